@@ -1,0 +1,873 @@
+"""Compiled event-driven integrator (source template).
+
+This file is not imported as a module.  :mod:`saltation.codegen` copies its
+text into a generated module after the model's own compiled functions
+(``vector_field``, ``vector_field_jac``, ``vector_field_dp``, ``indicator``,
+``indicator_grad``, ``lie_derivative``, ``reset_map``, ``reset_jac``,
+``guard``) and the Dormand-Prince 8(5,3) tableau (``RK_A``, ``RK_B``,
+``RK_C``, ``RK_E3``, ``RK_E5``, ``RK_D``), so that numba compiles one
+self-contained module per model and caches it on disk.
+
+The integrator (see ``docs/algorithms.md``):
+
+* takes DOP853 steps of the augmented system ``x' = f``, ``Phi' = f_x Phi``,
+  ``psi' = f_x psi + f_p[:, k]`` with the error controlled on ``x``;
+* watches the indicators of the surfaces of the current mode's transitions,
+  including indicators that dip through zero and back within one step
+  (a golden-section search on the dense output when the indicator's slope
+  reverses), locates each crossing by bracketing on the dense output and
+  refines it by re-stepping from the step start to near machine precision;
+* applies the transition (reset, new mode) and jumps ``Phi`` by the saltation
+  matrix ``S = g_x + (f+ - g_x f- - g_t) h_x / (h_x f- + h_t)`` (eq. 9 with
+  resets), ``psi`` by the parameter column of the same formula;
+* slides (Filippov) when the new field pushes back into the surface, and
+  leaves the sliding motion where either field turns tangent.
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+# Status codes (mirrored in saltation.integrate.Status).
+STATUS_OK = 0
+STATUS_MAX_EVENTS = 1
+STATUS_CHATTERING = 2
+STATUS_STEP_TOO_SMALL = 3
+STATUS_NON_FINITE = 4
+STATUS_SLIDING_UNDEFINED = 5
+STATUS_MAX_STEPS = 6
+STATUS_TANGENTIAL = 7
+
+EVENT_TRANSITION = 0
+EVENT_SLIDING_START = 1
+EVENT_SLIDING_END = 2
+
+EPS = 2.220446049250313e-16
+CHATTER_WINDOW = 40
+
+
+@njit(cache=True)
+def _field(mode, slide, t, x, p, var, pidx, f, J, fpc, ws1, ws2, ws3, wsJ1, wsJ2, wsP, gA, gB, gpA, gpB):
+    """Vector field (and Jacobian and parameter column) of a mode or a sliding motion.
+
+    ``slide = (active, mode_a, mode_b, surface, crossing)``; the sliding field
+    is Filippov's ``f_a + alpha (f_b - f_a)`` with ``alpha = s_a / (s_a - s_b)``,
+    ``s_m = h_x f_m + h_t``.
+    """
+    n = x.shape[0]
+    if slide[0] == 0:
+        vector_field(mode, t, x, p, f)  # noqa: F821
+        if var:
+            vector_field_jac(mode, t, x, p, J)  # noqa: F821
+            if pidx >= 0:
+                vector_field_dp(mode, t, x, p, wsP)  # noqa: F821
+                for i in range(n):
+                    fpc[i] = wsP[i, pidx]
+        return
+    ma = slide[1]
+    mb = slide[2]
+    surf = slide[3]
+    vector_field(ma, t, x, p, ws1)  # noqa: F821
+    vector_field(mb, t, x, p, ws2)  # noqa: F821
+    sa = lie_derivative(ma, surf, t, x, p, gA, gpA)  # noqa: F821
+    sb = lie_derivative(mb, surf, t, x, p, gB, gpB)  # noqa: F821
+    d = sa - sb
+    alpha = sa / d
+    for i in range(n):
+        f[i] = ws1[i] + alpha * (ws2[i] - ws1[i])
+    if var:
+        vector_field_jac(ma, t, x, p, wsJ1)  # noqa: F821
+        vector_field_jac(mb, t, x, p, wsJ2)  # noqa: F821
+        d2 = d * d
+        for j in range(n):
+            ws3[j] = (sa * gB[j] - sb * gA[j]) / d2
+        for i in range(n):
+            df = ws2[i] - ws1[i]
+            for j in range(n):
+                J[i, j] = wsJ1[i, j] + alpha * (wsJ2[i, j] - wsJ1[i, j]) + df * ws3[j]
+        if pidx >= 0:
+            dalpha = (sa * gpB[pidx] - sb * gpA[pidx]) / d2
+            vector_field_dp(ma, t, x, p, wsP)  # noqa: F821
+            for i in range(n):
+                fpc[i] = wsP[i, pidx] * (1.0 - alpha)
+            vector_field_dp(mb, t, x, p, wsP)  # noqa: F821
+            for i in range(n):
+                fpc[i] += alpha * wsP[i, pidx] + (ws2[i] - ws1[i]) * dalpha
+
+
+@njit(cache=True)
+def _aug_rhs(mode, slide, t, y, p, n, var, pidx, dy, W, WJ, WP, wv):
+    """Right-hand side of the augmented system ``[x, Phi (row-major), psi]``."""
+    x = y[:n]
+    f = wv[0]
+    fpc = wv[1]
+    J = WJ[0]
+    _field(mode, slide, t, x, p, var, pidx, f, J, fpc, wv[2], wv[3], wv[4], WJ[1], WJ[2], WP, wv[5], wv[6], W[0], W[1])
+    for i in range(n):
+        dy[i] = f[i]
+    if var:
+        for i in range(n):
+            for j in range(n):
+                acc = 0.0
+                for k in range(n):
+                    acc += J[i, k] * y[n + k * n + j]
+                dy[n + i * n + j] = acc
+        off = n + n * n
+        for i in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += J[i, k] * y[off + k]
+            dy[off + i] = acc + (fpc[i] if pidx >= 0 else 0.0)
+
+
+@njit(cache=True)
+def _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv):
+    """One DOP853 step from ``(t, y)`` with ``K[0] = f(t, y)`` given; returns the error norm."""
+    N = y.shape[0]
+    for s in range(1, 12):
+        for i in range(N):
+            acc = 0.0
+            for j in range(s):
+                a = RK_A[s, j]  # noqa: F821
+                if a != 0.0:
+                    acc += a * K[j, i]
+            ytmp[i] = y[i] + h * acc
+        _aug_rhs(mode, slide, t + RK_C[s] * h, ytmp, p, n, var, pidx, K[s], W, WJ, WP, wv)  # noqa: F821
+    for i in range(N):
+        acc = 0.0
+        for j in range(12):
+            acc += RK_B[j] * K[j, i]  # noqa: F821
+        ynew[i] = y[i] + h * acc
+    _aug_rhs(mode, slide, t + h, ynew, p, n, var, pidx, K[12], W, WJ, WP, wv)
+    e5 = 0.0
+    e3 = 0.0
+    for i in range(n):
+        sc = atol + rtol * max(abs(y[i]), abs(ynew[i]))
+        a5 = 0.0
+        a3 = 0.0
+        for j in range(13):
+            a5 += RK_E5[j] * K[j, i]  # noqa: F821
+            a3 += RK_E3[j] * K[j, i]  # noqa: F821
+        e5 += (a5 / sc) ** 2
+        e3 += (a3 / sc) ** 2
+    if e5 == 0.0 and e3 == 0.0:
+        return 0.0
+    return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * n)
+
+
+@njit(cache=True)
+def _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv):
+    """Coefficients of the 7th-order continuous extension of the state ``x`` only."""
+    for s in range(13, 16):
+        for i in range(n):
+            acc = 0.0
+            for j in range(s):
+                a = RK_A[s, j]  # noqa: F821
+                if a != 0.0:
+                    acc += a * K[j, i]
+            xtmp[i] = y[i] + h * acc
+        _aug_rhs(mode, slide, t + RK_C[s] * h, xtmp, p, n, False, -1, K[s], W, WJ, WP, wv)  # noqa: F821
+    for i in range(n):
+        dyi = ynew[i] - y[i]
+        F[0, i] = dyi
+        F[1, i] = h * K[0, i] - dyi
+        F[2, i] = 2.0 * dyi - h * (K[12, i] + K[0, i])
+        for r in range(4):
+            acc = 0.0
+            for j in range(16):
+                acc += RK_D[r, j] * K[j, i]  # noqa: F821
+            F[3 + r, i] = h * acc
+
+
+@njit(cache=True)
+def _dense_eval(F, y, s, out):
+    n = out.shape[0]
+    for i in range(n):
+        v = 0.0
+        for k in range(7):
+            v += F[6 - k, i]
+            if k % 2 == 0:
+                v *= s
+            else:
+                v *= 1.0 - s
+        out[i] = v + y[i]
+
+
+@njit(cache=True)
+def _event_value(kind, idx, slide, t, x, p, gtmp, gptmp):
+    """Event function: an indicator (kind 0) or a sliding-exit function (kind 1: side a, 2: side b)."""
+    if kind == 0:
+        return indicator(idx, t, x, p)  # noqa: F821
+    if kind == 1:
+        return slide[4] * lie_derivative(slide[1], slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
+    return -slide[4] * lie_derivative(slide[2], slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
+
+
+@njit(cache=True)
+def _dense_event(kind, idx, slide, sgn, t, h, F, y, s, p, xtmp, gtmp, gptmp):
+    _dense_eval(F, y, s, xtmp)
+    return sgn * _event_value(kind, idx, slide, t + s * h, xtmp, p, gtmp, gptmp)
+
+
+@njit(cache=True)
+def _bracket_root(kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp, gtmp, gptmp):
+    """Illinois root finding of ``sgn * event`` on the dense output in ``[sa, sb]`` (value > 0 at sa, <= 0 at sb)."""
+    ga = _dense_event(kind, idx, slide, sgn, t, h, F, y, sa, p, xtmp, gtmp, gptmp)
+    if ga <= 0.0:
+        ga = 1e-300
+    side = 0
+    for _ in range(100):
+        if sb - sa <= 4.0 * EPS * max(1.0, sb):
+            break
+        sc = sb - gb * (sb - sa) / (gb - ga)
+        if not (sa < sc < sb):
+            sc = 0.5 * (sa + sb)
+        gc = _dense_event(kind, idx, slide, sgn, t, h, F, y, sc, p, xtmp, gtmp, gptmp)
+        if gc > 0.0:
+            sa = sc
+            ga = gc
+            if side == -1:
+                gb *= 0.5
+            side = -1
+        else:
+            sb = sc
+            gb = gc
+            if gc == 0.0:
+                break
+            if side == 1:
+                ga *= 0.5
+            side = 1
+    return sb
+
+
+@njit(cache=True)
+def _dip_search(kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp):
+    """Golden-section search for the minimum of ``sgn * event`` on the step; returns (s, value)."""
+    invphi = 0.6180339887498949
+    a = 0.0
+    b = 1.0
+    c = b - invphi * (b - a)
+    d = a + invphi * (b - a)
+    fc = _dense_event(kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp)
+    fd = _dense_event(kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp)
+    for _ in range(60):
+        if fc <= 0.0:
+            return c, fc
+        if fd <= 0.0:
+            return d, fd
+        if b - a < 1e-12:
+            break
+        if fc < fd:
+            b = d
+            d = c
+            fd = fc
+            c = b - invphi * (b - a)
+            fc = _dense_event(kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp)
+        else:
+            a = c
+            c = d
+            fc = fd
+            d = a + invphi * (b - a)
+            fd = _dense_event(kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp)
+    if fc < fd:
+        return c, fc
+    return d, fd
+
+
+@njit(cache=True)
+def _slope(mode, slide, kind, idx, t, x, f, p, n, hx, hp, gtmp, gptmp):
+    """Time derivative of an event function along ``f`` (indicators: ``h_x f + h_t``)."""
+    if kind == 0:
+        ht = indicator_grad(idx, t, x, p, hx, hp)  # noqa: F821
+        acc = ht
+        for i in range(n):
+            acc += hx[i] * f[i]
+        return acc
+    m = slide[1] if kind == 1 else slide[2]
+    lie_derivative(m, slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
+    acc = 0.0
+    for i in range(n):
+        acc += gtmp[i] * f[i]
+    return (slide[4] if kind == 1 else -slide[4]) * acc
+
+
+@njit(cache=True)
+def _grow(a, cap):
+    shape = (cap,) + a.shape[1:]
+    b = np.zeros(shape, dtype=a.dtype)
+    b[: a.shape[0]] = a
+    return b
+
+
+@njit(cache=True)
+def _track_extrema(F, y, s_end, n, xmin, xmax, f0, f1, xtmp):
+    """Update per-component extrema over a step segment ``s in [0, s_end]`` of the dense output."""
+    invphi = 0.6180339887498949
+    for i in range(n):
+        if f0[i] * f1[i] > 0.0 and s_end >= 1.0:
+            continue
+        for sense in (1.0, -1.0):
+            a = 0.0
+            b = s_end
+            c = b - invphi * (b - a)
+            d = a + invphi * (b - a)
+            _dense_eval(F, y, c, xtmp)
+            fc = -sense * xtmp[i]
+            _dense_eval(F, y, d, xtmp)
+            fd = -sense * xtmp[i]
+            for _ in range(80):
+                if b - a < 1e-13:
+                    break
+                if fc < fd:
+                    b = d
+                    d = c
+                    fd = fc
+                    c = b - invphi * (b - a)
+                    _dense_eval(F, y, c, xtmp)
+                    fc = -sense * xtmp[i]
+                else:
+                    a = c
+                    c = d
+                    fc = fd
+                    d = a + invphi * (b - a)
+                    _dense_eval(F, y, d, xtmp)
+                    fd = -sense * xtmp[i]
+            v = -min(fc, fd) * sense
+            if v > xmax[i]:
+                xmax[i] = v
+            if v < xmin[i]:
+                xmin[i] = v
+
+
+@njit(cache=True)
+def integrate_kernel(
+    t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step, max_events, max_steps,
+    tr_table, n_surfaces, record, phi0, psi0,
+):
+    """Integrate from ``t0`` to ``t_end`` (either direction), event by event.
+
+    Returns a tuple (see ``saltation.integrate._unpack``).
+    """
+    n = x0.shape[0]
+    npar = p.shape[0]
+    N = n + n * n + n if var else n
+    direction = 1.0 if t_end >= t0 else -1.0
+    n_tr = tr_table.shape[0]
+
+    y = np.zeros(N)
+    ynew = np.zeros(N)
+    ytmp = np.zeros(N)
+    ysave = np.zeros(N)
+    K = np.zeros((16, N))
+    Ksave = np.zeros((16, N))
+    F = np.zeros((7, n))
+    W = np.zeros((2, max(npar, 1)))
+    WJ = np.zeros((3, n, n))
+    WP = np.zeros((n, max(npar, 1)))
+    wv = np.zeros((7, n))
+    xtmp = np.zeros(n)
+    hx = np.zeros(n)
+    hp = np.zeros(max(npar, 1))
+    gtmp = np.zeros(n)
+    gptmp = np.zeros(max(npar, 1))
+    fa = np.zeros(n)
+    fb = np.zeros(n)
+    fplus = np.zeros(n)
+    xplus = np.zeros(n)
+    gx = np.zeros((n, n))
+    gt = np.zeros(n)
+    gp = np.zeros((n, max(npar, 1)))
+    S = np.zeros((n, n))
+    wvec = np.zeros(n)
+    Phi_tmp = np.zeros((n, n))
+    psi_tmp = np.zeros(n)
+
+    for i in range(n):
+        y[i] = x0[i]
+    if var:
+        for i in range(n):
+            for j in range(n):
+                y[n + i * n + j] = phi0[i, j]
+            y[n + n * n + i] = psi0[i]
+
+    mode = mode0
+    slide = np.zeros(5, dtype=np.int64)  # active, mode_a, mode_b, surface, crossing
+    t = t0
+
+    # event log
+    ev_cap = 16
+    ev_t = np.zeros(ev_cap)
+    ev_int = np.zeros((ev_cap, 5), dtype=np.int64)  # kind, transition, surface, mode_from, mode_to
+    ev_xm = np.zeros((ev_cap, n))
+    ev_xp = np.zeros((ev_cap, n))
+    ev_S = np.zeros((ev_cap, n, n))
+    n_ev = 0
+
+    rec_cap = 64 if record else 1
+    rec_t = np.zeros(rec_cap)
+    rec_h = np.zeros(rec_cap)
+    rec_send = np.zeros(rec_cap)
+    rec_y = np.zeros((rec_cap, n))
+    rec_F = np.zeros((rec_cap, 7, n))
+    n_rec = 0
+
+    xmin = np.full(n, np.inf)
+    xmax = np.full(n, -np.inf)
+    for i in range(n):
+        xmin[i] = y[i]
+        xmax[i] = y[i]
+
+    status = STATUS_OK
+    info_mode = -1
+    info_surface = -1
+    n_steps = 0
+    n_rejected = 0
+
+    surf_sign = np.zeros(n_surfaces)
+    surf_old = np.zeros(n_surfaces)
+    slope_old = np.zeros(n_surfaces)
+    watched = np.zeros(n_surfaces, dtype=np.bool_)
+    fixed_sign = np.zeros(n_surfaces, dtype=np.bool_)
+    surf_new = np.zeros(n_surfaces)
+    slope_new = np.zeros(n_surfaces)
+
+    _aug_rhs(mode, slide, t, y, p, n, var, pidx, K[0], W, WJ, WP, wv)
+    for i in range(n):
+        if not math.isfinite(K[0, i]) or not math.isfinite(y[i]):
+            status = STATUS_NON_FINITE
+            info_mode = mode
+    tspan = abs(t_end - t0)
+    # initial step (Hairer & Wanner, II.4)
+    if h_init > 0.0:
+        habs = h_init
+    else:
+        d0 = 0.0
+        d1 = 0.0
+        for i in range(n):
+            sc = atol + rtol * abs(y[i])
+            d0 += (y[i] / sc) ** 2
+            d1 += (K[0, i] / sc) ** 2
+        d0 = math.sqrt(d0 / n)
+        d1 = math.sqrt(d1 / n)
+        habs = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+        habs = min(habs, tspan if tspan > 0 else 1.0)
+        habs = max(habs, 1e-6 * max(tspan, 1e-300))
+        habs = min(habs, 0.1 * tspan) if tspan > 0 else habs
+    habs = min(habs, max_step)
+
+    need_signs = True
+    chatter_ring = np.zeros(CHATTER_WINDOW)
+
+    while status == STATUS_OK and (t_end - t) * direction > 0.0:
+        if need_signs:
+            # sign memory of every surface watched in this mode, in the direction of travel
+            for s in range(n_surfaces):
+                watched[s] = False
+            if slide[0] == 0:
+                for k in range(n_tr):
+                    if tr_table[k, 0] == mode:
+                        watched[tr_table[k, 1]] = True
+            for s in range(n_surfaces):
+                if watched[s]:
+                    v = indicator(s, t, y[:n], p)  # noqa: F821
+                    surf_old[s] = v
+                    sl = direction * _slope(mode, slide, 0, s, t, y[:n], K[0, :n], p, n, hx, hp, gtmp, gptmp)
+                    slope_old[s] = sl
+                    if fixed_sign[s]:
+                        continue
+                    if abs(v) > 1e-12:
+                        surf_sign[s] = 1.0 if v > 0 else -1.0
+                    elif sl != 0.0:
+                        surf_sign[s] = 1.0 if sl > 0 else -1.0
+                    else:
+                        surf_sign[s] = 1.0 if v >= 0 else -1.0
+            for s in range(n_surfaces):
+                fixed_sign[s] = False
+            need_signs = False
+
+        if n_steps >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        remaining = abs(t_end - t)
+        habs = min(habs, max_step)
+        if habs >= remaining or remaining - habs < 1e-12 * remaining:
+            habs = remaining
+        # attempt a step
+        while True:
+            h = direction * habs
+            err = _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv)
+            finite = math.isfinite(err)
+            if finite and err <= 1.0:
+                break
+            n_rejected += 1
+            if not finite:
+                fin = True
+                for i in range(N):
+                    if not math.isfinite(ynew[i]):
+                        fin = False
+                if not fin and habs < 1e-10 * max(1.0, abs(t)):
+                    status = STATUS_NON_FINITE
+                    info_mode = mode
+                    break
+                habs *= 0.2
+            else:
+                habs *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
+            if habs < 10.0 * EPS * max(1.0, abs(t)):
+                status = STATUS_STEP_TOO_SMALL
+                info_mode = mode
+                break
+        if status != STATUS_OK:
+            break
+        n_steps += 1
+        t_new = t + h
+        if habs == remaining:
+            t_new = t_end
+        for i in range(n):
+            if not math.isfinite(ynew[i]) or not math.isfinite(K[12, i]):
+                status = STATUS_NON_FINITE
+                info_mode = mode
+        if status != STATUS_OK:
+            break
+
+        # ---------------------------------------------------------------- events
+        have_dense = False
+        best_s = 2.0
+        best_kind = -1
+        best_idx = -1
+        best_tr = -1
+        if slide[0] == 0:
+            for s in range(n_surfaces):
+                if not watched[s]:
+                    continue
+                v = indicator(s, t_new, ynew[:n], p)  # noqa: F821
+                surf_new[s] = v
+                sl = direction * _slope(mode, slide, 0, s, t_new, ynew[:n], K[12, :n], p, n, hx, hp, gtmp, gptmp)
+                slope_new[s] = sl
+                sg = surf_sign[s]
+                sb = 2.0
+                if sg * v <= 0.0:
+                    sb = 1.0
+                elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
+                    if not have_dense:
+                        _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv)
+                        have_dense = True
+                    smin, vmin = _dip_search(0, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp)
+                    if vmin <= 0.0:
+                        sb = smin
+                if sb <= 1.0:
+                    if not have_dense:
+                        _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv)
+                        have_dense = True
+                    gb = _dense_event(0, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
+                    if gb > 0.0:
+                        gb = -1e-300
+                    sr = _bracket_root(0, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
+                    if sr < best_s:
+                        # find a transition that fires at this crossing
+                        _dense_eval(F, y, sr, xtmp)
+                        cross = -sg  # new sign in the direction of travel
+                        for k in range(n_tr):
+                            if tr_table[k, 0] != mode or tr_table[k, 1] != s:
+                                continue
+                            dk = tr_table[k, 2]
+                            if dk != 0 and dk != cross:
+                                continue
+                            if not guard(k, t + sr * h, xtmp, p):  # noqa: F821
+                                continue
+                            best_s = sr
+                            best_kind = 0
+                            best_idx = s
+                            best_tr = k
+                            break
+        else:
+            for kind in (1, 2):
+                v1 = _event_value(kind, 0, slide, t_new, ynew[:n], p, gtmp, gptmp)
+                if v1 <= 0.0:
+                    if not have_dense:
+                        _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv)
+                        have_dense = True
+                    sr = _bracket_root(kind, 0, slide, 1.0, t, h, F, y, 0.0, 1.0, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
+                    if sr < best_s:
+                        best_s = sr
+                        best_kind = kind
+                        best_idx = slide[3]
+                        best_tr = -1
+
+        if best_kind < 0:
+            # ----------------------------------------------------------- accept whole step
+            if record or _needs_extrema(K, n):
+                if not have_dense:
+                    _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv)
+                    have_dense = True
+                _track_extrema(F, y, 1.0, n, xmin, xmax, K[0], K[12], xtmp)
+            for i in range(n):
+                xmin[i] = min(xmin[i], ynew[i])
+                xmax[i] = max(xmax[i], ynew[i])
+            if record:
+                if n_rec == rec_t.shape[0]:
+                    rec_t = _grow(rec_t, 2 * n_rec)
+                    rec_h = _grow(rec_h, 2 * n_rec)
+                    rec_send = _grow(rec_send, 2 * n_rec)
+                    rec_y = _grow(rec_y, 2 * n_rec)
+                    rec_F = _grow(rec_F, 2 * n_rec)
+                rec_t[n_rec] = t
+                rec_h[n_rec] = h
+                rec_send[n_rec] = 1.0
+                rec_y[n_rec] = y[:n]
+                rec_F[n_rec] = F
+                n_rec += 1
+            t = t_new
+            for i in range(N):
+                y[i] = ynew[i]
+            for i in range(N):
+                K[0, i] = K[12, i]
+            for s in range(n_surfaces):
+                if watched[s]:
+                    surf_old[s] = surf_new[s]
+                    slope_old[s] = slope_new[s]
+                    if surf_new[s] != 0.0:
+                        surf_sign[s] = 1.0 if surf_new[s] > 0 else -1.0
+            fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
+            habs = abs(h) * fac
+            continue
+
+        # --------------------------------------------------------------- an event
+        _track_extrema(F, y, best_s, n, xmin, xmax, K[0], K[12], xtmp)
+        if record:
+            if n_rec == rec_t.shape[0]:
+                rec_t = _grow(rec_t, 2 * n_rec)
+                rec_h = _grow(rec_h, 2 * n_rec)
+                rec_send = _grow(rec_send, 2 * n_rec)
+                rec_y = _grow(rec_y, 2 * n_rec)
+                rec_F = _grow(rec_F, 2 * n_rec)
+            rec_t[n_rec] = t
+            rec_h[n_rec] = h
+            rec_send[n_rec] = best_s
+            rec_y[n_rec] = y[:n]
+            rec_F[n_rec] = F
+            n_rec += 1
+        # refine the event time by re-stepping from the step start (secant on the true RK solution)
+        for i in range(N):
+            ysave[i] = y[i]
+        for i in range(N):
+            Ksave[0, i] = K[0, i]
+        sgn_ev = surf_sign[best_idx] if best_kind == 0 else 1.0
+        s_e = best_s
+        s_prev = -1.0
+        g_prev = 0.0
+        for it in range(6):
+            for i in range(N):
+                K[0, i] = Ksave[0, i]
+            if s_e > 0.0:
+                _rk_step(mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv)
+            else:
+                for i in range(N):
+                    ynew[i] = ysave[i]
+            g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+            if g_e == 0.0:
+                break
+            if s_prev < 0.0:
+                dg = (
+                    _dense_event(best_kind, best_idx, slide, sgn_ev, t, h, F, y, min(s_e + 1e-7, 1.0), p, xtmp, gtmp, gptmp)
+                    - _dense_event(best_kind, best_idx, slide, sgn_ev, t, h, F, y, max(s_e - 1e-7, 0.0), p, xtmp, gtmp, gptmp)
+                ) / (min(s_e + 1e-7, 1.0) - max(s_e - 1e-7, 0.0))
+            else:
+                dg = (g_e - g_prev) / (s_e - s_prev) if s_e != s_prev else 0.0
+            if dg == 0.0 or not math.isfinite(dg):
+                break
+            ds = -g_e / dg
+            s_prev = s_e
+            g_prev = g_e
+            s_new = min(max(s_e + ds, 0.0), 1.0)
+            if abs(s_new - s_e) <= 2.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300)):
+                break
+            s_e = s_new
+        t_e = t + s_e * h
+        # state at the event (before it)
+        for i in range(N):
+            y[i] = ynew[i]
+        x_e = y[:n]
+        mode_from = mode
+        kind_logged = EVENT_TRANSITION
+        mode_to = mode
+        den = 0.0
+        # S and the jump of psi are built from: n (hx, hp, ht), f-, f+, g_x, g_t, g_p
+        for i in range(n):
+            for j in range(n):
+                gx[i, j] = 1.0 if i == j else 0.0
+            gt[i] = 0.0
+            for j in range(gp.shape[1]):
+                gp[i, j] = 0.0
+        if best_kind == 0:
+            k = best_tr
+            mode_to = tr_table[k, 3]
+            ht = indicator_grad(best_idx, t_e, x_e, p, hx, hp)  # noqa: F821
+            vector_field(mode, t_e, x_e, p, fa)  # noqa: F821
+            den = ht
+            for i in range(n):
+                den += hx[i] * fa[i]
+            if tr_table[k, 4] != 0:
+                reset_map(k, t_e, x_e, p, xplus)  # noqa: F821
+                reset_jac(k, t_e, x_e, p, gx, gt, gp)  # noqa: F821
+            else:
+                for i in range(n):
+                    xplus[i] = x_e[i]
+            vector_field(mode_to, t_e, xplus, p, fb)  # noqa: F821
+            sig_b = ht
+            for i in range(n):
+                sig_b += hx[i] * fb[i]
+            cross = 1.0 if direction * den > 0 else -1.0
+            if den == 0.0 or not math.isfinite(den):
+                status = STATUS_TANGENTIAL
+                info_mode = mode
+                info_surface = best_idx
+                break
+            if direction * sig_b * cross < 0.0:
+                # the new field pushes back: Filippov sliding along the surface
+                if tr_table[k, 4] != 0 or den == sig_b:
+                    status = STATUS_SLIDING_UNDEFINED
+                    info_mode = mode
+                    info_surface = best_idx
+                    break
+                alpha = den / (den - sig_b)
+                for i in range(n):
+                    fplus[i] = fa[i] + alpha * (fb[i] - fa[i])
+                slide[0] = 1
+                slide[1] = mode
+                slide[2] = mode_to
+                slide[3] = best_idx
+                slide[4] = 1 if cross > 0 else -1
+                kind_logged = EVENT_SLIDING_START
+            else:
+                for i in range(n):
+                    fplus[i] = fb[i]
+            surf_sign[best_idx] = cross
+            fixed_sign[best_idx] = True
+            mode = mode_to
+        else:
+            # leaving a sliding motion where side a (kind 1) or side b (kind 2) turns tangent
+            exit_mode = slide[1] if best_kind == 1 else slide[2]
+            _field(mode, slide, t_e, x_e, p, False, -1, fa, WJ[0], wv[1], wv[2], wv[3], wv[4], WJ[1], WJ[2], WP, wv[5], wv[6], W[0], W[1])
+            sgl = 1.0 if best_kind == 1 else -1.0
+            sgl = sgl * slide[4]
+            lie_derivative(exit_mode, slide[3], t_e, x_e, p, hx, hp)  # noqa: F821
+            for i in range(n):
+                hx[i] *= sgl
+            for j in range(hp.shape[0]):
+                hp[j] *= sgl
+            den = 0.0
+            for i in range(n):
+                den += hx[i] * fa[i]
+            for i in range(n):
+                xplus[i] = x_e[i]
+            vector_field(exit_mode, t_e, xplus, p, fplus)  # noqa: F821
+            crossing_sign = slide[4]
+            surf_sign[slide[3]] = -crossing_sign if best_kind == 1 else crossing_sign
+            fixed_sign[slide[3]] = True
+            mode_from = slide[1] if best_kind == 1 else slide[2]
+            mode_to = exit_mode
+            mode = exit_mode
+            slide[0] = 0
+            kind_logged = EVENT_SLIDING_END
+            if den == 0.0:
+                den = 1e-300
+        # saltation matrix and jumps
+        for i in range(n):
+            acc = fplus[i] - gt[i]
+            for j in range(n):
+                acc -= gx[i, j] * fa[j]
+            wvec[i] = acc
+        for i in range(n):
+            for j in range(n):
+                S[i, j] = gx[i, j] + wvec[i] * hx[j] / den
+        if var:
+            for i in range(n):
+                for j in range(n):
+                    acc = 0.0
+                    for k2 in range(n):
+                        acc += S[i, k2] * y[n + k2 * n + j]
+                    Phi_tmp[i, j] = acc
+            off = n + n * n
+            for i in range(n):
+                acc = 0.0
+                for k2 in range(n):
+                    acc += S[i, k2] * y[off + k2]
+                if pidx >= 0:
+                    acc += gp[i, pidx] + wvec[i] * hp[pidx] / den
+                psi_tmp[i] = acc
+            for i in range(n):
+                for j in range(n):
+                    y[n + i * n + j] = Phi_tmp[i, j]
+                y[off + i] = psi_tmp[i]
+        # log
+        if n_ev == ev_t.shape[0]:
+            ev_t = _grow(ev_t, 2 * n_ev)
+            ev_int = _grow(ev_int, 2 * n_ev)
+            ev_xm = _grow(ev_xm, 2 * n_ev)
+            ev_xp = _grow(ev_xp, 2 * n_ev)
+            ev_S = _grow(ev_S, 2 * n_ev)
+        ev_t[n_ev] = t_e
+        ev_int[n_ev, 0] = kind_logged
+        ev_int[n_ev, 1] = best_tr
+        ev_int[n_ev, 2] = best_idx
+        ev_int[n_ev, 3] = mode_from
+        ev_int[n_ev, 4] = mode_to
+        for i in range(n):
+            ev_xm[n_ev, i] = x_e[i]
+            ev_xp[n_ev, i] = xplus[i]
+            for j in range(n):
+                ev_S[n_ev, i, j] = S[i, j]
+        chatter_ring[n_ev % CHATTER_WINDOW] = t_e
+        n_ev += 1
+        for i in range(n):
+            y[i] = xplus[i]
+            xmin[i] = min(xmin[i], x_e[i], xplus[i])
+            xmax[i] = max(xmax[i], x_e[i], xplus[i])
+        if n_ev >= max_events:
+            status = STATUS_MAX_EVENTS
+            info_mode = mode
+            info_surface = best_idx
+            t = t_e
+            break
+        if n_ev >= CHATTER_WINDOW:
+            oldest = chatter_ring[n_ev % CHATTER_WINDOW]
+            if abs(t_e - oldest) <= 1e-9 * max(1.0, abs(t_e)) + 1e-6 * tspan:
+                status = STATUS_CHATTERING
+                info_mode = mode
+                info_surface = best_idx
+                t = t_e
+                break
+        t = t_e
+        if abs(t_end - t) <= 4.0 * EPS * max(1.0, abs(t)):
+            t = t_end
+        _aug_rhs(mode, slide, t, y, p, n, var, pidx, K[0], W, WJ, WP, wv)
+        for i in range(n):
+            if not math.isfinite(K[0, i]):
+                status = STATUS_NON_FINITE
+                info_mode = mode
+        habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
+        need_signs = True
+
+    Phi = np.zeros((n, n))
+    psi = np.zeros(n)
+    if var:
+        for i in range(n):
+            for j in range(n):
+                Phi[i, j] = y[n + i * n + j]
+            psi[i] = y[n + n * n + i]
+    info = np.array([status, info_mode, info_surface, n_ev, n_steps, n_rejected, mode, slide[0], slide[1], slide[2], slide[3], slide[4]])
+    return (
+        info, t, y[:n].copy(), Phi, psi,
+        ev_t[:n_ev].copy(), ev_int[:n_ev].copy(), ev_xm[:n_ev].copy(), ev_xp[:n_ev].copy(), ev_S[:n_ev].copy(),
+        xmin, xmax,
+        rec_t[:n_rec].copy(), rec_h[:n_rec].copy(), rec_send[:n_rec].copy(), rec_y[:n_rec].copy(), rec_F[:n_rec].copy(),
+    )
+
+
+@njit(cache=True)
+def _needs_extrema(K, n):
+    for i in range(n):
+        if K[0, i] * K[12, i] <= 0.0:
+            return True
+    return False

@@ -1,0 +1,380 @@
+"""Event-driven integration of piecewise-smooth systems, forward and backward in time.
+
+The work happens in a compiled kernel generated per model (see
+:mod:`saltation.codegen`); this module is the thin typed driver around it.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .codegen import load_kernels, transition_table
+from .errors import (
+    ChatteringError,
+    IntegrationError,
+    ModelError,
+    NonFiniteError,
+    SlidingError,
+    StepSizeError,
+)
+from .model import PiecewiseSystem
+
+
+class Status(enum.IntEnum):
+    """Outcome of an integration (mirrors the kernel's status codes)."""
+
+    OK = 0
+    MAX_EVENTS = 1
+    CHATTERING = 2
+    STEP_TOO_SMALL = 3
+    NON_FINITE = 4
+    SLIDING_UNDEFINED = 5
+    MAX_STEPS = 6
+    TANGENTIAL = 7
+
+
+class EventKind(enum.IntEnum):
+    """What happened at a switching event."""
+
+    TRANSITION = 0
+    SLIDING_START = 1
+    SLIDING_END = 2
+
+
+@dataclass(frozen=True)
+class SwitchingEvent:
+    """One switching event of a trajectory.
+
+    Attributes
+    ----------
+    t : float
+        Event time.
+    kind : EventKind
+        A transition, the start of a sliding motion, or its end.
+    transition : int
+        Index of the transition that fired (-1 for the end of sliding).
+    surface : str
+        Name of the switching surface.
+    mode_from, mode_to : str
+        Modes before and after (for the start of sliding, ``mode_to`` is the
+        mode on the far side of the surface).
+    x_minus, x_plus : ndarray, shape (n,)
+        State just before and just after the event (they differ for resets).
+    saltation : ndarray, shape (n, n)
+        Saltation matrix ``S`` with ``Phi(t+) = S Phi(t-)`` (eq. 8).
+    """
+
+    t: float
+    kind: EventKind
+    transition: int
+    surface: str
+    mode_from: str
+    mode_to: str
+    x_minus: np.ndarray
+    x_plus: np.ndarray
+    saltation: np.ndarray
+
+    @property
+    def signature(self) -> tuple[int, int, str]:
+        """What identifies the event in an orbit's event sequence."""
+        return (int(self.kind), self.transition, self.surface)
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Result of :func:`simulate`.
+
+    Attributes
+    ----------
+    t0, t1 : float
+        Start and end time (``t1 < t0`` in backward time).
+    x0, x1 : ndarray, shape (n,)
+        Initial and final state.
+    mode0, mode1 : str
+        Initial and final mode.
+    events : list of SwitchingEvent
+        The event log, in the order met.
+    monodromy : ndarray, shape (n, n) or None
+        Fundamental solution matrix ``Phi(t1, t0)`` with every saltation
+        matrix applied, when ``variational=True``.
+    parameter_sensitivity : ndarray, shape (n,) or None
+        ``d x(t1) / d p_k`` for the requested parameter ``k``.
+    x_min, x_max : ndarray, shape (n,)
+        Extremes of every state over the trajectory (from the dense output).
+    sliding_at_end : bool
+        Whether the trajectory ends on a sliding motion.
+    n_steps, n_rejected : int
+        Accepted and rejected steps.
+    """
+
+    system: PiecewiseSystem
+    t0: float
+    t1: float
+    x0: np.ndarray
+    x1: np.ndarray
+    mode0: str
+    mode1: str
+    events: list[SwitchingEvent]
+    monodromy: np.ndarray | None
+    parameter_sensitivity: np.ndarray | None
+    x_min: np.ndarray
+    x_max: np.ndarray
+    sliding_at_end: bool
+    n_steps: int
+    n_rejected: int
+    _steps: tuple[np.ndarray, ...] | None = field(default=None, repr=False)
+
+    @property
+    def event_sequence(self) -> tuple[tuple[int, int, str], ...]:
+        """The orbit's sequence of events (kind, transition, surface)."""
+        return tuple(e.signature for e in self.events)
+
+    @property
+    def modes(self) -> list[str]:
+        """Sequence of modes visited (sliding motions named ``a|b``)."""
+        seq = [self.mode0]
+        for e in self.events:
+            seq.append(f"{e.mode_from}|{e.mode_to}" if e.kind == EventKind.SLIDING_START else e.mode_to)
+        return seq
+
+    def sample(self, num_per_step: int = 8) -> tuple[np.ndarray, np.ndarray]:
+        """Dense states along the trajectory.
+
+        Returns
+        -------
+        t : ndarray, shape (m,)
+        x : ndarray, shape (m, n)
+
+        Raises
+        ------
+        ValueError
+            If the trajectory was computed without ``dense=True``.
+        """
+        if self._steps is None:
+            raise ValueError("this trajectory was computed without dense=True")
+        t_old, h, s_end, y0, F = self._steps
+        ts = []
+        xs = []
+        s = np.linspace(0.0, 1.0, num_per_step + 1)
+        for k in range(len(t_old)):
+            sk = s * s_end[k]
+            ts.append(t_old[k] + sk * h[k])
+            xs.append(_dense_eval(F[k], y0[k], sk))
+        if not ts:
+            return np.array([self.t0]), self.x0[None, :]
+        return np.concatenate(ts), np.concatenate(xs)
+
+
+def _dense_eval(F: np.ndarray, y0: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Evaluate DOP853's continuous extension at fractions ``s`` of a step (vectorised)."""
+    out = np.zeros((len(s), F.shape[1]))
+    for k in range(7):
+        out += F[6 - k][None, :]
+        out *= (s if k % 2 == 0 else 1.0 - s)[:, None]
+    return out + y0[None, :]
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Integration tolerances.
+
+    Attributes
+    ----------
+    rtol, atol : float
+        Relative and absolute local error tolerances on the state.
+    max_step : float
+        Largest step size (inf for none).
+    max_events : int
+        Largest number of switching events in one integration.
+    max_steps : int
+        Largest number of steps in one integration.
+    """
+
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    max_step: float = np.inf
+    max_events: int = 100_000
+    max_steps: int = 1_000_000
+
+    def __post_init__(self):
+        if not (0 < self.rtol < 1 and self.atol > 0):
+            raise ValueError(f"tolerances must satisfy 0 < rtol < 1 and atol > 0, got rtol={self.rtol}, atol={self.atol}")
+        if not self.max_step > 0:
+            raise ValueError(f"max_step must be positive, got {self.max_step}")
+
+
+class Flow:
+    """The compiled flow of one model: integrate, with events and saltation matrices.
+
+    Parameters
+    ----------
+    system : PiecewiseSystem
+        The model.
+    tolerances : Tolerances, optional
+        Default integration tolerances.
+    """
+
+    def __init__(self, system: PiecewiseSystem, tolerances: Tolerances | None = None):
+        self.system = system
+        self.tolerances = tolerances or Tolerances()
+        self._kernels = load_kernels(system)
+        self._table = transition_table(system)
+
+    def parameters(self, overrides: Mapping[str, float] | np.ndarray | None = None) -> np.ndarray:
+        """Parameter vector from a mapping of overrides (or an array passed through)."""
+        if isinstance(overrides, np.ndarray):
+            if overrides.shape != (self.system.n_params,):
+                raise ModelError(f"parameter array must have shape ({self.system.n_params},), got {overrides.shape}")
+            return overrides.astype(float)
+        return self.system.parameter_vector(overrides)
+
+    def run(
+        self,
+        x0: Sequence[float],
+        t0: float,
+        t1: float,
+        p: np.ndarray,
+        *,
+        mode0: int | str | None = None,
+        variational: bool = False,
+        parameter: int = -1,
+        dense: bool = False,
+        tolerances: Tolerances | None = None,
+        phi0: np.ndarray | None = None,
+    ) -> Trajectory:
+        """Integrate from ``t0`` to ``t1`` (``t1 < t0`` integrates backward in time).
+
+        Parameters
+        ----------
+        x0 : array_like, shape (n,)
+            Initial state.
+        t0, t1 : float
+            Start and end time.
+        p : ndarray, shape (n_params,)
+            Parameter values (see :meth:`parameters`).
+        mode0 : int or str, optional
+            Initial mode; by default the model's initial-mode rule.
+        variational : bool
+            Carry the fundamental solution matrix through modes and events.
+        parameter : int
+            Index of a parameter whose sensitivity ``dx/dp`` to carry (-1: none).
+        dense : bool
+            Keep the dense output for :meth:`Trajectory.sample`.
+
+        Raises
+        ------
+        InitialModeError, ModelError, IntegrationError
+            With a message that names the mode and surface involved.
+        """
+        sys_ = self.system
+        tol = tolerances or self.tolerances
+        x0 = np.asarray(x0, dtype=float).reshape(-1)
+        if x0.shape != (sys_.n,):
+            raise ModelError(f"initial state must have {sys_.n} components {list(sys_.state_names)}, got {x0.size}")
+        if not np.all(np.isfinite(x0)):
+            raise ModelError(f"initial state {x0.tolist()} is not finite")
+        p = np.ascontiguousarray(p, dtype=float)
+        if not np.isfinite(t0) or not np.isfinite(t1):
+            raise ValueError(f"integration times must be finite, got t0={t0}, t1={t1}")
+        m0 = sys_.initial_mode(x0, p, t0) if mode0 is None else sys_.mode_index(mode0)
+        if not -1 <= parameter < sys_.n_params:
+            raise ModelError(f"parameter index {parameter} out of range")
+        phi = np.eye(sys_.n) if phi0 is None else np.ascontiguousarray(phi0, dtype=float)
+        out = self._kernels.integrate_kernel(
+            float(t0), float(t1), x0, int(m0), p, bool(variational), int(parameter),
+            float(tol.rtol), float(tol.atol), 0.0, float(tol.max_step), int(tol.max_events), int(tol.max_steps),
+            self._table, len(sys_.surface_names), bool(dense), phi, np.zeros(sys_.n),
+        )
+        return self._unpack(out, x0, float(t0), m0, variational, parameter, dense)
+
+    def _unpack(self, out, x0, t0, m0, variational, parameter, dense) -> Trajectory:
+        sys_ = self.system
+        info, t, x, Phi, psi, ev_t, ev_int, ev_xm, ev_xp, ev_S, xmin, xmax, rt, rh, rs, ry, rF = out
+        status = Status(int(info[0]))
+        names = sys_.mode_names
+        events = [
+            SwitchingEvent(
+                t=float(ev_t[k]),
+                kind=EventKind(int(ev_int[k, 0])),
+                transition=int(ev_int[k, 1]),
+                surface=sys_.surface_names[int(ev_int[k, 2])],
+                mode_from=names[int(ev_int[k, 3])],
+                mode_to=names[int(ev_int[k, 4])],
+                x_minus=ev_xm[k],
+                x_plus=ev_xp[k],
+                saltation=ev_S[k],
+            )
+            for k in range(len(ev_t))
+        ]
+        if status != Status.OK:
+            raise _error(status, sys_, info, float(t), x, events)
+        return Trajectory(
+            system=sys_,
+            t0=t0,
+            t1=float(t),
+            x0=x0,
+            x1=x,
+            mode0=names[m0],
+            mode1=names[int(info[6])],
+            events=events,
+            monodromy=Phi if variational else None,
+            parameter_sensitivity=psi if (variational and parameter >= 0) else None,
+            x_min=xmin,
+            x_max=xmax,
+            sliding_at_end=bool(info[7]),
+            n_steps=int(info[4]),
+            n_rejected=int(info[5]),
+            _steps=(rt, rh, rs, ry, rF) if dense else None,
+        )
+
+
+def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, x: np.ndarray, events) -> IntegrationError:
+    mode = system.mode_names[int(info[1])] if info[1] >= 0 else "?"
+    surface = system.surface_names[int(info[2])] if info[2] >= 0 else "?"
+    where = f"at t = {t:.12g}, x = {np.array2string(np.asarray(x), precision=6)}, in mode {mode!r}"
+    if status == Status.CHATTERING:
+        recent = ", ".join(f"{e.surface}@{e.t:.6g}" for e in events[-5:])
+        return ChatteringError(
+            f"chattering {where}: many switching events on surface {surface!r} in a vanishing time interval "
+            f"(last events: {recent}); the model may need a sliding mode or a different transition"
+        )
+    if status == Status.MAX_EVENTS:
+        return ChatteringError(f"more switching events than max_events {where} (last surface {surface!r})")
+    if status == Status.STEP_TOO_SMALL:
+        return StepSizeError(f"step size fell below floating-point resolution {where}")
+    if status == Status.NON_FINITE:
+        return NonFiniteError(f"the vector field of mode {mode!r} returned NaN or infinity {where}")
+    if status == Status.SLIDING_UNDEFINED:
+        return SlidingError(
+            f"sliding on surface {surface!r} {where} is required (the target field pushes back into the surface) "
+            "but is not defined: the transition has a reset map or both fields are tangent"
+        )
+    if status == Status.TANGENTIAL:
+        return IntegrationError(f"switching event exactly tangent to surface {surface!r} {where}: the saltation matrix is undefined")
+    if status == Status.MAX_STEPS:
+        return IntegrationError(f"more steps than max_steps {where}")
+    return IntegrationError(f"integration failed with status {status.name} {where}")
+
+
+def simulate(
+    system: PiecewiseSystem,
+    x0: Sequence[float],
+    t_span: tuple[float, float],
+    *,
+    parameters: Mapping[str, float] | None = None,
+    mode0: int | str | None = None,
+    variational: bool = False,
+    dense: bool = True,
+    tolerances: Tolerances | None = None,
+) -> Trajectory:
+    """Integrate a model over ``t_span = (t0, t1)``; backward in time when ``t1 < t0``.
+
+    A convenience around :class:`Flow` (which keeps the compiled kernels for
+    repeated use).
+    """
+    flow = Flow(system, tolerances)
+    return flow.run(x0, t_span[0], t_span[1], flow.parameters(parameters), mode0=mode0, variational=variational, dense=dense)
