@@ -1,5 +1,6 @@
 """Models shipped with saltation, each a short file that reads like its source."""
 
+from .block_on_belt import WRegion, block_on_belt
 from .trilinear import trilinear
 
-__all__ = ["trilinear"]
+__all__ = ["WRegion", "block_on_belt", "trilinear"]

@@ -1,0 +1,107 @@
+"""Floquet multipliers, from the monodromy matrix, and set-valued multipliers at non-smooth points."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def multipliers_from_monodromy(monodromy: np.ndarray, *, backward: bool = False) -> np.ndarray:
+    """Forward-time Floquet multipliers, sorted by decreasing magnitude.
+
+    Parameters
+    ----------
+    monodromy : ndarray, shape (n, n)
+        Fundamental solution matrix over one period in the direction of integration.
+    backward : bool
+        Whether the monodromy was computed in backward time; the forward
+        multipliers are then the reciprocals of its eigenvalues, and a zero
+        backward multiplier becomes an infinite forward one (an infinitely
+        unstable orbit).
+    """
+    mu = np.linalg.eigvals(np.asarray(monodromy, dtype=float)).astype(complex)
+    if backward:
+        mu = reciprocal(mu)
+    return sort_multipliers(mu)
+
+
+def reciprocal(mu: np.ndarray, *, zero: float = 1e-13) -> np.ndarray:
+    """``1 / mu`` with multipliers below ``zero`` in magnitude mapped to infinity."""
+    out = np.empty_like(mu, dtype=complex)
+    for i, m in enumerate(mu):
+        out[i] = complex(np.inf, 0.0) if abs(m) <= zero else 1.0 / m
+    return out
+
+
+def sort_multipliers(mu: np.ndarray) -> np.ndarray:
+    """Sort by decreasing magnitude, then by argument (deterministic order)."""
+    mu = np.asarray(mu, dtype=complex)
+    key = np.lexsort((-np.angle(mu), -np.abs(mu)))
+    return mu[key]
+
+
+def trivial_multiplier_error(mu: np.ndarray) -> float:
+    """Distance from 1 of the multiplier closest to 1 (the trivial one of an autonomous orbit)."""
+    finite = mu[np.isfinite(mu)]
+    return float(np.min(np.abs(finite - 1.0))) if finite.size else np.inf
+
+
+def is_stable(mu: np.ndarray, *, autonomous: bool, tol: float = 1e-6) -> bool:
+    """All multipliers inside the unit circle (the trivial one excepted for autonomous orbits)."""
+    mu = np.asarray(mu, dtype=complex)
+    if autonomous and mu.size:
+        idx = int(np.argmin(np.where(np.isfinite(mu), np.abs(mu - 1.0), np.inf)))
+        mu = np.delete(mu, idx)
+    return bool(np.all(np.abs(mu) < 1.0 + tol))
+
+
+@dataclass(frozen=True)
+class SetValuedMultipliers:
+    """Eigenvalue paths of ``(1 - q) M- + q M+`` for ``q`` in ``[0, 1]``.
+
+    Attributes
+    ----------
+    q : ndarray, shape (m,)
+    paths : ndarray, shape (m, n), complex
+        Multipliers at each ``q`` (continuous paths, matched by proximity).
+    """
+
+    q: np.ndarray
+    paths: np.ndarray
+
+
+def set_valued_multipliers(
+    m_minus: np.ndarray, m_plus: np.ndarray, *, num: int = 401, backward: bool = False
+) -> SetValuedMultipliers:
+    """Set-valued Floquet multipliers at a non-smooth point (convex hull of ``M-`` and ``M+``).
+
+    For backward-time monodromies the convex combination is formed in
+    backward time and the paths are mapped to forward-time multipliers.
+    """
+    q = np.linspace(0.0, 1.0, num)
+    n = m_minus.shape[0]
+    paths = np.empty((num, n), dtype=complex)
+    prev = None
+    for k, qk in enumerate(q):
+        mu = np.linalg.eigvals((1.0 - qk) * m_minus + qk * m_plus).astype(complex)
+        if prev is not None:
+            mu = _match(prev, mu)
+        else:
+            mu = sort_multipliers(mu)
+        paths[k] = mu
+        prev = mu
+    if backward:
+        paths = np.array([reciprocal(row) for row in paths])
+    return SetValuedMultipliers(q=q, paths=paths)
+
+
+def _match(prev: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """Reorder ``new`` to follow ``prev`` (greedy nearest neighbour)."""
+    out = np.empty_like(prev)
+    left = list(range(len(new)))
+    for i, m in enumerate(prev):
+        j = min(left, key=lambda jj: abs(new[jj] - m))
+        out[i] = new[j]
+        left.remove(j)
+    return out

@@ -1,0 +1,458 @@
+"""Periodic solutions by shooting, and equilibria, as problems ``r(u, lambda) = 0``.
+
+A shooting problem exposes the residual of the period map and its exact
+Jacobian (the monodromy matrix, with every saltation matrix applied) through
+the small protocol that :mod:`saltation.continuation` uses:
+``evaluate(u, lam) -> Evaluation(residual, jac_u, jac_lam, ...)``.
+
+* Forced systems: ``u = x0``, period ``T`` fixed by the forcing,
+  ``r = phi(t0 + s T; t0, x0) - x0`` with ``s = +1`` (forward) or ``-1``
+  (backward time).
+* Autonomous systems: ``u = (x0, T)``, the same residual closed by the phase
+  condition ``f(x_ref) . (x0 - x_ref) = 0``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import ConvergenceError, IntegrationError, ModelError, SaltationError
+from .floquet import is_stable, multipliers_from_monodromy, trivial_multiplier_error
+from .integrate import Flow, Tolerances, Trajectory
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Residual and Jacobians of a problem at ``(u, lam)``."""
+
+    residual: np.ndarray
+    jac_u: np.ndarray
+    jac_lam: np.ndarray | None
+    trajectory: Trajectory | None = None
+
+
+@dataclass(frozen=True)
+class PeriodicOrbit:
+    """A periodic solution found by shooting.
+
+    Attributes
+    ----------
+    state0 : ndarray, shape (n,)
+        State at ``t0`` on the orbit.
+    period : float
+    t0 : float
+    backward : bool
+        Whether the orbit was computed in backward time.
+    parameters : ndarray
+        Parameter values.
+    monodromy : ndarray, shape (n, n)
+        Monodromy in the direction of integration.
+    multipliers : ndarray, complex
+        Forward-time Floquet multipliers (``inf`` for an infinitely unstable direction).
+    trajectory : Trajectory
+        One period, with its events.
+    converged : bool
+    iterations : int
+    residual_norm : float
+    residuals : list of float
+        Newton residual history.
+    """
+
+    system_name: str
+    state0: np.ndarray
+    period: float
+    t0: float
+    backward: bool
+    autonomous: bool
+    parameters: np.ndarray
+    monodromy: np.ndarray
+    multipliers: np.ndarray
+    trajectory: Trajectory
+    converged: bool
+    iterations: int
+    residual_norm: float
+    residuals: list[float] = field(default_factory=list)
+
+    @property
+    def amplitude(self) -> float:
+        """``max |x_1|`` over the period."""
+        return float(max(abs(self.trajectory.x_max[0]), abs(self.trajectory.x_min[0])))
+
+    @property
+    def half_peak_to_peak(self) -> float:
+        """``(max x_1 - min x_1) / 2`` over the period."""
+        return float(0.5 * (self.trajectory.x_max[0] - self.trajectory.x_min[0]))
+
+    @property
+    def backward_multipliers(self) -> np.ndarray:
+        """Eigenvalues of the monodromy in the direction of integration."""
+        return np.linalg.eigvals(self.monodromy)
+
+    @property
+    def stable(self) -> bool:
+        return is_stable(self.multipliers, autonomous=self.autonomous)
+
+    @property
+    def trivial_multiplier_error(self) -> float:
+        """Distance of the trivial multiplier from 1 (autonomous orbits): an accuracy figure."""
+        return trivial_multiplier_error(self.multipliers) if self.autonomous else float("nan")
+
+    @property
+    def events(self) -> list[tuple[str, float]]:
+        return [(e.surface, e.t) for e in self.trajectory.events]
+
+
+def newton(
+    fun, u0: np.ndarray, *, tol: float = 1e-10, max_iter: int = 30, what: str = "Newton", damped: bool = False
+) -> tuple[np.ndarray, list[float], object]:
+    """Newton's method on ``fun(u) -> (r, J, extra)``.
+
+    Converged when ``|r| <= tol * (1 + |u|)`` or the step is below that.
+    With ``damped``, a step is halved (up to 8 times) until the residual decreases.
+
+    Raises
+    ------
+    ConvergenceError
+        With the residual history, after ``max_iter`` iterations or when the
+        Jacobian is singular.
+    """
+    u = np.array(u0, dtype=float)
+    history: list[float] = []
+    extra = None
+    for it in range(max_iter + 1):
+        r, J, extra = fun(u)
+        rn = float(np.linalg.norm(r))
+        history.append(rn)
+        if not np.isfinite(rn):
+            raise ConvergenceError(f"{what}: residual is not finite at iteration {it}", history)
+        scale = 1.0 + float(np.linalg.norm(u))
+        if rn <= tol * scale:
+            return u, history, extra
+        if it == max_iter:
+            break
+        try:
+            du = np.linalg.solve(J, -r)
+        except np.linalg.LinAlgError:
+            raise ConvergenceError(f"{what}: singular Jacobian at iteration {it}", history) from None
+        if not damped:
+            u = u + du
+        else:
+            # backtracking: accept the first step (full, half, ...) that reduces the residual
+            for _ in range(8):
+                try:
+                    r_try = fun(u + du)[0]
+                    if np.linalg.norm(r_try) < rn:
+                        break
+                except SaltationError:
+                    pass
+                du = 0.5 * du
+            u = u + du
+        if float(np.linalg.norm(du)) <= 1e-3 * tol * scale:
+            r, J, extra = fun(u)
+            history.append(float(np.linalg.norm(r)))
+            if history[-1] <= 10 * tol * scale:
+                return u, history, extra
+            break
+    raise ConvergenceError(f"{what} did not converge in {max_iter} iterations", history)
+
+
+class ShootingProblem:
+    """Periodic orbits of a model by single shooting.
+
+    Parameters
+    ----------
+    flow : Flow
+        The compiled flow of the model.
+    parameters : mapping or ndarray, optional
+        Parameter values (defaults of the model otherwise).
+    continuation_parameter : str, optional
+        Name of the parameter ``lam`` for :meth:`evaluate` (continuation).
+    backward : bool
+        Shoot in backward time (infinitely unstable orbits).
+    t0 : float
+        Initial time (forced systems: the phase of the forcing).
+    tolerances : Tolerances, optional
+    """
+
+    def __init__(
+        self,
+        flow: Flow,
+        parameters: Mapping[str, float] | np.ndarray | None = None,
+        *,
+        continuation_parameter: str | None = None,
+        backward: bool = False,
+        t0: float = 0.0,
+        tolerances: Tolerances | None = None,
+    ):
+        self.flow = flow
+        self.system = flow.system
+        self.p = flow.parameters(parameters)
+        self.lam_index = -1 if continuation_parameter is None else self.system.parameter_index(continuation_parameter)
+        self.lam_name = continuation_parameter
+        self.backward = bool(backward)
+        self.sign = -1.0 if backward else 1.0
+        self.t0 = float(t0)
+        self.tolerances = tolerances
+        self.autonomous = self.system.is_autonomous
+        self.x_ref: np.ndarray | None = None
+        self.f_ref: np.ndarray | None = None
+
+    # -- the protocol used by continuation ----------------------------------------------
+    @property
+    def dimension(self) -> int:
+        """Number of unknowns ``u``."""
+        return self.system.n + (1 if self.autonomous else 0)
+
+    def parameters_at(self, lam: float | None) -> np.ndarray:
+        p = self.p.copy()
+        if lam is not None:
+            if self.lam_index < 0:
+                raise ModelError("this problem has no continuation parameter")
+            p[self.lam_index] = lam
+        return p
+
+    def lam0(self) -> float:
+        if self.lam_index < 0:
+            raise ModelError("this problem has no continuation parameter")
+        return float(self.p[self.lam_index])
+
+    def pack(self, state0: Sequence[float], period: float | None = None) -> np.ndarray:
+        """Unknowns ``u`` from an initial state (and period, autonomous systems)."""
+        x0 = np.asarray(state0, dtype=float)
+        if x0.shape != (self.system.n,):
+            raise ModelError(f"initial state must have {self.system.n} components {list(self.system.state_names)}")
+        if not self.autonomous:
+            return x0.copy()
+        if period is None or not period > 0:
+            raise ModelError(f"model {self.system.name!r} is autonomous: give a positive period guess")
+        return np.append(x0, float(period))
+
+    def set_phase_reference(self, u: np.ndarray, lam: float | None = None) -> None:
+        """Anchor the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` at ``u``."""
+        x = u[: self.system.n]
+        p = self.parameters_at(lam)
+        mode = self.system.initial_mode(x, p, self.t0)
+        f = np.zeros(self.system.n)
+        self.flow._kernels.vector_field(mode, self.t0, np.ascontiguousarray(x), p, f)
+        norm = np.linalg.norm(f)
+        if norm == 0:
+            raise ModelError(f"phase condition undefined: the vector field vanishes at {x.tolist()}")
+        self.x_ref = x.copy()
+        self.f_ref = f / norm
+
+    def period_of(self, u: np.ndarray, lam: float | None = None) -> float:
+        return float(u[-1]) if self.autonomous else self.system.forcing_period(self.parameters_at(lam))
+
+    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
+        """Residual ``r(u, lam)`` and its exact Jacobians."""
+        n = self.system.n
+        p = self.parameters_at(lam)
+        x0 = np.ascontiguousarray(u[:n])
+        T = self.period_of(u, lam)
+        if not T > 0:
+            raise IntegrationError(f"shooting period must be positive, got {T}")
+        pidx = self.lam_index if (need_lam and lam is not None) else -1
+        traj = self.flow.run(
+            x0, self.t0, self.t0 + self.sign * T, p, variational=True, parameter=pidx, tolerances=self.tolerances
+        )
+        M = traj.monodromy
+        f_end = np.zeros(n)
+        mode_end = self.system.mode_index(traj.mode1)
+        if traj.sliding_at_end:
+            # the kernel's end state lies on a sliding motion; its velocity is the sliding field
+            f_end = _sliding_velocity(self.flow, traj, p)
+        else:
+            self.flow._kernels.vector_field(mode_end, traj.t1, np.ascontiguousarray(traj.x1), p, f_end)
+        r = traj.x1 - x0
+        J = M - np.eye(n)
+        jl = None
+        if pidx >= 0:
+            jl = traj.parameter_sensitivity.copy()
+            if not self.autonomous:
+                jl = jl + self.sign * f_end * self.system.period_derivative(p, pidx)
+        if self.autonomous:
+            if self.x_ref is None:
+                self.set_phase_reference(u, lam)
+            r = np.append(r, self.f_ref @ (x0 - self.x_ref))
+            J = np.block([[J, (self.sign * f_end)[:, None]], [self.f_ref[None, :], np.zeros((1, 1))]])
+            if jl is not None:
+                jl = np.append(jl, 0.0)
+        return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
+
+    # -- solving ------------------------------------------------------------------------
+    def solve(self, u0: np.ndarray, lam: float | None = None, *, tol: float = 1e-10, max_iter: int = 30) -> PeriodicOrbit:
+        """Newton on the period map from the guess ``u0``.
+
+        Raises
+        ------
+        ConvergenceError
+            With the residual history when Newton fails.
+        """
+        u0 = np.asarray(u0, dtype=float)
+        if self.autonomous:
+            self.set_phase_reference(u0, lam)
+
+        def fun(u):
+            ev = self.evaluate(u, lam, need_lam=False)
+            return ev.residual, ev.jac_u, ev
+
+        direction = "backward" if self.backward else "forward"
+        u, history, ev = newton(
+            fun, u0, tol=tol, max_iter=max_iter, what=f"shooting ({direction} time) for {self.system.name!r}", damped=True
+        )
+        return self.orbit(u, lam, ev, history)
+
+    def orbit(self, u: np.ndarray, lam: float | None, ev: Evaluation, history: Sequence[float] = ()) -> PeriodicOrbit:
+        """Package a solved point as a :class:`PeriodicOrbit`."""
+        traj = ev.trajectory
+        M = traj.monodromy
+        return PeriodicOrbit(
+            system_name=self.system.name,
+            state0=np.array(u[: self.system.n]),
+            period=self.period_of(u, lam),
+            t0=self.t0,
+            backward=self.backward,
+            autonomous=self.autonomous,
+            parameters=self.parameters_at(lam),
+            monodromy=M,
+            multipliers=multipliers_from_monodromy(M, backward=self.backward),
+            trajectory=traj,
+            converged=True,
+            iterations=max(len(history) - 1, 0),
+            residual_norm=float(history[-1]) if history else float(np.linalg.norm(ev.residual)),
+            residuals=list(history),
+        )
+
+
+def _sliding_velocity(flow: Flow, traj: Trajectory, p: np.ndarray) -> np.ndarray:
+    """Velocity at the end of a trajectory that ends on a sliding motion (finite differences free)."""
+    # re-run a tiny bit further would change the event log; the sliding field is evaluated directly instead
+    sys_ = flow.system
+    ev = [e for e in traj.events if e.kind == 1][-1]
+    a, b = sys_.mode_index(ev.mode_from), sys_.mode_index(ev.mode_to)
+    s = sys_.surface_index(ev.surface)
+    k = flow._kernels
+    x = np.ascontiguousarray(traj.x1)
+    fa = np.zeros(sys_.n)
+    fb = np.zeros(sys_.n)
+    k.vector_field(a, traj.t1, x, p, fa)
+    k.vector_field(b, traj.t1, x, p, fb)
+    g = np.zeros(sys_.n)
+    gp = np.zeros(max(sys_.n_params, 1))
+    sa = k.lie_derivative(a, s, traj.t1, x, p, g, gp)
+    sb = k.lie_derivative(b, s, traj.t1, x, p, g, gp)
+    alpha = sa / (sa - sb)
+    return fa + alpha * (fb - fa)
+
+
+def find_periodic_orbit(
+    flow: Flow,
+    state0: Sequence[float],
+    *,
+    parameters: Mapping[str, float] | None = None,
+    period: float | None = None,
+    backward: bool = False,
+    t0: float = 0.0,
+    tol: float = 1e-10,
+    max_iter: int = 30,
+    tolerances: Tolerances | None = None,
+) -> PeriodicOrbit:
+    """Find one periodic orbit by shooting from a guess.
+
+    Parameters
+    ----------
+    flow : Flow
+    state0 : array_like
+        Guess of the state at ``t0``.
+    parameters : mapping, optional
+        Parameter overrides.
+    period : float, optional
+        Period guess (autonomous systems; forced systems use the forcing period).
+    backward : bool
+        Shoot in backward time.
+    """
+    prob = ShootingProblem(flow, parameters, backward=backward, t0=t0, tolerances=tolerances)
+    return prob.solve(prob.pack(state0, period), tol=tol, max_iter=max_iter)
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """An equilibrium of one mode, with the eigenvalues of ``f_x`` there."""
+
+    mode: str
+    state: np.ndarray
+    parameters: np.ndarray
+    eigenvalues: np.ndarray
+    residuals: list[float]
+
+    @property
+    def stable(self) -> bool:
+        return bool(np.all(self.eigenvalues.real < 0))
+
+
+class EquilibriumProblem:
+    """Equilibria ``f(x, p) = 0`` of one mode (autonomous systems), in the continuation protocol."""
+
+    def __init__(
+        self,
+        flow: Flow,
+        mode: str | int,
+        parameters: Mapping[str, float] | np.ndarray | None = None,
+        *,
+        continuation_parameter: str | None = None,
+    ):
+        self.flow = flow
+        self.system = flow.system
+        self.mode = self.system.mode_index(mode)
+        self.p = flow.parameters(parameters)
+        self.lam_index = -1 if continuation_parameter is None else self.system.parameter_index(continuation_parameter)
+        self.lam_name = continuation_parameter
+        self.autonomous = True
+        self.backward = False
+
+    @property
+    def dimension(self) -> int:
+        return self.system.n
+
+    def parameters_at(self, lam: float | None) -> np.ndarray:
+        p = self.p.copy()
+        if lam is not None:
+            p[self.lam_index] = lam
+        return p
+
+    def lam0(self) -> float:
+        return float(self.p[self.lam_index])
+
+    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
+        n = self.system.n
+        p = self.parameters_at(lam)
+        k = self.flow._kernels
+        x = np.ascontiguousarray(u, dtype=float)
+        f = np.zeros(n)
+        J = np.zeros((n, n))
+        k.vector_field(self.mode, 0.0, x, p, f)
+        k.vector_field_jac(self.mode, 0.0, x, p, J)
+        jl = None
+        if need_lam and lam is not None:
+            fp = np.zeros((n, max(self.system.n_params, 1)))
+            k.vector_field_dp(self.mode, 0.0, x, p, fp)
+            jl = fp[:, self.lam_index].copy()
+        return Evaluation(residual=f, jac_u=J, jac_lam=jl)
+
+    def solve(self, x0: Sequence[float], lam: float | None = None, *, tol: float = 1e-12, max_iter: int = 30) -> Equilibrium:
+        def fun(u):
+            ev = self.evaluate(u, lam, need_lam=False)
+            return ev.residual, ev.jac_u, ev
+
+        mname = self.system.mode_names[self.mode]
+        x, history, ev = newton(fun, np.asarray(x0, dtype=float), tol=tol, max_iter=max_iter, what=f"equilibrium of mode {mname!r}")
+        return Equilibrium(
+            mode=mname,
+            state=x,
+            parameters=self.parameters_at(lam),
+            eigenvalues=np.linalg.eigvals(ev.jac_u),
+            residuals=history,
+        )
