@@ -51,7 +51,7 @@ CHATTER_WINDOW = 40
 def _field(mode, slide, t, x, p, var, pidx, f, J, fpc, ws1, ws2, ws3, wsJ1, wsJ2, wsP, gA, gB, gpA, gpB):
     """Vector field (and Jacobian and parameter column) of a mode or a sliding motion.
 
-    ``slide = (active, mode_a, mode_b, surface, crossing)``; the sliding field
+    ``slide = (active, mode_a, mode_b, surface, crossing, time direction)``; the sliding field
     is Filippov's ``f_a + alpha (f_b - f_a)`` with ``alpha = s_a / (s_a - s_b)``,
     ``s_m = h_x f_m + h_t``.
     """
@@ -200,8 +200,8 @@ def _event_value(kind, idx, slide, t, x, p, gtmp, gptmp):
     if kind == 0:
         return indicator(idx, t, x, p)  # noqa: F821
     if kind == 1:
-        return slide[4] * lie_derivative(slide[1], slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
-    return -slide[4] * lie_derivative(slide[2], slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
+        return slide[4] * slide[5] * lie_derivative(slide[1], slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
+    return -slide[4] * slide[5] * lie_derivative(slide[2], slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
 
 
 @njit(cache=True)
@@ -289,7 +289,7 @@ def _slope(mode, slide, kind, idx, t, x, f, p, n, hx, hp, gtmp, gptmp):
     acc = 0.0
     for i in range(n):
         acc += gtmp[i] * f[i]
-    return (slide[4] if kind == 1 else -slide[4]) * acc
+    return (slide[4] if kind == 1 else -slide[4]) * slide[5] * acc
 
 
 @njit(cache=True)
@@ -392,7 +392,8 @@ def integrate_kernel(
             y[n + n * n + i] = psi0[i]
 
     mode = mode0
-    slide = np.zeros(5, dtype=np.int64)  # active, mode_a, mode_b, surface, crossing
+    slide = np.zeros(6, dtype=np.int64)  # active, mode_a, mode_b, surface, crossing, time direction
+    slide[5] = 1 if direction > 0 else -1
     t = t0
 
     # event log
@@ -655,6 +656,7 @@ def integrate_kernel(
         sgn_ev = surf_sign[best_idx] if best_kind == 0 else 1.0
         s_e = best_s
         s_prev = -1.0
+        g_e = 1.0
         g_prev = 0.0
         for it in range(6):
             for i in range(N):
@@ -683,6 +685,17 @@ def integrate_kernel(
             if abs(s_new - s_e) <= 2.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300)):
                 break
             s_e = s_new
+        # make sure the event state lies on (or just past) the switching set, never before it
+        bump = 4.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300))
+        for it in range(40):
+            if g_e <= 0.0 or s_e >= 1.0:
+                break
+            s_e = min(s_e + bump, 1.0)
+            bump *= 2.0
+            for i in range(N):
+                K[0, i] = Ksave[0, i]
+            _rk_step(mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv)
+            g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
         t_e = t + s_e * h
         # state at the event (before it)
         for i in range(N):
@@ -765,7 +778,7 @@ def integrate_kernel(
             crossing_sign = slide[4]
             surf_sign[slide[3]] = -crossing_sign if best_kind == 1 else crossing_sign
             fixed_sign[slide[3]] = True
-            mode_from = slide[1] if best_kind == 1 else slide[2]
+            mode_from = slide[2] if best_kind == 1 else slide[1]
             mode_to = exit_mode
             mode = exit_mode
             slide[0] = 0
