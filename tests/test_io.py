@@ -1,0 +1,321 @@
+"""Export and reload of branches and special points."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+from saltation.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind, StopReason
+from saltation.io import (
+    csv_metadata_path,
+    load_branch_csv,
+    load_branch_json,
+    load_diagram_json,
+    load_special_points_json,
+    save_branch_csv,
+    save_branch_json,
+    save_diagram_json,
+    save_special_points_json,
+    special_point_record,
+)
+
+INF = complex(math.inf, 0.0)
+
+
+def _point(k: int, *, stable: bool, mu: np.ndarray, events: tuple[str, ...]) -> BranchPoint:
+    # irrational-looking values exercise full-precision writing
+    return BranchPoint(
+        parameter=0.1 * k + 1 / 3,
+        state=np.array([np.sqrt(2) * k, -np.pi / (k + 1)]),
+        period=2 * np.pi / (1.0 + 0.1 * k + 1e-17 * k),
+        amplitude=np.e + k * 1e-9,
+        half_peak_to_peak=np.e - k / 7,
+        multipliers=mu,
+        stable=stable,
+        events=events,
+        step=1e-3 / 3 * (k + 1),
+        iterations=k % 4,
+    )
+
+
+def smooth_fold() -> SpecialPoint:
+    return SpecialPoint(
+        kind=SpecialPointKind.FOLD,
+        parameter=1.2345678901234567,
+        bracket=(1.2345678901, 1.2345678902),
+        accuracy=1e-10,
+        index=2,
+        state=np.array([0.1, -0.2]),
+        period=6.283185307179586,
+        amplitude=1.5,
+        multipliers=np.array([1.0 + 0.0j, 0.3 - 0.1j]),
+        note="smooth fold",
+    )
+
+
+def discontinuous_fold() -> SpecialPoint:
+    return SpecialPoint(
+        kind=SpecialPointKind.DISCONTINUOUS_FOLD,
+        parameter=0.7071067811865476,
+        bracket=(0.70710678, 0.70710679),
+        accuracy=1e-8,
+        index=4,
+        state=np.array([2.0, 0.5]),
+        period=4.1,
+        amplitude=2.0,
+        multipliers_minus=np.array([1.0 + 0j, 0.0 + 0j]),
+        multipliers_plus=np.array([INF, 1.0 + 0j]),
+        monodromy_minus=np.array([[1.0, 0.25], [0.0, 0.0]]),
+        monodromy_plus=np.array([[1.0, 0.0], [np.inf, 1.0]]),
+        crossing_q=0.5,
+        crossing_point=1.0 + 0.0j,
+        events_minus=("slip -[stick+]-> stick",),
+        events_plus=("slip -[stick+]-> stick", "stick -[slip-]-> slip"),
+        note="set-valued multiplier crosses at +1",
+    )
+
+
+def no_crossing() -> SpecialPoint:
+    return SpecialPoint(
+        kind=SpecialPointKind.NONSMOOTH_NO_CROSSING,
+        parameter=0.9,
+        bracket=(0.89, 0.91),
+        accuracy=0.02,
+        index=5,
+        state=np.array([1.0, 0.0]),
+        period=math.nan,
+        amplitude=1.0,
+        multipliers_minus=np.array([0.5 + 0.2j, 0.5 - 0.2j]),
+        multipliers_plus=np.array([0.4 + 0j, 0.1 + 0j]),
+    )
+
+
+def synthetic_branch() -> Branch:
+    points = []
+    for k in range(8):
+        stable = k < 5
+        if stable:
+            mu = np.array([0.5 + 0.25j * k / 8, 0.5 - 0.25j * k / 8])
+            events = ("free -[h1+]-> contact", "contact -[h1-]-> free")
+        else:
+            mu = np.array([INF, 1.0 + 1e-16j])
+            events = ("slide on stick (slip|stick)", "leave stick sliding -> slip")
+        points.append(_point(k, stable=stable, mu=mu, events=events))
+    points.append(_point(8, stable=False, mu=np.array([INF, 1.0 + 0j]), events=()))
+    return Branch(
+        model="block_on_belt",
+        parameter_name="v_dr",
+        kind=BranchKind.PERIODIC,
+        backward=True,
+        points=points,
+        special_points=[smooth_fold(), discontinuous_fold(), no_crossing()],
+        stop_reason=StopReason.MIN_STEP,
+        fixed_parameters={"m": 1.0, "k": 1.0, "c": 0.0, "F_slip": 1.0, "F_stick": 2.0, "eta": 1e-4},
+        label="unstable periodic",
+        autonomous=True,
+    )
+
+
+def _same_array(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    if a is None or b is None:
+        return a is None and b is None
+    a, b = np.asarray(a), np.asarray(b)
+    return a.shape == b.shape and a.dtype.kind == b.dtype.kind and np.array_equal(a, b, equal_nan=True)
+
+
+def _same_float(a: float | None, b: float | None) -> bool:
+    if a is None or b is None:
+        return a is None and b is None
+    return a == b or (math.isnan(a) and math.isnan(b))
+
+
+def assert_points_equal(p: BranchPoint, q: BranchPoint) -> None:
+    for name in ("parameter", "period", "amplitude", "half_peak_to_peak", "step"):
+        assert _same_float(getattr(p, name), getattr(q, name)), name
+    assert _same_array(p.state, q.state)
+    assert _same_array(p.multipliers, q.multipliers)
+    assert p.stable == q.stable and isinstance(q.stable, bool)
+    assert p.events == q.events and isinstance(q.events, tuple)
+    assert p.iterations == q.iterations
+
+
+def assert_special_points_equal(s: SpecialPoint, t: SpecialPoint) -> None:
+    assert s.kind is t.kind
+    for name in ("parameter", "accuracy", "period", "amplitude", "crossing_q"):
+        assert _same_float(getattr(s, name), getattr(t, name)), name
+    assert tuple(s.bracket) == tuple(t.bracket)
+    assert s.index == t.index
+    for name in ("state", "multipliers", "multipliers_minus", "multipliers_plus", "monodromy_minus", "monodromy_plus"):
+        assert _same_array(getattr(s, name), getattr(t, name)), name
+    assert s.crossing_point == t.crossing_point
+    assert s.events_minus == t.events_minus and s.events_plus == t.events_plus
+    assert s.note == t.note
+
+
+def assert_branches_equal(a: Branch, b: Branch) -> None:
+    assert (a.model, a.parameter_name, a.kind, a.backward, a.stop_reason, a.label, a.autonomous) == (
+        b.model, b.parameter_name, b.kind, b.backward, b.stop_reason, b.label, b.autonomous
+    )
+    assert a.fixed_parameters == b.fixed_parameters
+    assert len(a.points) == len(b.points)
+    for p, q in zip(a.points, b.points):
+        assert_points_equal(p, q)
+    assert len(a.special_points) == len(b.special_points)
+    for s, t in zip(a.special_points, b.special_points):
+        assert_special_points_equal(s, t)
+
+
+# --- JSON -------------------------------------------------------------------
+
+
+def test_branch_json_round_trip_is_lossless(tmp_path):
+    branch = synthetic_branch()
+    path = save_branch_json(branch, tmp_path / "branch.json")
+    assert_branches_equal(branch, load_branch_json(path))
+
+
+def test_branch_json_is_strict_json_with_inf_as_string(tmp_path):
+    path = save_branch_json(synthetic_branch(), tmp_path / "branch.json")
+    text = path.read_text()
+    assert "Infinity" not in text and "NaN" not in text
+    d = json.loads(text)
+    last = d["points"][-1]
+    assert last["multipliers"] == ["inf", [1.0, 0.0]]
+    assert d["special_points"][2]["period"] == "nan"
+    assert d["special_points"][1]["monodromy_plus"] == [[1.0, 0.0], ["inf", 1.0]]
+
+
+def test_branch_json_round_trip_of_equilibrium_branch(tmp_path):
+    eq = Branch(
+        model="block_on_belt",
+        parameter_name="v_dr",
+        kind=BranchKind.EQUILIBRIUM,
+        points=[
+            BranchPoint(
+                parameter=v, state=np.array([1.0, 0.0]), period=math.nan, amplitude=1.0,
+                half_peak_to_peak=0.0, multipliers=np.array([-0.1 + 1j, -0.1 - 1j]), stable=True, events=(),
+            )
+            for v in (0.1, 0.2)
+        ],
+    )
+    assert_branches_equal(eq, load_branch_json(save_branch_json(eq, tmp_path / "eq.json")))
+
+
+def test_diagram_json_round_trip(tmp_path):
+    a = synthetic_branch()
+    b = synthetic_branch()
+    b.label, b.backward, b.stop_reason, b.special_points = "stable periodic", False, None, []
+    loaded = load_diagram_json(save_diagram_json([a, b], tmp_path / "diagram.json"))
+    assert len(loaded) == 2
+    assert_branches_equal(a, loaded[0])
+    assert_branches_equal(b, loaded[1])
+
+
+def test_load_rejects_other_formats(tmp_path):
+    path = tmp_path / "x.json"
+    path.write_text(json.dumps({"format": "something else", "version": 1}))
+    with pytest.raises(ValueError, match="saltation.branch"):
+        load_branch_json(path)
+    path.write_text(json.dumps({"format": "saltation.branch", "version": 99}))
+    with pytest.raises(ValueError, match="version 99"):
+        load_branch_json(path)
+
+
+# --- CSV --------------------------------------------------------------------
+
+
+def test_csv_columns(tmp_path):
+    path = save_branch_csv(synthetic_branch(), tmp_path / "branch.csv")
+    with path.open(newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == [
+        "parameter", "period", "amplitude", "half_peak_to_peak", "stable", "events", "step", "iterations",
+        "state_0", "state_1", "mu0_re", "mu0_im", "mu0_abs", "mu1_re", "mu1_im", "mu1_abs",
+    ]
+    assert len(rows) == 1 + len(synthetic_branch())
+    first = dict(zip(rows[0], rows[1]))
+    assert first["stable"] == "true"
+    assert first["events"] == "free -[h1+]-> contact;contact -[h1-]-> free"
+    assert float(first["parameter"]) == 1 / 3
+    last = dict(zip(rows[0], rows[-1]))
+    assert (last["mu0_re"], last["mu0_im"], last["mu0_abs"]) == ("inf", "0.0", "inf")
+    assert last["events"] == ""
+
+
+def test_csv_round_trip_of_points_is_lossless(tmp_path):
+    branch = synthetic_branch()
+    path = save_branch_csv(branch, tmp_path / "branch.csv", metadata=False)
+    assert not csv_metadata_path(path).exists()
+    loaded = load_branch_csv(path, model="block_on_belt", parameter_name="v_dr")
+    assert (loaded.model, loaded.parameter_name, loaded.special_points) == ("block_on_belt", "v_dr", [])
+    assert len(loaded) == len(branch)
+    for p, q in zip(branch.points, loaded.points):
+        assert_points_equal(p, q)
+
+
+def test_csv_with_side_file_restores_the_whole_branch(tmp_path):
+    branch = synthetic_branch()
+    path = save_branch_csv(branch, tmp_path / "run.v1.csv")
+    assert csv_metadata_path(path) == tmp_path / "run.v1.meta.json"
+    assert_branches_equal(branch, load_branch_csv(path))
+
+
+def test_csv_rejects_ragged_points(tmp_path):
+    branch = synthetic_branch()
+    p = branch.points[3]
+    branch.points[3] = BranchPoint(
+        p.parameter, np.zeros(3), p.period, p.amplitude, p.half_peak_to_peak, p.multipliers, p.stable, p.events
+    )
+    with pytest.raises(ValueError, match="point 3"):
+        save_branch_csv(branch, tmp_path / "bad.csv")
+
+
+# --- special-point records --------------------------------------------------
+
+COMMON = {"model", "kind", "parameter", "value", "amplitude", "bracket", "accuracy", "crossing_point", "note"}
+
+
+def test_record_of_smooth_point():
+    rec = special_point_record(smooth_fold(), "trilinear", "omega")
+    assert set(rec) == COMMON | {"multipliers"}
+    assert list(rec)[:5] == ["model", "kind", "parameter", "value", "amplitude"]
+    assert rec["model"] == "trilinear"
+    assert rec["kind"] == "fold"
+    assert rec["parameter"] == "omega"
+    assert rec["value"] == 1.2345678901234567
+    assert rec["amplitude"] == 1.5
+    assert rec["multipliers"] == [[1.0, 0.0], [0.3, -0.1]]
+    assert rec["bracket"] == [1.2345678901, 1.2345678902]
+    assert rec["accuracy"] == 1e-10
+    assert rec["crossing_point"] is None
+    assert rec["note"] == "smooth fold"
+
+
+def test_record_of_nonsmooth_point():
+    rec = special_point_record(discontinuous_fold(), "block_on_belt", "v_dr")
+    assert set(rec) == COMMON | {"multipliers_minus", "multipliers_plus", "crossing_q"}
+    assert rec["kind"] == "discontinuous_fold"
+    assert rec["parameter"] == "v_dr"
+    assert rec["value"] == 0.7071067811865476
+    assert rec["multipliers_minus"] == [[1.0, 0.0], [0.0, 0.0]]
+    assert rec["multipliers_plus"] == ["inf", [1.0, 0.0]]
+    assert rec["crossing_q"] == 0.5
+    assert rec["crossing_point"] == [1.0, 0.0]
+
+    rec = special_point_record(no_crossing(), "trilinear", "omega")
+    assert set(rec) == COMMON | {"multipliers_minus", "multipliers_plus", "crossing_q"}
+    assert rec["crossing_q"] is None and rec["crossing_point"] is None
+
+
+def test_special_points_json(tmp_path):
+    branch = synthetic_branch()
+    records = [special_point_record(sp, branch.model, branch.parameter_name) for sp in branch.special_points]
+    path = save_special_points_json(records, tmp_path / "special_points.json")
+    text = path.read_text()
+    assert "Infinity" not in text and "NaN" not in text
+    assert json.loads(text) == records
+    assert load_special_points_json(path) == records
