@@ -158,6 +158,9 @@ class Branch:
     points : list of BranchPoint
     special_points : list of SpecialPoint
     stop_reason : StopReason or None
+        Why the (first) run stopped.
+    stop_reasons : list
+        Why each further run (other directions) stopped.
     fixed_parameters : dict
         Values of every parameter (the continuation parameter at the start point).
     label : str
@@ -171,6 +174,7 @@ class Branch:
     points: list[BranchPoint] = field(default_factory=list)
     special_points: list[SpecialPoint] = field(default_factory=list)
     stop_reason: StopReason | None = None
+    stop_reasons: list[StopReason | None] = field(default_factory=list)
     fixed_parameters: dict[str, float] = field(default_factory=dict)
     label: str = ""
     autonomous: bool = False

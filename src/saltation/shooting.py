@@ -21,7 +21,7 @@ import numpy as np
 
 from .errors import ConvergenceError, IntegrationError, ModelError, SaltationError
 from .floquet import is_stable, multipliers_from_monodromy, trivial_multiplier_error
-from .integrate import Flow, Tolerances, Trajectory
+from .integrate import EventKind, Flow, Tolerances, Trajectory
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,34 @@ class Evaluation:
     jac_u: np.ndarray
     jac_lam: np.ndarray | None
     trajectory: Trajectory | None = None
+
+
+@dataclass(frozen=True)
+class SolutionSummary:
+    """What a branch records of a solved point."""
+
+    state: np.ndarray
+    period: float
+    amplitude: float
+    half_peak_to_peak: float
+    multipliers: np.ndarray
+    stable: bool
+    events: tuple[str, ...]
+    monodromy: np.ndarray | None = None
+
+
+def event_labels(traj: Trajectory) -> tuple[str, ...]:
+    """Readable labels of a trajectory's events: the transition, or the sliding motion started or ended."""
+    sys_ = traj.system
+    labels = []
+    for e in traj.events:
+        if e.kind == EventKind.TRANSITION:
+            labels.append(sys_.transitions[e.transition].label)
+        elif e.kind == EventKind.SLIDING_START:
+            labels.append(f"slide on {e.surface} ({e.mode_from}|{e.mode_to})")
+        else:
+            labels.append(f"leave {e.surface} sliding -> {e.mode_to}")
+    return tuple(labels)
 
 
 @dataclass(frozen=True)
@@ -282,6 +310,26 @@ class ShootingProblem:
                 jl = np.append(jl, 0.0)
         return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
 
+    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+        """Summary of a solved point for a branch (multipliers, amplitude, events)."""
+        traj = ev.trajectory
+        mu = multipliers_from_monodromy(traj.monodromy, backward=self.backward)
+        return SolutionSummary(
+            state=np.array(u[: self.system.n]),
+            period=self.period_of(u, lam),
+            amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
+            half_peak_to_peak=float(0.5 * (traj.x_max[0] - traj.x_min[0])),
+            multipliers=mu,
+            stable=is_stable(mu, autonomous=self.autonomous),
+            events=event_labels(traj),
+            monodromy=traj.monodromy,
+        )
+
+    def accept(self, u: np.ndarray, lam: float | None) -> None:
+        """Called by continuation at every accepted point: re-anchor the phase condition."""
+        if self.autonomous:
+            self.set_phase_reference(u, lam)
+
     # -- solving ------------------------------------------------------------------------
     def solve(self, u0: np.ndarray, lam: float | None = None, *, tol: float = 1e-10, max_iter: int = 30) -> PeriodicOrbit:
         """Newton on the period map from the guess ``u0``.
@@ -441,6 +489,22 @@ class EquilibriumProblem:
             k.vector_field_dp(self.mode, 0.0, x, p, fp)
             jl = fp[:, self.lam_index].copy()
         return Evaluation(residual=f, jac_u=J, jac_lam=jl)
+
+    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+        eig = np.linalg.eigvals(ev.jac_u).astype(complex)
+        eig = eig[np.lexsort((-eig.imag, -eig.real))]
+        return SolutionSummary(
+            state=np.array(u),
+            period=float("nan"),
+            amplitude=float(abs(u[0])),
+            half_peak_to_peak=0.0,
+            multipliers=eig,
+            stable=bool(np.all(eig.real < 0)),
+            events=(),
+        )
+
+    def accept(self, u: np.ndarray, lam: float | None) -> None:
+        """Nothing to re-anchor for equilibria."""
 
     def solve(self, x0: Sequence[float], lam: float | None = None, *, tol: float = 1e-12, max_iter: int = 30) -> Equilibrium:
         def fun(u):

@@ -1,0 +1,306 @@
+"""Detection, location and classification of special points along a branch.
+
+Smooth special points are found by test functions and located by the
+Illinois method along the secant between two branch points:
+
+* fold (turning point): the parameter component of the tangent changes sign;
+* period doubling: a real multiplier passes -1 (``prod(mu + 1)`` changes sign);
+* Neimark-Sacker: a complex pair leaves the unit circle;
+* Hopf (equilibria): a complex pair of eigenvalues crosses the imaginary axis.
+
+*Discontinuous* (non-smooth) points are where the orbit's event sequence
+changes.  They are located by bisection along the secant to ``locate_tol``;
+the monodromies on both sides, ``M-`` and ``M+``, give the set-valued
+Floquet multipliers, the eigenvalues of ``(1 - q) M- + q M+`` for ``q`` in
+``[0, 1]``.  Where that set crosses the unit circle the point is a
+discontinuous fold (through +1), flip (through -1) or Neimark-Sacker (a
+complex pair); if it stays on one side it is a jump without crossing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
+from .continuation import Corrector, Solution, canonical_events
+from .errors import SaltationError
+from .floquet import set_valued_multipliers
+
+
+@dataclass(frozen=True)
+class SetValuedCrossing:
+    """How the set-valued multipliers of a non-smooth point meet the unit circle."""
+
+    kind: SpecialPointKind
+    q: float | None
+    point: complex | None
+
+
+def classify_nonsmooth(
+    m_minus: np.ndarray | None,
+    m_plus: np.ndarray | None,
+    *,
+    backward: bool = False,
+    autonomous: bool = False,
+    mu_minus: np.ndarray | None = None,
+    mu_plus: np.ndarray | None = None,
+    num: int = 801,
+) -> SetValuedCrossing:
+    """Classify a non-smooth point from its one-sided monodromies.
+
+    The eigenvalue paths of ``(1 - q) M- + q M+`` are followed for ``q`` in
+    ``[0, 1]``; the first non-trivial path whose magnitude passes 1 decides
+    the kind.  Monodromies computed in backward time are combined in backward
+    time (their eigenvalues are reciprocals of the forward multipliers, and
+    the unit circle, +1 and -1 are the same).  When one side is infinitely
+    unstable (a forward multiplier is infinite; ``M`` is then not available
+    in forward time), the jump runs along the real axis from the finite
+    multiplier to infinity and crosses at ``q = 0``.
+    """
+    if m_minus is None or m_plus is None:
+        fin = mu_minus if m_minus is not None else mu_plus
+        inf_side = mu_plus if m_minus is not None else mu_minus
+        if fin is None or inf_side is None:
+            raise SaltationError("a non-smooth point needs both one-sided monodromies or multipliers")
+        if any(np.isinf(np.abs(inf_side))):
+            finite_partner = [m for m in fin if abs(m - 1.0) > 1e-6 or not autonomous]
+            m = finite_partner[0] if finite_partner else fin[-1]
+            if abs(m.imag) < 1e-9 and m.real >= 0:
+                return SetValuedCrossing(SpecialPointKind.DISCONTINUOUS_FOLD, 0.0, complex(1.0, 0.0))
+            if abs(m.imag) < 1e-9:
+                return SetValuedCrossing(SpecialPointKind.DISCONTINUOUS_FLIP, 0.0, complex(-1.0, 0.0))
+            return SetValuedCrossing(SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER, 0.0, m / abs(m))
+        raise SaltationError("one-sided monodromy missing for a finite jump")
+    sv = set_valued_multipliers(m_minus, m_plus, num=num, backward=False)
+    paths = sv.paths
+    mags = np.abs(paths)
+    n = paths.shape[1]
+    trivial = -1
+    if autonomous:
+        dev = np.max(np.abs(paths - 1.0), axis=0)
+        trivial = int(np.argmin(dev)) if np.min(dev) < 1e-5 else -1
+    best = None
+    for i in range(n):
+        if i == trivial:
+            continue
+        g = mags[:, i] - 1.0
+        g = np.where(np.isfinite(g), g, 1e300)
+        sign_change = np.nonzero(np.sign(g[:-1]) * np.sign(g[1:]) <= 0)[0]
+        if sign_change.size == 0:
+            continue
+        k = int(sign_change[0])
+        if g[k] == g[k + 1]:
+            qc = float(sv.q[k])
+        else:
+            qc = float(sv.q[k] + (sv.q[k + 1] - sv.q[k]) * g[k] / (g[k] - g[k + 1]))
+        qc, point = _refine_crossing(m_minus, m_plus, paths[k, i], qc, float(sv.q[k]), float(sv.q[k + 1]))
+        if best is None or qc < best[0]:
+            best = (qc, point)
+    if best is None:
+        return SetValuedCrossing(SpecialPointKind.NONSMOOTH_NO_CROSSING, None, None)
+    qc, point = best
+    if backward:
+        point = 1.0 / point
+    if abs(point.imag) > 1e-6:
+        kind = SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER
+    elif point.real > 0:
+        kind = SpecialPointKind.DISCONTINUOUS_FOLD
+    else:
+        kind = SpecialPointKind.DISCONTINUOUS_FLIP
+    return SetValuedCrossing(kind, qc, complex(point))
+
+
+def _refine_crossing(m_minus, m_plus, guide: complex, q0: float, qa: float, qb: float) -> tuple[float, complex]:
+    """Refine the crossing ``|mu(q)| = 1`` of the eigenvalue path near ``guide`` by bisection."""
+
+    def mu_at(q: float, near: complex) -> complex:
+        ev = np.linalg.eigvals((1.0 - q) * m_minus + q * m_plus)
+        return complex(ev[np.argmin(np.abs(ev - near))])
+
+    ma = mu_at(qa, guide)
+    ga = abs(ma) - 1.0
+    near = ma
+    for _ in range(60):
+        qm = 0.5 * (qa + qb)
+        mm = mu_at(qm, near)
+        gm = abs(mm) - 1.0
+        if np.sign(gm) == np.sign(ga) and gm != 0.0:
+            qa, ga, near = qm, gm, mm
+        else:
+            qb = qm
+            near = mm
+        if qb - qa < 1e-13:
+            break
+    q = 0.5 * (qa + qb)
+    return q, mu_at(q, near)
+
+
+class SpecialPointDetector:
+    """Looks for special points between consecutive branch points and locates them."""
+
+    def __init__(self, problem, corrector: Corrector, branch: Branch):
+        self.problem = problem
+        self.corrector = corrector
+        self.branch = branch
+        self.tol = corrector.settings.locate_tol
+        self.equilibrium = branch.kind is BranchKind.EQUILIBRIUM
+        self.autonomous = branch.autonomous and not self.equilibrium
+
+    # -- detection ------------------------------------------------------------------------
+    def check(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
+        if canonical_events(a.summary.events) != canonical_events(b.summary.events):
+            return [self.locate_nonsmooth(a, b, index)]
+        found = []
+        secant = _unit(b.z - a.z)
+        fold = lambda s: self.corrector.tangent(s, secant)[-1]  # noqa: E731
+        if fold(a) * fold(b) < 0:
+            found.append(self.locate_smooth(a, b, index, SpecialPointKind.FOLD, fold))
+        if self.equilibrium:
+            ga, gb = _hopf_test(a), _hopf_test(b)
+            if ga * gb < 0:
+                found.append(self.locate_smooth(a, b, index, SpecialPointKind.HOPF, _hopf_test))
+            return found
+        for kind, test in ((SpecialPointKind.PERIOD_DOUBLING, _flip_test), (SpecialPointKind.NEIMARK_SACKER, _ns_test)):
+            g = lambda s, test=test: test(_nontrivial(s, self.autonomous))  # noqa: E731
+            if g(a) * g(b) < 0:
+                found.append(self.locate_smooth(a, b, index, kind, g))
+        return found
+
+    # -- location along the secant ----------------------------------------------------------
+    def on_secant(self, a: Solution, b: Solution, sigma: float) -> Solution:
+        d = b.z - a.z
+        return self.corrector.solve_bordered(a.z + sigma * d, _unit(d))
+
+    def locate_smooth(
+        self, a: Solution, b: Solution, index: int, kind: SpecialPointKind, test: Callable[[Solution], float]
+    ) -> SpecialPoint:
+        """Illinois iteration on a continuous test function along the secant from ``a`` to ``b``."""
+        sa, sb = 0.0, 1.0
+        ga, gb = test(a), test(b)
+        lo, hi = a, b
+        side = 0
+        for _ in range(80):
+            if np.linalg.norm(hi.z - lo.z) <= self.tol:
+                break
+            sm = sb - gb * (sb - sa) / (gb - ga) if gb != ga else 0.5 * (sa + sb)
+            if not (sa < sm < sb) or (sb - sa) < 1e-14:
+                sm = 0.5 * (sa + sb)
+            try:
+                mid = self.on_secant(a, b, sm)
+            except SaltationError:
+                break
+            gm = test(mid)
+            if gm == 0.0:
+                lo = hi = mid
+                break
+            if np.sign(gm) == np.sign(ga):
+                sa, ga, lo = sm, gm, mid
+                if side == -1:
+                    gb *= 0.5
+                side = -1
+            else:
+                sb, gb, hi = sm, gm, mid
+                if side == 1:
+                    ga *= 0.5
+                side = 1
+        best = lo if abs(test(lo)) <= abs(test(hi)) else hi
+        bracket = (min(lo.lam, hi.lam), max(lo.lam, hi.lam))
+        return SpecialPoint(
+            kind=kind,
+            parameter=best.lam,
+            bracket=bracket,
+            accuracy=float(np.linalg.norm(hi.z - lo.z)),
+            index=index,
+            state=best.summary.state,
+            period=best.summary.period,
+            amplitude=best.summary.amplitude,
+            multipliers=best.summary.multipliers,
+        )
+
+    def locate_nonsmooth(self, a: Solution, b: Solution, index: int) -> SpecialPoint:
+        """Bisection along the secant on the event sequence, then set-valued multipliers."""
+        seq_a = canonical_events(a.summary.events)
+        lo, hi = a, b
+        sa, sb = 0.0, 1.0
+        for _ in range(80):
+            if np.linalg.norm(hi.z - lo.z) <= self.tol:
+                break
+            sm = 0.5 * (sa + sb)
+            try:
+                mid = self.on_secant(a, b, sm)
+            except SaltationError:
+                break
+            if canonical_events(mid.summary.events) == seq_a:
+                sa, lo = sm, mid
+            else:
+                sb, hi = sm, mid
+        return self.nonsmooth_point(lo, hi, index)
+
+    def nonsmooth_point(self, lo: Solution, hi: Solution, index: int, note: str = "") -> SpecialPoint:
+        """Special point record from the two one-sided solutions around a non-smooth point."""
+        m_lo, m_hi = lo.summary.monodromy, hi.summary.monodromy
+        if self.equilibrium:
+            crossing = SetValuedCrossing(SpecialPointKind.NONSMOOTH_NO_CROSSING, None, None)
+        else:
+            crossing = classify_nonsmooth(
+                m_lo, m_hi, backward=self.branch.backward, autonomous=self.autonomous,
+                mu_minus=lo.summary.multipliers, mu_plus=hi.summary.multipliers,
+            )
+        return SpecialPoint(
+            kind=crossing.kind,
+            parameter=0.5 * (lo.lam + hi.lam),
+            bracket=(min(lo.lam, hi.lam), max(lo.lam, hi.lam)),
+            accuracy=float(np.linalg.norm(hi.z - lo.z)),
+            index=index,
+            state=lo.summary.state,
+            period=lo.summary.period,
+            amplitude=lo.summary.amplitude,
+            multipliers_minus=lo.summary.multipliers,
+            multipliers_plus=hi.summary.multipliers,
+            monodromy_minus=m_lo,
+            monodromy_plus=m_hi,
+            crossing_q=crossing.q,
+            crossing_point=crossing.point,
+            events_minus=lo.summary.events,
+            events_plus=hi.summary.events,
+            note=note,
+        )
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
+
+
+def _nontrivial(sol: Solution, autonomous: bool) -> np.ndarray:
+    """Multipliers without the trivial one (closest to 1) of an autonomous orbit."""
+    mu = np.asarray(sol.summary.multipliers, dtype=complex)
+    if autonomous and mu.size:
+        finite = np.where(np.isfinite(mu), np.abs(mu - 1.0), np.inf)
+        mu = np.delete(mu, int(np.argmin(finite)))
+    return mu
+
+
+def _flip_test(mu: np.ndarray) -> float:
+    """``prod(mu + 1)`` over the finite multipliers (changes sign at period doubling)."""
+    mu = mu[np.isfinite(mu)]
+    return float(np.real(np.prod(mu + 1.0)))
+
+
+def _ns_test(mu: np.ndarray) -> float:
+    """``|mu| - 1`` of the largest complex multiplier (0 when there is none, never a crossing)."""
+    cplx = mu[np.isfinite(mu) & (np.abs(mu.imag) > 1e-8)]
+    if cplx.size == 0:
+        return 0.0
+    return float(np.max(np.abs(cplx)) - 1.0)
+
+
+def _hopf_test(sol: Solution) -> float:
+    """Largest real part among complex eigenvalues of an equilibrium (0 when there is none)."""
+    ev = np.asarray(sol.summary.multipliers, dtype=complex)
+    cplx = ev[np.abs(ev.imag) > 1e-10]
+    if cplx.size == 0:
+        return 0.0
+    return float(np.max(cplx.real))

@@ -1,0 +1,565 @@
+"""Command line interface: ``saltation SUBCOMMAND ...``.
+
+One function per subcommand (``cmd_<name>``), each registered by an
+``_add_<name>_parser`` function in :data:`SUBCOMMANDS`; shipped models are
+looked up in :data:`MODELS`.  Every failure of a subcommand becomes one line
+``saltation: error: ...`` on stderr and a non-zero exit status:
+
+* 0: success;
+* 1: the computation failed (integration, Newton, ...);
+* 2: bad usage (unknown model, parameter or option, malformed value).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+from .errors import SaltationError
+from .model import PiecewiseSystem
+from .models import block_on_belt, trilinear
+
+PROG = "saltation"
+
+#: Models shipped with saltation, by the name the command line uses: ``{name: factory}``.
+#: A factory takes keyword overrides of the default parameter values.
+MODELS: dict[str, Callable[..., PiecewiseSystem]] = {
+    "trilinear": trilinear,
+    "block_on_belt": block_on_belt,
+}
+
+#: One-line summaries of the shipped models (for --help).
+MODEL_SUMMARIES: dict[str, str] = {
+    "trilinear": "forced mass on a spring and damper between two compliant supports (forcing f0 sin(omega t))",
+    "block_on_belt": "autonomous stick-slip oscillator: a mass on a spring and damper riding a belt at v_dr",
+}
+
+#: Number of forcing periods of the transient of a forced model (when --x0 is not given).
+TRANSIENT_PERIODS = 50
+#: Length of the transient of an autonomous model without a better hint, in time units.
+TRANSIENT_TIME = 200.0
+
+
+def _block_on_belt_start(p: Mapping[str, float], backward: bool) -> list[float]:
+    if backward:
+        # just off the equilibrium [F_slip/k, 0]: in backward time the flow spirals out
+        # from it onto the unstable (infinitely unstable) limit cycle
+        return [p["F_slip"] / p["k"] + 0.1 * p["v_dr"] * math.sqrt(p["m"] / p["k"]), 0.0]
+    # sticking to the belt: the stick phase leads onto the stable stick-slip cycle
+    return [0.0, p["v_dr"]]
+
+
+#: Start of the transient, per model: ``(parameter values, backward) -> state`` (zeros otherwise).
+TRANSIENT_START: dict[str, Callable[[Mapping[str, float], bool], list[float]]] = {
+    "block_on_belt": _block_on_belt_start,
+}
+
+#: Length of the transient of an autonomous model, per model: ``parameter values -> time``
+#: (forced models use :data:`TRANSIENT_PERIODS` forcing periods).
+TRANSIENT_LENGTH: dict[str, Callable[[Mapping[str, float]], float]] = {
+    # 50 periods of the undamped oscillator
+    "block_on_belt": lambda p: 50 * 2 * math.pi * math.sqrt(p["m"] / p["k"]),
+}
+
+
+class UsageError(SaltationError, ValueError):
+    """The command line is malformed (exit status 2)."""
+
+
+class CommandError(SaltationError, RuntimeError):
+    """A subcommand could not do its job (exit status 1)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line, raised as :class:`UsageError`.
+
+    ``epilog_factory`` builds the epilog only when help is printed (it may be costly).
+    """
+
+    def __init__(self, *args, epilog_factory: Callable[[], str] | None = None, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.epilog_factory = epilog_factory
+
+    def error(self, message: str):  # noqa: D102 (argparse protocol)
+        raise UsageError(f"{message} (see '{self.prog} --help')")
+
+    def format_help(self) -> str:  # noqa: D102
+        if self.epilog_factory is not None:
+            self.epilog = self.epilog_factory()
+        return super().format_help()
+
+
+# --------------------------------------------------------------------------------------------
+# shared helpers (for every subcommand that works on a shipped model)
+# --------------------------------------------------------------------------------------------
+
+def model_names() -> str:
+    return ", ".join(MODELS)
+
+
+def build_model(name: str) -> PiecewiseSystem:
+    """The shipped model ``name`` with its default parameter values.
+
+    Raises
+    ------
+    UsageError
+        If no model of that name is shipped.
+    """
+    try:
+        factory = MODELS[name]
+    except KeyError:
+        raise UsageError(f"unknown model {name!r}; shipped models are {model_names()}") from None
+    return factory()
+
+
+def make_flow(system: PiecewiseSystem):
+    """The compiled flow of a model (compiles on first use, cached on disk afterwards)."""
+    from .integrate import Flow
+
+    return Flow(system)
+
+
+def parse_sets(items: Sequence[str] | None, system: PiecewiseSystem) -> dict[str, float]:
+    """Parameter overrides from ``--set NAME=VALUE`` items (the last one of a name wins).
+
+    Raises
+    ------
+    UsageError
+        For a malformed item, an unknown parameter or a value that is not a finite number.
+    """
+    out: dict[str, float] = {}
+    for item in items or ():
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise UsageError(f"malformed --set {item!r}: expected NAME=VALUE, e.g. --set omega=1.2")
+        if name not in system.parameter_names:
+            raise UsageError(
+                f"unknown parameter {name!r} in --set for model {system.name!r}; "
+                f"parameters are {', '.join(system.parameter_names)}"
+            )
+        try:
+            value = float(text)
+        except ValueError:
+            raise UsageError(f"malformed --set {item!r}: {text.strip()!r} is not a number") from None
+        if not math.isfinite(value):
+            raise UsageError(f"--set {item!r}: the value must be finite")
+        out[name] = value
+    return out
+
+
+def parse_vector(text: str, system: PiecewiseSystem, option: str = "--x0") -> np.ndarray:
+    """A state from ``V1,V2,...`` with one finite number per state of the model.
+
+    Raises
+    ------
+    UsageError
+        For a malformed list or the wrong number of components.
+    """
+    parts = [s.strip() for s in text.split(",")]
+    try:
+        values = [float(s) for s in parts]
+    except ValueError:
+        raise UsageError(
+            f"malformed {option} {text!r}: expected {system.n} comma-separated numbers such as "
+            f"{','.join(['0.5'] * system.n)}"
+        ) from None
+    if len(values) != system.n:
+        raise UsageError(
+            f"{option} {text!r} has {len(values)} component{'s' if len(values) != 1 else ''}; model "
+            f"{system.name!r} has {system.n} states ({', '.join(system.state_names)})"
+        )
+    if not all(math.isfinite(v) for v in values):
+        raise UsageError(f"{option} {text!r}: every component must be finite")
+    return np.array(values)
+
+
+def _positive(option: str) -> Callable[[str], float]:
+    def convert(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        if not (math.isfinite(value) and value > 0):
+            raise argparse.ArgumentTypeError(f"{text!r} must be a positive finite number")
+        return value
+
+    convert.__name__ = option
+    return convert
+
+
+def _finite(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} must be finite")
+    return value
+
+
+def _fmt(value: float) -> str:
+    return f"{value:.10g}"
+
+
+def _complex_text(mu: complex) -> str:
+    if not np.isfinite(mu):
+        return "inf"
+    if mu.imag == 0:
+        return _fmt(mu.real)
+    sign = "+" if mu.imag > 0 else "-"
+    return f"{_fmt(mu.real)} {sign} {_fmt(abs(mu.imag))}i"
+
+
+def multipliers_json(mu: Sequence[complex]) -> list:
+    """Multipliers as ``[re, im]`` pairs, an infinite one as the string ``"inf"``."""
+    return ["inf" if not np.isfinite(m) else [float(m.real), float(m.imag)] for m in np.asarray(mu, dtype=complex)]
+
+
+# --------------------------------------------------------------------------------------------
+# transients: a starting guess when the user gives none
+# --------------------------------------------------------------------------------------------
+
+def _period_from_events(events) -> float | None:
+    """Period of the event sequence at the end of a trajectory (shortest repeating lag)."""
+    sig = [e.signature for e in events]
+    n = len(sig)
+    for lag in range(1, n // 2 + 1):
+        if all(sig[n - 1 - j] == sig[n - 1 - lag - j] for j in range(lag)):
+            return abs(events[-1].t - events[-1 - lag].t)
+    return None
+
+
+def _period_from_section(traj) -> float | None:
+    """Period from successive crossings of a Poincaré section ``x_1 = mid-range`` (last half)."""
+    t, x = traj.sample(16)
+    if t.size < 4:
+        return None
+    half = np.abs(t - t[0]) >= 0.5 * abs(t[-1] - t[0])
+    t, x1 = t[half], x[half, 0]
+    lo, hi = float(np.min(x1)), float(np.max(x1))
+    if hi - lo <= 1e-8 * (1.0 + abs(hi)):
+        return None  # settles to an equilibrium
+    g = x1 - 0.5 * (lo + hi)
+    up = np.nonzero((g[:-1] < 0) & (g[1:] >= 0))[0]
+    if up.size < 3:
+        return None
+    times = [t[i] - g[i] * (t[i + 1] - t[i]) / (g[i + 1] - g[i]) for i in up[-2:]]
+    return abs(times[1] - times[0])
+
+
+def transient(flow, name: str, p: np.ndarray, state: np.ndarray | None, *, t0: float, backward: bool):
+    """Simulate a transient in the direction of integration; returns (trajectory, start state).
+
+    Forced models run :data:`TRANSIENT_PERIODS` forcing periods (so the end
+    state has the phase ``t0``); autonomous ones :data:`TRANSIENT_LENGTH` (or
+    :data:`TRANSIENT_TIME`).  A run that would end on a sliding motion is
+    extended until it does not.
+    """
+    system = flow.system
+    values = dict(zip(system.parameter_names, map(float, p)))
+    if state is None:
+        start = TRANSIENT_START.get(name)
+        state = np.array(start(values, backward) if start else np.zeros(system.n), dtype=float)
+    sign = -1.0 if backward else 1.0
+    if system.is_autonomous:
+        length_fn = TRANSIENT_LENGTH.get(name)
+        length = length_fn(values) if length_fn else TRANSIENT_TIME
+        extra = 0.01 * length
+    else:
+        T = system.forcing_period(p)
+        length = TRANSIENT_PERIODS * T
+        extra = T
+    direction = "backward" if backward else "forward"
+    for attempt in range(20):
+        try:
+            traj = flow.run(state, t0, t0 + sign * (length + attempt * extra), p, dense=system.is_autonomous)
+        except SaltationError as exc:
+            raise CommandError(
+                f"the {direction} transient from {state.tolist()} failed ({exc}); give a starting guess with --x0"
+            ) from None
+        if not traj.sliding_at_end:
+            break
+    if not np.all(np.isfinite(traj.x1)) or np.max(np.abs(traj.x1)) > 1e6 * (1.0 + np.max(np.abs(state))):
+        raise CommandError(
+            f"the {direction} transient from {state.tolist()} diverges (ends at {traj.x1.tolist()}); "
+            "give a starting guess with --x0"
+        )
+    return traj, state
+
+
+def estimate_period(traj) -> float:
+    """Period estimate from a transient of an autonomous model.
+
+    Raises
+    ------
+    CommandError
+        If the transient shows no oscillation (e.g. it settles to an equilibrium).
+    """
+    T = _period_from_events(traj.events)
+    if T is None or not T > 0:
+        T = _period_from_section(traj)
+    if T is None or not T > 0:
+        raise CommandError(
+            f"cannot estimate a period: the transient (t = {_fmt(traj.t0)} to {_fmt(traj.t1)}, ending at "
+            f"{traj.x1.tolist()}) shows no repeating events or oscillation (an equilibrium?); give --period "
+            "and a guess --x0"
+        )
+    return float(T)
+
+
+# --------------------------------------------------------------------------------------------
+# orbit
+# --------------------------------------------------------------------------------------------
+
+def orbit_to_dict(orbit, system: PiecewiseSystem) -> dict:
+    """A JSON-ready description of a :class:`~saltation.shooting.PeriodicOrbit`."""
+    mu = np.asarray(orbit.multipliers, dtype=complex)
+    return {
+        "model": system.name,
+        "parameters": dict(zip(system.parameter_names, map(float, orbit.parameters))),
+        "state_names": list(system.state_names),
+        "state0": [float(v) for v in orbit.state0],
+        "t0": float(orbit.t0),
+        "period": float(orbit.period),
+        "autonomous": bool(orbit.autonomous),
+        "backward": bool(orbit.backward),
+        "amplitude": float(orbit.amplitude),
+        "half_peak_to_peak": float(orbit.half_peak_to_peak),
+        "multipliers": multipliers_json(mu),
+        "multiplier_magnitudes": ["inf" if not np.isfinite(m) else float(abs(m)) for m in mu],
+        "stable": bool(orbit.stable),
+        "events": [[str(e.surface), float(e.t)] for e in orbit.trajectory.events],
+        "event_modes": [[e.mode_from, e.mode_to] for e in orbit.trajectory.events],
+        "converged": bool(orbit.converged),
+        "iterations": int(orbit.iterations),
+        "residual_norm": float(orbit.residual_norm),
+    }
+
+
+def format_orbit(orbit, system: PiecewiseSystem) -> str:
+    """A short human-readable table of an orbit."""
+    from .integrate import EventKind
+
+    kind = "autonomous" if system.is_autonomous else f"forced, forcing period {system.period_expr}"
+    rows: list[tuple[str, str]] = []
+    rows.append(("model", f"{system.name} ({kind})"))
+    rows.append(("parameters", ", ".join(f"{k} = {_fmt(v)}" for k, v in zip(system.parameter_names, orbit.parameters))))
+    rows.append(("time", "backward (shooting in backward time)" if orbit.backward else "forward"))
+    rows.append(("state0", ", ".join(f"{k} = {_fmt(v)}" for k, v in zip(system.state_names, orbit.state0))
+                 + f"   at t0 = {_fmt(orbit.t0)}"))
+    rows.append(("period", _fmt(orbit.period)))
+    rows.append(("amplitude", f"{_fmt(orbit.amplitude)}   (max |{system.state_names[0]}| over the period)"))
+    mu = np.asarray(orbit.multipliers, dtype=complex)
+    texts = [_complex_text(m) for m in mu]
+    width = max(len(s) for s in texts) if texts else 0
+    for i, (m, s) in enumerate(zip(mu, texts)):
+        mag = "inf" if not np.isfinite(m) else _fmt(abs(m))
+        rows.append(("multipliers" if i == 0 else "", f"{s:<{width}}   |mu| = {mag}"))
+    if orbit.stable:
+        stab = "stable"
+    elif not np.all(np.isfinite(mu)):
+        stab = "unstable (infinitely unstable: an infinite multiplier)"
+    else:
+        stab = "unstable"
+    if system.is_autonomous:
+        stab += f"   (trivial multiplier 1 excluded; its error {orbit.trivial_multiplier_error:.1e})"
+    rows.append(("stability", stab))
+    events = orbit.trajectory.events
+    if not events:
+        rows.append(("events", "none"))
+    for i, e in enumerate(events):
+        what = {EventKind.SLIDING_START: "  sliding starts", EventKind.SLIDING_END: "  sliding ends"}.get(e.kind, "")
+        rows.append(("events" if i == 0 else "", f"{e.surface:<12} t = {_fmt(e.t):<16} {e.mode_from} -> {e.mode_to}{what}"))
+    its = orbit.iterations
+    rows.append(("Newton", f"converged in {its} iteration{'s' if its != 1 else ''}, residual {orbit.residual_norm:.1e}"))
+    return "\n".join(f"{k:<12} {v}".rstrip() for k, v in rows)
+
+
+def cmd_orbit(args: argparse.Namespace) -> int:
+    """``saltation orbit``: find one periodic orbit of a shipped model and print it."""
+    from .shooting import find_periodic_orbit
+
+    system = build_model(args.model)
+    overrides = parse_sets(args.set, system)
+    x0 = parse_vector(args.x0, system) if args.x0 is not None else None
+    if not system.is_autonomous and args.period is not None:
+        raise UsageError(
+            f"model {system.name!r} is forced: its period is fixed by the forcing ({system.period_expr}); "
+            "drop --period (change the forcing with --set)"
+        )
+    flow = make_flow(system)
+    p = flow.parameters(overrides)
+    period = args.period
+    if x0 is None or (system.is_autonomous and period is None):
+        traj, _ = transient(flow, args.model, p, x0, t0=args.t0, backward=args.backward)
+        if x0 is None:
+            x0 = traj.x1.copy()
+        if system.is_autonomous and period is None:
+            period = estimate_period(traj)
+    orbit = find_periodic_orbit(
+        flow, x0, parameters=overrides, period=period, backward=args.backward, t0=args.t0
+    )
+    if args.json:
+        print(json.dumps(orbit_to_dict(orbit, system)))
+    else:
+        print(format_orbit(orbit, system))
+    return 0
+
+
+def _orbit_epilog() -> str:
+    lines = ["shipped models (parameters with their default values):"]
+    for name, factory in MODELS.items():
+        system = factory()
+        kind = "autonomous" if system.is_autonomous else f"forced, period {system.period_expr}"
+        lines.append(f"  {name}: {MODEL_SUMMARIES.get(name, '')}")
+        lines.append(f"    {kind}; states {', '.join(system.state_names)}")
+        lines.append("    " + " ".join(f"{k}={_fmt(v)}" for k, v in system.defaults.items()))
+    lines += [
+        "",
+        "defaults when no guess is given:",
+        f"  without --x0 a transient is simulated ({TRANSIENT_PERIODS} forcing periods for forced models, about",
+        "  50 oscillation periods for autonomous ones) from a default state, in the direction of integration",
+        "  (with --backward it runs backward and so approaches orbits that attract in backward time), and",
+        "  shooting starts from its end state; for autonomous models without --period the period guess is",
+        "  the time between two repetitions of the transient's event sequence (or between crossings of a",
+        "  Poincaré section x_1 = mid-range when it has no events).",
+        "",
+        "output: state0, period, amplitude (max |x_1| over the period), Floquet multipliers (forward time;",
+        "an infinite one, of an infinitely unstable orbit, is 'inf') with their magnitudes, stability and",
+        "the switching events [surface, time] of one period. --json prints one JSON object with the keys",
+        "model, parameters, state_names, state0, t0, period, autonomous, backward, amplitude,",
+        "half_peak_to_peak, multipliers ([re, im] pairs or \"inf\"), multiplier_magnitudes, stable, events,",
+        "event_modes, converged, iterations, residual_norm.",
+        "",
+        "exit status: 0 found, 1 the computation failed (e.g. Newton did not converge), 2 bad usage.",
+        "",
+        "examples:",
+        f"  {PROG} orbit trilinear --set omega=1.2 --x0 0.5,0.5",
+        f"  {PROG} orbit block_on_belt --json",
+        f"  {PROG} orbit block_on_belt --backward --x0 1.0,-0.95 --period 6.3",
+    ]
+    return "\n".join(lines)
+
+
+def _add_orbit_parser(sub) -> None:
+    p = sub.add_parser(
+        "orbit",
+        help="find one periodic orbit of a shipped model and print it",
+        description=(
+            "Find one periodic orbit of a shipped model by shooting (Newton on the period map, with the "
+            "monodromy matrix and every saltation matrix as its Jacobian) from a guess, and print it with "
+            "its Floquet multipliers."
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog_factory=_orbit_epilog,
+    )
+    p.add_argument("model", metavar="MODEL", help=f"name of a shipped model: {model_names()}")
+    p.add_argument(
+        "--set", metavar="NAME=VALUE", action="append", default=[],
+        help="override a parameter of the model (repeat for several), e.g. --set omega=0.7",
+    )
+    p.add_argument(
+        "--x0", metavar="V1,V2,...",
+        help="guess of the state at t0, one comma-separated number per state (write --x0=-1,0 or "
+        "--x0 -1,0 for a negative first component); default: the end of a transient",
+    )
+    p.add_argument(
+        "--t0", metavar="T", type=_finite, default=0.0,
+        help="initial time, i.e. the phase of the forcing at state0 (default 0)",
+    )
+    p.add_argument(
+        "--period", metavar="T", type=_positive("--period"),
+        help="period guess for autonomous models (default: estimated from a transient); forced models "
+        "take the forcing period",
+    )
+    p.add_argument(
+        "--backward", action="store_true",
+        help="shoot in backward time: finds orbits that are unstable in forward time, including "
+        "infinitely unstable ones (a multiplier 'inf')",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    p.set_defaults(handler=cmd_orbit)
+
+
+# --------------------------------------------------------------------------------------------
+# the program
+# --------------------------------------------------------------------------------------------
+
+#: Subcommands in the order of ``saltation --help``: each adds its parser to the subparsers
+#: action and sets ``handler`` to its ``cmd_<name>(args) -> int``.
+SUBCOMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [
+    _add_orbit_parser,
+]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand."""
+    from . import __version__
+
+    parser = _Parser(
+        prog=PROG,
+        description=(
+            "saltation: bifurcation analysis of periodic solutions of discontinuous (piecewise-smooth) "
+            "systems, with saltation matrices, shooting in forward and backward time and Floquet "
+            "multipliers, after the paper 'Fold bifurcations in discontinuous systems'."
+        ),
+        epilog=f"Run '{PROG} SUBCOMMAND --help' for the options of a subcommand. Shipped models: {model_names()}.",
+    )
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="SUBCOMMAND", title="subcommands", parser_class=_Parser)
+    for add in SUBCOMMANDS:
+        add(sub)
+    return parser
+
+
+def _join_negative_values(argv: list[str], options: Sequence[str] = ("--x0",)) -> list[str]:
+    """Let ``--x0 -1,0`` through argparse (which would take ``-1,0`` for an option)."""
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        if argv[i] in options and i + 1 < len(argv) and argv[i + 1].startswith("-") and argv[i + 1][1:2] not in ("", "-") \
+                and not argv[i + 1][1:2].isalpha():
+            out.append(f"{argv[i]}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(argv[i])
+        i += 1
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        parser = build_parser()
+        args = parser.parse_args(_join_negative_values(argv))
+        if getattr(args, "handler", None) is None:
+            raise UsageError(f"choose a subcommand ({', '.join(parser._subparsers._group_actions[0].choices)}); "
+                             f"see '{PROG} --help'")
+        return int(args.handler(args) or 0)
+    except SystemExit as exc:  # --help, --version
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    except UsageError as exc:
+        _fail(exc)
+        return 2
+    except (SaltationError, ValueError) as exc:
+        _fail(exc)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _fail(exc: BaseException) -> None:
+    message = " ".join(str(exc).split()) or type(exc).__name__
+    print(f"{PROG}: error: {message}", file=sys.stderr)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,338 @@
+"""Pseudo-arclength continuation of solutions of ``r(u, lam) = 0``.
+
+One engine for every problem of the small protocol of
+:mod:`saltation.shooting` (periodic orbits by forward or backward shooting,
+equilibria): ``evaluate(u, lam) -> Evaluation``, ``describe``, ``accept``.
+
+* Predictor: the unit tangent ``t`` of the branch in ``z = (u, lam)``,
+  ``z_pred = z + ds t``.
+* Corrector: Newton on the bordered system ``r(z) = 0``,
+  ``t . (z - z_pred) = 0``.
+* Step control: the step grows after quick convergence and is halved when
+  the corrector fails or the tangent turns by more than ``max_angle`` --
+  except across a corner of the branch (the orbit's event sequence changes),
+  where the tangent genuinely jumps and the step is accepted.
+* After every step, :mod:`saltation.bifurcations` looks for special points
+  between the last two points and locates them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from .branch import Branch, BranchKind, BranchPoint, StopReason
+from .errors import ConvergenceError, SaltationError
+from .shooting import Evaluation, EquilibriumProblem, SolutionSummary
+
+
+@dataclass(frozen=True)
+class ContinuationSettings:
+    """Options of a continuation run (keyword-only, so a typo is an error).
+
+    Attributes
+    ----------
+    ds : float
+        Initial arclength step.
+    ds_min, ds_max : float
+        Step bounds; the run stops when the corrector fails at ``ds_min``.
+    max_points : int
+        Largest number of points of a run.
+    bounds : (float, float)
+        Interval of the continuation parameter.
+    tol : float
+        Newton tolerance on the residual.
+    max_newton : int
+        Corrector iterations before a step counts as failed.
+    max_angle : float
+        Largest angle (radians) between consecutive tangents in a smooth stretch.
+    detect : bool
+        Look for and locate special points.
+    locate_tol : float
+        Distance in ``(u, lam)`` to which special points are located.
+    """
+
+    ds: float = 0.02
+    ds_min: float = 1e-6
+    ds_max: float = 0.05
+    max_points: int = 400
+    bounds: tuple[float, float] = (-math.inf, math.inf)
+    tol: float = 1e-10
+    max_newton: int = 7
+    max_angle: float = 0.3
+    detect: bool = True
+    locate_tol: float = 1e-9
+
+    def __post_init__(self):
+        if not 0 < self.ds_min <= self.ds <= self.ds_max:
+            raise ValueError(f"need 0 < ds_min <= ds <= ds_max, got {self.ds_min}, {self.ds}, {self.ds_max}")
+        lo, hi = self.bounds
+        if not lo < hi:
+            raise ValueError(f"parameter bounds must satisfy lower < upper, got {self.bounds}")
+
+
+@dataclass
+class Solution:
+    """A corrected point ``z = (u, lam)`` with its evaluation and summary."""
+
+    z: np.ndarray
+    evaluation: Evaluation
+    summary: SolutionSummary
+    tangent: np.ndarray | None = None
+    iterations: int = 0
+    step: float = 0.0
+
+    @property
+    def u(self) -> np.ndarray:
+        return self.z[:-1]
+
+    @property
+    def lam(self) -> float:
+        return float(self.z[-1])
+
+
+def canonical_events(events: tuple[str, ...]) -> tuple[str, ...]:
+    """The event sequence up to cyclic rotation (where an orbit starts is not a change)."""
+    if not events:
+        return events
+    rotations = [events[k:] + events[:k] for k in range(len(events))]
+    return min(rotations)
+
+
+@dataclass
+class Corrector:
+    """Newton solvers on the branch of one problem (shared by continuation and location)."""
+
+    problem: object
+    settings: ContinuationSettings
+
+    def solve_bordered(self, z_pred: np.ndarray, normal: np.ndarray) -> Solution:
+        """Solve ``r(z) = 0``, ``normal . (z - z_pred) = 0`` by Newton from ``z_pred``.
+
+        Raises
+        ------
+        ConvergenceError
+            If Newton does not converge in ``max_newton`` iterations.
+        """
+        z = z_pred.copy()
+        history = []
+        prob = self.problem
+        for it in range(self.settings.max_newton + 1):
+            ev = prob.evaluate(z[:-1], float(z[-1]))
+            rn = float(np.linalg.norm(ev.residual))
+            history.append(rn)
+            if not np.isfinite(rn):
+                break
+            if rn <= self.settings.tol * (1.0 + float(np.linalg.norm(z[:-1]))):
+                return Solution(z=z, evaluation=ev, summary=prob.describe(z[:-1], float(z[-1]), ev), iterations=it)
+            if it == self.settings.max_newton:
+                break
+            J = np.block([[ev.jac_u, ev.jac_lam[:, None]], [normal[None, :]]])
+            rhs = np.append(ev.residual, normal @ (z - z_pred))
+            try:
+                z = z - np.linalg.solve(J, rhs)
+            except np.linalg.LinAlgError:
+                break
+        raise ConvergenceError("corrector did not converge", history)
+
+    def solve_fixed(self, u0: np.ndarray, lam: float) -> Solution:
+        """Solve ``r(u, lam) = 0`` at fixed ``lam`` (natural parameter)."""
+        e = np.zeros(len(u0) + 1)
+        e[-1] = 1.0
+        return self.solve_bordered(np.append(u0, lam), e)
+
+    def tangent(self, sol: Solution, previous: np.ndarray) -> np.ndarray:
+        """Unit tangent at ``sol`` oriented along ``previous``."""
+        ev = sol.evaluation
+        J = np.block([[ev.jac_u, ev.jac_lam[:, None]], [previous[None, :]]])
+        rhs = np.zeros(J.shape[0])
+        rhs[-1] = 1.0
+        try:
+            t = np.linalg.solve(J, rhs)
+        except np.linalg.LinAlgError:
+            t = previous.copy()
+        t /= np.linalg.norm(t)
+        if t @ previous < 0:
+            t = -t
+        return t
+
+
+class Continuation:
+    """Pseudo-arclength continuation of one branch in one direction.
+
+    Parameters
+    ----------
+    problem : ShootingProblem or EquilibriumProblem
+        The problem, with its continuation parameter set.
+    settings : ContinuationSettings
+
+    Examples
+    --------
+    Iterate step by step::
+
+        cont = Continuation(problem, ContinuationSettings(ds=0.01))
+        for point in cont.run(u0, lam0, direction=+1):
+            print(point.parameter, point.amplitude)
+        branch = cont.branch
+    """
+
+    def __init__(self, problem, settings: ContinuationSettings | None = None):
+        if getattr(problem, "lam_index", -1) < 0:
+            raise SaltationError("the problem needs a continuation parameter (continuation_parameter=...)")
+        self.problem = problem
+        self.settings = settings or ContinuationSettings()
+        self.corrector = Corrector(problem, self.settings)
+        self.branch = Branch(
+            model=problem.system.name,
+            parameter_name=problem.lam_name,
+            kind=BranchKind.EQUILIBRIUM if isinstance(problem, EquilibriumProblem) else BranchKind.PERIODIC,
+            backward=bool(getattr(problem, "backward", False)),
+            fixed_parameters=dict(zip(problem.system.parameter_names, map(float, problem.p))),
+            autonomous=bool(problem.system.is_autonomous),
+        )
+        self.solutions: list[Solution] = []
+        self.last_failure: np.ndarray | None = None
+
+    # ---------------------------------------------------------------------------------
+    def run(self, u0: np.ndarray, lam0: float, *, direction: int = 1) -> Iterator[BranchPoint]:
+        """Yield branch points, starting with the corrected start point."""
+        from .bifurcations import SpecialPointDetector
+
+        s = self.settings
+        lo, hi = s.bounds
+        if not lo <= lam0 <= hi:
+            raise SaltationError(f"start value {lam0} of {self.problem.lam_name!r} lies outside the bounds {s.bounds}")
+        self.problem.accept(np.asarray(u0, float), lam0)
+        sol = self.corrector.solve_fixed(np.asarray(u0, dtype=float), float(lam0))
+        e_lam = np.zeros(len(sol.z))
+        e_lam[-1] = 1.0 if direction >= 0 else -1.0
+        sol.tangent = self.corrector.tangent(sol, e_lam)
+        self._accept(sol)
+        yield self.branch.points[-1]
+
+        detector = SpecialPointDetector(self.problem, self.corrector, self.branch) if s.detect else None
+        ds = s.ds
+        while True:
+            if len(self.branch.points) >= s.max_points:
+                self.branch.stop_reason = StopReason.MAX_POINTS
+                return
+            prev = self.solutions[-1]
+            new = None
+            while ds >= s.ds_min:
+                z_pred = prev.z + ds * prev.tangent
+                if z_pred[-1] > hi or z_pred[-1] < lo:
+                    # land exactly on the bound
+                    bound = hi if z_pred[-1] > hi else lo
+                    frac = (bound - prev.z[-1]) / (z_pred[-1] - prev.z[-1])
+                    if frac * ds < s.ds_min:
+                        self.branch.stop_reason = StopReason.PARAMETER_BOUND
+                        return
+                    try:
+                        cand = self.corrector.solve_fixed(prev.u + frac * ds * prev.tangent[:-1], bound)
+                    except SaltationError:
+                        ds *= 0.5
+                        continue
+                    cand.tangent = self.corrector.tangent(cand, prev.tangent)
+                    cand.step = frac * ds
+                    new = cand
+                    break
+                try:
+                    cand = self.corrector.solve_bordered(z_pred, prev.tangent)
+                except SaltationError:
+                    self.last_failure = z_pred
+                    ds *= 0.5
+                    continue
+                cand.tangent = self.corrector.tangent(cand, prev.tangent)
+                cand.step = ds
+                angle = math.acos(max(-1.0, min(1.0, float(cand.tangent @ prev.tangent))))
+                corner = canonical_events(cand.summary.events) != canonical_events(prev.summary.events)
+                if angle > s.max_angle and not corner and ds > 2 * s.ds_min:
+                    ds *= 0.5
+                    continue
+                if corner and ds > 4 * s.ds_min and angle > s.max_angle and cand.iterations > 4:
+                    ds *= 0.5
+                    continue
+                new = cand
+                break
+            if new is None:
+                self.branch.stop_reason = StopReason.MIN_STEP
+                return
+            self._accept(new)
+            if detector is not None:
+                for sp in detector.check(self.solutions[-2], self.solutions[-1], len(self.branch.points) - 2):
+                    self.branch.special_points.append(sp)
+            yield self.branch.points[-1]
+            if new.lam >= hi or new.lam <= lo:
+                self.branch.stop_reason = StopReason.PARAMETER_BOUND
+                return
+            if new.iterations <= 3:
+                ds = min(ds * 1.5, s.ds_max)
+            elif new.iterations >= 6:
+                ds = max(ds * 0.5, s.ds_min)
+
+    def _accept(self, sol: Solution) -> None:
+        self.problem.accept(sol.u, sol.lam)
+        self.solutions.append(sol)
+        sm = sol.summary
+        self.branch.points.append(
+            BranchPoint(
+                parameter=sol.lam,
+                state=sm.state,
+                period=sm.period,
+                amplitude=sm.amplitude,
+                half_peak_to_peak=sm.half_peak_to_peak,
+                multipliers=sm.multipliers,
+                stable=sm.stable,
+                events=sm.events,
+                step=sol.step,
+                iterations=sol.iterations,
+            )
+        )
+
+
+def continue_branch(
+    problem,
+    u0: np.ndarray,
+    lam0: float | None = None,
+    *,
+    settings: ContinuationSettings | None = None,
+    directions: tuple[int, ...] = (1, -1),
+    label: str = "",
+    progress=None,
+) -> Branch:
+    """Follow a branch from a start point in one or both directions and return it.
+
+    Parameters
+    ----------
+    problem : ShootingProblem or EquilibriumProblem
+    u0 : ndarray
+        Guess of the unknowns at the start (see ``problem.pack``).
+    lam0 : float, optional
+        Start value of the parameter (the problem's value by default).
+    directions : tuple of int
+        +1 (increasing parameter first), -1, or both.
+    progress : callable, optional
+        Called with each new BranchPoint.
+    """
+    lam0 = problem.lam0() if lam0 is None else float(lam0)
+    branch: Branch | None = None
+    for d in directions:
+        cont = Continuation(problem, settings)
+        for point in cont.run(np.asarray(u0, dtype=float), lam0, direction=d):
+            if progress is not None:
+                progress(point)
+        if branch is None:
+            branch = cont.branch
+        else:
+            branch.extend(cont.branch)
+            branch.stop_reasons.append(cont.branch.stop_reason)
+    if branch is None:
+        raise SaltationError("no continuation direction given")
+    branch.label = label
+    return branch
+
+
+__all__ = ["Continuation", "ContinuationSettings", "Corrector", "Solution", "canonical_events", "continue_branch"]

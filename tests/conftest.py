@@ -1,0 +1,109 @@
+"""Shared models and compiled flows for the test suite.
+
+Compiling a model's kernels costs ~40 s the first time (numba caches them on disk
+afterwards), so the suite uses the two paper models and only two small models of
+its own.  Everything else is done by changing parameter values, which does not
+recompile.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from saltation import Crossing, Flow, Mode, PiecewiseSystem, Tolerances, Transition
+from saltation.models import block_on_belt, trilinear
+
+RISING, FALLING = Crossing.RISING, Crossing.FALLING
+
+#: Tight tolerances for reference integrations (finite differences, closed forms).
+TIGHT = Tolerances(rtol=1e-13, atol=1e-15)
+
+
+def oscillator_system() -> PiecewiseSystem:
+    """``x'' = -w^2 x - g`` with a wall at ``x = a`` and a floor at ``x = 0``.
+
+    * ``below`` / ``above``: the same field on either side of the wall, switching
+      both ways without reset (event location; closed form ``x = R sin(w t)``).
+    * ``ball``: bounces on the floor with restitution ``e`` (``v -> -e v``); with
+      ``w = 0, g = 1`` a Zeno bouncing ball.
+    * ``root``: field ``[v, -sqrt(x)]``, which is NaN for ``x < 0``.
+
+    ``ball`` and ``root`` are reached only by passing ``mode0``; the domains of
+    ``below`` and ``above`` leave the wall ``x = a`` itself uncovered.
+    """
+    field = ["v", "-w**2*x - g"]
+    return PiecewiseSystem(
+        name="test_oscillator",
+        states=["x", "v"],
+        parameters={"w": 1.0, "a": 0.5, "g": 0.0, "e": 0.5},
+        modes=[
+            Mode("below", field, domain=["x - a < 0"]),
+            Mode("above", field, domain=["x - a > 0"]),
+            Mode("ball", field, domain=["x - a < 0"]),
+            Mode("root", ["v", "-sqrt(x)"], domain=["x - a < 0"]),
+        ],
+        surfaces={"wall": "x - a", "floor": "x"},
+        transitions=[
+            Transition("below", "wall", RISING, "above"),
+            Transition("above", "wall", FALLING, "below"),
+            Transition("ball", "floor", FALLING, "ball", reset=["x", "-e*v"]),
+        ],
+    )
+
+
+def filippov_system() -> PiecewiseSystem:
+    """A planar Filippov system with an attracting sliding motion on ``y = 0``.
+
+    ``above`` (y > 0): ``[1, -1]``; ``below`` (y < 0): ``[2, 1 - x + q sin(omega t)]``.
+    Both fields push into ``y = 0`` while ``x < 1 + q sin(omega t)``; the sliding
+    motion leaves into ``below`` where that field turns tangent.  For ``q = 0``
+    everything is in closed form (see test_sliding.py).
+    """
+    return PiecewiseSystem(
+        name="test_filippov",
+        states=["x", "y"],
+        parameters={"q": 0.0, "omega": 1.0},
+        modes=[
+            Mode("above", ["1", "-1"], domain=["y > 0"]),
+            Mode("below", ["2", "1 - x + q*sin(omega*t)"], domain=["y < 0"]),
+        ],
+        surfaces={"s": "y"},
+        transitions=[
+            Transition("above", "s", FALLING, "below"),
+            Transition("below", "s", RISING, "above"),
+        ],
+        period="2*pi/omega",
+    )
+
+
+@pytest.fixture(scope="session")
+def trilinear_flow() -> Flow:
+    return Flow(trilinear())
+
+
+@pytest.fixture(scope="session")
+def belt_flow() -> Flow:
+    return Flow(block_on_belt())
+
+
+@pytest.fixture(scope="session")
+def oscillator_flow() -> Flow:
+    return Flow(oscillator_system())
+
+
+@pytest.fixture(scope="session")
+def filippov_flow() -> Flow:
+    return Flow(filippov_system())
+
+
+def central_difference_jacobian(fun, x0, h):
+    """Jacobian of ``fun`` at ``x0`` by central differences with steps ``h`` (scalar or per component)."""
+    x0 = np.asarray(x0, dtype=float)
+    h = np.broadcast_to(np.asarray(h, dtype=float), x0.shape)
+    cols = []
+    for j in range(x0.size):
+        e = np.zeros_like(x0)
+        e[j] = h[j]
+        cols.append((np.asarray(fun(x0 + e)) - np.asarray(fun(x0 - e))) / (2 * h[j]))
+    return np.column_stack(cols)
