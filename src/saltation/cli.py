@@ -16,6 +16,7 @@ import argparse
 import json
 import math
 import sys
+import textwrap
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
@@ -36,7 +37,7 @@ MODELS: dict[str, Callable[..., PiecewiseSystem]] = {
 #: One-line summaries of the shipped models (for --help).
 MODEL_SUMMARIES: dict[str, str] = {
     "trilinear": "forced mass on a spring and damper between two compliant supports (forcing f0 sin(omega t))",
-    "block_on_belt": "autonomous stick-slip oscillator: a mass on a spring and damper riding a belt at v_dr",
+    "block_on_belt": "stick-slip oscillator: a mass on a spring and damper riding a belt at v_dr",
 }
 
 #: Number of forcing periods of the transient of a forced model (when --x0 is not given).
@@ -364,11 +365,11 @@ def format_orbit(orbit, system: PiecewiseSystem) -> str:
     if orbit.stable:
         stab = "stable"
     elif not np.all(np.isfinite(mu)):
-        stab = "unstable (infinitely unstable: an infinite multiplier)"
+        stab = "infinitely unstable (an infinite multiplier)"
     else:
         stab = "unstable"
     if system.is_autonomous:
-        stab += f"   (trivial multiplier 1 excluded; its error {orbit.trivial_multiplier_error:.1e})"
+        stab += f"; trivial multiplier 1 excluded (its error {orbit.trivial_multiplier_error:.1e})"
     rows.append(("stability", stab))
     events = orbit.trajectory.events
     if not events:
@@ -412,49 +413,63 @@ def cmd_orbit(args: argparse.Namespace) -> int:
     return 0
 
 
+def _paragraph(text: str, indent: str = "") -> str:
+    return textwrap.fill(" ".join(text.split()), width=88, initial_indent=indent, subsequent_indent=indent)
+
+
 def _orbit_epilog() -> str:
-    lines = ["shipped models (parameters with their default values):"]
+    parts = ["shipped models (states; parameters with their default values):"]
     for name, factory in MODELS.items():
         system = factory()
         kind = "autonomous" if system.is_autonomous else f"forced, period {system.period_expr}"
-        lines.append(f"  {name}: {MODEL_SUMMARIES.get(name, '')}")
-        lines.append(f"    {kind}; states {', '.join(system.state_names)}")
-        lines.append("    " + " ".join(f"{k}={_fmt(v)}" for k, v in system.defaults.items()))
-    lines += [
+        parts.append(_paragraph(f"{name}: {MODEL_SUMMARIES.get(name, '')}; {kind}", "  "))
+        parts.append(_paragraph(
+            f"states {', '.join(system.state_names)}; "
+            + " ".join(f"{k}={_fmt(v)}" for k, v in system.defaults.items()), "    "))
+    parts += [
         "",
-        "defaults when no guess is given:",
-        f"  without --x0 a transient is simulated ({TRANSIENT_PERIODS} forcing periods for forced models, about",
-        "  50 oscillation periods for autonomous ones) from a default state, in the direction of integration",
-        "  (with --backward it runs backward and so approaches orbits that attract in backward time), and",
-        "  shooting starts from its end state; for autonomous models without --period the period guess is",
-        "  the time between two repetitions of the transient's event sequence (or between crossings of a",
-        "  Poincaré section x_1 = mid-range when it has no events).",
+        _paragraph(
+            f"""Without --x0, a transient is simulated from a default state ({TRANSIENT_PERIODS} forcing
+            periods for forced models, about 50 oscillation periods for autonomous ones) in the
+            direction of integration (with --backward it runs backward, and so approaches orbits
+            that attract in backward time, such as infinitely unstable ones), and shooting starts
+            from its end state. For autonomous models without --period, the period guess is the
+            time between two repetitions of the transient's event sequence, or between crossings
+            of the Poincare section x_1 = mid-range when it has no events."""
+        ),
         "",
-        "output: state0, period, amplitude (max |x_1| over the period), Floquet multipliers (forward time;",
-        "an infinite one, of an infinitely unstable orbit, is 'inf') with their magnitudes, stability and",
-        "the switching events [surface, time] of one period. --json prints one JSON object with the keys",
-        "model, parameters, state_names, state0, t0, period, autonomous, backward, amplitude,",
-        "half_peak_to_peak, multipliers ([re, im] pairs or \"inf\"), multiplier_magnitudes, stable, events,",
-        "event_modes, converged, iterations, residual_norm.",
+        _paragraph(
+            """Output: state0, period, amplitude (max |x_1| over the period), the Floquet
+            multipliers in forward time (an infinite one, of an infinitely unstable orbit, is
+            'inf') with their magnitudes, stability, and the switching events (surface, time) of
+            one period. --json prints one JSON object with the keys model, parameters,
+            state_names, state0, t0, period, autonomous, backward, amplitude, half_peak_to_peak,
+            multipliers ([re, im] pairs, or "inf"), multiplier_magnitudes, stable, events
+            ([surface, time] pairs), event_modes, converged, iterations, residual_norm."""
+        ),
         "",
-        "exit status: 0 found, 1 the computation failed (e.g. Newton did not converge), 2 bad usage.",
+        _paragraph(
+            """Exit status: 0 when an orbit is found, 1 when the computation fails (e.g. Newton does
+            not converge), 2 for bad usage; errors are one line on stderr."""
+        ),
         "",
         "examples:",
         f"  {PROG} orbit trilinear --set omega=1.2 --x0 0.5,0.5",
-        f"  {PROG} orbit block_on_belt --json",
+        f"  {PROG} orbit trilinear --set omega=0.7 --json",
+        f"  {PROG} orbit block_on_belt",
         f"  {PROG} orbit block_on_belt --backward --x0 1.0,-0.95 --period 6.3",
     ]
-    return "\n".join(lines)
+    return "\n".join(parts)
 
 
 def _add_orbit_parser(sub) -> None:
     p = sub.add_parser(
         "orbit",
         help="find one periodic orbit of a shipped model and print it",
-        description=(
-            "Find one periodic orbit of a shipped model by shooting (Newton on the period map, with the "
-            "monodromy matrix and every saltation matrix as its Jacobian) from a guess, and print it with "
-            "its Floquet multipliers."
+        description=_paragraph(
+            """Find one periodic orbit of a shipped model by shooting (Newton on the period map, with
+            the monodromy matrix and every saltation matrix as its Jacobian) from a guess, and print
+            it with its Floquet multipliers."""
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog_factory=_orbit_epilog,
