@@ -1,0 +1,247 @@
+"""Figures: they draw, they save, and they use the paper's line styles."""
+
+from __future__ import annotations
+
+import math
+
+import matplotlib
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from saltation.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind
+from saltation.plotting import (
+    CurveStyle,
+    PhaseCurve,
+    plot_multipliers,
+    plot_phase_plane,
+    plot_response,
+    save_figure,
+    stability_runs,
+)
+
+INF = complex(math.inf, 0.0)
+
+
+def _pt(p: float, a: float, mu: list[complex], stable: bool) -> BranchPoint:
+    return BranchPoint(
+        parameter=p, state=np.array([a, 0.0]), period=2 * np.pi / p, amplitude=a, half_peak_to_peak=0.9 * a,
+        multipliers=np.array(mu, dtype=complex), stable=stable, events=(),
+    )
+
+
+def trilinear_like() -> Branch:
+    """Stable, then unstable past a smooth fold at index 4, with a non-smooth point at index 1."""
+    pts = []
+    for k in range(10):
+        p = 1.0 + 0.1 * k if k < 5 else 1.4 - 0.1 * (k - 4)
+        a = 0.5 + 0.2 * k
+        if k < 2:
+            mu = [0.6 + 0.3j, 0.6 - 0.3j]
+        elif k < 5:
+            mu = [0.9, 0.2]
+        else:
+            mu = [1.5 + 0.1 * k, 0.1]
+        pts.append(_pt(p, a, mu, stable=k < 5))
+    specials = [
+        SpecialPoint(
+            kind=SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER, parameter=1.15, bracket=(1.1, 1.2), accuracy=0.1,
+            index=1, state=np.array([0.8, 0.0]), period=5.0, amplitude=0.8,
+            multipliers_minus=np.array([0.6 + 0.3j, 0.6 - 0.3j]), multipliers_plus=np.array([0.85, 0.25]),
+        ),
+        SpecialPoint(
+            kind=SpecialPointKind.FOLD, parameter=1.45, bracket=(1.44, 1.46), accuracy=0.02, index=4,
+            state=np.array([1.4, 0.0]), period=4.3, amplitude=1.4, multipliers=np.array([1.0, 0.15]),
+        ),
+    ]
+    return Branch(model="trilinear", parameter_name="omega", kind=BranchKind.PERIODIC, points=pts,
+                  special_points=specials, label="periodic")
+
+
+def block_on_belt_like() -> Branch:
+    """Stable stick-slip cycles (1, 0), a discontinuous fold, unstable ones (1, inf)."""
+    pts = [_pt(0.5 + 0.05 * k, 2.0 - 0.1 * k, [1.0, 0.0], True) for k in range(5)]
+    pts += [_pt(0.75 - 0.05 * k, 1.5 - 0.1 * k, [INF, 1.0], False) for k in range(5)]
+    fold = SpecialPoint(
+        kind=SpecialPointKind.DISCONTINUOUS_FOLD, parameter=0.73, bracket=(0.72, 0.74), accuracy=0.02, index=4,
+        state=np.array([1.55, 0.0]), period=6.0, amplitude=1.55,
+        multipliers_minus=np.array([1.0, 0.0], dtype=complex), multipliers_plus=np.array([INF, 1.0]),
+        crossing_q=0.5, crossing_point=1.0 + 0j,
+    )
+    return Branch(model="block_on_belt", parameter_name="v_dr", kind=BranchKind.PERIODIC, points=pts,
+                  special_points=[fold], autonomous=True, label="stick-slip")
+
+
+def _lines(fig: Figure, gid: str):
+    return [ln for ln in fig.axes[0].get_lines() if ln.get_gid() == gid]
+
+
+def _assert_written(paths):
+    for path in paths:
+        assert path.exists() and path.stat().st_size > 1000
+    png, pdf = paths
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert pdf.read_bytes()[:5] == b"%PDF-"
+
+
+# --- response diagram -------------------------------------------------------
+
+
+def test_response_line_styles_follow_stability(tmp_path):
+    branch = trilinear_like()
+    fig = plot_response(branch)
+    stable, unstable = _lines(fig, "stable"), _lines(fig, "unstable")
+    assert len(stable) == 1 and len(unstable) == 1
+    assert stable[0].get_linestyle() == "-"
+    assert unstable[0].get_linestyle() == "-."
+    # the runs meet at the fold, which lies between the last stable and first unstable point
+    assert stable[0].get_xdata()[-1] == unstable[0].get_xdata()[0] == 1.45
+    assert stable[0].get_ydata()[-1] == unstable[0].get_ydata()[0] == 1.4
+    np.testing.assert_array_equal(stable[0].get_xdata()[:-1], branch.parameter[:5])
+    np.testing.assert_array_equal(unstable[0].get_ydata()[1:], branch.amplitude[5:])
+    _assert_written(save_figure(fig, tmp_path / "response"))
+
+
+def test_response_marks_special_points_with_distinct_markers_and_legend():
+    fig = plot_response([trilinear_like(), block_on_belt_like()], colors=["k", "C1"])
+    markers = {
+        kind: _lines(fig, kind.value)[0].get_marker()
+        for kind in (SpecialPointKind.FOLD, SpecialPointKind.DISCONTINUOUS_FOLD,
+                     SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER)
+    }
+    assert len(set(markers.values())) == 3
+    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert {"stable", "unstable", "fold", "discontinuous fold", "periodic", "stick-slip"} <= set(texts)
+
+
+def test_response_runs_split_by_stability_change():
+    branch = trilinear_like()
+    flags = [True, True, False, False, True]
+    branch.points = [
+        BranchPoint(p.parameter, p.state, p.period, p.amplitude, p.half_peak_to_peak, p.multipliers, f, p.events)
+        for p, f in zip(branch.points[:5], flags)
+    ]
+    branch.special_points = []
+    runs = stability_runs(branch, branch.amplitude)
+    assert [r[0] for r in runs] == [True, False, True]
+    # neighbouring runs meet half way between the points where stability changes
+    assert runs[0][1][-1] == runs[1][1][0] == pytest.approx(1.15)
+    assert runs[1][2][-1] == runs[2][2][0] == pytest.approx(1.2)
+
+
+@pytest.mark.parametrize(
+    ("measure", "words"),
+    [("amplitude", "max |x|"), ("half_peak_to_peak", "half peak-to-peak")],
+)
+def test_response_y_label_names_the_measure(measure, words):
+    branch = trilinear_like()
+    fig = plot_response(branch, measure=measure)
+    ax = fig.axes[0]
+    assert words in ax.get_ylabel()
+    assert ax.get_xlabel() == "omega"
+    expected = branch.amplitude if measure == "amplitude" else branch.half_peak_to_peak
+    np.testing.assert_array_equal(_lines(fig, "stable")[0].get_ydata()[:5], expected[:5])
+
+
+def test_response_custom_measure_and_bad_measure():
+    fig = plot_response(trilinear_like(), measure=lambda b: b.period, ylabel="T")
+    assert fig.axes[0].get_ylabel() == "T"
+    with pytest.raises(ValueError, match="unknown amplitude measure 'peak'"):
+        plot_response(trilinear_like(), measure="peak")
+
+
+def test_response_draws_on_given_axes():
+    fig = Figure()
+    ax = fig.add_subplot(1, 2, 2)
+    assert plot_response(block_on_belt_like(), ax=ax) is fig
+    assert ax.get_lines()
+
+
+# --- multipliers ------------------------------------------------------------
+
+
+def test_multipliers_unit_line_and_dotted_jump(tmp_path):
+    branch = trilinear_like()
+    fig = plot_multipliers(branch)
+    unit = _lines(fig, "unit")
+    assert len(unit) == 1 and unit[0].get_linestyle() == "--"
+    assert list(unit[0].get_ydata()) == [1.0, 1.0]
+    jumps = _lines(fig, "jump")
+    assert len(jumps) == 2
+    for ln in jumps:
+        assert ln.get_linestyle() == ":"
+        assert list(ln.get_xdata()) == [1.15, 1.15]
+    ends = sorted(tuple(ln.get_ydata()) for ln in jumps)
+    assert ends == sorted([(abs(0.6 + 0.3j), 0.85), (abs(0.6 - 0.3j), 0.25)])
+    # the magnitude curves are broken at the non-smooth point and joined to its one-sided values
+    mu0 = _lines(fig, "mu0")
+    assert len(mu0) == 2
+    assert mu0[0].get_xdata()[-1] == mu0[1].get_xdata()[0] == 1.15
+    assert mu0[0].get_ydata()[-1] == pytest.approx(abs(0.6 + 0.3j))
+    assert mu0[1].get_ydata()[0] == 0.85
+    _assert_written(save_figure(fig, tmp_path / "multipliers"))
+
+
+def test_multipliers_infinite_clipped_to_top(tmp_path):
+    fig = plot_multipliers(block_on_belt_like())
+    ax = fig.axes[0]
+    top = max(max(ln.get_ydata()) for ln in _lines(fig, "jump"))
+    assert np.isfinite(top) and 1.0 < top < ax.get_ylim()[1]
+    jumps = _lines(fig, "jump")
+    assert {tuple(ln.get_ydata()) for ln in jumps} == {(1.0, top), (0.0, 1.0)}
+    assert all(list(ln.get_xdata()) == [0.73, 0.73] for ln in jumps)
+    infinite = _lines(fig, "infinite")
+    assert infinite and all(ln.get_marker() == "^" for ln in infinite)
+    assert all(np.all(ln.get_ydata() == top) for ln in infinite)
+    for ln in _lines(fig, "mu0") + _lines(fig, "mu1"):
+        assert np.all(np.isfinite(ln.get_ydata())) and np.all(ln.get_ydata() <= top)
+    _assert_written(save_figure(fig, tmp_path / "sub" / "multipliers.belt"))
+    assert (tmp_path / "sub" / "multipliers.belt.pdf").exists()
+
+
+# --- phase plane ------------------------------------------------------------
+
+
+def _circle(r: float, c=(0.0, 0.0), m: int = 100) -> np.ndarray:
+    t = np.linspace(0, 2 * np.pi, m)
+    return np.column_stack([c[0] + r * np.cos(t), c[1] + r * np.sin(t)])
+
+
+def test_phase_plane(tmp_path):
+    curves = [
+        PhaseCurve(_circle(2.0), "stable limit cycle", CurveStyle.STABLE),
+        PhaseCurve(_circle(1.0, (1.0, 0.0)), "unstable limit cycle", "unstable"),
+        PhaseCurve(_circle(2.5)[:60], "flow I", CurveStyle.TRAJECTORY),
+    ]
+    fig = plot_phase_plane(curves, equilibrium=(1.0, 0.0), stick_band=(2.0, 0.1))
+    ax = fig.axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("x", "x'")
+    (stable,) = _lines(fig, "stable")
+    (unstable,) = _lines(fig, "unstable")
+    assert stable.get_linestyle() == "-" and unstable.get_linestyle() == "--"
+    assert stable.get_linewidth() > unstable.get_linewidth()
+    (eq,) = _lines(fig, "equilibrium")
+    assert eq.get_marker() == "o" and list(eq.get_xdata()) == [1.0]
+    band = [p for p in ax.patches if p.get_gid() == "stick_band"]
+    assert len(band) == 1
+    ys = ax.transData.inverted().transform(band[0].get_verts())[:, 1]
+    assert ys.min() == pytest.approx(1.9) and ys.max() == pytest.approx(2.1)
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "stable limit cycle" in texts and "equilibrium" in texts
+    _assert_written(save_figure(fig, tmp_path / "phase"))
+
+
+def test_phase_plane_rejects_bad_shapes():
+    with pytest.raises(ValueError, match="curve 0 .*shape"):
+        plot_phase_plane([PhaseCurve(np.zeros((5, 3)), "bad")])
+
+
+def test_no_pyplot_figures_leak():
+    import matplotlib.pyplot as plt
+
+    before = plt.get_fignums()
+    plot_response(trilinear_like())
+    plot_multipliers(block_on_belt_like())
+    plot_phase_plane([PhaseCurve(_circle(1.0))])
+    assert plt.get_fignums() == before
+    assert matplotlib.get_backend()
