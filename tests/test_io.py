@@ -114,6 +114,7 @@ def synthetic_branch() -> Branch:
         points=points,
         special_points=[smooth_fold(), discontinuous_fold(), no_crossing()],
         stop_reason=StopReason.MIN_STEP,
+        stop_reasons=[StopReason.PARAMETER_BOUND, None],
         fixed_parameters={"m": 1.0, "k": 1.0, "c": 0.0, "F_slip": 1.0, "F_stick": 2.0, "eta": 1e-4},
         label="unstable periodic",
         autonomous=True,
@@ -161,6 +162,7 @@ def assert_branches_equal(a: Branch, b: Branch) -> None:
         b.model, b.parameter_name, b.kind, b.backward, b.stop_reason, b.label, b.autonomous
     )
     assert a.fixed_parameters == b.fixed_parameters
+    assert a.stop_reasons == b.stop_reasons
     assert len(a.points) == len(b.points)
     for p, q in zip(a.points, b.points):
         assert_points_equal(p, q)
@@ -185,6 +187,7 @@ def test_branch_json_is_strict_json_with_inf_as_string(tmp_path):
     d = json.loads(text)
     last = d["points"][-1]
     assert last["multipliers"] == ["inf", [1.0, 0.0]]
+    assert (d["stop_reason"], d["stop_reasons"]) == ("min_step", ["parameter_bound", None])
     assert d["special_points"][2]["period"] == "nan"
     assert d["special_points"][1]["monodromy_plus"] == [[1.0, 0.0], ["inf", 1.0]]
 

@@ -214,6 +214,15 @@ def _special_point_from_dict(d: dict[str, Any]) -> SpecialPoint:
     )
 
 
+def _enc_stop(reason: StopReason | None) -> str | None:
+    """A stop reason by its (lower-case) name; its value is a sentence that may be reworded."""
+    return None if reason is None else reason.name.lower()
+
+
+def _dec_stop(name: str | None) -> StopReason | None:
+    return None if name is None else StopReason[name.upper()]
+
+
 def _metadata_to_dict(branch: Branch) -> dict[str, Any]:
     return {
         "format": BRANCH_FORMAT,
@@ -224,7 +233,8 @@ def _metadata_to_dict(branch: Branch) -> dict[str, Any]:
         "backward": bool(branch.backward),
         "autonomous": bool(branch.autonomous),
         "label": branch.label,
-        "stop_reason": None if branch.stop_reason is None else branch.stop_reason.name.lower(),
+        "stop_reason": _enc_stop(branch.stop_reason),
+        "stop_reasons": [_enc_stop(r) for r in branch.stop_reasons],
         "fixed_parameters": {str(k): _enc_float(v) for k, v in branch.fixed_parameters.items()},
         "special_points": [_special_point_to_dict(sp) for sp in branch.special_points],
     }
@@ -268,7 +278,6 @@ def branch_from_dict(d: dict[str, Any], *, points: list[BranchPoint] | None = No
         Points read elsewhere (from a CSV file).
     """
     _check_format(d, BRANCH_FORMAT, "branch")
-    stop = d.get("stop_reason")
     if points is None:
         points = [_point_from_dict(p) for p in d.get("points", [])]
     return Branch(
@@ -278,7 +287,8 @@ def branch_from_dict(d: dict[str, Any], *, points: list[BranchPoint] | None = No
         backward=bool(d.get("backward", False)),
         points=points,
         special_points=[_special_point_from_dict(s) for s in d.get("special_points", [])],
-        stop_reason=None if stop is None else StopReason[stop.upper()],
+        stop_reason=_dec_stop(d.get("stop_reason")),
+        stop_reasons=[_dec_stop(r) for r in d.get("stop_reasons", [])],
         fixed_parameters={k: _dec_float(v) for k, v in d.get("fixed_parameters", {}).items()},
         label=d.get("label", ""),
         autonomous=bool(d.get("autonomous", False)),
