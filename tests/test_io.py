@@ -322,3 +322,14 @@ def test_special_points_json(tmp_path):
     assert "Infinity" not in text and "NaN" not in text
     assert json.loads(text) == records
     assert load_special_points_json(path) == records
+
+
+def test_every_dataclass_field_is_written(tmp_path):
+    """A field added to Branch, BranchPoint or SpecialPoint must be added to the file format too."""
+    from dataclasses import fields
+
+    branch = synthetic_branch()
+    d = json.loads(save_branch_json(branch, tmp_path / "b.json").read_text())
+    assert {f.name for f in fields(Branch)} <= set(d)
+    assert {f.name for f in fields(BranchPoint)} == set(d["points"][0])
+    assert {f.name for f in fields(SpecialPoint)} == set(d["special_points"][0])
