@@ -17,6 +17,7 @@ import json
 import math
 import sys
 import textwrap
+import threading
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
@@ -119,10 +120,26 @@ def build_model(name: str) -> PiecewiseSystem:
 
 
 def make_flow(system: PiecewiseSystem):
-    """The compiled flow of a model (compiles on first use, cached on disk afterwards)."""
+    """The compiled flow of a model (compiles on first use, cached on disk afterwards).
+
+    On a terminal, says so on stderr when loading the kernels takes more than a few seconds.
+    """
     from .integrate import Flow
 
-    return Flow(system)
+    timer = None
+    if sys.stderr.isatty():
+        def notice() -> None:
+            print(f"{PROG}: compiling the kernels of model {system.name!r} (first use only, about a minute)...",
+                  file=sys.stderr, flush=True)
+
+        timer = threading.Timer(3.0, notice)
+        timer.daemon = True
+        timer.start()
+    try:
+        return Flow(system)
+    finally:
+        if timer is not None:
+            timer.cancel()
 
 
 def parse_sets(items: Sequence[str] | None, system: PiecewiseSystem) -> dict[str, float]:

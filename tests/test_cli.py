@@ -1,0 +1,242 @@
+"""The command line, end to end: ``saltation orbit`` against closed forms and the paper's stick-slip cycles."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from saltation import cli
+from saltation.errors import ConvergenceError
+from saltation.models import trilinear
+
+# Appendix A
+M, C, K, F0 = 1.0, 0.05, 1.0, 0.2
+W = 0.7  # below the contact range: the orbit never reaches x_c = 1
+REQUIRED = {"state0", "period", "amplitude", "multipliers", "events", "converged"}
+
+
+def _strict_json(text: str) -> dict:
+    """Parse JSON, refusing the non-standard NaN / Infinity."""
+
+    def refuse(name):
+        raise ValueError(f"non-standard JSON constant {name}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def _run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = cli.main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _linear_reference(w: float = W):
+    """Steady state x = X sin(w t - phi) of m x'' + c x' + k x = f0 sin(w t), and its multipliers."""
+    X = F0 / np.hypot(K - M * w**2, C * w)
+    phi = np.arctan2(C * w, K - M * w**2)
+    state0 = np.array([-X * np.sin(phi), X * w * np.cos(phi)])
+    A = np.array([[0.0, 1.0], [-K / M, -C / M]])
+    mu = np.linalg.eigvals(expm(A * 2 * np.pi / w))
+    return X, state0, mu
+
+
+def _pairs(mu) -> np.ndarray:
+    return np.sort_complex(np.array([complex(*m) for m in mu]))
+
+
+@pytest.fixture(scope="module")
+def compiled(trilinear_flow, belt_flow):
+    """Both shipped models compiled (the CLI then loads them from the cache)."""
+    return trilinear_flow, belt_flow
+
+
+def test_orbit_json_matches_linear_closed_form(capsys, compiled):
+    code, out, err = _run(capsys, "orbit", "trilinear", "--set", "omega=0.7", "--x0", "0.3,0", "--json")
+    assert code == 0, err
+    data = _strict_json(out)
+    assert REQUIRED <= set(data)
+    X, state0, mu = _linear_reference()
+    assert data["converged"] is True
+    assert data["period"] == pytest.approx(2 * np.pi / W, rel=1e-14)
+    assert data["amplitude"] == pytest.approx(X, rel=1e-8)
+    assert np.allclose(data["state0"], state0, rtol=0, atol=1e-8)
+    assert np.allclose(_pairs(data["multipliers"]), np.sort_complex(mu), rtol=0, atol=1e-8)
+    assert data["events"] == []
+    assert data["stable"] is True
+    assert data["parameters"]["omega"] == W and data["parameters"]["f0"] == F0
+
+
+def test_orbit_subprocess_python_m(compiled):
+    """``python -m saltation`` with the transient default (no --x0)."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "saltation", "orbit", "trilinear", "--json", "--set", "omega=0.7"],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    data = _strict_json(proc.stdout)
+    X, state0, mu = _linear_reference()
+    assert data["amplitude"] == pytest.approx(X, rel=1e-8)
+    assert np.allclose(data["state0"], state0, rtol=0, atol=1e-8)
+    assert np.allclose(_pairs(data["multipliers"]), np.sort_complex(mu), rtol=0, atol=1e-8)
+
+
+def test_orbit_phase_t0(capsys, compiled):
+    """--t0 shifts the phase of the forcing: state0 is the steady state at t0."""
+    t0 = 1.3
+    code, out, err = _run(capsys, "orbit", "trilinear", "--set", "omega=0.7", "--t0", str(t0), "--x0", "0.3,0", "--json")
+    assert code == 0, err
+    data = _strict_json(out)
+    X, _, _ = _linear_reference()
+    phi = np.arctan2(C * W, K - M * W**2)
+    assert data["t0"] == t0
+    assert np.allclose(data["state0"], [X * np.sin(W * t0 - phi), X * W * np.cos(W * t0 - phi)], atol=1e-8)
+
+
+def test_orbit_contact_orbit_has_events(capsys, compiled):
+    """omega = 1.2 from the far side: the large orbit in contact with both supports (x0 with a minus sign)."""
+    code, out, err = _run(capsys, "orbit", "trilinear", "--x0", "-1,0", "--json")
+    assert code == 0, err
+    data = _strict_json(out)
+    assert data["amplitude"] > 1.0  # beyond x_c
+    surfaces = {s for s, _ in data["events"]}
+    assert surfaces == {"h1a", "h1b", "h2a", "h2b"}
+    times = [t for _, t in data["events"]]
+    assert times == sorted(times) and 0.0 <= times[0] and times[-1] <= data["period"]
+
+
+def test_stable_stick_slip_cycle_from_transient(capsys, compiled):
+    """No --x0, no --period: transient, period estimate, then the stable cycle with multipliers (1, ~0)."""
+    code, out, err = _run(capsys, "orbit", "block_on_belt", "--json")
+    assert code == 0, err
+    data = _strict_json(out)
+    assert data["converged"] and data["stable"] and data["autonomous"]
+    assert data["period"] == pytest.approx(6.494, abs=2e-3)
+    mu = sorted(abs(complex(*m)) for m in data["multipliers"])
+    assert mu[1] == pytest.approx(1.0, abs=1e-6)
+    assert mu[0] < 1e-3  # zero as eta -> 0 (the stick phase)
+    # one stick phase per period: enter it on the band, leave it where the spring force reaches F_stick
+    assert sorted(s for s, _ in data["events"]) == ["band_lower", "stick_upper"]
+
+
+def test_unstable_stick_slip_cycle_backward_has_infinite_multiplier(capsys, compiled):
+    code, out, err = _run(
+        capsys, "orbit", "block_on_belt", "--backward", "--x0", "1.0,-0.95", "--period", "6.3", "--json"
+    )
+    assert code == 0, err
+    data = _strict_json(out)
+    assert data["backward"] is True and data["stable"] is False and data["converged"] is True
+    assert "inf" in data["multipliers"]
+    finite = [complex(*m) for m in data["multipliers"] if m != "inf"]
+    assert len(finite) == 1 and finite[0] == pytest.approx(1.0, abs=1e-6)
+    assert "inf" in data["multiplier_magnitudes"]
+    assert data["period"] == pytest.approx(6.44, abs=0.01)
+    assert data["events"] and all(t < 0 for _, t in data["events"])  # backward time
+    # the same cycle from a backward transient, with the period estimated
+    code, out2, err = _run(capsys, "orbit", "block_on_belt", "--backward", "--json")
+    assert code == 0, err
+    data2 = _strict_json(out2)
+    assert "inf" in data2["multipliers"]
+    assert data2["period"] == pytest.approx(data["period"], rel=1e-8)
+    assert data2["amplitude"] == pytest.approx(data["amplitude"], rel=1e-6)
+
+
+def test_table_output(capsys, compiled):
+    code, out, err = _run(capsys, "orbit", "block_on_belt", "--backward", "--x0", "1.0,-0.95", "--period", "6.3")
+    assert code == 0, err
+    for row in ("state0", "period", "amplitude", "multipliers", "stability", "events"):
+        assert any(line.startswith(row) for line in out.splitlines()), row
+    assert "|mu| = inf" in out
+    assert "infinitely unstable" in out
+    code, out, err = _run(capsys, "orbit", "trilinear", "--set", "omega=0.7", "--x0", "0.3,0")
+    assert code == 0, err
+    assert "stable" in out and "events       none" in out
+    X, _, _ = _linear_reference()
+    assert f"{X:.8f}"[:8] in out
+
+
+@pytest.mark.parametrize(
+    "argv, culprit",
+    [
+        (["orbit", "pendulum"], "unknown model 'pendulum'"),
+        (["orbit", "trilinear", "--set", "omgea=1"], "unknown parameter 'omgea'"),
+        (["orbit", "trilinear", "--set", "omega"], "NAME=VALUE"),
+        (["orbit", "trilinear", "--set", "omega=fast"], "'fast' is not a number"),
+        (["orbit", "trilinear", "--x0", "0.5;0.5"], "malformed --x0"),
+        (["orbit", "trilinear", "--x0", "1,2,3"], "has 3 components"),
+        (["orbit", "trilinear", "--x0", "nan,0"], "finite"),
+        (["orbit", "trilinear", "--period", "5"], "forced"),
+        (["orbit", "block_on_belt", "--period", "-1"], "positive"),
+        (["orbit", "trilinear", "--frobnicate"], "unrecognized arguments"),
+        (["orbit"], "MODEL"),
+        ([], "subcommand"),
+    ],
+)
+def test_bad_usage_is_one_line_exit_2(capsys, argv, culprit):
+    code, out, err = _run(capsys, *argv)
+    assert code == 2
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("saltation: error: ")
+    assert culprit in lines[0]
+
+
+def test_failed_computation_is_one_line_exit_1(capsys, compiled):
+    # the transient from the equilibrium [F_slip/k, 0] does not oscillate: no period to estimate
+    code, out, err = _run(capsys, "orbit", "block_on_belt", "--x0", "1,0")
+    assert code == 1 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("saltation: error: ") and "period" in lines[0]
+
+
+def test_newton_failure_is_one_line_exit_1(capsys, compiled, monkeypatch):
+    import saltation.shooting
+
+    def fail(*args, **kwargs):
+        raise ConvergenceError("shooting (forward time) for 'trilinear' did not converge in 30 iterations", [1.0, 2.0])
+
+    monkeypatch.setattr(saltation.shooting, "find_periodic_orbit", fail)
+    code, out, err = _run(capsys, "orbit", "trilinear", "--x0", "0.5,0.5", "--json")
+    assert code == 1 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith("saltation: error: shooting") and "did not converge" in lines[0]
+    assert "Traceback" not in err
+
+
+def test_bad_usage_subprocess_has_no_traceback():
+    proc = subprocess.run(
+        [sys.executable, "-m", "saltation", "orbit", "trilinear", "--set", "omgea=1"],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    assert proc.stderr.strip().splitlines() == [
+        "saltation: error: unknown parameter 'omgea' in --set for model 'trilinear'; "
+        "parameters are m, c, k, x_c, k_f, c_f, f0, omega"
+    ]
+
+
+def test_help_explains_every_option(capsys):
+    code, out, _ = _run(capsys, "--help")
+    assert code == 0 and "orbit" in out
+    code, out, _ = _run(capsys, "orbit", "--help")
+    assert code == 0
+    for option in ("MODEL", "--set", "--x0", "--t0", "--period", "--backward", "--json"):
+        assert option in out
+    for name in cli.MODELS:
+        assert name in out
+    for pname in trilinear().parameter_names:
+        assert f"{pname}=" in out
+
+
+def test_registry_and_helpers():
+    assert set(cli.MODELS) >= {"trilinear", "block_on_belt"}
+    assert cli.multipliers_json([0.5 + 0.25j, complex(np.inf, 0)]) == [[0.5, 0.25], "inf"]
+    assert cli._join_negative_values(["orbit", "m", "--x0", "-1,0", "--json"]) == ["orbit", "m", "--x0=-1,0", "--json"]
+    assert cli._join_negative_values(["--x0", "--json"]) == ["--x0", "--json"]
