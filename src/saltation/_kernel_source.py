@@ -489,6 +489,7 @@ def integrate_kernel(
 
         if n_steps >= max_steps:
             status = STATUS_MAX_STEPS
+            info_mode = mode
             break
         remaining = abs(t_end - t)
         habs = min(habs, max_step)

@@ -205,6 +205,28 @@ def generate_source(system: PiecewiseSystem) -> str:
         body.append(f"{ind}return True")
         guard_cases.append((k, body))
     src += _dispatch("guard", "k, t, x, p", "k", guard_cases, "True")
+
+    # mode domains (the initial-mode rule)
+    domain_cases = []
+    for m, conds in enumerate(system.domains):
+        if not conds:
+            continue
+        body = []
+        for c in conds:
+            op = ">" if c.strict else ">="
+            body.append(f"{ind}if not ({em.printer.doprint(c.expr)} {op} 0.0):")
+            body.append(f"{ind}    return False")
+        body.append(f"{ind}return True")
+        domain_cases.append((m, body))
+    src += _dispatch("in_domain", "mode, t, x, p", "mode", domain_cases, "True")
+    src += [
+        "@njit(cache=True)",
+        "def initial_mode(t, x, p):",
+        f"    for m in range({len(system.modes)}):",
+        "        if in_domain(m, t, x, p):",
+        "            return m",
+        "    return -1",
+    ]
     return "\n".join(src) + "\n"
 
 

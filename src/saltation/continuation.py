@@ -53,6 +53,8 @@ class ContinuationSettings:
         Look for and locate special points.
     locate_tol : float
         Distance in ``(u, lam)`` to which special points are located.
+    max_correction : float
+        A corrector step longer than this (relative to ``1 + |z|``) counts as divergence.
     """
 
     ds: float = 0.02
@@ -65,6 +67,7 @@ class ContinuationSettings:
     max_angle: float = 0.3
     detect: bool = True
     locate_tol: float = 1e-9
+    max_correction: float = 0.2
 
     def __post_init__(self):
         if not 0 < self.ds_min <= self.ds <= self.ds_max:
@@ -133,9 +136,12 @@ class Corrector:
             J = np.block([[ev.jac_u, ev.jac_lam[:, None]], [normal[None, :]]])
             rhs = np.append(ev.residual, normal @ (z - z_pred))
             try:
-                z = z - np.linalg.solve(J, rhs)
+                dz = np.linalg.solve(J, rhs)
             except np.linalg.LinAlgError:
                 break
+            if np.linalg.norm(dz) > self.settings.max_correction * (1.0 + np.linalg.norm(z)):
+                break  # diverging: let the step control shorten the step
+            z = z - dz
         raise ConvergenceError("corrector did not converge", history)
 
     def solve_fixed(self, u0: np.ndarray, lam: float) -> Solution:

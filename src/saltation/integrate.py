@@ -232,6 +232,19 @@ class Flow:
             return overrides.astype(float)
         return self.system.parameter_vector(overrides)
 
+    def initial_mode(self, x0: np.ndarray, p: np.ndarray, t0: float = 0.0) -> int:
+        """The model's initial-mode rule, compiled: the first mode whose domain holds.
+
+        Raises
+        ------
+        InitialModeError
+            If the state lies in no mode's domain.
+        """
+        m = int(self._kernels.initial_mode(float(t0), np.ascontiguousarray(x0, dtype=float), p))
+        if m < 0:
+            return self.system.initial_mode(x0, p, t0)  # raises with the full explanation
+        return m
+
     def run(
         self,
         x0: Sequence[float],
@@ -280,7 +293,7 @@ class Flow:
         p = np.ascontiguousarray(p, dtype=float)
         if not np.isfinite(t0) or not np.isfinite(t1):
             raise ValueError(f"integration times must be finite, got t0={t0}, t1={t1}")
-        m0 = sys_.initial_mode(x0, p, t0) if mode0 is None else sys_.mode_index(mode0)
+        m0 = self.initial_mode(x0, p, t0) if mode0 is None else sys_.mode_index(mode0)
         if not -1 <= parameter < sys_.n_params:
             raise ModelError(f"parameter index {parameter} out of range")
         phi = np.eye(sys_.n) if phi0 is None else np.ascontiguousarray(phi0, dtype=float)

@@ -262,7 +262,7 @@ class ShootingProblem:
         """Anchor the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` at ``u``."""
         x = u[: self.system.n]
         p = self.parameters_at(lam)
-        mode = self.system.initial_mode(x, p, self.t0)
+        mode = self.flow.initial_mode(x, p, self.t0)
         f = np.zeros(self.system.n)
         self.flow._kernels.vector_field(mode, self.t0, np.ascontiguousarray(x), p, f)
         norm = np.linalg.norm(f)

@@ -1,0 +1,224 @@
+"""Bifurcation diagrams: several branches stitched together.
+
+The main non-smooth case handled here is the one of the block-on-belt
+system (Fig. 7): a stable branch ends at a discontinuous fold that forward
+shooting cannot pass, because the branch beyond it is *infinitely unstable*
+(its orbits slide along a repulsion sliding mode; multipliers ``(1, inf)``).
+:func:`follow_through_discontinuous_fold` locates the end of the stable
+branch, restarts continuation with backward-time shooting, in which the
+unstable orbits are attracting, and records the discontinuous fold joining
+the two branches.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .bifurcations import classify_nonsmooth
+from .branch import Branch, SpecialPoint
+from .continuation import Continuation, ContinuationSettings, Corrector, Solution, canonical_events
+from .errors import SaltationError
+from .shooting import ShootingProblem
+
+
+@dataclass
+class BifurcationDiagram:
+    """Branches of one model over one parameter, with the special points joining them."""
+
+    model: str
+    parameter_name: str
+    branches: list[Branch] = field(default_factory=list)
+    connections: list[SpecialPoint] = field(default_factory=list)
+
+    @property
+    def special_points(self) -> list[SpecialPoint]:
+        """Every special point: those on the branches, then those joining branches."""
+        return [sp for b in self.branches for sp in b.special_points] + list(self.connections)
+
+
+def locate_branch_end(corrector: Corrector, last: Solution, lam_fail: float, *, tol: float = 1e-9) -> tuple[Solution, float]:
+    """Bisection in the parameter for the end of a branch that the corrector cannot pass.
+
+    Returns the last solution found (with the branch's event sequence) and
+    the smallest parameter value known to fail.
+    """
+    seq = canonical_events(last.summary.events)
+    good, bad = last, float(lam_fail)
+    for _ in range(80):
+        if abs(bad - good.lam) <= tol:
+            break
+        lam = 0.5 * (good.lam + bad)
+        try:
+            sol = corrector.solve_fixed(good.u, lam)
+            ok = canonical_events(sol.summary.events) == seq
+        except SaltationError:
+            ok = False
+        if ok:
+            good = sol
+        else:
+            bad = lam
+    return good, bad
+
+
+def _branch_end(cont: Continuation) -> tuple[Solution, float]:
+    """Locate where a run that stopped at the minimum step really ends (natural-parameter bisection)."""
+    last = cont.solutions[-1]
+    if cont.last_failure is not None:
+        lam_fail = float(cont.last_failure[-1])
+    else:
+        lam_fail = last.lam + 1e-3 * (1.0 + abs(last.lam)) * float(np.sign(last.tangent[-1]) or 1.0)
+    return locate_branch_end(cont.corrector, last, lam_fail, tol=cont.settings.locate_tol)
+
+
+def find_backward_seed(
+    forward_problem: ShootingProblem, stable: Solution, *, periods: int = 3, offset: float = 1e-3
+) -> np.ndarray | None:
+    """An infinitely unstable orbit near a stable one, by a backward-time transient.
+
+    Such orbits attract in backward time.  The stable orbit's state is pushed
+    by ``offset`` (relative) both ways along the eigenvector of its most
+    contracting Floquet multiplier, integrated backward over a few periods,
+    and refined by backward shooting; the first orbit whose event sequence
+    differs from the stable orbit's is returned as unknowns ``u`` (or None).
+    """
+    flow = forward_problem.flow
+    backward = ShootingProblem(
+        flow, forward_problem.parameters_at(stable.lam), backward=True, t0=forward_problem.t0,
+        tolerances=forward_problem.tolerances,
+    )
+    n = forward_problem.system.n
+    mu, vec = np.linalg.eig(stable.summary.monodromy)
+    v = np.real(vec[:, int(np.argmin(np.abs(mu)))])
+    x0 = stable.u[:n]
+    period = forward_problem.period_of(stable.u, stable.lam)
+    scale = offset * (1.0 + float(np.linalg.norm(x0)))
+    p = backward.p
+    own = canonical_events(stable.summary.events)
+    for sign in (1.0, -1.0):
+        try:
+            traj = flow.run(x0 + sign * scale * v, backward.t0, backward.t0 - periods * period, p)
+            u0 = backward.pack(traj.x1, period if backward.autonomous else None)
+            backward.set_phase_reference(u0)
+            orbit = backward.solve(u0, max_iter=20)
+        except SaltationError:
+            continue
+        labels = tuple(orbit.trajectory.events and [e.surface for e in orbit.trajectory.events])
+        if canonical_events(tuple(map(str, labels))) != own and not _same_orbit(orbit.state0, x0, orbit.period, period):
+            return backward.pack(orbit.state0, orbit.period if backward.autonomous else None)
+    return None
+
+
+def _same_orbit(xa: np.ndarray, xb: np.ndarray, ta: float, tb: float) -> bool:
+    return bool(np.linalg.norm(xa - xb) < 1e-6 * (1 + np.linalg.norm(xb)) and abs(ta - tb) < 1e-6 * tb)
+
+
+def follow_through_discontinuous_fold(
+    forward: Continuation,
+    *,
+    settings: ContinuationSettings | None = None,
+    progress: Callable | None = None,
+    offset: float = 1e-3,
+) -> tuple[Branch, SpecialPoint]:
+    """Locate the end of a forward-time branch and follow the infinitely unstable branch beyond it.
+
+    1. The end of the stable branch is located by bisection in the parameter.
+    2. A little inside (``offset`` relative in the parameter), an unstable
+       orbit is found by a backward-time transient and backward shooting
+       (:func:`find_backward_seed`).
+    3. That branch is continued with backward-time shooting both ways: away
+       from the fold, and towards it, where its end is located too.
+    4. The discontinuous fold is recorded with the multipliers of both
+       branches at their ends (stable ``(1, 0)``, unstable ``(1, inf)``).
+
+    Parameters
+    ----------
+    forward : Continuation
+        A finished continuation run of a forward-shooting problem that
+        stopped because the corrector failed (``StopReason.MIN_STEP``).
+
+    Returns
+    -------
+    branch : Branch
+        The backward-time branch, ordered from the fold outwards.
+    fold : SpecialPoint
+        The discontinuous fold joining the two branches.
+
+    Raises
+    ------
+    SaltationError
+        If no backward-time orbit can be found near the end of the branch.
+    """
+    prob_f = forward.problem
+    if not isinstance(prob_f, ShootingProblem) or prob_f.backward:
+        raise SaltationError("follow_through_discontinuous_fold needs a forward-time shooting continuation")
+    settings = settings or forward.settings
+    end, bad = _branch_end(forward)
+    towards = float(np.sign(bad - end.lam)) or 1.0
+    lam_in = end.lam - towards * offset * (1.0 + abs(end.lam))
+    stable_in = forward.corrector.solve_fixed(end.u, lam_in)
+    seed = find_backward_seed(prob_f, stable_in, offset=offset)
+    if seed is None:
+        raise SaltationError(
+            f"no backward-time orbit found near the end of the branch at {prob_f.lam_name} = {end.lam:.10g}"
+        )
+    prob_b = ShootingProblem(
+        prob_f.flow, prob_f.p, continuation_parameter=prob_f.lam_name, backward=True, t0=prob_f.t0,
+        tolerances=prob_f.tolerances,
+    )
+    away = Continuation(prob_b, settings)
+    for point in away.run(seed, lam_in, direction=-int(towards)):
+        if progress is not None:
+            progress(point)
+    near = Continuation(prob_b, settings)
+    for point in near.run(seed, lam_in, direction=int(towards)):
+        if progress is not None:
+            progress(point)
+    end_b, bad_b = _branch_end(near)
+    # the joined branch, ordered from the fold outwards
+    branch = away.branch
+    near.branch.points.append(_point_of(near, end_b))
+    branch.extend(near.branch)
+    branch.stop_reasons.append(near.branch.stop_reason)
+
+    lo, hi = sorted((max(end.lam, end_b.lam) if towards > 0 else min(end.lam, end_b.lam), min(bad, bad_b) if towards > 0 else max(bad, bad_b)))
+    crossing = classify_nonsmooth(
+        end.summary.monodromy, None, autonomous=prob_f.autonomous,
+        mu_minus=end.summary.multipliers, mu_plus=end_b.summary.multipliers,
+    )
+    fold = SpecialPoint(
+        kind=crossing.kind,
+        parameter=0.5 * (end.lam + end_b.lam),
+        bracket=(min(end.lam, end_b.lam, lo), max(end.lam, end_b.lam, hi)),
+        accuracy=abs(end.lam - end_b.lam),
+        index=-1,
+        state=end.summary.state,
+        period=end.summary.period,
+        amplitude=end.summary.amplitude,
+        multipliers_minus=end.summary.multipliers,
+        multipliers_plus=end_b.summary.multipliers,
+        monodromy_minus=end.summary.monodromy,
+        monodromy_plus=None,
+        crossing_q=crossing.q,
+        crossing_point=crossing.point,
+        events_minus=end.summary.events,
+        events_plus=end_b.summary.events,
+        note=(
+            "end of the forward-time branch, joined to the infinitely unstable branch found by backward-time "
+            "shooting; bracket from both branch ends"
+        ),
+    )
+    return branch, fold
+
+
+def _point_of(cont: Continuation, sol: Solution):
+    """A branch point for a solution found outside the continuation loop."""
+    cont._accept(sol)
+    return cont.branch.points.pop()
+
+
+def with_label(branch: Branch, label: str) -> Branch:
+    """The same branch with a label for plots."""
+    return replace(branch, label=label)
