@@ -74,40 +74,49 @@ def _branch_end(cont: Continuation) -> tuple[Solution, float]:
 
 
 def find_backward_seed(
-    forward_problem: ShootingProblem, stable: Solution, *, periods: int = 3, offset: float = 1e-3
+    forward_problem: ShootingProblem, stable: Solution, *, periods: int = 3, offset: float = 1e-3, phases: int = 8
 ) -> np.ndarray | None:
     """An infinitely unstable orbit near a stable one, by a backward-time transient.
 
-    Such orbits attract in backward time.  The stable orbit's state is pushed
-    by ``offset`` (relative) both ways along the eigenvector of its most
-    contracting Floquet multiplier, integrated backward over a few periods,
-    and refined by backward shooting; the first orbit whose event sequence
-    differs from the stable orbit's is returned as unknowns ``u`` (or None).
+    Such orbits attract in backward time.  Points of the stable orbit (at
+    ``phases`` instants of its period) are pushed by ``offset`` (relative)
+    both ways along each coordinate, integrated backward over ``periods``
+    periods, and refined by backward shooting; the first orbit whose event
+    sequence differs from the stable orbit's is returned as unknowns ``u``
+    of a backward problem (or None).
     """
     flow = forward_problem.flow
+    params = forward_problem.parameters_at(stable.lam)
     backward = ShootingProblem(
-        flow, forward_problem.parameters_at(stable.lam), backward=True, t0=forward_problem.t0,
-        tolerances=forward_problem.tolerances,
+        flow, params, backward=True, t0=forward_problem.t0, tolerances=forward_problem.tolerances
     )
     n = forward_problem.system.n
-    mu, vec = np.linalg.eig(stable.summary.monodromy)
-    v = np.real(vec[:, int(np.argmin(np.abs(mu)))])
     x0 = stable.u[:n]
     period = forward_problem.period_of(stable.u, stable.lam)
-    scale = offset * (1.0 + float(np.linalg.norm(x0)))
-    p = backward.p
-    own = canonical_events(stable.summary.events)
-    for sign in (1.0, -1.0):
-        try:
-            traj = flow.run(x0 + sign * scale * v, backward.t0, backward.t0 - periods * period, p)
-            u0 = backward.pack(traj.x1, period if backward.autonomous else None)
-            backward.set_phase_reference(u0)
-            orbit = backward.solve(u0, max_iter=20)
-        except SaltationError:
-            continue
-        labels = tuple(orbit.trajectory.events and [e.surface for e in orbit.trajectory.events])
-        if canonical_events(tuple(map(str, labels))) != own and not _same_orbit(orbit.state0, x0, orbit.period, period):
-            return backward.pack(orbit.state0, orbit.period if backward.autonomous else None)
+    t_samples, x_samples = flow.run(x0, forward_problem.t0, forward_problem.t0 + period, params, dense=True).sample(4)
+    picks = np.linspace(0, len(t_samples) - 1, phases, endpoint=False).astype(int)
+    for k in picks:
+        xk, tk = x_samples[k], float(t_samples[k])
+        scale = offset * (1.0 + float(np.linalg.norm(xk)))
+        for i in range(n):
+            for sign in (1.0, -1.0):
+                start = xk.copy()
+                start[i] += sign * scale
+                try:
+                    traj = flow.run(start, tk, tk - periods * period, params)
+                    backward.t0 = traj.t1 if backward.autonomous else forward_problem.t0
+                    if not backward.autonomous:
+                        # forced systems: return to the forcing phase t0 before shooting
+                        traj = flow.run(traj.x1, traj.t1, traj.t1 - ((traj.t1 - forward_problem.t0) % period), params)
+                    u0 = backward.pack(traj.x1, period if backward.autonomous else None)
+                    backward.set_phase_reference(u0) if backward.autonomous else None
+                    orbit = backward.solve(u0, max_iter=20)
+                except SaltationError:
+                    continue
+                if not orbit.stable:
+                    # attracting in backward time: not the stable orbit traversed backward
+                    backward.t0 = forward_problem.t0
+                    return backward.pack(orbit.state0, orbit.period if backward.autonomous else None)
     return None
 
 
@@ -144,7 +153,8 @@ def follow_through_discontinuous_fold(
     branch : Branch
         The backward-time branch, ordered from the fold outwards.
     fold : SpecialPoint
-        The discontinuous fold joining the two branches.
+        The discontinuous fold joining the two branches (also the first
+        special point of ``branch``, at its first point).
 
     Raises
     ------
@@ -193,7 +203,7 @@ def follow_through_discontinuous_fold(
         parameter=0.5 * (end.lam + end_b.lam),
         bracket=(min(end.lam, end_b.lam, lo), max(end.lam, end_b.lam, hi)),
         accuracy=abs(end.lam - end_b.lam),
-        index=-1,
+        index=0,
         state=end.summary.state,
         period=end.summary.period,
         amplitude=end.summary.amplitude,
@@ -210,6 +220,7 @@ def follow_through_discontinuous_fold(
             "shooting; bracket from both branch ends"
         ),
     )
+    branch.special_points.insert(0, fold)
     return branch, fold
 
 
