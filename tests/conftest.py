@@ -107,3 +107,43 @@ def central_difference_jacobian(fun, x0, h):
         e[j] = h[j]
         cols.append((np.asarray(fun(x0 + e)) - np.asarray(fun(x0 - e))) / (2 * h[j]))
     return np.column_stack(cols)
+
+
+# -- periodic orbits of the paper models (shared by several test files) -----------------
+
+@pytest.fixture(scope="session")
+def contact_orbit(trilinear_flow):
+    """The trilinear orbit at omega = 1.0: contact with both supports, four events per period."""
+    from saltation.shooting import find_periodic_orbit
+
+    p = trilinear_flow.parameters({"omega": 1.0})
+    guess = trilinear_flow.run([0.0, 0.0], 0.0, 50 * 2 * np.pi, p).x1  # transient
+    return find_periodic_orbit(trilinear_flow, guess, parameters={"omega": 1.0})
+
+
+def stick_slip_orbit(belt_flow, eta=None):
+    """The stable stick-slip cycle, from a transient started in the stick band."""
+    from saltation.shooting import find_periodic_orbit
+
+    overrides = {} if eta is None else {"eta": eta}
+    p = belt_flow.parameters(overrides)
+    guess = belt_flow.run([0.0, 1.0], 0.0, 30.0, p).x1
+    return find_periodic_orbit(belt_flow, guess, parameters=overrides, period=6.5)
+
+
+def unstable_orbit(belt_flow, eta=None):
+    """The infinitely unstable cycle, by shooting in backward time."""
+    from saltation.shooting import find_periodic_orbit
+
+    overrides = {} if eta is None else {"eta": eta}
+    return find_periodic_orbit(belt_flow, [1.0, -0.95], parameters=overrides, period=6.3, backward=True)
+
+
+@pytest.fixture(scope="session")
+def stable_cycle(belt_flow):
+    return stick_slip_orbit(belt_flow)
+
+
+@pytest.fixture(scope="session")
+def unstable_cycle(belt_flow):
+    return unstable_orbit(belt_flow)
