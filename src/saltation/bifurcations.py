@@ -156,16 +156,16 @@ class SpecialPointDetector:
         found = []
         secant = _unit(b.z - a.z)
         fold = lambda s: self.corrector.tangent(s, secant)[-1]  # noqa: E731
-        if fold(a) * fold(b) < 0:
+        if _crosses(fold(a), fold(b)):
             found.append(self.locate_smooth(a, b, index, SpecialPointKind.FOLD, fold))
         if self.equilibrium:
             ga, gb = _hopf_test(a), _hopf_test(b)
-            if ga * gb < 0:
+            if _crosses(ga, gb):
                 found.append(self.locate_smooth(a, b, index, SpecialPointKind.HOPF, _hopf_test))
             return found
         for kind, test in ((SpecialPointKind.PERIOD_DOUBLING, _flip_test), (SpecialPointKind.NEIMARK_SACKER, _ns_test)):
             g = lambda s, test=test: test(_nontrivial(s, self.autonomous))  # noqa: E731
-            if g(a) * g(b) < 0:
+            if _crosses(g(a), g(b)):
                 found.append(self.locate_smooth(a, b, index, kind, g))
         return found
 
@@ -270,6 +270,11 @@ class SpecialPointDetector:
         )
 
 
+def _crosses(ga: float, gb: float) -> bool:
+    """A test function changes sign from ``a`` to ``b`` (a zero at ``b`` counts, a zero at ``a`` or nan not)."""
+    return (ga < 0.0 <= gb) or (ga > 0.0 >= gb)
+
+
 def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v)
 
@@ -290,17 +295,17 @@ def _flip_test(mu: np.ndarray) -> float:
 
 
 def _ns_test(mu: np.ndarray) -> float:
-    """``|mu| - 1`` of the largest complex multiplier (0 when there is none, never a crossing)."""
+    """``|mu| - 1`` of the largest complex multiplier (nan when there is none: never a crossing)."""
     cplx = mu[np.isfinite(mu) & (np.abs(mu.imag) > 1e-8)]
     if cplx.size == 0:
-        return 0.0
+        return float("nan")
     return float(np.max(np.abs(cplx)) - 1.0)
 
 
 def _hopf_test(sol: Solution) -> float:
-    """Largest real part among complex eigenvalues of an equilibrium (0 when there is none)."""
+    """Largest real part among complex eigenvalues of an equilibrium (nan when there is none)."""
     ev = np.asarray(sol.summary.multipliers, dtype=complex)
     cplx = ev[np.abs(ev.imag) > 1e-10]
     if cplx.size == 0:
-        return 0.0
+        return float("nan")
     return float(np.max(cplx.real))

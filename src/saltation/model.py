@@ -328,11 +328,18 @@ class PiecewiseSystem:
             values[key] = val
         return np.array([values[k] for k in self.parameter_names], dtype=float)
 
+    @cached_property
+    def _period_functions(self):
+        args = list(self.p)
+        period = sp.lambdify(args, self.period_expr, modules="math")
+        derivatives = [sp.lambdify(args, sp.diff(self.period_expr, q), modules="math") for q in self.p]
+        return period, derivatives
+
     def forcing_period(self, p: np.ndarray) -> float:
         """The forcing period for parameter values ``p`` (forced systems only)."""
         if self.period_expr is None:
             raise ModelError(f"model {self.name!r} is autonomous: it has no forcing period")
-        value = float(self.period_expr.subs(dict(zip(self.p, p))))
+        value = float(self._period_functions[0](*map(float, p)))
         if not (math.isfinite(value) and value > 0):
             raise ModelError(f"forcing period {self.period_expr} evaluates to {value} for these parameters")
         return value
@@ -341,7 +348,7 @@ class PiecewiseSystem:
         """Derivative of the forcing period with respect to parameter ``index``."""
         if self.period_expr is None:
             return 0.0
-        return float(sp.diff(self.period_expr, self.p[index]).subs(dict(zip(self.p, p))))
+        return float(self._period_functions[1][index](*map(float, p)))
 
     # -- initial mode -----------------------------------------------------------------------
     def initial_mode(self, x0: Sequence[float], p: np.ndarray, t0: float = 0.0) -> int:

@@ -138,8 +138,8 @@ def newton(
 ) -> tuple[np.ndarray, list[float], object]:
     """Newton's method on ``fun(u) -> (r, J, extra)``.
 
-    Converged when ``|r| <= tol * (1 + |u|)`` or the step is below that.
-    With ``damped``, a step is halved (up to 8 times) until the residual decreases.
+    Converged when ``|r| <= tol * (1 + |u|)``.  With ``damped``, a step is
+    halved (up to 8 times) until the residual decreases.
 
     Raises
     ------
@@ -149,15 +149,13 @@ def newton(
     """
     u = np.array(u0, dtype=float)
     history: list[float] = []
-    extra = None
+    r, J, extra = fun(u)
     for it in range(max_iter + 1):
-        r, J, extra = fun(u)
         rn = float(np.linalg.norm(r))
         history.append(rn)
         if not np.isfinite(rn):
             raise ConvergenceError(f"{what}: residual is not finite at iteration {it}", history)
-        scale = 1.0 + float(np.linalg.norm(u))
-        if rn <= tol * scale:
+        if rn <= tol * (1.0 + float(np.linalg.norm(u))):
             return u, history, extra
         if it == max_iter:
             break
@@ -165,25 +163,20 @@ def newton(
             du = np.linalg.solve(J, -r)
         except np.linalg.LinAlgError:
             raise ConvergenceError(f"{what}: singular Jacobian at iteration {it}", history) from None
-        if not damped:
-            u = u + du
-        else:
-            # backtracking: accept the first step (full, half, ...) that reduces the residual
-            for _ in range(8):
-                try:
-                    r_try = fun(u + du)[0]
-                    if np.linalg.norm(r_try) < rn:
-                        break
-                except SaltationError:
-                    pass
-                du = 0.5 * du
-            u = u + du
-        if float(np.linalg.norm(du)) <= 1e-3 * tol * scale:
-            r, J, extra = fun(u)
-            history.append(float(np.linalg.norm(r)))
-            if history[-1] <= 10 * tol * scale:
-                return u, history, extra
-            break
+        trial = None
+        for _ in range(9 if damped else 1):
+            try:
+                trial = fun(u + du)
+            except SaltationError:
+                trial = None
+            if trial is not None and (not damped or np.linalg.norm(trial[0]) < rn):
+                break
+            du = 0.5 * du
+            trial = None
+        if trial is None:
+            raise ConvergenceError(f"{what}: no step reduces the residual at iteration {it}", history)
+        u = u + du
+        r, J, extra = trial
     raise ConvergenceError(f"{what} did not converge in {max_iter} iterations", history)
 
 

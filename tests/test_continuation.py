@@ -1,0 +1,226 @@
+"""Continuation, special points and the paper's diagrams against independent references."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.linalg import expm
+from scipy.optimize import brentq
+
+from saltation import Flow
+from saltation.branch import SpecialPointKind
+from saltation.continuation import Continuation, ContinuationSettings, continue_branch
+from saltation.models import block_on_belt, trilinear
+from saltation.models.block_on_belt import DEFAULTS as BELT
+from saltation.models.trilinear import DEFAULTS as TRI
+from saltation.paper import PaperSettings, block_on_belt_diagram, linear_response_state
+from saltation.shooting import EquilibriumProblem, ShootingProblem
+
+M, C, K, F0, XC, CF = (TRI[k] for k in ("m", "c", "k", "f0", "x_c", "c_f"))
+A_FREE = np.array([[0.0, 1.0], [-K / M, -C / M]])
+S_CONTACT = np.array([[1.0, 0.0], [-CF / M, 1.0]])  # eqs. (11), (13); S_1b = S_2b = I
+
+
+def linear_amplitude(w):
+    return F0 / np.sqrt((K - M * w**2) ** 2 + (C * w) ** 2)
+
+
+def corner_frequencies():
+    """Roots of m^2 w^4 + (c^2 - 2km) w^2 + k^2 - (f0/x_c)^2 = 0 (amplitude = x_c)."""
+    w2 = np.roots([M**2, C**2 - 2 * K * M, K**2 - (F0 / XC) ** 2])
+    return np.sort(np.sqrt(w2[w2 > 0].real))
+
+
+@pytest.fixture(scope="module")
+def tri_flow():
+    return Flow(trilinear())
+
+
+@pytest.fixture(scope="module")
+def tri_branch(tri_flow):
+    lo, hi = 0.6, 1.6
+    problem = ShootingProblem(tri_flow, {"omega": lo}, continuation_parameter="omega")
+    settings = ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(lo, hi))
+    x0 = linear_response_state(dict(TRI) | {"omega": lo})
+    return continue_branch(problem, x0, lo, settings=settings, directions=(1,)), problem
+
+
+@pytest.fixture(scope="module")
+def belt_diagram():
+    return block_on_belt_diagram(PaperSettings(ds=0.02, ds_max=0.05))
+
+
+def test_no_contact_branch_matches_closed_form_amplitude(tri_branch):
+    branch, _ = tri_branch
+    free = [p for p in branch.points if not p.events]
+    assert len(free) > 20
+    for p in free:
+        assert p.amplitude == pytest.approx(linear_amplitude(p.parameter), rel=1e-8)
+        mu = np.sort_complex(np.linalg.eigvals(expm(A_FREE * 2 * np.pi / p.parameter)))
+        assert np.allclose(np.sort_complex(p.multipliers), mu, atol=1e-8)
+
+
+def test_corners_located_at_closed_form(tri_branch):
+    branch, _ = tri_branch
+    w_a, w_b = corner_frequencies()
+    nonsmooth = [sp for sp in branch.special_points if sp.kind.is_nonsmooth]
+    assert len(nonsmooth) == 2
+    at_a = min(nonsmooth, key=lambda sp: abs(sp.parameter - w_a))
+    at_b = min(nonsmooth, key=lambda sp: abs(sp.parameter - w_b))
+    assert at_a.parameter == pytest.approx(w_a, abs=1e-8)
+    assert at_b.parameter == pytest.approx(w_b, abs=1e-8)
+    # the jump at w_A stays inside the unit circle, the one at w_B crosses through +1
+    assert at_a.kind is SpecialPointKind.NONSMOOTH_NO_CROSSING
+    assert at_b.kind is SpecialPointKind.DISCONTINUOUS_FOLD
+    assert at_b.crossing_point == pytest.approx(1.0, abs=1e-8)
+    assert 0.0 < at_b.crossing_q < 1.0
+    assert at_a.amplitude == pytest.approx(XC, abs=1e-7)
+
+
+def test_smooth_fold_at_top_of_peak(tri_branch):
+    branch, problem = tri_branch
+    folds = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.FOLD]
+    assert len(folds) == 1
+    fold = folds[0]
+    # a fold of a forced orbit has a multiplier +1 ...
+    assert np.min(np.abs(fold.multipliers - 1.0)) < 1e-5
+    # ... and is the largest frequency reached by the contact part of the branch
+    contact = np.array([p.parameter for p in branch.points if p.events])
+    assert fold.parameter >= contact.max() - 1e-12
+    assert fold.parameter == pytest.approx(contact.max(), abs=1e-3)
+
+
+def one_sided_monodromies(w):
+    """Free-flight monodromy, and the same with the contact saltation matrices at the touching instants."""
+    T = 2 * np.pi / w
+    det = (K - M * w**2) ** 2 + (C * w) ** 2
+    a, b = F0 * (K - M * w**2) / det, -F0 * C * w / det  # x = a sin(wt) + b cos(wt)
+    t_max = (np.arctan2(a, b) / w) % T  # where x reaches +X
+    t_min = (t_max + T / 2) % T
+    t1, t2 = sorted((t_max, t_min))
+    m_minus = expm(A_FREE * T)
+    m_plus = expm(A_FREE * (T - t2)) @ S_CONTACT @ expm(A_FREE * (t2 - t1)) @ S_CONTACT @ expm(A_FREE * t1)
+    return m_minus, m_plus
+
+
+def test_one_sided_multipliers_at_corners(tri_branch):
+    branch, _ = tri_branch
+    for sp in branch.special_points:
+        if not sp.kind.is_nonsmooth:
+            continue
+        m_free, m_contact = one_sided_monodromies(sp.parameter)
+        free_side, contact_side = (
+            (sp.multipliers_minus, sp.multipliers_plus) if not sp.events_minus else (sp.multipliers_plus, sp.multipliers_minus)
+        )
+        assert np.allclose(np.sort_complex(free_side), np.sort_complex(np.linalg.eigvals(m_free)), atol=1e-7)
+        assert np.allclose(np.sort_complex(contact_side), np.sort_complex(np.linalg.eigvals(m_contact)), atol=2e-4)
+
+
+def test_branch_invariants(tri_branch, belt_diagram):
+    branch, problem = tri_branch
+    for br in [branch, *belt_diagram.branches]:
+        assert br.check_stability_flags()
+        lam = br.parameter
+        for sp in br.special_points:
+            lo, hi = sp.bracket
+            assert lo <= sp.parameter <= hi
+            assert hi - lo <= 1e-6
+            turning = sp.kind in (SpecialPointKind.FOLD, SpecialPointKind.DISCONTINUOUS_FOLD)
+            if sp.index >= 0 and sp.index + 1 < len(br) and not turning:  # folds turn back in lam
+                a, b = lam[sp.index], lam[sp.index + 1]
+                assert min(a, b) - 1e-9 <= sp.parameter <= max(a, b) + 1e-9
+    # stored multipliers equal recomputed ones
+    for point in branch.points[:: max(1, len(branch) // 12)]:
+        ev = problem.evaluate(point.state, point.parameter, need_lam=False)
+        mu = np.linalg.eigvals(ev.trajectory.monodromy)
+        assert np.allclose(np.sort_complex(mu), np.sort_complex(point.multipliers), atol=1e-9)
+
+
+def stick_slip_fold_reference():
+    """Belt velocity where the slip arc leaving the stick band returns to it tangentially (switch model band edge)."""
+    k, c, m, f_slip, f_stick, eta = (BELT[n] for n in ("k", "c", "m", "F_slip", "F_stick", "eta"))
+
+    def max_velocity(v_dr):
+        x_exit = (f_stick - c * v_dr) / k
+
+        def rhs(t, y):
+            return [y[1], (-k * y[0] - c * y[1] + f_slip) / m]
+
+        def velocity_max(t, y):
+            return (-k * y[0] - c * y[1] + f_slip) / m
+
+        velocity_max.direction = -1
+        sol = solve_ivp(rhs, [0, 30], [x_exit, v_dr], events=velocity_max, rtol=1e-12, atol=1e-14, method="DOP853")
+        return sol.y_events[0][0][1]
+
+    return brentq(lambda v: max_velocity(v) - (v - eta), 1.0, 1.2, xtol=1e-13)
+
+
+def test_stick_slip_fold_and_unstable_branch(belt_diagram):
+    stable, unstable, equilibrium = belt_diagram.branches
+    folds = [sp for sp in belt_diagram.special_points if sp.kind is SpecialPointKind.DISCONTINUOUS_FOLD]
+    assert folds, "the discontinuous fold joining the stable and unstable branches was not found"
+    fold = folds[0]
+    # the idealised reference starts the slip arc at v = v_dr; the switch model leaves the band at
+    # v_dr - O(eta): the two agree to O(eta)
+    assert fold.parameter == pytest.approx(stick_slip_fold_reference(), abs=2 * BELT["eta"])
+    assert np.any(np.isinf(np.abs(fold.multipliers_plus)))
+    # the stable branch: multipliers (1, ~0) away from the fold
+    far = [p for p in stable.points if abs(p.parameter - fold.parameter) > 0.1]
+    assert far
+    for p in far:
+        mu = np.sort(np.abs(p.multipliers))
+        assert mu[1] == pytest.approx(1.0, abs=1e-6)
+        assert mu[0] < 1e-3
+        assert p.stable
+    # the unstable branch: backward multipliers (1, 0), i.e. forward (1, inf)
+    assert unstable.backward
+    for p in unstable.points:
+        finite = p.multipliers[np.isfinite(p.multipliers)]
+        assert np.isinf(np.abs(p.multipliers)).sum() == 1
+        assert finite[0] == pytest.approx(1.0, abs=1e-6)
+        assert not p.stable
+    assert unstable.parameter.min() < 0.3  # followed far from the fold
+    # the equilibrium [F_slip/k, 0] (eq. 18 corrected), stable for c > 0
+    for p in equilibrium.points:
+        assert p.state == pytest.approx([BELT["F_slip"] / BELT["k"], 0.0], abs=1e-12)
+        assert p.stable
+
+
+def test_equilibrium_branch_eigenvalues():
+    flow = Flow(block_on_belt())
+    problem = EquilibriumProblem(flow, "slip_minus", continuation_parameter="c")
+    branch = continue_branch(
+        problem, [1.0, 0.0], 0.1, settings=ContinuationSettings(ds=0.05, ds_max=0.05, bounds=(-0.2, 0.2)), directions=(1, -1)
+    )
+    # eigenvalues of [[0, 1], [-k/m, -c/m]]: a Hopf point at c = 0
+    hopf = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.HOPF]
+    assert len(hopf) == 1
+    assert hopf[0].parameter == pytest.approx(0.0, abs=1e-9)
+    for p in branch.points:
+        ref = np.linalg.eigvals(np.array([[0, 1], [-1.0, -p.parameter]]))
+        assert np.allclose(np.sort_complex(p.multipliers), np.sort_complex(ref), atol=1e-12)
+
+
+def test_step_by_step_iteration_and_bounds(tri_flow):
+    problem = ShootingProblem(tri_flow, {"omega": 0.6}, continuation_parameter="omega")
+    cont = Continuation(problem, ContinuationSettings(ds=0.02, ds_max=0.02, bounds=(0.5, 0.7)))
+    x0 = linear_response_state(dict(TRI) | {"omega": 0.6})
+    params = [pt.parameter for pt in cont.run(x0, 0.6, direction=1)]
+    assert params[0] == pytest.approx(0.6)
+    assert np.all(np.diff(params) > 0)
+    assert params[-1] == pytest.approx(0.7, abs=1e-12)
+    assert cont.branch.stop_reason.name == "PARAMETER_BOUND"
+
+
+def test_bad_continuation_input(tri_flow):
+    from saltation.errors import SaltationError
+
+    with pytest.raises(SaltationError, match="continuation parameter"):
+        Continuation(ShootingProblem(tri_flow, {"omega": 0.6}))
+    with pytest.raises(ValueError, match="ds_min"):
+        ContinuationSettings(ds=1e-9)
+    problem = ShootingProblem(tri_flow, {"omega": 0.6}, continuation_parameter="omega")
+    with pytest.raises(SaltationError, match="outside the bounds"):
+        list(Continuation(problem, ContinuationSettings(bounds=(0.8, 1.0))).run(np.zeros(2), 0.6))
