@@ -737,9 +737,9 @@ def integrate_kernel(
                 info_mode = mode
                 info_surface = best_idx
                 break
-            if direction * sig_b * cross < 0.0:
-                # the new field pushes back: Filippov sliding along the surface
-                if tr_table[k, 4] != 0 or den == sig_b:
+            if tr_table[k, 4] == 0 and direction * sig_b * cross < 0.0:
+                # no jump, and the new field pushes back: Filippov sliding along the surface
+                if den == sig_b:
                     status = STATUS_SLIDING_UNDEFINED
                     info_mode = mode
                     info_surface = best_idx
@@ -756,7 +756,16 @@ def integrate_kernel(
             else:
                 for i in range(n):
                     fplus[i] = fb[i]
-            surf_sign[best_idx] = cross
+            # the side of the surface the motion continues on (after a reset it may be the old one)
+            h_after = indicator(best_idx, t_e, xplus, p)  # noqa: F821
+            if slide[0] == 1 or tr_table[k, 4] == 0:
+                surf_sign[best_idx] = cross
+            elif abs(h_after) > 1e-12:
+                surf_sign[best_idx] = 1.0 if h_after > 0 else -1.0
+            elif direction * sig_b != 0.0:
+                surf_sign[best_idx] = 1.0 if direction * sig_b > 0 else -1.0
+            else:
+                surf_sign[best_idx] = cross
             fixed_sign[best_idx] = True
             mode = mode_to
         else:
@@ -770,7 +779,7 @@ def integrate_kernel(
                 hx[i] *= sgl
             for j in range(hp.shape[0]):
                 hp[j] *= sgl
-            den = 0.0
+            den = sgl * lie_derivative_dt(exit_mode, slide[3], t_e, x_e, p)  # noqa: F821
             for i in range(n):
                 den += hx[i] * fa[i]
             for i in range(n):

@@ -175,6 +175,14 @@ def generate_source(system: PiecewiseSystem) -> str:
         lie_lines += em.block(assigns, ind, result=sigma)
     lie_lines.append("    return 0.0")
     src += lie_lines
+    lie_t = ["@njit(cache=True)", "def lie_derivative_dt(mode, surface, t, x, p):"]
+    for m, s in pairs:
+        dsigma = sp.diff(system.lie_derivative(m, s), TIME)
+        if dsigma != 0:
+            lie_t.append(f"    if mode == {m} and surface == {s}:")
+            lie_t += em.block([], ind, result=dsigma)
+    lie_t.append("    return 0.0")
+    src += lie_t
 
     # resets
     reset_cases = []
