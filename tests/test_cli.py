@@ -240,3 +240,63 @@ def test_registry_and_helpers():
     assert cli.multipliers_json([0.5 + 0.25j, complex(np.inf, 0)]) == [[0.5, 0.25], "inf"]
     assert cli._join_negative_values(["orbit", "m", "--x0", "-1,0", "--json"]) == ["orbit", "m", "--x0=-1,0", "--json"]
     assert cli._join_negative_values(["--x0", "--json"]) == ["--x0", "--json"]
+
+
+# ---------------------------------------------------------------------------------------------
+# continue and paper
+# ---------------------------------------------------------------------------------------------
+
+def test_continue_writes_branch_that_loads_back(tmp_path, capsys):
+    from saltation import io
+
+    status = cli.main([
+        "continue", "trilinear", "--param", "omega", "--from", "0.6", "--to", "0.8",
+        "--ds-max", "0.05", "--out", str(tmp_path), "--no-progress",
+    ])
+    assert status == 0
+    out = capsys.readouterr().out
+    assert "points" in out
+    branch = io.load_branch_json(tmp_path / "trilinear_omega_branch.json")
+    assert branch.parameter[0] == pytest.approx(0.6) and branch.parameter[-1] == pytest.approx(0.8)
+    # no contact below w_A: the linear closed-form amplitude
+    w = branch.parameter
+    assert np.allclose(branch.amplitude, 0.2 / np.sqrt((1 - w**2) ** 2 + (0.05 * w) ** 2), rtol=1e-8)
+    points = io.load_branch_csv(tmp_path / "trilinear_omega_branch.csv")
+    assert np.allclose(points.parameter, branch.parameter, rtol=0, atol=0)
+    assert (tmp_path / "trilinear_omega_diagram.png").stat().st_size > 0
+    assert json.loads((tmp_path / "trilinear_omega_special_points.json").read_text()) == []
+
+
+def test_continue_rejects_unknown_parameter(tmp_path, capsys):
+    status = cli.main(["continue", "trilinear", "--param", "nope", "--from", "0.6", "--to", "0.8", "--out", str(tmp_path)])
+    assert status != 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "nope" in err[0]
+
+
+def test_paper_end_to_end(tmp_path, capsys):
+    status = cli.main(["paper", "--out", str(tmp_path), "--ds-max", "0.05", "--no-progress"])
+    assert status == 0
+    records = json.loads((tmp_path / "special_points.json").read_text())
+    kinds = {(r["model"], r["kind"]) for r in records}
+    assert ("trilinear", "discontinuous_fold") in kinds
+    assert ("trilinear", "nonsmooth_no_crossing") in kinds
+    assert ("trilinear", "fold") in kinds
+    assert ("block_on_belt", "discontinuous_fold") in kinds
+    for r in records:
+        assert {"model", "kind", "parameter", "value", "amplitude"} <= set(r)
+        if r["kind"] in ("fold", "period_doubling", "neimark_sacker", "hopf"):
+            assert "multipliers" in r
+        else:
+            assert {"multipliers_minus", "multipliers_plus", "crossing_q"} <= set(r)
+    fold = next(r for r in records if r["model"] == "block_on_belt" and r["kind"] == "discontinuous_fold")
+    assert "inf" in fold["multipliers_plus"]
+    for stem in ("fig3_trilinear_response", "fig4_trilinear_multipliers", "fig6_block_on_belt_phase_plane",
+                 "fig7_block_on_belt_diagram"):
+        assert (tmp_path / f"{stem}.png").stat().st_size > 0
+        assert (tmp_path / f"{stem}.pdf").stat().st_size > 0
+    from saltation import io
+
+    branch = io.load_branch_json(tmp_path / "trilinear_branch.json")
+    assert len(branch) > 20
+    assert len(io.load_diagram_json(tmp_path / "block_on_belt_branches.json")) == 3

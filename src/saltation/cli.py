@@ -13,6 +13,7 @@ looked up in :data:`MODELS`.  Every failure of a subcommand becomes one line
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 import json
 import math
 import sys
@@ -520,6 +521,186 @@ def _add_orbit_parser(sub) -> None:
 
 
 # --------------------------------------------------------------------------------------------
+# continue
+# --------------------------------------------------------------------------------------------
+
+def _progress_bar(enabled: bool):
+    """A tqdm progress callback ``(stage, count)`` (or None when disabled)."""
+    if not enabled:
+        return None, lambda: None
+    from tqdm import tqdm
+
+    bar = tqdm(total=None, unit=" points", file=sys.stderr, dynamic_ncols=True, leave=False, mininterval=0.25, disable=None)
+
+    def update(stage: str, _count: int) -> None:
+        bar.set_description(stage)
+        bar.update(1)
+
+    return update, bar.close
+
+
+def _special_points_text(records: list[dict]) -> str:
+    from .paper import special_point_table
+
+    return special_point_table(records) if records else "no special points located"
+
+
+def cmd_continue(args: argparse.Namespace) -> int:
+    """``saltation continue``: follow one branch of a shipped model and write its data and plot."""
+    from . import io, plotting
+    from .continuation import Continuation, ContinuationSettings
+    from .diagram import follow_through_discontinuous_fold
+    from .shooting import EquilibriumProblem, ShootingProblem, find_periodic_orbit
+
+    system = build_model(args.model)
+    system.parameter_index(args.param)
+    overrides = parse_sets(args.set, system)
+    start, stop = float(args.start), float(args.stop)
+    if start == stop:
+        raise UsageError("--from and --to must differ")
+    overrides[args.param] = start
+    flow = make_flow(system)
+    p = flow.parameters(overrides)
+    x0 = parse_vector(args.x0, system) if args.x0 is not None else None
+    settings = ContinuationSettings(
+        ds=min(args.ds, args.ds_max), ds_max=args.ds_max, bounds=(min(start, stop), max(start, stop)),
+        max_points=args.max_points,
+    )
+    direction = 1 if stop > start else -1
+    update, close = _progress_bar(not args.no_progress)
+    counter = (lambda point: update(f"{args.model}: {args.param}", 0)) if update else None
+    branches = []
+    try:
+        if args.equilibrium is not None:
+            problem = EquilibriumProblem(flow, args.equilibrium, overrides, continuation_parameter=args.param)
+            guess = x0 if x0 is not None else np.zeros(system.n)
+            u0 = problem.solve(guess, start).state
+        else:
+            if not system.is_autonomous and args.period is not None:
+                raise UsageError(f"model {system.name!r} is forced: drop --period")
+            period = args.period
+            if x0 is None or (system.is_autonomous and period is None):
+                traj, _ = transient(flow, args.model, p, x0, t0=0.0, backward=args.backward)
+                x0 = traj.x1.copy() if x0 is None else x0
+                if system.is_autonomous and period is None:
+                    period = estimate_period(traj)
+            orbit = find_periodic_orbit(flow, x0, parameters=overrides, period=period, backward=args.backward)
+            problem = ShootingProblem(flow, overrides, continuation_parameter=args.param, backward=args.backward)
+            u0 = problem.pack(orbit.state0, orbit.period if system.is_autonomous else None)
+        cont = Continuation(problem, settings)
+        for point in cont.run(u0, start, direction=direction):
+            if counter:
+                counter(point)
+        branches.append(cont.branch)
+        note = ""
+        if cont.branch.stop_reason is not None and cont.branch.stop_reason.name == "MIN_STEP" and not args.backward \
+                and args.equilibrium is None:
+            try:
+                unstable, _fold = follow_through_discontinuous_fold(cont, settings=settings, progress=counter)
+                branches.append(unstable)
+                note = "the branch ended at a discontinuous fold; its continuation was followed in backward time"
+            except SaltationError as exc:
+                note = f"the branch ended where the corrector failed ({exc})"
+    finally:
+        close()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = f"{system.name}_{args.param}"
+    records = []
+    for k, br in enumerate(branches):
+        suffix = "" if k == 0 else f"_{k}"
+        io.save_branch_json(br, out / f"{stem}_branch{suffix}.json")
+        io.save_branch_csv(br, out / f"{stem}_branch{suffix}.csv")
+        records += [io.special_point_record(sp, system.name, args.param) for sp in br.special_points]
+    io.save_special_points_json(records, out / f"{stem}_special_points.json")
+    plotting.save_figure(plotting.plot_response(branches), out / f"{stem}_diagram")
+    total = sum(len(b) for b in branches)
+    reasons = "; ".join(b.stop_reason.value for b in branches if b.stop_reason is not None)
+    print(f"{total} points on {len(branches)} branch(es) of {system.name} over {args.param}; stopped: {reasons}")
+    if note:
+        print(note)
+    print(_special_points_text(records))
+    print(f"written to {out}/{stem}_*")
+    return 0
+
+
+def _add_continue_parser(sub) -> None:
+    p = sub.add_parser(
+        "continue",
+        help="follow a branch of periodic orbits (or equilibria) over a parameter; write CSV/JSON and a plot",
+        description=_paragraph(
+            """Follow one branch of periodic orbits of a shipped model by pseudo-arclength continuation
+            in one parameter, from --from towards --to, through the corners of the branch, locating
+            smooth and discontinuous bifurcations (set-valued Floquet multipliers). A forward-time
+            branch that ends at a discontinuous fold is followed beyond it by backward-time shooting.
+            Writes MODEL_PARAM_branch.json/.csv, MODEL_PARAM_special_points.json and a diagram
+            (PNG and PDF) into --out."""
+        ),
+    )
+    p.add_argument("model", metavar="MODEL", help=f"name of a shipped model: {model_names()}")
+    p.add_argument("--param", metavar="NAME", required=True, help="the continuation parameter")
+    p.add_argument("--from", dest="start", metavar="V", type=_finite, required=True, help="start value of the parameter")
+    p.add_argument("--to", dest="stop", metavar="V", type=_finite, required=True, help="end value of the parameter")
+    p.add_argument(
+        "--set", metavar="NAME=VALUE", action="append", default=[],
+        help="override another parameter of the model (repeat for several)",
+    )
+    p.add_argument("--x0", metavar="V1,V2,...", help="guess of the start state (default: the end of a transient)")
+    p.add_argument("--period", metavar="T", type=_positive("--period"), help="period guess for autonomous models")
+    p.add_argument("--backward", action="store_true", help="shoot in backward time (infinitely unstable branches)")
+    p.add_argument("--equilibrium", metavar="MODE", help="continue an equilibrium of this mode instead of periodic orbits")
+    p.add_argument("--out", metavar="DIR", default=".", help="output directory (default: the current one)")
+    p.add_argument("--ds", metavar="S", type=_positive("--ds"), default=0.01, help="initial arclength step (default 0.01)")
+    p.add_argument("--ds-max", metavar="S", type=_positive("--ds-max"), default=0.02, help="largest step (default 0.02)")
+    p.add_argument("--max-points", metavar="N", type=int, default=2000, help="largest number of points (default 2000)")
+    p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    p.set_defaults(handler=cmd_continue)
+
+
+# --------------------------------------------------------------------------------------------
+# paper
+# --------------------------------------------------------------------------------------------
+
+def cmd_paper(args: argparse.Namespace) -> int:
+    """``saltation paper``: reproduce Figures 3, 4, 6 and 7 with their data."""
+    from . import paper
+
+    settings = paper.PaperSettings(ds=min(args.ds_max, 0.01), ds_max=args.ds_max)
+    update, close = _progress_bar(not args.no_progress)
+    try:
+        results = paper.compute(settings, progress=update)
+    finally:
+        close()
+    written = paper.write(results, Path(args.out))
+    print(_special_points_text(results.special_point_records()))
+    print(f"{len(written)} files written to {args.out}: figures fig3, fig4, fig6, fig7 (PNG and PDF), branch data "
+          "(JSON, CSV) and special_points.json")
+    return 0
+
+
+def _add_paper_parser(sub) -> None:
+    p = sub.add_parser(
+        "paper",
+        help="reproduce Figures 3, 4, 6 and 7 of 'Fold bifurcations in discontinuous systems'",
+        description=_paragraph(
+            """Compute the response curve of the trilinear spring system (Figs. 3 and 4: corners at
+            w_A and w_B, the discontinuous fold at w_B, the smooth fold of the hardened peak), the
+            phase plane of the block-on-belt system (Fig. 6) and its bifurcation diagram with the
+            infinitely unstable branch found by backward-time shooting (Fig. 7). Writes the figures
+            (PNG and PDF), the branch data (JSON and CSV) and DIR/special_points.json, and prints the
+            located special points."""
+        ),
+    )
+    p.add_argument("--out", metavar="DIR", required=True, help="output directory")
+    p.add_argument(
+        "--ds-max", metavar="S", type=_positive("--ds-max"), default=0.005,
+        help="largest continuation step: smaller gives denser diagrams (default 0.005)",
+    )
+    p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    p.set_defaults(handler=cmd_paper)
+
+
+# --------------------------------------------------------------------------------------------
 # the program
 # --------------------------------------------------------------------------------------------
 
@@ -527,6 +708,8 @@ def _add_orbit_parser(sub) -> None:
 #: action and sets ``handler`` to its ``cmd_<name>(args) -> int``.
 SUBCOMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [
     _add_orbit_parser,
+    _add_continue_parser,
+    _add_paper_parser,
 ]
 
 
