@@ -1,6 +1,7 @@
 """Models shipped with saltation, each a short file that reads like its source."""
 
 from .block_on_belt import WRegion, block_on_belt
+from .chain import chain
 from .trilinear import trilinear
 
-__all__ = ["WRegion", "block_on_belt", "trilinear"]
+__all__ = ["WRegion", "block_on_belt", "chain", "trilinear"]
