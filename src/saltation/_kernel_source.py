@@ -44,7 +44,7 @@ EVENT_SLIDING_START = 1
 EVENT_SLIDING_END = 2
 
 EPS = 2.220446049250313e-16
-CHATTER_WINDOW = 40
+CHATTER_WINDOW = 20
 
 
 @njit(cache=True)
@@ -855,7 +855,7 @@ def integrate_kernel(
             break
         if n_ev >= CHATTER_WINDOW:
             oldest = chatter_ring[n_ev % CHATTER_WINDOW]
-            if abs(t_e - oldest) <= 1e-9 * max(1.0, abs(t_e)) + 1e-6 * tspan:
+            if abs(t_e - oldest) <= 1e-9 * max(1.0, abs(t_e)) + 1e-8 * tspan:
                 status = STATUS_CHATTERING
                 info_mode = mode
                 info_surface = best_idx
