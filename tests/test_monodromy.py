@@ -147,15 +147,15 @@ def test_stick_slip_parameter_sensitivity(belt_flow, stable_cycle, name):
 
 @pytest.fixture(scope="module")
 def unstable_cycles(belt_flow, unstable_cycle):
-    return {1e-4: unstable_cycle, 1e-5: unstable_orbit(belt_flow, eta=1e-5)}
+    return {1e-4: unstable_cycle} | {eta: unstable_orbit(belt_flow, eta=eta) for eta in (1e-5, 1e-6)}
 
 
-@pytest.mark.parametrize("eta", [1e-4, 1e-5])
+@pytest.mark.parametrize("eta", [1e-4, 1e-5, 1e-6])
 def test_unstable_cycle_monodromy_backward(belt_flow, unstable_cycles, eta):
     """Backward time through the attraction sliding mode along the border of D.
 
-    The paper takes eta "very small in numerical calculations"; eta = 1e-5 is a
-    parameter value of the same compiled model.
+    The paper takes eta "very small in numerical calculations"; eta = 1e-5 and 1e-6
+    are parameter values of the same compiled model.
     """
     orb = unstable_cycles[eta]
     assert orb.backward
