@@ -122,8 +122,12 @@ def _aug_rhs(mode, slide, t, y, p, n, var, pidx, dy, W, WJ, WP, wv):
 
 
 @njit(cache=True)
-def _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv):
-    """One DOP853 step from ``(t, y)`` with ``K[0] = f(t, y)`` given; returns the error norm."""
+def _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err):
+    """One DOP853 step from ``(t, y)`` with ``K[0] = f(t, y)`` given; returns the error norm.
+
+    The error is measured on the first ``n_err`` components (the state, or the
+    state and the variational components).
+    """
     N = y.shape[0]
     for s in range(1, 12):
         for i in range(N):
@@ -142,7 +146,7 @@ def _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W
     _aug_rhs(mode, slide, t + h, ynew, p, n, var, pidx, K[12], W, WJ, WP, wv)
     e5 = 0.0
     e3 = 0.0
-    for i in range(n):
+    for i in range(n_err):
         sc = atol + rtol * max(abs(y[i]), abs(ynew[i]))
         a5 = 0.0
         a3 = 0.0
@@ -153,7 +157,7 @@ def _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W
         e3 += (a3 / sc) ** 2
     if e5 == 0.0 and e3 == 0.0:
         return 0.0
-    return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * n)
+    return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * n_err)
 
 
 @njit(cache=True)
@@ -343,7 +347,7 @@ def _track_extrema(F, y, s_end, n, xmin, xmax, f0, f1, xtmp):
 @njit(cache=True)
 def integrate_kernel(
     t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step, max_events, max_steps,
-    tr_table, n_surfaces, record, phi0, psi0,
+    tr_table, n_surfaces, record, phi0, psi0, control_variational,
 ):
     """Integrate from ``t0`` to ``t_end`` (either direction), event by event.
 
@@ -352,6 +356,7 @@ def integrate_kernel(
     n = x0.shape[0]
     npar = p.shape[0]
     N = n + n * n + n if var else n
+    n_err = N if (var and control_variational) else n
     direction = 1.0 if t_end >= t0 else -1.0
     n_tr = tr_table.shape[0]
 
@@ -498,7 +503,7 @@ def integrate_kernel(
         # attempt a step
         while True:
             h = direction * habs
-            err = _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv)
+            err = _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
             finite = math.isfinite(err)
             if finite and err <= 1.0:
                 break
@@ -663,7 +668,7 @@ def integrate_kernel(
             for i in range(N):
                 K[0, i] = Ksave[0, i]
             if s_e > 0.0:
-                _rk_step(mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv)
+                _rk_step(mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
             else:
                 for i in range(N):
                     ynew[i] = ysave[i]
@@ -695,7 +700,7 @@ def integrate_kernel(
             bump *= 2.0
             for i in range(N):
                 K[0, i] = Ksave[0, i]
-            _rk_step(mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv)
+            _rk_step(mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
             g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
         t_e = t + s_e * h
         # state at the event (before it)

@@ -192,6 +192,11 @@ class Tolerances:
         Largest number of switching events in one integration.
     max_steps : int
         Largest number of steps in one integration.
+    control_variational : bool
+        Control the local error of the fundamental solution matrix (and the
+        parameter sensitivity) too, not only of the state.  Off, steps are
+        chosen for the state alone, which can leave the monodromy matrix far
+        less accurate than the orbit (e.g. along a sliding motion).
     """
 
     rtol: float = 1e-10
@@ -199,6 +204,7 @@ class Tolerances:
     max_step: float = np.inf
     max_events: int = 100_000
     max_steps: int = 1_000_000
+    control_variational: bool = True
 
     def __post_init__(self):
         if not (0 < self.rtol < 1 and self.atol > 0):
@@ -300,7 +306,7 @@ class Flow:
         out = self._kernels.integrate_kernel(
             float(t0), float(t1), x0, int(m0), p, bool(variational), int(parameter),
             float(tol.rtol), float(tol.atol), 0.0, float(tol.max_step), int(tol.max_events), int(tol.max_steps),
-            self._table, len(sys_.surface_names), bool(dense), phi, np.zeros(sys_.n),
+            self._table, len(sys_.surface_names), bool(dense), phi, np.zeros(sys_.n), bool(tol.control_variational),
         )
         return self._unpack(out, x0, float(t0), m0, variational, parameter, dense)
 
