@@ -640,6 +640,13 @@ def integrate_kernel(
             continue
 
         # --------------------------------------------------------------- an event
+        # the shortened step that ends at the event must pass the error test too: a step can
+        # straddle a thin layer (e.g. where a sliding motion ends) that its own estimate missed
+        err_e = _rk_step(mode, slide, t, y, best_s * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
+        if err_e > 1.0 and best_s * habs > 100.0 * EPS * max(1.0, abs(t)):
+            n_rejected += 1
+            habs = best_s * habs * max(0.2, 0.9 * err_e ** (-1.0 / 8.0))
+            continue
         _track_extrema(F, y, best_s, n, xmin, xmax, K[0], K[12], xtmp)
         if record:
             if n_rec == rec_t.shape[0]:
