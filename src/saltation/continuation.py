@@ -105,6 +105,16 @@ def canonical_events(events: tuple[str, ...]) -> tuple[str, ...]:
     return min(rotations)
 
 
+def bordered(jac_u: np.ndarray, jac_lam: np.ndarray, row: np.ndarray) -> np.ndarray:
+    """The bordered matrix ``[[J_u, J_lam], [row]]`` of the pseudo-arclength system."""
+    m = jac_u.shape[0]
+    J = np.empty((m + 1, m + 1))
+    J[:m, :m] = jac_u
+    J[:m, m] = jac_lam
+    J[m] = row
+    return J
+
+
 @dataclass
 class Corrector:
     """Newton solvers on the branch of one problem (shared by continuation and location)."""
@@ -133,7 +143,7 @@ class Corrector:
                 return Solution(z=z, evaluation=ev, summary=prob.describe(z[:-1], float(z[-1]), ev), iterations=it)
             if it == self.settings.max_newton:
                 break
-            J = np.block([[ev.jac_u, ev.jac_lam[:, None]], [normal[None, :]]])
+            J = bordered(ev.jac_u, ev.jac_lam, normal)
             rhs = np.append(ev.residual, normal @ (z - z_pred))
             try:
                 dz = np.linalg.solve(J, rhs)
@@ -153,7 +163,7 @@ class Corrector:
     def tangent(self, sol: Solution, previous: np.ndarray) -> np.ndarray:
         """Unit tangent at ``sol`` oriented along ``previous``."""
         ev = sol.evaluation
-        J = np.block([[ev.jac_u, ev.jac_lam[:, None]], [previous[None, :]]])
+        J = bordered(ev.jac_u, ev.jac_lam, previous)
         rhs = np.zeros(J.shape[0])
         rhs[-1] = 1.0
         try:

@@ -90,7 +90,7 @@ def trilinear_diagram(settings: PaperSettings = PaperSettings(), progress: Progr
     lo, hi = settings.omega_range
     params = dict(system.defaults) | {"omega": lo}
     problem = ShootingProblem(flow, {"omega": lo}, continuation_parameter="omega")
-    cset = ContinuationSettings(ds=settings.ds, ds_max=settings.ds_max, bounds=(lo, hi), max_points=5000)
+    cset = ContinuationSettings(ds=min(settings.ds, settings.ds_max), ds_max=settings.ds_max, bounds=(lo, hi), max_points=5000)
     counter = _counter(progress, "trilinear response")
     branch = continue_branch(problem, linear_response_state(params), lo, settings=cset, directions=(1,), progress=counter)
     branch.label = "periodic"
@@ -103,7 +103,7 @@ def block_on_belt_diagram(settings: PaperSettings = PaperSettings(), progress: P
     flow = Flow(system)
     lo, hi = settings.v_dr_range
     v0 = settings.phase_plane_v_dr
-    cset = ContinuationSettings(ds=settings.ds, ds_max=settings.ds_max, bounds=(lo, hi), max_points=5000, ds_min=1e-5)
+    cset = ContinuationSettings(ds=min(settings.ds, settings.ds_max), ds_max=settings.ds_max, bounds=(lo, hi), max_points=5000, ds_min=1e-5)
     stable0 = stable_stick_slip_cycle(flow, v0)
     problem = ShootingProblem(flow, {"v_dr": v0}, continuation_parameter="v_dr")
     u0 = problem.pack(stable0.state0, stable0.period)

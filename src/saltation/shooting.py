@@ -298,7 +298,11 @@ class ShootingProblem:
             if self.x_ref is None:
                 self.set_phase_reference(u, lam)
             r = np.append(r, self.f_ref @ (x0 - self.x_ref))
-            J = np.block([[J, (self.sign * f_end)[:, None]], [self.f_ref[None, :], np.zeros((1, 1))]])
+            Ja = np.zeros((n + 1, n + 1))
+            Ja[:n, :n] = J
+            Ja[:n, n] = self.sign * f_end
+            Ja[n, :n] = self.f_ref
+            J = Ja
             if jl is not None:
                 jl = np.append(jl, 0.0)
         return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
