@@ -264,6 +264,48 @@ def module_source(system: PiecewiseSystem) -> str:
     return generate_source(system) + "\n\n" + body
 
 
+def _module_path(system: PiecewiseSystem) -> tuple[Path, str]:
+    source = module_source(system)
+    digest = hashlib.sha256((system.fingerprint + "\0" + source).encode()).hexdigest()[:20]
+    return cache_directory() / f"{system.name}_{digest}.py", digest
+
+
+def is_compiled(system: PiecewiseSystem) -> bool:
+    """Whether numba's on-disk cache already holds the integrator of this model."""
+    path, _ = _module_path(system)
+    return any((path.parent / "__pycache__").glob(f"{path.stem}.integrate_kernel-*.nbi"))
+
+
+def _compile_in_worker(system: PiecewiseSystem) -> str:
+    from .integrate import Flow
+
+    flow = Flow(system)
+    x0 = np.zeros(system.n)
+    try:
+        flow.run(x0, 0.0, 1e-3, flow.parameters(), variational=True, parameter=0 if system.n_params else -1)
+    except Exception:  # noqa: BLE001 - compiling is what matters here, not this tiny run
+        pass
+    return system.name
+
+
+def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = None) -> list[str]:
+    """Compile the kernels of several models at once, one process per model (a cold cache only).
+
+    Models whose kernels are cached already are skipped.  Returns the names compiled.
+    """
+    todo = [s for s in systems if not is_compiled(s)]
+    if len(todo) <= 1:
+        return []
+    from concurrent.futures import ProcessPoolExecutor
+    import multiprocessing
+
+    workers = min(len(todo), workers or os.cpu_count() or 1)
+    if workers <= 1:
+        return []
+    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return list(pool.map(_compile_in_worker, todo))
+
+
 def load_kernels(system: PiecewiseSystem) -> ModuleType:
     """Generate (if needed), write (if needed) and import the compiled module of a model."""
     source = module_source(system)

@@ -433,6 +433,12 @@ class PiecewiseSystem:
         ]
         return "\n".join(parts)
 
+    def __getstate__(self) -> dict:
+        # compiled helper functions are rebuilt on demand (they do not pickle)
+        state = dict(self.__dict__)
+        state.pop("_period_functions", None)
+        return state
+
     def __repr__(self) -> str:
         kind = "autonomous" if self.is_autonomous else f"forced, period {self.period_expr}"
         return (
