@@ -300,3 +300,20 @@ def test_paper_end_to_end(tmp_path, capsys):
     branch = io.load_branch_json(tmp_path / "trilinear_branch.json")
     assert len(branch) > 20
     assert len(io.load_diagram_json(tmp_path / "block_on_belt_branches.json")) == 3
+
+
+def test_sweep_end_to_end(tmp_path, capsys):
+    from saltation.sweep import SweepResult
+
+    status = cli.main([
+        "sweep", "trilinear", "--param", "omega", "--from", "0.6", "--to", "0.7", "--num", "3",
+        "--periods", "5", "--transient", "60", "--workers", "1", "--out", str(tmp_path),
+    ])
+    assert status == 0
+    result = SweepResult.load(tmp_path / "trilinear_omega_sweep.json")
+    # no contact: every section point is the harmonic response at t = 0 (x(0) = -f0 c w / det)
+    for k, w in enumerate(np.linspace(0.6, 0.7, 3)):
+        det = (1 - w**2) ** 2 + (0.05 * w) ** 2
+        assert np.allclose(result.at(k)[:, 0], -0.2 * 0.05 * w / det, atol=1e-6)
+    assert (tmp_path / "trilinear_omega_sweep.png").stat().st_size > 0
+    assert "Poincare" in capsys.readouterr().out

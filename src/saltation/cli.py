@@ -701,6 +701,69 @@ def _add_paper_parser(sub) -> None:
 
 
 # --------------------------------------------------------------------------------------------
+# sweep
+# --------------------------------------------------------------------------------------------
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """``saltation sweep``: a brute-force diagram of a shipped model."""
+    from . import plotting
+    from .sweep import sweep
+
+    system = build_model(args.model)
+    system.parameter_index(args.param)
+    overrides = parse_sets(args.set, system)
+    if args.num < 1:
+        raise UsageError(f"--num must be at least 1, got {args.num}")
+    if args.periods < 1 or args.transient < 0:
+        raise UsageError("--periods must be positive and --transient non-negative")
+    x0 = parse_vector(args.x0, system) if args.x0 is not None else None
+    if x0 is None and system.is_autonomous:
+        start = TRANSIENT_START.get(args.model)
+        values = dict(system.defaults) | overrides
+        x0 = np.array(start(values, False)) if start else None
+    make_flow(system)  # compile (or load) here, with the notice, before the workers load it from the cache
+    values = np.linspace(args.start, args.stop, args.num)
+    result = sweep(
+        system, args.param, values, periods=args.periods, transient=args.transient, x0=x0,
+        parameters=overrides, workers=args.workers,
+    )
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = out / f"{system.name}_{args.param}_sweep"
+    result.save(stem.with_suffix(".json"))
+    plotting.save_figure(result.plot(), stem)
+    kind = "Poincare section points" if not system.is_autonomous else "maxima of x_1"
+    print(f"{sum(len(result.at(k)) for k in range(args.num))} {kind} at {args.num} values of {args.param}; "
+          f"written to {stem}.json/.png/.pdf")
+    return 0
+
+
+def _add_sweep_parser(sub) -> None:
+    p = sub.add_parser(
+        "sweep",
+        help="brute-force diagram: simulate at each parameter value and plot the sampled attractor",
+        description=_paragraph(
+            """Simulate a shipped model at --num parameter values between --from and --to, discard a
+            transient, and sample the attractor: the Poincare section x(t0 + k T) for forced models,
+            the maxima of x_1 for autonomous ones. Uses every local core. Writes
+            MODEL_PARAM_sweep.json and a plot (PNG, PDF) into --out."""
+        ),
+    )
+    p.add_argument("model", metavar="MODEL", help=f"name of a shipped model: {model_names()}")
+    p.add_argument("--param", metavar="NAME", required=True, help="the swept parameter")
+    p.add_argument("--from", dest="start", metavar="V", type=_finite, required=True, help="first value")
+    p.add_argument("--to", dest="stop", metavar="V", type=_finite, required=True, help="last value")
+    p.add_argument("--num", metavar="N", type=int, required=True, help="number of values")
+    p.add_argument("--periods", metavar="P", type=int, default=200, help="periods sampled per value (default 200)")
+    p.add_argument("--transient", metavar="Q", type=int, default=100, help="periods discarded first (default 100)")
+    p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="override another parameter")
+    p.add_argument("--x0", metavar="V1,V2,...", help="initial state (default: zeros, or the model's usual start)")
+    p.add_argument("--workers", metavar="N", type=int, default=None, help="worker processes (default: every core)")
+    p.add_argument("--out", metavar="DIR", default=".", help="output directory (default: the current one)")
+    p.set_defaults(handler=cmd_sweep)
+
+
+# --------------------------------------------------------------------------------------------
 # the program
 # --------------------------------------------------------------------------------------------
 
@@ -710,6 +773,7 @@ SUBCOMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [
     _add_orbit_parser,
     _add_continue_parser,
     _add_paper_parser,
+    _add_sweep_parser,
 ]
 
 
