@@ -693,8 +693,8 @@ def _add_paper_parser(sub) -> None:
     )
     p.add_argument("--out", metavar="DIR", required=True, help="output directory")
     p.add_argument(
-        "--ds-max", metavar="S", type=_positive("--ds-max"), default=0.005,
-        help="largest continuation step: smaller gives denser diagrams (default 0.005)",
+        "--ds-max", metavar="S", type=_positive("--ds-max"), default=0.01,
+        help="largest continuation step: smaller gives denser diagrams (default 0.01)",
     )
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(handler=cmd_paper)

@@ -265,8 +265,10 @@ def module_source(system: PiecewiseSystem) -> str:
 
 
 def _module_path(system: PiecewiseSystem) -> tuple[Path, str]:
-    source = module_source(system)
-    digest = hashlib.sha256((system.fingerprint + "\0" + source).encode()).hexdigest()[:20]
+    """Where the generated module of a model lives: named by a hash of the model's mathematics,
+    the integrator template and this code generator (so the source need not be generated to know)."""
+    key = "\0".join([system.fingerprint, _kernel_text(), Path(__file__).read_text()])
+    digest = hashlib.sha256(key.encode()).hexdigest()[:20]
     return cache_directory() / f"{system.name}_{digest}.py", digest
 
 
@@ -291,34 +293,39 @@ def _compile_in_worker(system: PiecewiseSystem) -> str:
 def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = None) -> list[str]:
     """Compile the kernels of several models at once, one process per model (a cold cache only).
 
-    Models whose kernels are cached already are skipped.  Returns the names compiled.
+    Models whose kernels are cached already are skipped; each model is compiled
+    in a fresh interpreter (so this is safe from any script) and the calling
+    process then loads the kernels from the cache.  Returns the names compiled.
     """
-    todo = [s for s in systems if not is_compiled(s)]
-    if len(todo) <= 1:
-        return []
-    from concurrent.futures import ProcessPoolExecutor
-    import multiprocessing
+    import pickle
+    import subprocess
 
+    todo = [s for s in systems if not is_compiled(s)]
     workers = min(len(todo), workers or os.cpu_count() or 1)
-    if workers <= 1:
+    if len(todo) <= 1 or workers <= 1:
         return []
-    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        return list(pool.map(_compile_in_worker, todo))
+    code = "import pickle, sys; from saltation.codegen import _compile_in_worker; _compile_in_worker(pickle.load(open(sys.argv[1], 'rb')))"
+    with tempfile.TemporaryDirectory() as tmp:
+        procs = []
+        for k, system in enumerate(todo):
+            path = Path(tmp) / f"model{k}.pickle"
+            path.write_bytes(pickle.dumps(system))
+            procs.append(subprocess.Popen([sys.executable, "-c", code, str(path)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        for proc in procs:
+            proc.wait()
+    return [s.name for s in todo]
 
 
 def load_kernels(system: PiecewiseSystem) -> ModuleType:
-    """Generate (if needed), write (if needed) and import the compiled module of a model."""
-    source = module_source(system)
-    digest = hashlib.sha256((system.fingerprint + "\0" + source).encode()).hexdigest()[:20]
+    """Generate and write (if needed) and import the compiled module of a model."""
+    path, digest = _module_path(system)
     if digest in _LOADED:
         return _LOADED[digest]
-    directory = cache_directory()
-    directory.mkdir(parents=True, exist_ok=True)
-    path = directory / f"{system.name}_{digest}.py"
-    if not path.exists() or path.read_text() != source:
-        fd, tmp = tempfile.mkstemp(dir=directory, suffix=".tmp")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if not path.exists():
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
         with os.fdopen(fd, "w") as fh:
-            fh.write(source)
+            fh.write(module_source(system))
         os.replace(tmp, path)
     modname = f"_saltation_kernels_{system.name}_{digest}"
     spec = importlib.util.spec_from_file_location(modname, path)
