@@ -1,0 +1,444 @@
+"""Benchmarks of saltation against a hand-written scipy baseline, in one process.
+
+Run by hand (not by CI)::
+
+    python benchmarks/run.py                 # every benchmark, a table of times and ratios
+    python benchmarks/run.py --quick --json  # under a minute once kernels are compiled; one JSON object
+    python benchmarks/run.py --only orbit sweep
+
+Times are medians of repeats, warm (kernels compiled and loaded, one untimed
+run first), wall clock.  The baseline (``scipy_baseline.py``) is the same
+algorithm written by hand for the trilinear system with ``solve_ivp``
+(DOP853, rtol 1e-10, atol 1e-12 as saltation's defaults).  Its results are
+checked against saltation's before anything is timed: the orbit and its
+multipliers must agree to 1e-8, or the run stops.
+
+Benchmarks
+----------
+orbit       one periodic orbit of the trilinear system at omega = 1.0 (and 0.7) from a
+            guess 1e-3 away, Newton to 1e-10, with monodromy and multipliers
+fig3        the response curve of Fig. 3 (``paper.trilinear_diagram``, >= 400 points,
+            special points located); baseline: pseudo-arclength over the same curve
+fig7        the block-on-belt diagram of Fig. 7 (``paper.block_on_belt_diagram``); no baseline
+paper       ``python -m saltation paper`` in a fresh process, empty and warm kernel cache
+            (full runs only: the empty-cache run compiles every kernel)
+multipliers Floquet multipliers on the no-contact branch vs eig(expm(A T)), default tolerances
+events      event times of a piecewise-linear flow vs closed form
+chain       the chain of n masses, n = 1 ... 32: time per orbit, fitted growth exponent
+sweep       brute-force diagram, 161 values of omega x 200 forcing periods (100 transient,
+            100 sampled), on every core; baseline: the same simulation with solve_ivp
+
+``--quick`` runs fewer repeats, times the slow scipy baselines (continuation,
+brute force) on a subset and scales them to the full job (marked "est."),
+and skips the paper runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.linalg import expm
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import scipy_baseline as sb  # noqa: E402
+
+from saltation import Flow, Tolerances  # noqa: E402
+from saltation.models import block_on_belt, chain, trilinear  # noqa: E402
+from saltation.paper import PaperSettings, block_on_belt_diagram, trilinear_diagram  # noqa: E402
+from saltation.shooting import find_periodic_orbit  # noqa: E402
+from saltation.sweep import sweep  # noqa: E402
+
+TARGETS = {
+    "orbit_ms": 0.3,
+    "orbit_ratio_vs_scipy": 100.0,
+    "fig3_s": 0.3,
+    "fig7_s": 0.3,
+    "paper_cold_s": 60.0,
+    "paper_warm_s": 5.0,
+    "multiplier_error": 1e-9,
+    "event_time_error": 1e-12,
+    "chain_exponent": 3.0,
+    "sweep_s": 1.0,
+}
+
+
+def log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def median_time(fn, repeat: int, warmup: int = 1) -> float:
+    """Median wall time of ``fn()`` over ``repeat`` runs after ``warmup`` untimed ones."""
+    for _ in range(warmup):
+        fn()
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times)
+
+
+def timed_runs(fn, quick: bool):
+    """Median time of 1 (quick) or 3 runs of a long job whose kernels are warm, and its last result."""
+    times = []
+    for _ in range(1 if quick else 3):
+        t = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times), result
+
+
+def warm_up(system) -> None:
+    """Load (or compile) a model's kernels and run them once, so that no timing includes it."""
+    flow = Flow(system)
+    flow.run(np.zeros(system.n) + 0.5, 0.0, 1.0, flow.parameters(), variational=True)
+
+
+def sorted_multipliers(mu) -> np.ndarray:
+    mu = np.asarray(mu, dtype=complex)
+    return mu[np.lexsort((mu.imag, mu.real))]
+
+
+# -- benchmarks -----------------------------------------------------------------------------------
+def bench_orbit(quick: bool) -> dict:
+    flow = Flow(trilinear())
+    out = {}
+    for omega, tag in ((1.0, ""), (0.7, "_no_contact")):
+        p = flow.parameters({"omega": omega})
+        start = flow.run([0.0, 0.0], 0.0, 100 * 2 * math.pi / omega, p).x1
+        ref = find_periodic_orbit(flow, start, parameters={"omega": omega})
+        guess = ref.state0 + 1e-3
+        orb = find_periodic_orbit(flow, guess, parameters={"omega": omega}, tol=1e-10)
+        base = sb.Trilinear(omega=omega)
+        x_sp, M_sp, mu_sp, it_sp, ev_sp = base.shoot(guess, tol=1e-10)
+        # the baseline must compute the same thing
+        dx = float(np.max(np.abs(x_sp - orb.state0)))
+        dmu = float(np.max(np.abs(sorted_multipliers(mu_sp) - sorted_multipliers(orb.multipliers))))
+        assert dx < 1e-8 and dmu < 1e-8, f"scipy baseline disagrees at omega={omega}: |dx|={dx:.2e}, |dmu|={dmu:.2e}"
+        assert [s for s, _ in ev_sp] == [s for s, _ in orb.events], (ev_sp, orb.events)
+        t_s = median_time(lambda: find_periodic_orbit(flow, guess, parameters={"omega": omega}, tol=1e-10),
+                          20 if quick else 200)
+        t_b = median_time(lambda: base.shoot(guess, tol=1e-10), 3 if quick else 15)
+        out |= {
+            f"orbit{tag}_ms": t_s * 1e3,
+            f"orbit{tag}_scipy_ms": t_b * 1e3,
+            f"orbit{tag}_ratio_vs_scipy": t_b / t_s,
+            f"orbit{tag}_newton_iterations": orb.iterations,
+            f"orbit{tag}_events": len(orb.events),
+            f"orbit{tag}_agreement": max(dx, dmu),
+        }
+    return out
+
+
+def bench_fig3(quick: bool) -> dict:
+    settings = PaperSettings(ds=0.01, ds_max=0.01)
+    warm_up(trilinear())
+    t_s, branch = timed_runs(lambda: trilinear_diagram(settings), quick)
+    n_points = len(branch.points)
+    assert n_points >= 400, n_points
+    # baseline: pseudo-arclength with the scipy shooting over the same curve (no special-point location);
+    # quick: coarser steps (about 150 points), the time per point scaled to saltation's number of points.
+    # max_step limited: solve_ivp checks the events' signs at step ends only, so a shallow contact inside
+    # one step is missed, the period map jumps where it is first seen, and the corrector stalls at w_A.
+    base = sb.Trilinear(omega=0.6, max_step=0.3)
+    x0 = sb.closed_form_no_contact_state(0.6)
+    ds = 0.04 if quick else 0.01
+    t0 = time.perf_counter()
+    pts = base.continuation(x0, 0.6, 1.6, ds=ds, ds_max=ds)
+    t_b = time.perf_counter() - t0
+    assert pts[-1][0] >= 1.6 and max(q[0] for q in pts) < 1.6 + ds, "the baseline did not follow the whole curve"
+    per_point = t_b / len(pts)
+    t_b_full = per_point * n_points if quick else t_b
+    return {
+        "fig3_s": t_s,
+        "fig3_points": n_points,
+        "fig3_special_points": [sp.kind.value for sp in branch.special_points],
+        "fig3_scipy_s": t_b_full,
+        "fig3_scipy_points": len(pts),
+        "fig3_scipy_estimated": quick,
+        "fig3_ratio_vs_scipy": t_b_full / t_s,
+        "fig3_ms_per_point": 1e3 * t_s / n_points,
+        "fig3_scipy_ms_per_point": 1e3 * per_point,
+    }
+
+
+def bench_fig7(quick: bool) -> dict:
+    warm_up(block_on_belt())
+    t_s, diagram = timed_runs(block_on_belt_diagram, quick)
+    return {
+        "fig7_s": t_s,
+        "fig7_points": [len(b.points) for b in diagram.branches],
+        "fig7_special_points": [sp.kind.value for sp in diagram.special_points],
+    }
+
+
+def bench_paper(quick: bool) -> dict:
+    if quick:
+        return {}
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, SALTATION_CACHE_DIR=str(Path(tmp) / "cache"))
+        cmd = [sys.executable, "-m", "saltation", "paper", "--out", str(Path(tmp) / "out"), "--no-progress"]
+        for key in ("paper_cold_s", "paper_warm_s"):
+            t = time.perf_counter()
+            proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
+            out[key] = time.perf_counter() - t
+            if proc.returncode != 0:
+                raise RuntimeError(f"saltation paper failed:\n{proc.stderr[-2000:]}")
+    out["paper_command"] = "python -m saltation paper --out DIR --no-progress (SALTATION_CACHE_DIR=empty tmpdir)"
+    return out
+
+
+def bench_multipliers(quick: bool) -> dict:
+    """No-contact orbits at default tolerances: multipliers vs the eigenvalues of expm(A T)."""
+    flow = Flow(trilinear())
+    d = trilinear().defaults
+    A = np.array([[0.0, 1.0], [-d["k"] / d["m"], -d["c"] / d["m"]]])
+    err, err_b = 0.0, 0.0
+    for omega in (0.6, 0.7, 0.8, 1.5, 1.6):
+        T = 2 * math.pi / omega
+        exact = sorted_multipliers(np.linalg.eigvals(expm(A * T)))
+        x0 = sb.closed_form_no_contact_state(omega)
+        orb = find_periodic_orbit(flow, x0 + 1e-3, parameters={"omega": omega})
+        assert not orb.events
+        err = max(err, float(np.max(np.abs(sorted_multipliers(orb.multipliers) - exact))))
+        mu_b = sb.Trilinear(omega=omega).shoot(x0 + 1e-3)[2]
+        err_b = max(err_b, float(np.max(np.abs(sorted_multipliers(mu_b) - exact))))
+    return {"multiplier_error": err, "multiplier_error_scipy": err_b}
+
+
+def bench_events(quick: bool) -> dict:
+    """Event times of piecewise-linear flows of the trilinear model against closed form.
+
+    * Free flight at constant speed (``k = c = f0 = 0``): ``x = V t`` meets ``x_c`` at ``x_c / V``;
+      the integration is exact, so this measures the event location alone.
+    * Undamped, unforced (``c = c_f = f0 = 0``) from ``(0, 2)``: free flight ``x = 2 sin t`` meets
+      ``x_c = 1`` at ``pi / 6``; each contact lasts ``2 atan2(V1 / w1, x_c - x_e) / w1``
+      (``w1 = sqrt((k + k_f) / m)``, ``x_e = k_f x_c / (k + k_f)``, ``V1 = sqrt(3)``), each free
+      flight between the supports ``pi / 3``: eleven events in 12 time units.
+    """
+    flow = Flow(trilinear())
+    loc = 0.0
+    for V in (0.3, 1.0, 3.7):
+        for xc in (1.0, 0.37, 2.9):
+            p = flow.parameters({"k": 0.0, "c": 0.0, "f0": 0.0, "c_f": 0.0, "x_c": xc})
+            tr = flow.run([0.0, V], 0.0, 2 * xc / V, p)
+            loc = max(loc, abs(tr.events[0].t - xc / V))
+    d = trilinear().defaults
+    w1 = math.sqrt((d["k"] + d["k_f"]) / d["m"])
+    xe = d["k_f"] * d["x_c"] / (d["k"] + d["k_f"])
+    contact = 2 * math.atan2(math.sqrt(3.0) / w1, d["x_c"] - xe) / w1
+    times = [math.pi / 6]
+    while len(times) < 11:
+        times += [times[-1] + contact, times[-1] + contact + math.pi / 3]
+    exact = np.array(times[:11])
+    p = flow.parameters({"c": 0.0, "f0": 0.0, "c_f": 0.0})
+    out = {"event_location_error": loc}
+    for key, tol in (("event_time_error", None), ("event_time_error_tight", Tolerances(rtol=1e-13, atol=1e-15))):
+        tr = flow.run([0.0, 2.0], 0.0, 12.0, p, tolerances=tol)
+        got = np.array([e.t for e in tr.events])
+        assert got.shape == exact.shape, (got, exact)
+        out[key] = float(np.max(np.abs(got - exact)))
+        out[key + "_first"] = float(abs(got[0] - exact[0]))
+    return out
+
+
+def linear_amplitude_of_last_mass(n: int, omega: float, d: dict) -> float:
+    """Steady amplitude of ``x_n`` of the chain without contact: ``(K - w^2 M + i w C) X = f0 e_1``."""
+    K = np.diag([2.0] * (n - 1) + [1.0]) - np.diag([1.0] * (n - 1), 1) - np.diag([1.0] * (n - 1), -1)
+    if n == 1:
+        K = np.ones((1, 1))
+    F = np.zeros(n)
+    F[0] = d["f0"]
+    X = np.linalg.solve(d["k"] * K - omega**2 * d["m"] * np.eye(n) + 1j * omega * d["c"] * K, F)
+    return float(abs(X[-1]))
+
+
+def bench_chain(quick: bool) -> dict:
+    """Chains of n masses at omega = 1 with the supports at 0.7 times the free amplitude of the last
+    mass, so that every orbit touches both supports (four events per period) whatever n."""
+    ns = (1, 2, 4, 8, 16, 32)
+    omega = 1.0
+    T = 2 * math.pi / omega
+    rows = []
+    for n in ns:
+        t = time.perf_counter()
+        system = chain(n)
+        flow = Flow(system)
+        overrides = {"omega": omega, "x_c": 0.7 * linear_amplitude_of_last_mass(n, omega, system.defaults)}
+        p = flow.parameters(overrides)
+        start = flow.run(np.zeros(2 * n), 0.0, 150 * T, p).x1
+        ref = find_periodic_orbit(flow, start, parameters=overrides)
+        setup = time.perf_counter() - t
+        guess = ref.state0 + 1e-3
+        t_orbit = median_time(lambda: find_periodic_orbit(flow, guess, parameters=overrides), 3 if quick else 10)
+        t_period = median_time(lambda: flow.run(ref.state0, 0.0, T, p, variational=True), 5 if quick else 20)
+        orb = find_periodic_orbit(flow, guess, parameters=overrides)
+        rows.append({"n": n, "orbit_ms": t_orbit * 1e3, "period_map_ms": t_period * 1e3,
+                     "newton_iterations": orb.iterations, "events": len(orb.events), "setup_s": setup})
+        log(f"  chain n={n}: {rows[-1]}")
+    big = [r for r in rows if r["n"] >= 4]
+    logn = np.log([r["n"] for r in big])
+    slope = np.polyfit(logn, np.log([r["orbit_ms"] for r in big]), 1)[0]
+    slope_pm = np.polyfit(logn, np.log([r["period_map_ms"] for r in big]), 1)[0]
+    return {"chain": rows, "chain_exponent": float(slope), "chain_exponent_period_map": float(slope_pm)}
+
+
+def bench_sweep(quick: bool) -> dict:
+    omegas = np.linspace(0.6, 1.6, 161)
+    periods, transient = 100, 100  # 200 forcing periods simulated per value
+    warm_up(trilinear())
+    t_s, res = timed_runs(lambda: sweep(trilinear(), "omega", omegas, periods=periods, transient=transient), quick)
+    assert not res.failures, res.failures
+    out = {"sweep_s": t_s, "sweep_points": int(res.states.shape[0]), "sweep_workers": _cores()}
+    if not quick:
+        out["sweep_1_worker_s"] = median_time(
+            lambda: sweep(trilinear(), "omega", omegas, periods=periods, transient=transient, workers=1), 1, warmup=0)
+    base = sb.Trilinear()
+    subset = omegas[::32] if quick else omegas
+    t = time.perf_counter()
+    base.brute_force(subset, periods=periods, transient=transient)
+    t_b = (time.perf_counter() - t) * len(omegas) / len(subset)
+    out |= {"sweep_scipy_s": t_b, "sweep_scipy_estimated": len(subset) < len(omegas), "sweep_ratio_vs_scipy": t_b / t_s}
+    return out
+
+
+BENCHMARKS = {
+    "orbit": bench_orbit,
+    "fig3": bench_fig3,
+    "fig7": bench_fig7,
+    "paper": bench_paper,
+    "multipliers": bench_multipliers,
+    "events": bench_events,
+    "chain": bench_chain,
+    "sweep": bench_sweep,
+}
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:
+        return os.cpu_count() or 1
+
+
+def machine() -> dict:
+    import numba
+    import scipy
+
+    return {
+        "cores": _cores(),
+        "cpu": _cpu_name(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "numba": numba.__version__,
+        "load_average_at_start": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
+    }
+
+
+def _cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor()
+
+
+def table(results: dict) -> str:
+    def fmt(v):
+        if isinstance(v, bool) or v is None:
+            return str(v)
+        if isinstance(v, float):
+            return f"{v:.3g}"
+        return str(v)
+
+    def met(key, v):
+        if key not in TARGETS or not isinstance(v, (int, float)):
+            return ""
+        goal = TARGETS[key]
+        ok = v >= goal if key.endswith("ratio_vs_scipy") else v <= goal
+        sign = ">=" if key.endswith("ratio_vs_scipy") else "<="
+        return f"target {sign} {goal:g}: {'met' if ok else 'MISSED'}"
+
+    rows = [
+        ("one orbit, omega=1.0 (ms)", "orbit_ms", "orbit_scipy_ms", "orbit_ratio_vs_scipy"),
+        ("one orbit, omega=0.7 (ms)", "orbit_no_contact_ms", "orbit_no_contact_scipy_ms",
+         "orbit_no_contact_ratio_vs_scipy"),
+        ("Fig. 3 diagram (s)", "fig3_s", "fig3_scipy_s", "fig3_ratio_vs_scipy"),
+        ("Fig. 7 diagram (s)", "fig7_s", None, None),
+        ("paper, empty cache (s)", "paper_cold_s", None, None),
+        ("paper, warm cache (s)", "paper_warm_s", None, None),
+        ("multiplier error", "multiplier_error", "multiplier_error_scipy", None),
+        ("event time error, rtol 1e-10", "event_time_error", None, None),
+        ("event time error, rtol 1e-13", "event_time_error_tight", None, None),
+        ("event location error (exact flow)", "event_location_error", None, None),
+        ("chain growth exponent, orbit (n>=4)", "chain_exponent", None, None),
+        ("chain growth exponent, period map", "chain_exponent_period_map", None, None),
+        ("sweep 161 x 200 periods (s)", "sweep_s", "sweep_scipy_s", "sweep_ratio_vs_scipy"),
+    ]
+    lines = [f"{'benchmark':38s} {'saltation':>11s} {'scipy':>11s} {'ratio':>8s}  target"]
+    for label, k, kb, kr in rows:
+        if k not in results:
+            continue
+        est = " est." if (kb and kb.endswith("_s") and results.get(kb[:-2] + "_estimated", False)) else ""
+        b = fmt(results[kb]) + est if kb and kb in results else "-"
+        r = fmt(results[kr]) if kr and kr in results else "-"
+        target = met(k, results[k])
+        if kr and kr in results and kr in TARGETS:
+            target += ("; " if target else "") + met(kr, results[kr])
+        lines.append(f"{label:38s} {fmt(results[k]):>11s} {b:>11s} {r:>8s}  {target}")
+    if "chain" in results:
+        lines.append("")
+        lines.append(f"{'chain n':>8s} {'orbit ms':>10s} {'period map ms':>14s} {'Newton':>7s} {'events':>7s}")
+        for r in results["chain"]:
+            lines.append(f"{r['n']:8d} {r['orbit_ms']:10.3g} {r['period_map_ms']:14.3g} "
+                         f"{r['newton_iterations']:7d} {r['events']:7d}")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="fewer repeats, scaled baselines, no paper runs (under a minute)")
+    ap.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+    ap.add_argument("--only", nargs="+", choices=sorted(BENCHMARKS), help="run only these benchmarks")
+    args = ap.parse_args(argv)
+    results: dict = {"quick": args.quick, "machine": machine()}
+    t_all = time.perf_counter()
+    for name, fn in BENCHMARKS.items():
+        if args.only and name not in args.only:
+            continue
+        log(f"{name} ...")
+        t = time.perf_counter()
+        results |= fn(args.quick)
+        log(f"{name}: {time.perf_counter() - t:.1f} s")
+    results["machine"]["load_average_at_end"] = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
+    results["total_s"] = time.perf_counter() - t_all
+    results["targets"] = TARGETS
+    if args.json:
+        print(json.dumps(results, default=float))
+    else:
+        print(table(results))
+        m = results["machine"]
+        print(f"\n{m['cores']} cores, {m['cpu']}; Python {m['python']}, numba {m['numba']}, scipy {m['scipy']}; "
+              f"load average {m['load_average_at_start']:.2f} at start, {m['load_average_at_end']:.2f} at end; "
+              f"{results['total_s']:.0f} s in all")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
