@@ -390,6 +390,7 @@ def table(results: dict) -> str:
         ("chain growth exponent, orbit (n>=4)", "chain_exponent", None, None),
         ("chain growth exponent, period map", "chain_exponent_period_map", None, None),
         ("sweep 161 x 200 periods (s)", "sweep_s", "sweep_scipy_s", "sweep_ratio_vs_scipy"),
+        ("sweep, one worker (s)", "sweep_1_worker_s", None, None),
     ]
     lines = [f"{'benchmark':38s} {'saltation':>11s} {'scipy':>11s} {'ratio':>8s}  target"]
     for label, k, kb, kr in rows:

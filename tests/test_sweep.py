@@ -143,3 +143,14 @@ def test_plot_leaves_no_pyplot_state(no_contact_sweep):
     other = Figure()
     ax2 = other.add_subplot()
     assert no_contact_sweep.plot(ax2, state="v") is other
+
+
+def test_workers_started_by_spawn_load_the_kernels_from_disk(monkeypatch, no_contact_sweep):
+    """Where fork is not available, fresh worker processes re-load the compiled kernels from the cache."""
+    import multiprocessing
+
+    import saltation.sweep as sweep_module
+
+    monkeypatch.setattr(sweep_module, "_context", lambda: multiprocessing.get_context("spawn"))
+    res = sweep(trilinear(), "omega", NO_CONTACT, periods=5, transient=300, x0=harmonic_state(0.6), workers=2)
+    np.testing.assert_allclose(res.states, no_contact_sweep.states, rtol=0, atol=1e-12)

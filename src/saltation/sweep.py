@@ -11,7 +11,9 @@ it settles to:
   ``x_1`` has no maximum in the sampling window (an equilibrium) contributes
   its final state once.
 
-The values are split into one contiguous chunk per worker process; within a
+The values are split into one contiguous chunk of equal length per worker
+process (the integrator's work per forcing period hardly depends on the
+period, so equal numbers of values are about equal work); within a
 chunk each value starts from the final state of the previous one, as
 brute-force diagrams do (so a branch is followed as far as it stays
 attracting), and the first value of each chunk starts from ``x0``.  A value
