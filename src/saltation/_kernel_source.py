@@ -305,6 +305,23 @@ def _grow(a, cap):
 
 
 @njit(cache=True)
+def _record_step(rec_t, rec_h, rec_send, rec_y, rec_F, n_rec, t, h, s_end, x, F):
+    """Append a step's dense output (start, size, end fraction, start state, coefficients)."""
+    if n_rec == rec_t.shape[0]:
+        rec_t = _grow(rec_t, 2 * n_rec)
+        rec_h = _grow(rec_h, 2 * n_rec)
+        rec_send = _grow(rec_send, 2 * n_rec)
+        rec_y = _grow(rec_y, 2 * n_rec)
+        rec_F = _grow(rec_F, 2 * n_rec)
+    rec_t[n_rec] = t
+    rec_h[n_rec] = h
+    rec_send[n_rec] = s_end
+    rec_y[n_rec] = x
+    rec_F[n_rec] = F
+    return rec_t, rec_h, rec_send, rec_y, rec_F, n_rec + 1
+
+
+@njit(cache=True)
 def _dense_component(F, y, s, i):
     """Component ``i`` of the continuous extension at fraction ``s`` of the step."""
     v = 0.0
@@ -633,18 +650,9 @@ def integrate_kernel(
                 xmin[i] = min(xmin[i], ynew[i])
                 xmax[i] = max(xmax[i], ynew[i])
             if record:
-                if n_rec == rec_t.shape[0]:
-                    rec_t = _grow(rec_t, 2 * n_rec)
-                    rec_h = _grow(rec_h, 2 * n_rec)
-                    rec_send = _grow(rec_send, 2 * n_rec)
-                    rec_y = _grow(rec_y, 2 * n_rec)
-                    rec_F = _grow(rec_F, 2 * n_rec)
-                rec_t[n_rec] = t
-                rec_h[n_rec] = h
-                rec_send[n_rec] = 1.0
-                rec_y[n_rec] = y[:n]
-                rec_F[n_rec] = F
-                n_rec += 1
+                rec_t, rec_h, rec_send, rec_y, rec_F, n_rec = _record_step(
+                    rec_t, rec_h, rec_send, rec_y, rec_F, n_rec, t, h, 1.0, y[:n], F
+                )
             t = t_new
             for i in range(N):
                 y[i] = ynew[i]
@@ -670,18 +678,9 @@ def integrate_kernel(
             continue
         _track_extrema(F, y, best_s, n, xmin, xmax, K[0], K[12], xtmp)
         if record:
-            if n_rec == rec_t.shape[0]:
-                rec_t = _grow(rec_t, 2 * n_rec)
-                rec_h = _grow(rec_h, 2 * n_rec)
-                rec_send = _grow(rec_send, 2 * n_rec)
-                rec_y = _grow(rec_y, 2 * n_rec)
-                rec_F = _grow(rec_F, 2 * n_rec)
-            rec_t[n_rec] = t
-            rec_h[n_rec] = h
-            rec_send[n_rec] = best_s
-            rec_y[n_rec] = y[:n]
-            rec_F[n_rec] = F
-            n_rec += 1
+            rec_t, rec_h, rec_send, rec_y, rec_F, n_rec = _record_step(
+                rec_t, rec_h, rec_send, rec_y, rec_F, n_rec, t, h, best_s, y[:n], F
+            )
         # refine the event time by re-stepping from the step start (secant on the true RK solution)
         for i in range(N):
             ysave[i] = y[i]

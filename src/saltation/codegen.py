@@ -200,33 +200,9 @@ def generate_source(system: PiecewiseSystem) -> str:
     src += _dispatch("reset_map", "k, t, x, p, out", "k", reset_cases, "None")
     src += _dispatch("reset_jac", "k, t, x, p, gx, gt, gp", "k", rjac_cases, "None")
 
-    # guards
-    guard_cases = []
-    for k, conds in enumerate(system.guards):
-        if not conds:
-            continue
-        body = []
-        for c in conds:
-            op = ">" if c.strict else ">="
-            body.append(f"{ind}if not ({em.printer.doprint(c.expr)} {op} 0.0):")
-            body.append(f"{ind}    return False")
-        body.append(f"{ind}return True")
-        guard_cases.append((k, body))
-    src += _dispatch("guard", "k, t, x, p", "k", guard_cases, "True")
-
-    # mode domains (the initial-mode rule)
-    domain_cases = []
-    for m, conds in enumerate(system.domains):
-        if not conds:
-            continue
-        body = []
-        for c in conds:
-            op = ">" if c.strict else ">="
-            body.append(f"{ind}if not ({em.printer.doprint(c.expr)} {op} 0.0):")
-            body.append(f"{ind}    return False")
-        body.append(f"{ind}return True")
-        domain_cases.append((m, body))
-    src += _dispatch("in_domain", "mode, t, x, p", "mode", domain_cases, "True")
+    # guards of transitions, domains of modes (the initial-mode rule)
+    src += _dispatch("guard", "k, t, x, p", "k", _condition_cases(em, system.guards, ind), "True")
+    src += _dispatch("in_domain", "mode, t, x, p", "mode", _condition_cases(em, system.domains, ind), "True")
     src += [
         "@njit(cache=True)",
         "def initial_mode(t, x, p):",
@@ -236,6 +212,22 @@ def generate_source(system: PiecewiseSystem) -> str:
         "    return -1",
     ]
     return "\n".join(src) + "\n"
+
+
+def _condition_cases(em: _Emitter, condition_lists, ind: str) -> list[tuple[int, list[str]]]:
+    """Dispatch cases returning whether every condition ``expr > 0`` (or ``>= 0``) holds."""
+    cases = []
+    for k, conds in enumerate(condition_lists):
+        if not conds:
+            continue
+        body = []
+        for c in conds:
+            op = ">" if c.strict else ">="
+            body.append(f"{ind}if not ({em.printer.doprint(c.expr)} {op} 0.0):")
+            body.append(f"{ind}    return False")
+        body.append(f"{ind}return True")
+        cases.append((k, body))
+    return cases
 
 
 def transition_table(system: PiecewiseSystem) -> np.ndarray:
