@@ -310,6 +310,13 @@ def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = No
 
 def load_kernels(system: PiecewiseSystem) -> ModuleType:
     """Generate and write (if needed) and import the compiled module of a model."""
+    from .compiled import CompiledSystem, build_module
+
+    if isinstance(system, CompiledSystem):
+        if system.fingerprint not in _LOADED:
+            tableau = {name: np.asarray(getattr(dop853, name), dtype=float) for name in ("A", "B", "C", "E3", "E5", "D")}
+            _LOADED[system.fingerprint] = build_module(system, _kernel_text(), tableau)
+        return _LOADED[system.fingerprint]
     path, digest = _module_path(system)
     if digest in _LOADED:
         return _LOADED[digest]

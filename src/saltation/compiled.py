@@ -1,0 +1,252 @@
+"""Models given as compiled callables: the escape hatch for fields sympy cannot express.
+
+A :class:`CompiledSystem` carries numba-compiled functions with the same
+signatures as the ones :mod:`saltation.codegen` generates from expressions,
+and the user supplies every derivative.  It works with :class:`~saltation.Flow`,
+shooting and continuation like a :class:`~saltation.model.PiecewiseSystem`;
+what it cannot do is print saltation matrices in closed form.
+
+Required functions (``mode``, ``surface``, ``k`` are integer indices; arrays
+are written in place)::
+
+    vector_field(mode, t, x, p, out)            # f
+    vector_field_jac(mode, t, x, p, out)        # f_x, shape (n, n)
+    indicator(surface, t, x, p) -> float        # h
+    indicator_grad(surface, t, x, p, hx, hp) -> float   # fills h_x, h_p; returns h_t
+
+Optional ones (defaults: no parameter derivatives, no resets, no guards,
+every state in the first mode, sliding unavailable)::
+
+    vector_field_dp(mode, t, x, p, out)         # f_p, shape (n, n_params)
+    reset_map(k, t, x, p, out)                  # g of transition k
+    reset_jac(k, t, x, p, gx, gt, gp)           # g_x, g_t, g_p
+    guard(k, t, x, p) -> bool
+    in_domain(mode, t, x, p) -> bool            # the initial-mode rule
+    lie_derivative(mode, surface, t, x, p, gx, gp) -> float   # h_x f + h_t and its gradients (sliding)
+    lie_derivative_dt(mode, surface, t, x, p) -> float
+
+The kernels are compiled once per process (numba cannot cache functions
+handed over at run time).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from types import ModuleType
+
+import numpy as np
+
+from .errors import InitialModeError, ModelError
+from .model import Crossing, Transition
+
+REQUIRED = ("vector_field", "vector_field_jac", "indicator", "indicator_grad")
+OPTIONAL = (
+    "vector_field_dp", "reset_map", "reset_jac", "guard", "in_domain", "lie_derivative", "lie_derivative_dt",
+)
+
+_DEFAULTS = '''
+@njit
+def vector_field_dp(mode, t, x, p, out):
+    out[:, :] = 0.0
+
+@njit
+def reset_map(k, t, x, p, out):
+    out[:] = x
+
+@njit
+def reset_jac(k, t, x, p, gx, gt, gp):
+    gx[:, :] = 0.0
+    for i in range(gx.shape[0]):
+        gx[i, i] = 1.0
+    gt[:] = 0.0
+    gp[:, :] = 0.0
+
+@njit
+def guard(k, t, x, p):
+    return True
+
+@njit
+def in_domain(mode, t, x, p):
+    return mode == 0
+
+@njit
+def lie_derivative(mode, surface, t, x, p, gx, gp):
+    gx[:] = math.nan
+    gp[:] = math.nan
+    return math.nan
+
+@njit
+def lie_derivative_dt(mode, surface, t, x, p):
+    return math.nan
+'''
+
+
+class CompiledSystem:
+    """A piecewise-smooth system given by numba-compiled callables.
+
+    Parameters
+    ----------
+    name : str
+    states : sequence of str
+    parameters : mapping of str to float
+    modes, surfaces : sequence of str
+        Names; the callables receive their indices.
+    transitions : sequence of Transition
+        As for :class:`~saltation.model.PiecewiseSystem`; ``reset`` is any
+        non-None value for a transition whose reset ``reset_map`` implements,
+        and guards are evaluated by the ``guard`` callable.
+    functions : mapping of str to numba dispatcher
+        The compiled functions (see the module docstring).
+    period : callable, optional
+        ``period(p) -> float``: the forcing period (forced systems); with it,
+        ``period_derivative(p, k) -> float`` may be given too (default: central
+        differences).
+
+    Raises
+    ------
+    ModelError
+        For a missing required function, an unknown function name, or a
+        transition naming an unknown mode or surface.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        states: Sequence[str],
+        parameters: Mapping[str, float],
+        modes: Sequence[str],
+        surfaces: Sequence[str],
+        transitions: Sequence[Transition],
+        functions: Mapping[str, Callable],
+        *,
+        period: Callable[[np.ndarray], float] | None = None,
+        period_derivative: Callable[[np.ndarray, int], float] | None = None,
+    ):
+        self.name = name
+        self.state_names = tuple(states)
+        self.parameter_names = tuple(parameters)
+        self.defaults = {k: float(v) for k, v in parameters.items()}
+        self.mode_names = tuple(modes)
+        self.surface_names = tuple(surfaces)
+        missing = [f for f in REQUIRED if f not in functions]
+        if missing:
+            raise ModelError(f"compiled system {name!r}: missing function(s) {missing}; required are {list(REQUIRED)}")
+        unknown = sorted(set(functions) - set(REQUIRED) - set(OPTIONAL))
+        if unknown:
+            raise ModelError(f"compiled system {name!r}: unknown function name(s) {unknown}")
+        self.functions = dict(functions)
+        self.transitions = tuple(transitions)
+        for k, tr in enumerate(self.transitions):
+            for role, mname in (("source", tr.source), ("target", tr.target)):
+                if mname not in self.mode_names:
+                    raise ModelError(f"transition {k}: {role} mode {mname!r} does not exist; modes are {list(self.mode_names)}")
+            if tr.surface not in self.surface_names:
+                raise ModelError(f"transition {k}: surface {tr.surface!r} does not exist; surfaces are {list(self.surface_names)}")
+            Crossing(int(tr.direction))
+        if any(tr.reset is not None for tr in self.transitions) and "reset_map" not in functions:
+            raise ModelError(f"compiled system {name!r}: a transition has a reset but no reset_map/reset_jac is given")
+        self.resets = [tr.reset for tr in self.transitions]
+        self._period = period
+        self._period_derivative = period_derivative
+        self.fingerprint = f"compiled:{name}:{id(self)}"
+
+    # -- the interface Flow and the problems use -----------------------------------------
+    @property
+    def n(self) -> int:
+        return len(self.state_names)
+
+    @property
+    def n_params(self) -> int:
+        return len(self.parameter_names)
+
+    @property
+    def is_autonomous(self) -> bool:
+        return self._period is None
+
+    @property
+    def period_expr(self) -> str | None:
+        return None if self._period is None else "period(p)"
+
+    def mode_index(self, name: str | int) -> int:
+        if isinstance(name, (int, np.integer)):
+            if not 0 <= int(name) < len(self.mode_names):
+                raise ModelError(f"mode index {name} out of range 0..{len(self.mode_names) - 1}")
+            return int(name)
+        try:
+            return self.mode_names.index(name)
+        except ValueError:
+            raise ModelError(f"unknown mode {name!r}; modes are {list(self.mode_names)}") from None
+
+    def surface_index(self, name: str) -> int:
+        try:
+            return self.surface_names.index(name)
+        except ValueError:
+            raise ModelError(f"unknown surface {name!r}; surfaces are {list(self.surface_names)}") from None
+
+    def parameter_index(self, name: str) -> int:
+        try:
+            return self.parameter_names.index(name)
+        except ValueError:
+            raise ModelError(f"unknown parameter {name!r}; parameters are {list(self.parameter_names)}") from None
+
+    def parameter_vector(self, overrides: Mapping[str, float] | None = None) -> np.ndarray:
+        values = dict(self.defaults)
+        for key, val in (overrides or {}).items():
+            self.parameter_index(key)
+            if not math.isfinite(float(val)):
+                raise ModelError(f"parameter {key!r} must be finite, got {val}")
+            values[key] = float(val)
+        return np.array([values[k] for k in self.parameter_names], dtype=float)
+
+    def forcing_period(self, p: np.ndarray) -> float:
+        if self._period is None:
+            raise ModelError(f"model {self.name!r} is autonomous: it has no forcing period")
+        value = float(self._period(p))
+        if not (math.isfinite(value) and value > 0):
+            raise ModelError(f"forcing period evaluates to {value} for these parameters")
+        return value
+
+    def period_derivative(self, p: np.ndarray, index: int) -> float:
+        if self._period is None:
+            return 0.0
+        if self._period_derivative is not None:
+            return float(self._period_derivative(p, index))
+        h = 1e-6 * (1.0 + abs(p[index]))
+        up, down = p.copy(), p.copy()
+        up[index] += h
+        down[index] -= h
+        return (float(self._period(up)) - float(self._period(down))) / (2 * h)
+
+    def initial_mode(self, x0, p, t0: float = 0.0) -> int:
+        raise InitialModeError(
+            f"initial state {list(map(float, x0))} at t = {t0} lies in no mode of {self.name!r} "
+            "(its in_domain function is false for every mode)"
+        )
+
+    def __repr__(self) -> str:
+        return f"CompiledSystem({self.name!r}, states={list(self.state_names)}, modes={list(self.mode_names)})"
+
+
+def build_module(system: CompiledSystem, kernel_text: str, tableau: dict[str, np.ndarray]) -> ModuleType:
+    """Compile the integrator template against the system's callables (in memory, not cached)."""
+    import numba
+
+    module = ModuleType(f"_saltation_compiled_{system.name}")
+    namespace = module.__dict__
+    namespace.update({"np": np, "math": math, "njit": numba.njit})
+    namespace.update({f"RK_{k}": v for k, v in tableau.items()})
+    exec(compile(_DEFAULTS, f"<saltation defaults for {system.name}>", "exec"), namespace)  # noqa: S102
+    namespace.update(system.functions)
+    initial = (
+        "@njit\n"
+        "def initial_mode(t, x, p):\n"
+        f"    for m in range({len(system.mode_names)}):\n"
+        "        if in_domain(m, t, x, p):\n"
+        "            return m\n"
+        "    return -1\n"
+    )
+    exec(compile(initial, f"<saltation initial mode for {system.name}>", "exec"), namespace)  # noqa: S102
+    text = kernel_text.replace("@njit(cache=True)", "@njit")
+    exec(compile(text, f"<saltation kernel for {system.name}>", "exec"), namespace)  # noqa: S102
+    return module
