@@ -47,7 +47,7 @@ EPS = 2.220446049250313e-16
 CHATTER_WINDOW = 20
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # inlined: array arguments cost more than the work
 def _field(mode, slide, t, x, p, var, pidx, f, J, fpc, ws1, ws2, ws3, wsJ1, wsJ2, wsP, gA, gB, gpA, gpB):
     """Vector field (and Jacobian and parameter column) of a mode or a sliding motion.
 
@@ -96,7 +96,7 @@ def _field(mode, slide, t, x, p, var, pidx, f, J, fpc, ws1, ws2, ws3, wsJ1, wsJ2
                 fpc[i] += alpha * wsP[i, pidx] + (ws2[i] - ws1[i]) * dalpha
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # inlined: array arguments cost more than the work
 def _aug_rhs(mode, slide, t, y, p, n, var, pidx, dy, W, WJ, WP, wv):
     """Right-hand side of the augmented system ``[x, Phi (row-major), psi]``."""
     x = y[:n]

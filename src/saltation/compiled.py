@@ -247,6 +247,6 @@ def build_module(system: CompiledSystem, kernel_text: str, tableau: dict[str, np
         "    return -1\n"
     )
     exec(compile(initial, f"<saltation initial mode for {system.name}>", "exec"), namespace)  # noqa: S102
-    text = kernel_text.replace("@njit(cache=True)", "@njit")
+    text = kernel_text.replace("cache=True", "cache=False")
     exec(compile(text, f"<saltation kernel for {system.name}>", "exec"), namespace)  # noqa: S102
     return module
