@@ -13,7 +13,7 @@ the two branches.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -26,17 +26,16 @@ from .shooting import ShootingProblem
 
 @dataclass
 class BifurcationDiagram:
-    """Branches of one model over one parameter, with the special points joining them."""
+    """Branches of one model over one parameter (a fold joining two branches is a special point of one)."""
 
     model: str
     parameter_name: str
     branches: list[Branch] = field(default_factory=list)
-    connections: list[SpecialPoint] = field(default_factory=list)
 
     @property
     def special_points(self) -> list[SpecialPoint]:
-        """Every special point: those on the branches, then those joining branches."""
-        return [sp for b in self.branches for sp in b.special_points] + list(self.connections)
+        """Every special point of every branch."""
+        return [sp for b in self.branches for sp in b.special_points]
 
 
 def locate_branch_end(corrector: Corrector, last: Solution, lam_fail: float, *, tol: float = 1e-9) -> tuple[Solution, float]:
@@ -228,8 +227,3 @@ def _point_of(cont: Continuation, sol: Solution):
     """A branch point for a solution found outside the continuation loop."""
     cont._accept(sol)
     return cont.branch.points.pop()
-
-
-def with_label(branch: Branch, label: str) -> Branch:
-    """The same branch with a label for plots."""
-    return replace(branch, label=label)

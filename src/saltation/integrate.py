@@ -9,6 +9,7 @@ from __future__ import annotations
 import enum
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -45,8 +46,7 @@ class EventKind(enum.IntEnum):
     SLIDING_END = 2
 
 
-@dataclass(frozen=True)
-class SwitchingEvent:
+class SwitchingEvent(NamedTuple):
     """One switching event of a trajectory.
 
     Attributes

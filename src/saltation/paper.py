@@ -28,6 +28,7 @@ from .branch import Branch, SpecialPoint
 from .codegen import compile_in_parallel
 from .continuation import Continuation, ContinuationSettings, continue_branch
 from .diagram import BifurcationDiagram, follow_through_discontinuous_fold
+from .errors import SaltationError
 from .floquet import multipliers_from_monodromy
 from .integrate import Flow
 from .models import block_on_belt, trilinear
@@ -146,7 +147,7 @@ def _return_time(traj) -> float:
     for e in reversed(traj.events[:-1]):
         if e.transition == last.transition and e.kind == last.kind:
             return last.t - e.t
-    raise RuntimeError("the transient shows no repeated event; cannot estimate the period")
+    raise SaltationError("the transient shows no repeated event; cannot estimate the period")
 
 
 def phase_plane(v_dr: float = 1.0) -> dict[str, np.ndarray]:
