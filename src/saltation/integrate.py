@@ -141,6 +141,37 @@ class Trajectory:
             seq.append(f"{e.mode_from}|{e.mode_to}" if e.kind == EventKind.SLIDING_START else e.mode_to)
         return seq
 
+    @property
+    def dense_steps(self) -> tuple[np.ndarray, ...]:
+        """The recorded steps: start times, sizes, end fractions, start states, coefficients.
+
+        Each step ``k`` covers ``t_old[k] + s h[k]`` for ``s`` in ``[0, s_end[k]]``
+        (``s_end < 1`` for a step cut short by an event).
+
+        Raises
+        ------
+        ValueError
+            If the trajectory was computed without ``dense=True``.
+        """
+        if self._steps is None:
+            raise ValueError("this trajectory was computed without dense=True")
+        return tuple(np.asarray(a) for a in self._steps)
+
+    def at(self, times: Sequence[float] | np.ndarray) -> np.ndarray:
+        """States at the given times (inside the time span) from the dense output, shape (m, n).
+
+        At an event time the state before the event is returned.
+        """
+        t_old, h, s_end, y0, F = self.dense_steps
+        times = np.asarray(times, dtype=float).reshape(-1)
+        if t_old.size == 0:
+            return np.repeat(self.x1[None, :], len(times), axis=0)
+        forward = h[0] > 0
+        key, starts = (times, t_old) if forward else (-times, -t_old)
+        k = np.clip(np.searchsorted(starts, key, side="right") - 1, 0, len(t_old) - 1)
+        s = np.clip((times - t_old[k]) / h[k], 0.0, s_end[k])
+        return dense_evaluate(F[k], y0[k], s)
+
     def sample(self, num_per_step: int = 8) -> tuple[np.ndarray, np.ndarray]:
         """Dense states along the trajectory.
 
@@ -170,12 +201,18 @@ class Trajectory:
 
 
 def _dense_eval(F: np.ndarray, y0: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Evaluate DOP853's continuous extension at fractions ``s`` of a step (vectorised)."""
-    out = np.zeros((len(s), F.shape[1]))
-    for k in range(7):
-        out += F[6 - k][None, :]
-        out *= (s if k % 2 == 0 else 1.0 - s)[:, None]
-    return out + y0[None, :]
+    """Evaluate DOP853's continuous extension of one step at fractions ``s`` (vectorised)."""
+    s = np.asarray(s, dtype=float)
+    return dense_evaluate(np.broadcast_to(F, (len(s),) + F.shape), np.broadcast_to(y0, (len(s),) + y0.shape), s)
+
+
+def dense_evaluate(F: np.ndarray, y0: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """DOP853's continuous extension of steps ``(F[k], y0[k])`` at fractions ``s[k]``, shape (m, n)."""
+    out = np.zeros(y0.shape)
+    for j in range(7):
+        out += F[:, 6 - j, :]
+        out *= (s if j % 2 == 0 else 1.0 - s)[:, None]
+    return out + y0
 
 
 @dataclass(frozen=True)

@@ -44,7 +44,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from .errors import ModelError, SaltationError
-from .integrate import Flow, Tolerances, Trajectory
+from .integrate import Flow, Tolerances, Trajectory, dense_evaluate
 from .model import PiecewiseSystem
 
 __all__ = ["SweepResult", "sweep"]
@@ -380,7 +380,7 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
             traj = flow.run(x, t_sample, t_end, p, mode0=mode, dense=True, tolerances=job.tolerances)
             if job.poincare:
                 times = t_sample + T * np.arange(1, job.periods + 1)
-                pts = _dense_at(traj, times)
+                pts = traj.at(times)
                 pts[-1] = traj.x1  # the integrator ends exactly there
             else:
                 pts = _maxima(traj)
@@ -398,24 +398,6 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
 
 
 # -- reading the dense output --------------------------------------------------------------------
-def _dense_steps(traj: Trajectory):
-    """The recorded steps of a trajectory run with ``dense=True``: start, size, end fraction, y0, coefficients."""
-    steps = getattr(traj, "_steps", None)
-    if steps is None:
-        raise ValueError("this trajectory was computed without dense=True")
-    t_old, h, s_end, y0, F = steps
-    return np.asarray(t_old), np.asarray(h), np.asarray(s_end), np.asarray(y0), np.asarray(F)
-
-
-def _eval_steps(F: np.ndarray, y0: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """DOP853's continuous extension of steps ``F[k], y0[k]`` at fractions ``s[k]`` (one each)."""
-    out = np.zeros_like(y0)
-    for j in range(7):
-        out += F[:, 6 - j, :]
-        out *= (s if j % 2 == 0 else 1.0 - s)[:, None]
-    return out + y0
-
-
 def _locate(t_old: np.ndarray, h: np.ndarray, s_end: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """For each time, the index of the recorded step that covers it and the fraction within the step."""
     forward = h[0] > 0 if h.size else True
@@ -426,24 +408,15 @@ def _locate(t_old: np.ndarray, h: np.ndarray, s_end: np.ndarray, times: np.ndarr
     return k, s
 
 
-def _dense_at(traj: Trajectory, times: np.ndarray) -> np.ndarray:
-    """States of a dense trajectory at the given times (inside its time span)."""
-    t_old, h, s_end, y0, F = _dense_steps(traj)
-    if t_old.size == 0:
-        return np.repeat(traj.x1[None, :], len(times), axis=0)
-    k, s = _locate(t_old, h, s_end, times)
-    return _eval_steps(F[k], y0[k], s)
-
-
 def _maxima(traj: Trajectory) -> np.ndarray:
     """States at the local maxima of ``x_1`` along a dense trajectory, refined on the dense output."""
-    t_old, h, s_end, y0, F = _dense_steps(traj)
+    t_old, h, s_end, y0, F = traj.dense_steps
     if t_old.size < 2:
         return np.zeros((0, traj.x1.size))
     g = np.linspace(0.0, 1.0, _MAXIMA_GRID + 1)[:-1]
     ks = np.repeat(np.arange(len(t_old)), g.size)
     ss = (g[None, :] * s_end[:, None]).reshape(-1)
-    x1 = _eval_steps(F[ks], y0[ks], ss)[:, 0]
+    x1 = dense_evaluate(F[ks], y0[ks], ss)[:, 0]
     times = t_old[ks] + ss * h[ks]
     scale = max(1.0, float(np.max(np.abs(x1))))
     if np.ptp(x1) <= _FLAT * scale:  # an equilibrium: round-off is no maximum
@@ -456,7 +429,7 @@ def _maxima(traj: Trajectory) -> np.ndarray:
 
     def x1_at(t):
         k, s = _locate(t_old, h, s_end, t)
-        return _eval_steps(F[k], y0[k], s)[:, 0]
+        return dense_evaluate(F[k], y0[k], s)[:, 0]
 
     c = b - _GOLDEN * (b - a)
     d = a + _GOLDEN * (b - a)
@@ -480,4 +453,4 @@ def _maxima(traj: Trajectory) -> np.ndarray:
         c, d, fc, fd = c_next, d_next, fc_next, fd_next
     t_max = 0.5 * (a + b)
     k, s = _locate(t_old, h, s_end, t_max)
-    return _eval_steps(F[k], y0[k], s)
+    return dense_evaluate(F[k], y0[k], s)
