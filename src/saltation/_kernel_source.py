@@ -692,13 +692,14 @@ def integrate_kernel(
         g_e = 1.0
         g_prev = 0.0
         for it in range(6):
-            for i in range(N):
-                K[0, i] = Ksave[0, i]
-            if s_e > 0.0:
-                _rk_step(mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
-            else:
+            if it > 0:  # the first state at the event is the checked step's
                 for i in range(N):
-                    ynew[i] = ysave[i]
+                    K[0, i] = Ksave[0, i]
+                if s_e > 0.0:
+                    _rk_step(mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
+                else:
+                    for i in range(N):
+                        ynew[i] = ysave[i]
             g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
             if g_e == 0.0:
                 break
