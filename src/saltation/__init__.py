@@ -13,7 +13,6 @@ from .errors import (
 )
 from .integrate import EventKind, Flow, Status, SwitchingEvent, Tolerances, Trajectory, simulate
 from .model import Crossing, Mode, PiecewiseSystem, Transition
-from .sweep import SweepResult, sweep
 
 __version__ = "0.1.0"
 
@@ -21,5 +20,5 @@ __all__ = [
     "ChatteringError", "ConvergenceError", "Crossing", "EventKind", "Flow", "InitialModeError",
     "IntegrationError", "Mode", "ModelError", "NonFiniteError", "PiecewiseSystem", "SaltationError",
     "SlidingError", "Status", "StepSizeError", "SwitchingEvent", "Tolerances", "Trajectory",
-    "SweepResult", "Transition", "simulate", "sweep",
+    "Transition", "simulate",
 ]
