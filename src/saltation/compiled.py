@@ -38,7 +38,7 @@ from types import ModuleType
 import numpy as np
 
 from .errors import InitialModeError, ModelError
-from .model import Crossing, Transition
+from .model import Crossing, NamedParts, Transition
 
 REQUIRED = ("vector_field", "vector_field_jac", "indicator", "indicator_grad")
 OPTIONAL = (
@@ -82,7 +82,7 @@ def lie_derivative_dt(mode, surface, t, x, p):
 '''
 
 
-class CompiledSystem:
+class CompiledSystem(NamedParts):
     """A piecewise-smooth system given by numba-compiled callables.
 
     Parameters
@@ -153,51 +153,12 @@ class CompiledSystem:
 
     # -- the interface Flow and the problems use -----------------------------------------
     @property
-    def n(self) -> int:
-        return len(self.state_names)
-
-    @property
-    def n_params(self) -> int:
-        return len(self.parameter_names)
-
-    @property
     def is_autonomous(self) -> bool:
         return self._period is None
 
     @property
     def period_expr(self) -> str | None:
         return None if self._period is None else "period(p)"
-
-    def mode_index(self, name: str | int) -> int:
-        if isinstance(name, (int, np.integer)):
-            if not 0 <= int(name) < len(self.mode_names):
-                raise ModelError(f"mode index {name} out of range 0..{len(self.mode_names) - 1}")
-            return int(name)
-        try:
-            return self.mode_names.index(name)
-        except ValueError:
-            raise ModelError(f"unknown mode {name!r}; modes are {list(self.mode_names)}") from None
-
-    def surface_index(self, name: str) -> int:
-        try:
-            return self.surface_names.index(name)
-        except ValueError:
-            raise ModelError(f"unknown surface {name!r}; surfaces are {list(self.surface_names)}") from None
-
-    def parameter_index(self, name: str) -> int:
-        try:
-            return self.parameter_names.index(name)
-        except ValueError:
-            raise ModelError(f"unknown parameter {name!r}; parameters are {list(self.parameter_names)}") from None
-
-    def parameter_vector(self, overrides: Mapping[str, float] | None = None) -> np.ndarray:
-        values = dict(self.defaults)
-        for key, val in (overrides or {}).items():
-            self.parameter_index(key)
-            if not math.isfinite(float(val)):
-                raise ModelError(f"parameter {key!r} must be finite, got {val}")
-            values[key] = float(val)
-        return np.array([values[k] for k in self.parameter_names], dtype=float)
 
     def forcing_period(self, p: np.ndarray) -> float:
         if self._period is None:

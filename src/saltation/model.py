@@ -150,7 +150,71 @@ class _SurfaceDerivatives:
     h_p: sp.Matrix
 
 
-class PiecewiseSystem:
+class NamedParts:
+    """Lookups shared by every kind of model: sizes, and indices of modes, surfaces and parameters.
+
+    Needs the attributes ``state_names``, ``parameter_names``, ``mode_names``,
+    ``surface_names`` and ``defaults``.
+    """
+
+    @property
+    def n(self) -> int:
+        """Number of states."""
+        return len(self.state_names)
+
+    @property
+    def n_params(self) -> int:
+        return len(self.parameter_names)
+
+    def mode_index(self, name: str | int) -> int:
+        if isinstance(name, (int, np.integer)):
+            if not 0 <= int(name) < len(self.mode_names):
+                raise ModelError(f"mode index {name} out of range 0..{len(self.mode_names) - 1}")
+            return int(name)
+        try:
+            return self.mode_names.index(name)
+        except ValueError:
+            raise ModelError(f"unknown mode {name!r}; modes are {list(self.mode_names)}") from None
+
+    def surface_index(self, name: str) -> int:
+        try:
+            return self.surface_names.index(name)
+        except ValueError:
+            raise ModelError(f"unknown surface {name!r}; surfaces are {list(self.surface_names)}") from None
+
+    def parameter_index(self, name: str) -> int:
+        try:
+            return self.parameter_names.index(name)
+        except ValueError:
+            raise ModelError(f"unknown parameter {name!r}; parameters are {list(self.parameter_names)}") from None
+
+    def parameter_vector(self, overrides: Mapping[str, float] | None = None) -> np.ndarray:
+        """Parameter values as an array, defaults replaced by ``overrides``.
+
+        Raises
+        ------
+        ModelError
+            If an override names an unknown parameter or is not finite.
+        """
+        values = dict(self.defaults)
+        for key, val in (overrides or {}).items():
+            self.parameter_index(key)
+            val = float(val)
+            if not math.isfinite(val):
+                raise ModelError(f"parameter {key!r} must be finite, got {val}")
+            values[key] = val
+        return np.array([values[k] for k in self.parameter_names], dtype=float)
+
+    @cached_property
+    def _period_functions(self):
+        args = list(self.p)
+        period = sp.lambdify(args, self.period_expr, modules="math")
+        derivatives = [sp.lambdify(args, sp.diff(self.period_expr, q), modules="math") for q in self.p]
+        return period, derivatives
+
+
+
+class PiecewiseSystem(NamedParts):
     """A piecewise-smooth (discontinuous) dynamical system.
 
     Parameters
@@ -277,63 +341,8 @@ class PiecewiseSystem:
 
     # -- sizes and lookups ------------------------------------------------------------------
     @property
-    def n(self) -> int:
-        """Number of states."""
-        return len(self.state_names)
-
-    @property
-    def n_params(self) -> int:
-        return len(self.parameter_names)
-
-    @property
     def is_autonomous(self) -> bool:
         return self.period_expr is None
-
-    def mode_index(self, name: str | int) -> int:
-        if isinstance(name, (int, np.integer)):
-            if not 0 <= int(name) < len(self.mode_names):
-                raise ModelError(f"mode index {name} out of range 0..{len(self.mode_names) - 1}")
-            return int(name)
-        try:
-            return self.mode_names.index(name)
-        except ValueError:
-            raise ModelError(f"unknown mode {name!r}; modes are {list(self.mode_names)}") from None
-
-    def surface_index(self, name: str) -> int:
-        try:
-            return self.surface_names.index(name)
-        except ValueError:
-            raise ModelError(f"unknown surface {name!r}; surfaces are {list(self.surface_names)}") from None
-
-    def parameter_index(self, name: str) -> int:
-        try:
-            return self.parameter_names.index(name)
-        except ValueError:
-            raise ModelError(f"unknown parameter {name!r}; parameters are {list(self.parameter_names)}") from None
-
-    def parameter_vector(self, overrides: Mapping[str, float] | None = None) -> np.ndarray:
-        """Parameter values as an array, defaults replaced by ``overrides``.
-
-        Raises
-        ------
-        ModelError
-            If an override names an unknown parameter or is not finite.
-        """
-        values = dict(self.defaults)
-        for key, val in (overrides or {}).items():
-            self.parameter_index(key)
-            val = float(val)
-            if not math.isfinite(val):
-                raise ModelError(f"parameter {key!r} must be finite, got {val}")
-            values[key] = val
-        return np.array([values[k] for k in self.parameter_names], dtype=float)
-
-    @cached_property
-    def _period_functions(self):
-        args = list(self.p)
-        period = sp.lambdify(args, self.period_expr, modules="math")
-        derivatives = [sp.lambdify(args, sp.diff(self.period_expr, q), modules="math") for q in self.p]
-        return period, derivatives
 
     def forcing_period(self, p: np.ndarray) -> float:
         """The forcing period for parameter values ``p`` (forced systems only)."""
