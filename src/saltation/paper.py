@@ -191,8 +191,8 @@ def write(results: PaperResults, out: Path) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     tri = results.trilinear_branch
-    written += plotting.save_figure(plotting.plot_response([tri]), out / "fig3_trilinear_response")
-    written += plotting.save_figure(plotting.plot_multipliers(tri), out / "fig4_trilinear_multipliers")
+    written += plotting.save_figure(plotting.plot_response([tri]), out / "fig3_trilinear_response", dpi=150)
+    written += plotting.save_figure(plotting.plot_multipliers(tri), out / "fig4_trilinear_multipliers", dpi=150)
     pp = results.phase_plane
     curves = [
         plotting.PhaseCurve(pp["stable"], label="stable limit cycle", style=plotting.CurveStyle.STABLE),
@@ -201,8 +201,8 @@ def write(results: PaperResults, out: Path) -> list[Path]:
     fig6 = plotting.plot_phase_plane(
         curves, equilibrium=pp["equilibrium"], stick_band=(float(pp["v_dr"]), 0.05), band_label="stick band D (eta enlarged)"
     )
-    written += plotting.save_figure(fig6, out / "fig6_block_on_belt_phase_plane")
-    written += plotting.save_figure(plotting.plot_response(results.block_on_belt.branches), out / "fig7_block_on_belt_diagram")
+    written += plotting.save_figure(fig6, out / "fig6_block_on_belt_phase_plane", dpi=150)
+    written += plotting.save_figure(plotting.plot_response(results.block_on_belt.branches), out / "fig7_block_on_belt_diagram", dpi=150)
 
     written.append(io.save_branch_json(tri, out / "trilinear_branch.json"))
     written.append(io.save_branch_csv(tri, out / "trilinear_branch.csv"))
