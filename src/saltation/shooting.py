@@ -373,8 +373,7 @@ class ShootingProblem:
 
 
 def _sliding_velocity(flow: Flow, traj: Trajectory, p: np.ndarray) -> np.ndarray:
-    """Velocity at the end of a trajectory that ends on a sliding motion (finite differences free)."""
-    # re-run a tiny bit further would change the event log; the sliding field is evaluated directly instead
+    """Velocity at the end of a trajectory that ends on a sliding motion: Filippov's sliding field there."""
     sys_ = flow.system
     ev = [e for e in traj.events if e.kind == 1][-1]
     a, b = sys_.mode_index(ev.mode_from), sys_.mode_index(ev.mode_to)
