@@ -224,3 +224,22 @@ def test_bad_continuation_input(tri_flow):
     problem = ShootingProblem(tri_flow, {"omega": 0.6}, continuation_parameter="omega")
     with pytest.raises(SaltationError, match="outside the bounds"):
         list(Continuation(problem, ContinuationSettings(bounds=(0.8, 1.0))).run(np.zeros(2), 0.6))
+
+
+def test_neimark_sacker_of_the_linear_response(tri_flow):
+    """Without contact the multipliers are eig(expm(A T)), |mu| = exp(-c T / 2m): a complex pair leaves
+    the unit circle exactly at c = 0 (a Neimark-Sacker point of the forced linear oscillator)."""
+    w, f0 = 0.7, 0.01  # amplitude ~0.02, far from the supports
+    problem = ShootingProblem(tri_flow, {"omega": w, "f0": f0, "c": 0.05}, continuation_parameter="c")
+    x0 = linear_response_state(dict(TRI) | {"omega": w, "f0": f0, "c": 0.05})
+    settings = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(-0.05, 0.05))
+    branch = continue_branch(problem, x0, 0.05, settings=settings, directions=(-1,))
+    ns = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.NEIMARK_SACKER]
+    assert len(ns) == 1
+    assert ns[0].parameter == pytest.approx(0.0, abs=1e-9)
+    assert np.allclose(np.abs(ns[0].multipliers), 1.0, atol=1e-8)
+    for p in branch.points:
+        A = np.array([[0.0, 1.0], [-K / M, -p.parameter / M]])
+        mu = np.linalg.eigvals(expm(A * 2 * np.pi / w))
+        assert np.allclose(np.sort_complex(p.multipliers), np.sort_complex(mu), atol=1e-8)
+        assert p.stable == (p.parameter > 0)
