@@ -55,8 +55,8 @@ class PaperSettings:
 
     omega_range: tuple[float, float] = (0.6, 1.6)
     v_dr_range: tuple[float, float] = (0.2, 1.4)
-    ds: float = 0.01
-    ds_max: float = 0.01
+    ds: float = 0.015
+    ds_max: float = 0.015
     phase_plane_v_dr: float = 1.0
 
 
