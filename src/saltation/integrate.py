@@ -162,15 +162,22 @@ class Trajectory:
 
         At an event time the state before the event is returned.
         """
-        t_old, h, s_end, y0, F = self.dense_steps
+        _, _, _, y0, F = self.dense_steps
         times = np.asarray(times, dtype=float).reshape(-1)
-        if t_old.size == 0:
+        if y0.shape[0] == 0:
             return np.repeat(self.x1[None, :], len(times), axis=0)
-        forward = h[0] > 0
+        k, s = self.locate(times)
+        return dense_evaluate(F[k], y0[k], s)
+
+    def locate(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For each time, the index of the recorded step that covers it and the fraction within it."""
+        t_old, h, s_end, _, _ = self.dense_steps
+        times = np.asarray(times, dtype=float)
+        forward = h[0] > 0 if h.size else True
         key, starts = (times, t_old) if forward else (-times, -t_old)
         k = np.clip(np.searchsorted(starts, key, side="right") - 1, 0, len(t_old) - 1)
         s = np.clip((times - t_old[k]) / h[k], 0.0, s_end[k])
-        return dense_evaluate(F[k], y0[k], s)
+        return k, s
 
     def sample(self, num_per_step: int = 8) -> tuple[np.ndarray, np.ndarray]:
         """Dense states along the trajectory.
@@ -185,9 +192,7 @@ class Trajectory:
         ValueError
             If the trajectory was computed without ``dense=True``.
         """
-        if self._steps is None:
-            raise ValueError("this trajectory was computed without dense=True")
-        t_old, h, s_end, y0, F = self._steps
+        t_old, h, s_end, y0, F = self.dense_steps
         ts = []
         xs = []
         s = np.linspace(0.0, 1.0, num_per_step + 1)

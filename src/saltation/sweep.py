@@ -398,16 +398,6 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
 
 
 # -- reading the dense output --------------------------------------------------------------------
-def _locate(t_old: np.ndarray, h: np.ndarray, s_end: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """For each time, the index of the recorded step that covers it and the fraction within the step."""
-    forward = h[0] > 0 if h.size else True
-    starts = t_old if forward else -t_old
-    key = times if forward else -times
-    k = np.clip(np.searchsorted(starts, key, side="right") - 1, 0, len(t_old) - 1)
-    s = np.clip((times - t_old[k]) / h[k], 0.0, s_end[k])
-    return k, s
-
-
 def _maxima(traj: Trajectory) -> np.ndarray:
     """States at the local maxima of ``x_1`` along a dense trajectory, refined on the dense output."""
     t_old, h, s_end, y0, F = traj.dense_steps
@@ -428,8 +418,7 @@ def _maxima(traj: Trajectory) -> np.ndarray:
     a, b = times[interior - 1].copy(), times[interior + 1].copy()
 
     def x1_at(t):
-        k, s = _locate(t_old, h, s_end, t)
-        return dense_evaluate(F[k], y0[k], s)[:, 0]
+        return traj.at(t)[:, 0]
 
     c = b - _GOLDEN * (b - a)
     d = a + _GOLDEN * (b - a)
@@ -451,6 +440,4 @@ def _maxima(traj: Trajectory) -> np.ndarray:
         if need_d.any():
             fd_next[need_d] = x1_at(d_next[need_d])
         c, d, fc, fd = c_next, d_next, fc_next, fd_next
-    t_max = 0.5 * (a + b)
-    k, s = _locate(t_old, h, s_end, t_max)
-    return dense_evaluate(F[k], y0[k], s)
+    return traj.at(0.5 * (a + b))
