@@ -55,8 +55,8 @@ def _harmonic_event_times(R=1.0, w=W, a=A, periods=PERIODS):
 
 @pytest.mark.parametrize(
     "tolerances, bound",
-    [(TIGHT, 1e-12), (Tolerances(), 1e-9)],
-    ids=["rtol=1e-13", "default"],
+    [(TIGHT, 1e-12), (Tolerances(), 1e-12), (Tolerances(exact_affine=False), 1e-9)],
+    ids=["rtol=1e-13", "default", "default-general-path"],
 )
 def test_harmonic_crossing_times(oscillator_flow, tolerances, bound):
     p = _params(oscillator_flow, w=W, a=A, g=0.0)

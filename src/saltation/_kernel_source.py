@@ -122,6 +122,18 @@ def _aug_rhs(mode, slide, t, y, p, n, var, pidx, dy, W, WJ, WP, wv):
 
 
 @njit(cache=True)
+def _aug_rhs_called(mode, slide, t, y, p, n, var, pidx, dy, W, WJ, WP, wv):
+    """:func:`_aug_rhs` as a call, for the places outside the stepper (inlining there only costs compile time)."""
+    _aug_rhs(mode, slide, t, y, p, n, var, pidx, dy, W, WJ, WP, wv)
+
+
+@njit(cache=True)
+def _field_called(mode, slide, t, x, p, f, WJ, WP, wv, W):
+    """The field (no derivatives) of a mode or sliding motion, as a call."""
+    _field(mode, slide, t, x, p, False, -1, f, WJ[0], wv[1], wv[2], wv[3], wv[4], WJ[1], WJ[2], WP, wv[5], wv[6], W[0], W[1])
+
+
+@njit(cache=True)
 def _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err):
     """One DOP853 step from ``(t, y)`` with ``K[0] = f(t, y)`` given; returns the error norm.
 
@@ -182,6 +194,221 @@ def _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP,
             for j in range(16):
                 acc += RK_D[r, j] * K[j, i]  # noqa: F821
             F[3 + r, i] = h * acc
+
+
+MAX_TAYLOR = 60  # terms of the exact flow's series; more means the step is too long
+
+
+def _dense_basis(s):
+    """DOP853's dense-output basis ``s^a (1 - s)^b``, ``a = j // 2 + 1``, ``b = (j + 1) // 2`` (see ``_dense_eval``)."""
+    s = np.asarray(s, dtype=float)
+    return np.stack([s ** (j // 2 + 1) * (1.0 - s) ** ((j + 1) // 2) for j in range(7)], axis=-1)
+
+
+def _lobatto_interpolation():
+    """Nodes of the exact steps' dense output and the bound of its error on each Taylor term.
+
+    The dense output of an exact step interpolates the step's Taylor
+    polynomial at the eight Chebyshev-Lobatto points of [0, 1] (near-minimax);
+    ``bound[k]`` is the largest error of that interpolation of ``s^k``.
+    """
+    nodes = 0.5 * (1.0 - np.cos(np.pi * np.arange(8) / 7.0))
+    to_dense = np.linalg.inv(_dense_basis(nodes[1:]))
+    grid = np.linspace(0.0, 1.0, 2001)
+    basis = _dense_basis(grid)
+    bound = np.zeros(MAX_TAYLOR + 1)
+    for k in range(8, MAX_TAYLOR + 1):
+        bound[k] = np.max(np.abs(basis @ (to_dense @ nodes[1:] ** k) - grid**k))
+    return nodes, to_dense, bound
+
+
+LOBATTO_NODES, LOBATTO_TO_DENSE, LOBATTO_BOUND = _lobatto_interpolation()
+
+
+@njit(cache=True)
+def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TZ, TP, TC):
+    """One step of the exact flow of an affine mode; returns the dense output's error norm.
+
+    The mode's field is ``A x + B z`` with ``z = (1, cos theta, sin theta)``,
+    ``theta = omega t + phase``; ``(x, z)``, the fundamental solution matrix and
+    the sensitivity ``(psi, dz/dp)`` obey a linear system with constant
+    coefficients, whose Taylor series is summed here until its terms fall below
+    rounding: the step is exact for any ``h``.  The scaled Taylor coefficients of
+    ``x`` go to the rows of ``TC`` (row 0 is ``x``; their number goes to the last
+    row, see :func:`_exact_dense`), ``K[12]`` receives ``f(t + h, x(t + h))``.  The error
+    returned bounds the error of the dense output (a degree-7 interpolant of the
+    series) against the tolerances, and rejects steps long enough for the series
+    to lose digits.
+    """
+    A = AFF_A[mode]
+    B = AFF_B[mode]
+    om = AFF_W[mode, 0]
+    sens = var  # the sensitivity is carried whenever Phi is (its forcing terms are zero when pidx < 0)
+    Ap = AFF_AP[mode]
+    Bp = AFF_BP[mode]
+    omp = AFF_W[mode, 2]
+    mnorm = abs(om)
+    bmax = 0.0
+    for i in range(n):
+        row = 0.0
+        for j in range(n):
+            row += abs(A[i, j])
+        for j in range(3):
+            row += abs(B[i, j])
+            bmax = max(bmax, abs(B[i, j]))
+        mnorm = max(mnorm, row)
+    if mnorm * abs(h) > 4.0:
+        return (mnorm * abs(h) / 2.0) ** 8
+    xs = TW[0]
+    xt = TW[1]
+    xn = TW[2]
+    ss = TW[3]
+    st = TW[4]
+    sn = TW[5]
+    tail = TW[6]
+    z = TZ[0]
+    zn = TZ[1]
+    ze = TZ[2]
+    zen = TZ[3]
+    Ps = TP[0]
+    Pt = TP[1]
+    theta = om * t + AFF_W[mode, 1]
+    z[0] = 1.0
+    z[1] = math.cos(theta)
+    z[2] = math.sin(theta)
+    if sens:
+        thp = omp * t + AFF_W[mode, 3]
+        ze[0] = 0.0
+        ze[1] = -thp * z[2]
+        ze[2] = thp * z[1]
+    for i in range(n):
+        xs[i] = y[i]
+        xt[i] = y[i]
+        TC[0, i] = y[i]
+        tail[i] = 0.0
+        if sens:
+            ss[i] = y[n + n * n + i]
+            st[i] = ss[i]
+        if var:
+            for j in range(n):
+                Ps[i, j] = y[n + i * n + j]
+                Pt[i, j] = Ps[i, j]
+    small = 0
+    converged = False
+    n_terms = 0
+    for k in range(1, MAX_TAYLOR + 1):
+        c = h / k
+        tnorm = 0.0
+        snorm = 0.0
+        for i in range(n):
+            acc = B[i, 0] * z[0] + B[i, 1] * z[1] + B[i, 2] * z[2]
+            for j in range(n):
+                acc += A[i, j] * xt[j]
+            xn[i] = c * acc
+            if sens:
+                acc = 0.0
+                for j in range(n):
+                    acc += A[i, j] * st[j] + Ap[i, j] * xt[j]
+                for j in range(3):
+                    acc += B[i, j] * ze[j] + Bp[i, j] * z[j]
+                sn[i] = c * acc
+        if sens:
+            zen[0] = 0.0
+            zen[1] = c * (-om * ze[2] - omp * z[2])
+            zen[2] = c * (om * ze[1] + omp * z[1])
+            for j in range(3):
+                ze[j] = zen[j]
+        zn[0] = 0.0
+        zn[1] = -c * om * z[2]
+        zn[2] = c * om * z[1]
+        for j in range(3):
+            z[j] = zn[j]
+            tnorm = max(tnorm, bmax * abs(z[j]))
+        for i in range(n):
+            xt[i] = xn[i]
+            xs[i] += xt[i]
+            tnorm = max(tnorm, abs(xt[i]))
+            snorm = max(snorm, abs(xs[i]))
+            TC[k, i] = xt[i]
+            tail[i] += LOBATTO_BOUND[k] * abs(xt[i])
+            if sens:
+                st[i] = sn[i]
+                ss[i] += st[i]
+                tnorm = max(tnorm, abs(st[i]), abs(ze[0]), abs(ze[1]), abs(ze[2]))
+                snorm = max(snorm, abs(ss[i]))
+        if var:
+            for i in range(n):
+                for j in range(n):
+                    acc = 0.0
+                    for l in range(n):
+                        acc += A[i, l] * Pt[l, j]
+                    TP[2, i, j] = c * acc
+            for i in range(n):
+                for j in range(n):
+                    Pt[i, j] = TP[2, i, j]
+                    Ps[i, j] += Pt[i, j]
+                    tnorm = max(tnorm, abs(Pt[i, j]))
+                    snorm = max(snorm, abs(Ps[i, j]))
+        small = small + 1 if tnorm <= 1e-17 * snorm else 0
+        if k >= 8 and small >= 2:
+            converged = True
+            n_terms = k + 1
+            break
+    if not converged:
+        return np.inf
+    theta1 = om * (t + h) + AFF_W[mode, 1]
+    c1 = math.cos(theta1)
+    s1 = math.sin(theta1)
+    err = 0.0
+    for i in range(n):
+        ynew[i] = xs[i]
+        if var:
+            for j in range(n):
+                ynew[n + i * n + j] = Ps[i, j]
+            ynew[n + n * n + i] = ss[i] if sens else 0.0
+    for i in range(n):
+        acc = B[i, 0] + B[i, 1] * c1 + B[i, 2] * s1
+        for j in range(n):
+            acc += A[i, j] * xs[j]
+        K[12, i] = acc
+        sc = atol + rtol * max(abs(y[i]), abs(xs[i]))
+        err += (tail[i] / sc) ** 2
+    TC[MAX_TAYLOR + 1, 0] = n_terms
+    return math.sqrt(err / n)
+
+
+@njit(cache=True)
+def _exact_dense(y, ynew, n, TC, F):
+    """Dense output of an exact step: its Taylor series interpolated at the Chebyshev-Lobatto points."""
+    n_terms = int(TC[MAX_TAYLOR + 1, 0])
+    for i in range(n):
+        for r in range(7):
+            F[r, i] = LOBATTO_TO_DENSE[r, 6] * (ynew[i] - y[i])
+        for j in range(1, 7):
+            sj = LOBATTO_NODES[j]
+            v = 0.0
+            for k in range(n_terms - 1, 0, -1):
+                v = (v + TC[k, i]) * sj
+            for r in range(7):
+                F[r, i] += LOBATTO_TO_DENSE[r, j - 1] * v
+
+
+@njit(cache=True)
+def _step(exact, mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+          AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC):
+    """A step of the exact flow (affine mode, not sliding) or of DOP853; returns the error norm."""
+    if exact:
+        return _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TZ, TP, TC)
+    return _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
+
+
+@njit(cache=True)
+def _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC):
+    """Dense-output coefficients of the step just taken (by :func:`_step`)."""
+    if exact:
+        _exact_dense(y, ynew, n, TC, F)
+    else:
+        _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv)
 
 
 @njit(cache=True)
@@ -385,7 +612,7 @@ def _track_extrema(F, y, s_end, n, xmin, xmax, f0, f1, xtmp):
 @njit(cache=True)
 def integrate_kernel(
     t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step, max_events, max_steps,
-    tr_table, n_surfaces, record, phi0, psi0, control_variational,
+    tr_table, n_surfaces, record, phi0, psi0, control_variational, exact_affine,
 ):
     """Integrate from ``t0`` to ``t_end`` (either direction), event by event.
 
@@ -425,6 +652,31 @@ def integrate_kernel(
     wvec = np.zeros(n)
     Phi_tmp = np.zeros((n, n))
     psi_tmp = np.zeros(n)
+
+    # exact flows of affine modes: A, B, (omega, phase, d omega/dp, d phase/dp), dA/dp, dB/dp
+    n_modes = AFFINE_MODES.shape[0]  # noqa: F821
+    AFF_A = np.zeros((n_modes, n, n))
+    AFF_B = np.zeros((n_modes, n, 3))
+    AFF_W = np.zeros((n_modes, 4))
+    AFF_AP = np.zeros((n_modes, n, n))
+    AFF_BP = np.zeros((n_modes, n, 3))
+    TW = np.zeros((7, n))
+    TZ = np.zeros((4, 3))
+    TP = np.zeros((3, n, n))
+    TC = np.zeros((MAX_TAYLOR + 2, n))  # Taylor coefficients of x; the last row holds their number
+    if exact_affine:
+        Ap_all = np.zeros((max(npar, 1), n, n))
+        Bp_all = np.zeros((max(npar, 1), n, 3))
+        wp_all = np.zeros((max(npar, 1), 2))
+        for m in range(n_modes):
+            if AFFINE_MODES[m]:  # noqa: F821
+                affine_parts(m, p, AFF_A[m], AFF_B[m], AFF_W[m, :2])  # noqa: F821
+                if var and pidx >= 0:
+                    affine_parts_dp(m, p, Ap_all, Bp_all, wp_all)  # noqa: F821
+                    AFF_AP[m] = Ap_all[pidx]
+                    AFF_BP[m] = Bp_all[pidx]
+                    AFF_W[m, 2] = wp_all[pidx, 0]
+                    AFF_W[m, 3] = wp_all[pidx, 1]
 
     for i in range(n):
         y[i] = x0[i]
@@ -476,7 +728,7 @@ def integrate_kernel(
     surf_new = np.zeros(n_surfaces)
     slope_new = np.zeros(n_surfaces)
 
-    _aug_rhs(mode, slide, t, y, p, n, var, pidx, K[0], W, WJ, WP, wv)
+    _aug_rhs_called(mode, slide, t, y, p, n, var, pidx, K[0], W, WJ, WP, wv)
     for i in range(n):
         if not math.isfinite(K[0, i]) or not math.isfinite(y[i]):
             status = STATUS_NON_FINITE
@@ -538,10 +790,12 @@ def integrate_kernel(
         habs = min(habs, max_step)
         if habs >= remaining or remaining - habs < 1e-12 * remaining:
             habs = remaining
+        exact = exact_affine and slide[0] == 0 and AFFINE_MODES[mode]  # noqa: F821
         # attempt a step
         while True:
             h = direction * habs
-            err = _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
+            err = _step(exact, mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+                        AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC)
             finite = math.isfinite(err)
             if finite and err <= 1.0:
                 break
@@ -595,14 +849,14 @@ def integrate_kernel(
                     sb = 1.0
                 elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
                     if not have_dense:
-                        _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv)
+                        _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
                         have_dense = True
                     smin, vmin = _dip_search(0, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp)
                     if vmin <= 0.0:
                         sb = smin
                 if sb <= 1.0:
                     if not have_dense:
-                        _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv)
+                        _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
                         have_dense = True
                     gb = _dense_event(0, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
                     if gb > 0.0:
@@ -630,7 +884,7 @@ def integrate_kernel(
                 v1 = _event_value(kind, 0, slide, t_new, ynew[:n], p, gtmp, gptmp)
                 if v1 <= 0.0:
                     if not have_dense:
-                        _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv)
+                        _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
                         have_dense = True
                     sr = _bracket_root(kind, 0, slide, 1.0, t, h, F, y, 0.0, 1.0, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
                     if sr < best_s:
@@ -643,7 +897,7 @@ def integrate_kernel(
             # ----------------------------------------------------------- accept whole step
             if record or _needs_extrema(K, n):
                 if not have_dense:
-                    _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv)
+                    _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
                     have_dense = True
                 _track_extrema(F, y, 1.0, n, xmin, xmax, K[0], K[12], xtmp)
             for i in range(n):
@@ -671,7 +925,8 @@ def integrate_kernel(
         # --------------------------------------------------------------- an event
         # the shortened step that ends at the event must pass the error test too: a step can
         # straddle a thin layer (e.g. where a sliding motion ends) that its own estimate missed
-        err_e = _rk_step(mode, slide, t, y, best_s * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
+        err_e = _step(exact, mode, slide, t, y, best_s * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+                      AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC)
         if err_e > 1.0 and best_s * habs > 100.0 * EPS * max(1.0, abs(t)):
             n_rejected += 1
             habs = best_s * habs * max(0.2, 0.9 * err_e ** (-1.0 / 8.0))
@@ -696,7 +951,8 @@ def integrate_kernel(
                 for i in range(N):
                     K[0, i] = Ksave[0, i]
                 if s_e > 0.0:
-                    _rk_step(mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
+                    _step(exact, mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+                          AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC)
                 else:
                     for i in range(N):
                         ynew[i] = ysave[i]
@@ -728,7 +984,8 @@ def integrate_kernel(
             bump *= 2.0
             for i in range(N):
                 K[0, i] = Ksave[0, i]
-            _rk_step(mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
+            _step(exact, mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+                          AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC)
             g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
         t_e = t + s_e * h
         # state at the event (before it)
@@ -804,7 +1061,7 @@ def integrate_kernel(
         else:
             # leaving a sliding motion where side a (kind 1) or side b (kind 2) turns tangent
             exit_mode = slide[1] if best_kind == 1 else slide[2]
-            _field(mode, slide, t_e, x_e, p, False, -1, fa, WJ[0], wv[1], wv[2], wv[3], wv[4], WJ[1], WJ[2], WP, wv[5], wv[6], W[0], W[1])
+            _field_called(mode, slide, t_e, x_e, p, fa, WJ, WP, wv, W)
             sgl = 1.0 if best_kind == 1 else -1.0
             sgl = sgl * slide[4]
             lie_derivative(exit_mode, slide[3], t_e, x_e, p, hx, hp)  # noqa: F821
@@ -897,7 +1154,7 @@ def integrate_kernel(
         t = t_e
         if abs(t_end - t) <= 4.0 * EPS * max(1.0, abs(t)):
             t = t_end
-        _aug_rhs(mode, slide, t, y, p, n, var, pidx, K[0], W, WJ, WP, wv)
+        _aug_rhs_called(mode, slide, t, y, p, n, var, pidx, K[0], W, WJ, WP, wv)
         for i in range(n):
             if not math.isfinite(K[0, i]):
                 status = STATUS_NON_FINITE
@@ -905,20 +1162,33 @@ def integrate_kernel(
         habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
         need_signs = True
 
-    Phi = np.zeros((n, n))
-    psi = np.zeros(n)
+    # packed results (each returned array costs a conversion): see saltation.integrate._unpack
+    out = np.zeros(1 + 4 * n + n * n)
+    out[0] = t
+    for i in range(n):
+        out[1 + i] = y[i]
+        out[1 + n + n * n + n + i] = xmin[i]
+        out[1 + n + n * n + 2 * n + i] = xmax[i]
     if var:
+        for i in range(n * n + n):
+            out[1 + n + i] = y[n + i]
+    ev = np.zeros((n_ev, 1 + 2 * n + n * n))
+    for k in range(n_ev):
+        ev[k, 0] = ev_t[k]
         for i in range(n):
+            ev[k, 1 + i] = ev_xm[k, i]
+            ev[k, 1 + n + i] = ev_xp[k, i]
             for j in range(n):
-                Phi[i, j] = y[n + i * n + j]
-            psi[i] = y[n + n * n + i]
+                ev[k, 1 + 2 * n + i * n + j] = ev_S[k, i, j]
+    rec = np.zeros((n_rec, 3 + n))
+    for k in range(n_rec):
+        rec[k, 0] = rec_t[k]
+        rec[k, 1] = rec_h[k]
+        rec[k, 2] = rec_send[k]
+        for i in range(n):
+            rec[k, 3 + i] = rec_y[k, i]
     info = np.array([status, info_mode, info_surface, n_ev, n_steps, n_rejected, mode, slide[0], slide[1], slide[2], slide[3], slide[4]])
-    return (
-        info, t, y[:n].copy(), Phi, psi,
-        ev_t[:n_ev].copy(), ev_int[:n_ev].copy(), ev_xm[:n_ev].copy(), ev_xp[:n_ev].copy(), ev_S[:n_ev].copy(),
-        xmin, xmax,
-        rec_t[:n_rec].copy(), rec_h[:n_rec].copy(), rec_send[:n_rec].copy(), rec_y[:n_rec].copy(), rec_F[:n_rec].copy(),
-    )
+    return info, out, ev_int[:n_ev].copy(), ev, rec, rec_F[:n_rec].copy()
 
 
 @njit(cache=True)

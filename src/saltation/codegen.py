@@ -28,6 +28,7 @@ import sympy as sp
 from scipy.integrate._ivp import dop853_coefficients as dop853
 from sympy.printing.pycode import PythonCodePrinter
 
+from .affine import affine_form
 from .model import TIME, PiecewiseSystem
 
 _TEMPLATE = Path(__file__).with_name("_kernel_source.py")
@@ -99,12 +100,13 @@ def _dispatch(name: str, args: str, index: str, cases: list[tuple[int, list[str]
     return lines
 
 
-def _matrix_assignments(target: str, M: sp.Matrix) -> list[_Assignment]:
+def _matrix_assignments(target: str, M: sp.Matrix, lead: str = "") -> list[_Assignment]:
+    """``target[lead i, j] = M[i, j]`` for the nonzero entries (``lead`` indexes a stack of matrices)."""
     out = []
     for i in range(M.rows):
         for j in range(M.cols):
             if M[i, j] != 0:
-                out.append(_Assignment(f"{target}[{i}, {j}]", M[i, j]))
+                out.append(_Assignment(f"{target}[{lead}{i}, {j}]", M[i, j]))
     return out
 
 
@@ -200,6 +202,8 @@ def generate_source(system: PiecewiseSystem) -> str:
     src += _dispatch("reset_map", "k, t, x, p, out", "k", reset_cases, "None")
     src += _dispatch("reset_jac", "k, t, x, p, gx, gt, gp", "k", rjac_cases, "None")
 
+    src += _affine_source(system, em, ind)
+
     # guards of transitions, domains of modes (the initial-mode rule)
     src += _dispatch("guard", "k, t, x, p", "k", _condition_cases(em, system.guards, ind), "True")
     src += _dispatch("in_domain", "mode, t, x, p", "mode", _condition_cases(em, system.domains, ind), "True")
@@ -212,6 +216,30 @@ def generate_source(system: PiecewiseSystem) -> str:
         "    return -1",
     ]
     return "\n".join(src) + "\n"
+
+
+def _affine_source(system: PiecewiseSystem, em: _Emitter, ind: str) -> list[str]:
+    """``AFFINE_MODES`` and the parts ``A, B, (omega, phase)`` of affine modes with their parameter derivatives."""
+    forms = [affine_form(f, system.x, TIME) for f in system.fields]
+    src = [f"AFFINE_MODES = np.array({[f is not None for f in forms]!r}, dtype=np.bool_)"]
+    cases, dp_cases = [], []
+    for m, form in enumerate(forms):
+        if form is None:
+            continue
+        assigns = _matrix_assignments("A", form.A) + _matrix_assignments("B", form.B)
+        assigns += [_Assignment(f"w[{i}]", e) for i, e in enumerate((form.omega, form.phase)) if e != 0]
+        cases.append((m, [f"{ind}A[:, :] = 0.0", f"{ind}B[:, :] = 0.0", f"{ind}w[:] = 0.0"] + em.block(assigns, ind)))
+        dp_assigns = []
+        for k, pk in enumerate(system.p):
+            dp_assigns += _matrix_assignments("Ap", form.A.diff(pk), f"{k}, ") + _matrix_assignments("Bp", form.B.diff(pk), f"{k}, ")
+            dp_assigns += [
+                _Assignment(f"wp[{k}, {i}]", sp.diff(e, pk)) for i, e in enumerate((form.omega, form.phase)) if sp.diff(e, pk) != 0
+            ]
+        zero = [f"{ind}Ap[:, :, :] = 0.0", f"{ind}Bp[:, :, :] = 0.0", f"{ind}wp[:, :] = 0.0"]
+        dp_cases.append((m, zero + em.block(dp_assigns, ind)))
+    src += _dispatch("affine_parts", "mode, p, A, B, w", "mode", cases, "None")
+    src += _dispatch("affine_parts_dp", "mode, p, Ap, Bp, wp", "mode", dp_cases, "None")
+    return src
 
 
 def _condition_cases(em: _Emitter, condition_lists, ind: str) -> list[tuple[int, list[str]]]:

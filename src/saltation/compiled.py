@@ -47,6 +47,13 @@ OPTIONAL = (
 
 _DEFAULTS = '''
 @njit
+def affine_parts(mode, p, A, B, w):
+    return
+
+@njit
+def affine_parts_dp(mode, p, Ap, Bp, wp):
+    return
+@njit
 def vector_field_dp(mode, t, x, p, out):
     out[:, :] = 0.0
 
@@ -197,6 +204,7 @@ def build_module(system: CompiledSystem, kernel_text: str, tableau: dict[str, np
     namespace = module.__dict__
     namespace.update({"np": np, "math": math, "njit": numba.njit})
     namespace.update({f"RK_{k}": v for k, v in tableau.items()})
+    namespace["AFFINE_MODES"] = np.zeros(len(system.mode_names), dtype=np.bool_)  # no exact flows: fields are opaque
     exec(compile(_DEFAULTS, f"<saltation defaults for {system.name}>", "exec"), namespace)  # noqa: S102
     namespace.update(system.functions)
     initial = (

@@ -7,8 +7,10 @@ The work happens in a compiled kernel generated per model (see
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
@@ -96,8 +98,9 @@ class Trajectory:
         Initial and final state.
     mode0, mode1 : str
         Initial and final mode.
-    events : list of SwitchingEvent
-        The event log, in the order met.
+    event_log : tuple of ndarray
+        The kernel's event log (times, integer columns, x-, x+, S); read it as
+        :attr:`events`.
     monodromy : ndarray, shape (n, n) or None
         Fundamental solution matrix ``Phi(t1, t0)`` with every saltation
         matrix applied, when ``variational=True``.
@@ -118,7 +121,7 @@ class Trajectory:
     x1: np.ndarray
     mode0: str
     mode1: str
-    events: list[SwitchingEvent]
+    event_log: tuple[np.ndarray, ...] = field(repr=False)
     monodromy: np.ndarray | None
     parameter_sensitivity: np.ndarray | None
     x_min: np.ndarray
@@ -127,6 +130,11 @@ class Trajectory:
     n_steps: int
     n_rejected: int
     _steps: tuple[np.ndarray, ...] | None = field(default=None, repr=False)
+
+    @cached_property
+    def events(self) -> list[SwitchingEvent]:
+        """The switching events, in the order met."""
+        return _switching_events(self.system, self.event_log)
 
     @property
     def event_sequence(self) -> tuple[tuple[int, int, str], ...]:
@@ -239,6 +247,11 @@ class Tolerances:
         parameter sensitivity) too, not only of the state.  Off, steps are
         chosen for the state alone, which can leave the monodromy matrix far
         less accurate than the orbit (e.g. along a sliding motion).
+    exact_affine : bool
+        In modes whose field is affine in the state with at most one harmonic
+        forcing term (:mod:`saltation.affine`), step with the exact flow
+        (its Taylor series summed to rounding error) instead of DOP853; the
+        tolerances then only govern the dense output between steps.
     """
 
     rtol: float = 1e-10
@@ -247,6 +260,7 @@ class Tolerances:
     max_events: int = 100_000
     max_steps: int = 1_000_000
     control_variational: bool = True
+    exact_affine: bool = True
 
     def __post_init__(self):
         if not (0 < self.rtol < 1 and self.atol > 0):
@@ -271,6 +285,9 @@ class Flow:
         self.tolerances = tolerances or Tolerances()
         self._kernels = load_kernels(system)
         self._table = transition_table(system)
+        self._n_surfaces = len(system.surface_names)
+        self._identity = np.eye(system.n)  # read-only inputs of the kernel
+        self._zeros = np.zeros(system.n)
 
     def parameters(self, overrides: Mapping[str, float] | np.ndarray | None = None) -> np.ndarray:
         """Parameter vector from a mapping of overrides (or an array passed through)."""
@@ -333,46 +350,43 @@ class Flow:
         """
         sys_ = self.system
         tol = tolerances or self.tolerances
-        x0 = np.asarray(x0, dtype=float).reshape(-1)
+        x0 = np.array(x0, dtype=float).reshape(-1)  # a copy: the trajectory keeps it
         if x0.shape != (sys_.n,):
             raise ModelError(f"initial state must have {sys_.n} components {list(sys_.state_names)}, got {x0.size}")
-        if not np.all(np.isfinite(x0)):
+        if not math.isfinite(x0.sum()):
             raise ModelError(f"initial state {x0.tolist()} is not finite")
         p = np.ascontiguousarray(p, dtype=float)
-        if not np.isfinite(t0) or not np.isfinite(t1):
+        t0, t1 = float(t0), float(t1)
+        if not (math.isfinite(t0) and math.isfinite(t1)):
             raise ValueError(f"integration times must be finite, got t0={t0}, t1={t1}")
         m0 = self.initial_mode(x0, p, t0) if mode0 is None else sys_.mode_index(mode0)
         if not -1 <= parameter < sys_.n_params:
             raise ModelError(f"parameter index {parameter} out of range")
-        phi = np.eye(sys_.n) if phi0 is None else np.ascontiguousarray(phi0, dtype=float)
+        phi = self._identity if phi0 is None else np.ascontiguousarray(phi0, dtype=float)
         out = self._kernels.integrate_kernel(
-            float(t0), float(t1), x0, int(m0), p, bool(variational), int(parameter),
+            t0, t1, x0, int(m0), p, bool(variational), int(parameter),
             float(tol.rtol), float(tol.atol), 0.0, float(tol.max_step), int(tol.max_events), int(tol.max_steps),
-            self._table, len(sys_.surface_names), bool(dense), phi, np.zeros(sys_.n), bool(tol.control_variational),
+            self._table, self._n_surfaces, bool(dense), phi, self._zeros, bool(tol.control_variational),
+            bool(tol.exact_affine),
         )
         return self._unpack(out, x0, float(t0), m0, variational, parameter, dense)
 
     def _unpack(self, out, x0, t0, m0, variational, parameter, dense) -> Trajectory:
         sys_ = self.system
-        info, t, x, Phi, psi, ev_t, ev_int, ev_xm, ev_xp, ev_S, xmin, xmax, rt, rh, rs, ry, rF = out
+        n = sys_.n
+        info, res, ev_int, ev, rec, rF = out
+        t = res[0]
+        x = res[1 : 1 + n]
+        Phi = res[1 + n : 1 + n + n * n].reshape(n, n)
+        psi = res[1 + n + n * n : 1 + 2 * n + n * n]
+        xmin = res[1 + 2 * n + n * n : 1 + 3 * n + n * n]
+        xmax = res[1 + 3 * n + n * n :]
+        event_log = (ev[:, 0], ev_int, ev[:, 1 : 1 + n], ev[:, 1 + n : 1 + 2 * n], ev[:, 1 + 2 * n :].reshape(-1, n, n))
+        rt, rh, rs, ry = rec[:, 0], rec[:, 1], rec[:, 2], rec[:, 3:]
         status = Status(int(info[0]))
         names = sys_.mode_names
-        events = [
-            SwitchingEvent(
-                t=float(ev_t[k]),
-                kind=EventKind(int(ev_int[k, 0])),
-                transition=int(ev_int[k, 1]),
-                surface=sys_.surface_names[int(ev_int[k, 2])],
-                mode_from=names[int(ev_int[k, 3])],
-                mode_to=names[int(ev_int[k, 4])],
-                x_minus=ev_xm[k],
-                x_plus=ev_xp[k],
-                saltation=ev_S[k],
-            )
-            for k in range(len(ev_t))
-        ]
         if status != Status.OK:
-            raise _error(status, sys_, info, float(t), x, events)
+            raise _error(status, sys_, info, float(t), x, _switching_events(sys_, event_log))
         return Trajectory(
             system=sys_,
             t0=t0,
@@ -381,7 +395,7 @@ class Flow:
             x1=x,
             mode0=names[m0],
             mode1=names[int(info[6])],
-            events=events,
+            event_log=event_log,
             monodromy=Phi if variational else None,
             parameter_sensitivity=psi if (variational and parameter >= 0) else None,
             x_min=xmin,
@@ -391,6 +405,26 @@ class Flow:
             n_rejected=int(info[5]),
             _steps=(rt, rh, rs, ry, rF) if dense else None,
         )
+
+
+def _switching_events(system: PiecewiseSystem, event_log: tuple[np.ndarray, ...]) -> list[SwitchingEvent]:
+    """The kernel's event log as :class:`SwitchingEvent` records."""
+    ev_t, ev_int, ev_xm, ev_xp, ev_S = event_log
+    names, surfaces = system.mode_names, system.surface_names
+    return [
+        SwitchingEvent(
+            t=float(ev_t[k]),
+            kind=EventKind(int(ev_int[k, 0])),
+            transition=int(ev_int[k, 1]),
+            surface=surfaces[int(ev_int[k, 2])],
+            mode_from=names[int(ev_int[k, 3])],
+            mode_to=names[int(ev_int[k, 4])],
+            x_minus=ev_xm[k],
+            x_plus=ev_xp[k],
+            saltation=ev_S[k],
+        )
+        for k in range(len(ev_t))
+    ]
 
 
 def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, x: np.ndarray, events) -> IntegrationError:

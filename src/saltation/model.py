@@ -348,7 +348,7 @@ class PiecewiseSystem(NamedParts):
         """The forcing period for parameter values ``p`` (forced systems only)."""
         if self.period_expr is None:
             raise ModelError(f"model {self.name!r} is autonomous: it has no forcing period")
-        value = float(self._period_functions[0](*map(float, p)))
+        value = float(self._period_functions[0](*np.asarray(p, dtype=float).tolist()))
         if not (math.isfinite(value) and value > 0):
             raise ModelError(f"forcing period {self.period_expr} evaluates to {value} for these parameters")
         return value
@@ -357,7 +357,7 @@ class PiecewiseSystem(NamedParts):
         """Derivative of the forcing period with respect to parameter ``index``."""
         if self.period_expr is None:
             return 0.0
-        return float(self._period_functions[1][index](*map(float, p)))
+        return float(self._period_functions[1][index](*np.asarray(p, dtype=float).tolist()))
 
     # -- initial mode -----------------------------------------------------------------------
     def initial_mode(self, x0: Sequence[float], p: np.ndarray, t0: float = 0.0) -> int:

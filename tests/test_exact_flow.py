@@ -1,0 +1,148 @@
+"""Exact flows of affine modes: detection, and agreement with the general integrator.
+
+Every mode of both paper models is affine, so by default their integration
+steps with the exact flow (saltation.affine).  References here: the DOP853 path
+of the same kernel at tight tolerances (``exact_affine=False``), closed-form
+solutions of linear oscillators, and central differences of the flow.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg
+import sympy as sp
+
+from saltation import Tolerances
+from saltation.affine import affine_form
+from saltation.model import TIME
+from saltation.models import block_on_belt, trilinear
+
+from conftest import TIGHT, central_difference_jacobian
+
+GENERAL_TIGHT = Tolerances(rtol=1e-13, atol=1e-15, exact_affine=False)
+
+x, v, k, c, w, phi, f0 = sp.symbols("x v k c w phi f0", real=True)
+STATES = [x, v]
+
+
+def _form(field):
+    return affine_form(sp.Matrix(field), STATES, TIME)
+
+
+# ---------------------------------------------------------------------------- detection
+def test_forced_oscillator_is_affine():
+    form = _form([v, -k * x - c * v + 3 + f0 * sp.cos(w * TIME + phi)])
+    assert form is not None
+    assert form.A == sp.Matrix([[0, 1], [-k, -c]])
+    assert form.B == sp.Matrix([[0, 0, 0], [3, f0, 0]])
+    assert (form.omega, form.phase) == (w, phi)
+
+
+def test_sine_forcing_goes_to_the_third_column():
+    form = _form([v, -x + 2 * sp.sin(w * TIME)])
+    assert form.B == sp.Matrix([[0, 0, 0], [0, 0, 2]])
+
+
+def test_autonomous_affine_field_has_no_frequency():
+    form = _form([v - 1, -x])
+    assert form is not None and form.omega == 0 and form.B == sp.Matrix([[-1, 0, 0], [0, 0, 0]])
+
+
+@pytest.mark.parametrize(
+    "field",
+    [
+        [v, -x**3],  # nonlinear (Duffing)
+        [v, -x * sp.cos(TIME)],  # parametric excitation
+        [v, -x + sp.cos(TIME) + sp.cos(2 * TIME)],  # two frequencies
+        [v, -x + TIME],  # non-harmonic time dependence
+        [v, -x + sp.exp(-TIME)],
+        [v, -x + sp.cos(TIME**2)],  # phase not linear in t
+        [v, -x + sp.cos(TIME) ** 2],  # a harmonic of the harmonic
+    ],
+    ids=["duffing", "parametric", "two-frequencies", "ramp", "decay", "chirp", "squared"],
+)
+def test_fields_without_an_exact_flow(field):
+    assert _form(field) is None
+
+
+def test_paper_models_are_piecewise_affine():
+    for system in (trilinear(), block_on_belt()):
+        assert all(affine_form(f, system.x, TIME) is not None for f in system.fields), system.name
+
+
+# ---------------------------------------------------------------------------- closed forms
+def test_free_flight_against_the_matrix_exponential(trilinear_flow):
+    """No contact, no forcing: x(t) = expm(A t) x0 and Phi = expm(A t), at default tolerances."""
+    p = trilinear_flow.parameters({"f0": 0.0})
+    A = np.array([[0.0, 1.0], [-1.0, -0.05]])
+    x0 = np.array([0.5, -0.2])
+    traj = trilinear_flow.run(x0, 0.0, 7.3, p, variational=True)
+    E = scipy.linalg.expm(A * 7.3)
+    # exact up to the rounding of about ten steps
+    np.testing.assert_allclose(traj.x1, E @ x0, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(traj.monodromy, E, rtol=0, atol=1e-13)
+
+
+def test_dense_output_of_exact_steps(trilinear_flow):
+    """The dense output between steps matches the closed form to the tolerance."""
+    p = trilinear_flow.parameters({"f0": 0.0})
+    A = np.array([[0.0, 1.0], [-1.0, -0.05]])
+    x0 = np.array([0.5, -0.2])
+    traj = trilinear_flow.run(x0, 0.0, 7.3, p, dense=True)
+    times = np.linspace(0.0, 7.3, 301)
+    exact = np.array([scipy.linalg.expm(A * t) @ x0 for t in times])
+    assert np.max(np.abs(traj.at(times) - exact)) < 1e-10
+    assert traj.x_max[0] == pytest.approx(np.max(exact[:, 0]), abs=1e-10)
+
+
+# ---------------------------------------------------------------------------- against the general path
+@pytest.mark.parametrize("backward", [False, True], ids=["forward", "backward"])
+def test_contact_orbit_matches_the_general_integrator(trilinear_flow, contact_orbit, backward):
+    """Three periods of the contact orbit (twelve events), monodromy and d/d omega:
+    exact path at default tolerances vs DOP853 at 1e-13."""
+    p = trilinear_flow.parameters({"omega": 1.0})
+    omega = trilinear_flow.system.parameter_index("omega")
+    t1 = -3 * 2 * np.pi if backward else 3 * 2 * np.pi
+    x0 = contact_orbit.state0
+    fast = trilinear_flow.run(x0, 0.0, t1, p, variational=True, parameter=omega)
+    ref = trilinear_flow.run(x0, 0.0, t1, p, variational=True, parameter=omega, tolerances=GENERAL_TIGHT)
+    assert len(fast.events) == 12
+    assert fast.event_sequence == ref.event_sequence
+    np.testing.assert_allclose([e.t for e in fast.events], [e.t for e in ref.events], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(fast.x1, ref.x1, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(fast.monodromy, ref.monodromy, rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(fast.parameter_sensitivity, ref.parameter_sensitivity, rtol=1e-10, atol=1e-10)
+    assert fast.n_steps < ref.n_steps
+
+
+@pytest.mark.parametrize("name", ["x_c", "k_f", "c", "m", "f0"])
+def test_parameter_sensitivity_against_central_differences(trilinear_flow, contact_orbit, name):
+    """d x(T) / d p through four contacts: the exact flow's sensitivity equations vs finite differences of the flow."""
+    p = trilinear_flow.parameters({"omega": 1.0})
+    j = trilinear_flow.system.parameter_index(name)
+    x0 = contact_orbit.state0
+    traj = trilinear_flow.run(x0, 0.0, 2 * np.pi, p, variational=True, parameter=j)
+    assert len(traj.events) == 4
+
+    def end_state(q):
+        pp = p.copy()
+        pp[j] = q[0]
+        return trilinear_flow.run(x0, 0.0, 2 * np.pi, pp, tolerances=TIGHT).x1
+
+    fd = central_difference_jacobian(end_state, [p[j]], 1e-6)[:, 0]
+    np.testing.assert_allclose(traj.parameter_sensitivity, fd, rtol=1e-6, atol=1e-7)
+
+
+@pytest.mark.parametrize("backward", [False, True], ids=["forward", "backward"])
+def test_stick_slip_matches_the_general_integrator(belt_flow, backward):
+    """Stick, slip and (backward) sliding along the stick band: exact steps where affine, DOP853 while sliding."""
+    p = belt_flow.parameters()
+    x0, t1 = ([0.0, 1.0], 20.0) if not backward else ([1.0, -0.95], -12.0)
+    fast = belt_flow.run(x0, 0.0, t1, p, variational=True)
+    ref = belt_flow.run(x0, 0.0, t1, p, variational=True, tolerances=GENERAL_TIGHT)
+    assert fast.event_sequence == ref.event_sequence
+    assert len(fast.events) >= 2
+    np.testing.assert_allclose([e.t for e in fast.events], [e.t for e in ref.events], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(fast.x1, ref.x1, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(fast.monodromy, ref.monodromy, rtol=1e-8, atol=1e-8)
