@@ -524,28 +524,27 @@ def _slope(mode, slide, kind, idx, t, x, f, p, n, hx, hp, gtmp, gptmp):
 
 
 @njit(cache=True)
-def _grow(a, cap):
-    shape = (cap,) + a.shape[1:]
-    b = np.zeros(shape, dtype=a.dtype)
+def _grow_rows(a, cap):
+    """A copy of the 2-d array ``a`` with room for ``cap`` rows."""
+    b = np.zeros((cap, a.shape[1]), dtype=a.dtype)
     b[: a.shape[0]] = a
     return b
 
 
 @njit(cache=True)
-def _record_step(rec_t, rec_h, rec_send, rec_y, rec_F, n_rec, t, h, s_end, x, F):
-    """Append a step's dense output (start, size, end fraction, start state, coefficients)."""
-    if n_rec == rec_t.shape[0]:
-        rec_t = _grow(rec_t, 2 * n_rec)
-        rec_h = _grow(rec_h, 2 * n_rec)
-        rec_send = _grow(rec_send, 2 * n_rec)
-        rec_y = _grow(rec_y, 2 * n_rec)
-        rec_F = _grow(rec_F, 2 * n_rec)
-    rec_t[n_rec] = t
-    rec_h[n_rec] = h
-    rec_send[n_rec] = s_end
-    rec_y[n_rec] = x
+def _record_step(rec, rec_F, n_rec, t, h, s_end, x, F):
+    """Append a step's dense output: row ``(start, size, end fraction, start state)`` and coefficients."""
+    if n_rec == rec.shape[0]:
+        rec = _grow_rows(rec, 2 * n_rec)
+        grown = np.zeros((2 * n_rec, rec_F.shape[1], rec_F.shape[2]))
+        grown[:n_rec] = rec_F
+        rec_F = grown
+    rec[n_rec, 0] = t
+    rec[n_rec, 1] = h
+    rec[n_rec, 2] = s_end
+    rec[n_rec, 3:] = x
     rec_F[n_rec] = F
-    return rec_t, rec_h, rec_send, rec_y, rec_F, n_rec + 1
+    return rec, rec_F, n_rec + 1
 
 
 @njit(cache=True)
@@ -693,18 +692,12 @@ def integrate_kernel(
 
     # event log
     ev_cap = 16
-    ev_t = np.zeros(ev_cap)
+    ev = np.zeros((ev_cap, 1 + 2 * n + n * n))  # t, x-, x+, S (row-major)
     ev_int = np.zeros((ev_cap, 5), dtype=np.int64)  # kind, transition, surface, mode_from, mode_to
-    ev_xm = np.zeros((ev_cap, n))
-    ev_xp = np.zeros((ev_cap, n))
-    ev_S = np.zeros((ev_cap, n, n))
     n_ev = 0
 
     rec_cap = 64 if record else 1
-    rec_t = np.zeros(rec_cap)
-    rec_h = np.zeros(rec_cap)
-    rec_send = np.zeros(rec_cap)
-    rec_y = np.zeros((rec_cap, n))
+    rec = np.zeros((rec_cap, 3 + n))  # start, size, end fraction, start state
     rec_F = np.zeros((rec_cap, 7, n))
     n_rec = 0
 
@@ -904,9 +897,7 @@ def integrate_kernel(
                 xmin[i] = min(xmin[i], ynew[i])
                 xmax[i] = max(xmax[i], ynew[i])
             if record:
-                rec_t, rec_h, rec_send, rec_y, rec_F, n_rec = _record_step(
-                    rec_t, rec_h, rec_send, rec_y, rec_F, n_rec, t, h, 1.0, y[:n], F
-                )
+                rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, 1.0, y[:n], F)
             t = t_new
             for i in range(N):
                 y[i] = ynew[i]
@@ -933,9 +924,7 @@ def integrate_kernel(
             continue
         _track_extrema(F, y, best_s, n, xmin, xmax, K[0], K[12], xtmp)
         if record:
-            rec_t, rec_h, rec_send, rec_y, rec_F, n_rec = _record_step(
-                rec_t, rec_h, rec_send, rec_y, rec_F, n_rec, t, h, best_s, y[:n], F
-            )
+            rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, best_s, y[:n], F)
         # refine the event time by re-stepping from the step start (secant on the true RK solution)
         for i in range(N):
             ysave[i] = y[i]
@@ -1114,23 +1103,20 @@ def integrate_kernel(
                     y[n + i * n + j] = Phi_tmp[i, j]
                 y[off + i] = psi_tmp[i]
         # log
-        if n_ev == ev_t.shape[0]:
-            ev_t = _grow(ev_t, 2 * n_ev)
-            ev_int = _grow(ev_int, 2 * n_ev)
-            ev_xm = _grow(ev_xm, 2 * n_ev)
-            ev_xp = _grow(ev_xp, 2 * n_ev)
-            ev_S = _grow(ev_S, 2 * n_ev)
-        ev_t[n_ev] = t_e
+        if n_ev == ev.shape[0]:
+            ev = _grow_rows(ev, 2 * n_ev)
+            ev_int = _grow_rows(ev_int, 2 * n_ev)
+        ev[n_ev, 0] = t_e
         ev_int[n_ev, 0] = kind_logged
         ev_int[n_ev, 1] = best_tr
         ev_int[n_ev, 2] = best_idx
         ev_int[n_ev, 3] = mode_from
         ev_int[n_ev, 4] = mode_to
         for i in range(n):
-            ev_xm[n_ev, i] = x_e[i]
-            ev_xp[n_ev, i] = xplus[i]
+            ev[n_ev, 1 + i] = x_e[i]
+            ev[n_ev, 1 + n + i] = xplus[i]
             for j in range(n):
-                ev_S[n_ev, i, j] = S[i, j]
+                ev[n_ev, 1 + 2 * n + i * n + j] = S[i, j]
         chatter_ring[n_ev % CHATTER_WINDOW] = t_e
         n_ev += 1
         for i in range(n):
@@ -1172,23 +1158,8 @@ def integrate_kernel(
     if var:
         for i in range(n * n + n):
             out[1 + n + i] = y[n + i]
-    ev = np.zeros((n_ev, 1 + 2 * n + n * n))
-    for k in range(n_ev):
-        ev[k, 0] = ev_t[k]
-        for i in range(n):
-            ev[k, 1 + i] = ev_xm[k, i]
-            ev[k, 1 + n + i] = ev_xp[k, i]
-            for j in range(n):
-                ev[k, 1 + 2 * n + i * n + j] = ev_S[k, i, j]
-    rec = np.zeros((n_rec, 3 + n))
-    for k in range(n_rec):
-        rec[k, 0] = rec_t[k]
-        rec[k, 1] = rec_h[k]
-        rec[k, 2] = rec_send[k]
-        for i in range(n):
-            rec[k, 3 + i] = rec_y[k, i]
     info = np.array([status, info_mode, info_surface, n_ev, n_steps, n_rejected, mode, slide[0], slide[1], slide[2], slide[3], slide[4]])
-    return info, out, ev_int[:n_ev].copy(), ev, rec, rec_F[:n_rec].copy()
+    return info, out, ev_int[:n_ev].copy(), ev[:n_ev].copy(), rec[:n_rec].copy(), rec_F[:n_rec].copy()
 
 
 @njit(cache=True)
