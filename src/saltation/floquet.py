@@ -81,14 +81,12 @@ def set_valued_multipliers(
     """
     q = np.linspace(0.0, 1.0, num)
     n = m_minus.shape[0]
+    hull = (1.0 - q)[:, None, None] * m_minus + q[:, None, None] * m_plus
+    eigenvalues = np.linalg.eigvals(hull).astype(complex)  # one stacked call
     paths = np.empty((num, n), dtype=complex)
     prev = None
-    for k, qk in enumerate(q):
-        mu = np.linalg.eigvals((1.0 - qk) * m_minus + qk * m_plus).astype(complex)
-        if prev is not None:
-            mu = _match(prev, mu)
-        else:
-            mu = sort_multipliers(mu)
+    for k in range(num):
+        mu = sort_multipliers(eigenvalues[k]) if prev is None else _match(prev, eigenvalues[k])
         paths[k] = mu
         prev = mu
     if backward:
