@@ -564,14 +564,19 @@ def _dense_component(F, y, s, i):
 def _track_extrema(F, y, s_end, n, xmin, xmax, f0, f1, xtmp):
     """Update per-component extrema over a step segment ``s in [0, s_end]`` of the dense output.
 
+    ``f0``, ``f1`` are the derivatives at the segment's ends: a component whose
+    derivative keeps its sign has its extremes at the ends (updated by the caller).
+
     Golden-section search to a bracket of 1e-5, then one parabolic step: the
     extreme value is then exact to far below the integration tolerance.
     """
     invphi = 0.6180339887498949
     for i in range(n):
-        if f0[i] * f1[i] > 0.0 and s_end >= 1.0:
+        if f0[i] * f1[i] > 0.0:
             continue
         for sense in (1.0, -1.0):
+            if (sense > 0.0 and f0[i] < 0.0) or (sense < 0.0 and f0[i] > 0.0):
+                continue  # rising then falling has an inner maximum only, and vice versa
             a = 0.0
             b = s_end
             c = b - invphi * (b - a)

@@ -155,16 +155,18 @@ class SpecialPointDetector:
             return [self.locate_nonsmooth(a, b, index)]
         found = []
         secant = _unit(b.z - a.z)
-        fold = lambda s: self.corrector.tangent(s, secant)[-1]  # noqa: E731
+        # a point's test values are kept for the next pair: both secants point along the branch,
+        # so the tangent (fold test) is oriented alike
+        fold = _remembered("fold", lambda s: self.corrector.tangent(s, secant)[-1])
         if _crosses(fold(a), fold(b)):
             found.append(self.locate_smooth(a, b, index, SpecialPointKind.FOLD, fold))
         if self.equilibrium:
-            ga, gb = _hopf_test(a), _hopf_test(b)
-            if _crosses(ga, gb):
-                found.append(self.locate_smooth(a, b, index, SpecialPointKind.HOPF, _hopf_test))
+            hopf = _remembered("hopf", _hopf_test)
+            if _crosses(hopf(a), hopf(b)):
+                found.append(self.locate_smooth(a, b, index, SpecialPointKind.HOPF, hopf))
             return found
         for kind, test in ((SpecialPointKind.PERIOD_DOUBLING, _flip_test), (SpecialPointKind.NEIMARK_SACKER, _ns_test)):
-            g = lambda s, test=test: test(_nontrivial(s, self.autonomous))  # noqa: E731
+            g = _remembered(kind.value, lambda s, test=test: test(_nontrivial(s, self.autonomous)))
             if _crosses(g(a), g(b)):
                 found.append(self.locate_smooth(a, b, index, kind, g))
         return found
@@ -268,6 +270,17 @@ class SpecialPointDetector:
             events_plus=hi.summary.events,
             note=note,
         )
+
+
+def _remembered(name: str, test: Callable[[Solution], float]) -> Callable[[Solution], float]:
+    """``test``, evaluated once per solution (the value is kept in ``solution.tests``)."""
+
+    def value(sol: Solution) -> float:
+        if name not in sol.tests:
+            sol.tests[name] = test(sol)
+        return sol.tests[name]
+
+    return value
 
 
 def _crosses(ga: float, gb: float) -> bool:

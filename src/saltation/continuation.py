@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -87,6 +87,7 @@ class Solution:
     tangent: np.ndarray | None = None
     iterations: int = 0
     step: float = 0.0
+    tests: dict[str, float] = field(default_factory=dict, repr=False)  # test-function values, by the detector
 
     @property
     def u(self) -> np.ndarray:

@@ -17,6 +17,8 @@ of the stick band (an attraction sliding mode in backward time).
 
 from __future__ import annotations
 
+import functools
+
 import enum
 
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
@@ -43,6 +45,7 @@ def _slip(force: str) -> list[str]:
     return ["v", f"(-k*x - c*v + {force})/m"]
 
 
+@functools.lru_cache(maxsize=64)  # a model is immutable: building it again (sympy) is wasted
 def block_on_belt(w_region: WRegion = WRegion.SLIP, **overrides: float) -> PiecewiseSystem:
     """The block-on-belt switch model; keyword arguments override Appendix B's values."""
     params = DEFAULTS | overrides

@@ -18,12 +18,15 @@ The states are ``x1, ..., xn, v1, ..., vn``.  Each ``n`` is its own model
 
 from __future__ import annotations
 
+import functools
+
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
 from .trilinear import DEFAULTS
 
 RISING, FALLING = Crossing.RISING, Crossing.FALLING
 
 
+@functools.lru_cache(maxsize=64)  # a model is immutable: building it again (sympy) is wasted
 def chain(n: int = 2, **overrides: float) -> PiecewiseSystem:
     """A chain of ``n`` masses with trilinear contacts on the last; keyword arguments override Appendix A's values."""
     if not isinstance(n, int) or isinstance(n, bool) or n < 1:

@@ -10,6 +10,8 @@ paper, so the transitions list every boundary both ways (backward time).
 
 from __future__ import annotations
 
+import functools
+
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
 
 RISING, FALLING = Crossing.RISING, Crossing.FALLING
@@ -18,6 +20,7 @@ RISING, FALLING = Crossing.RISING, Crossing.FALLING
 DEFAULTS = {"m": 1.0, "c": 0.05, "k": 1.0, "x_c": 1.0, "k_f": 4.0, "c_f": 0.5, "f0": 0.2, "omega": 1.2}
 
 
+@functools.lru_cache(maxsize=64)  # a model is immutable: building it again (sympy) is wasted
 def trilinear(**overrides: float) -> PiecewiseSystem:
     """The trilinear spring system; keyword arguments override Appendix A's values."""
     params = DEFAULTS | overrides
