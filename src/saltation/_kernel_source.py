@@ -46,6 +46,11 @@ EVENT_SLIDING_END = 2
 EPS = 2.220446049250313e-16
 CHATTER_WINDOW = 20
 
+# event kinds (0: an indicator; 1, 2: a sliding motion's exit on side a, b) and "none", as typed
+# integers: a literal int argument would make numba compile the callee once more for it
+KIND_INDICATOR = np.int64(0)
+NONE = np.int64(-1)
+
 
 @njit(cache=True, inline="always")  # inlined: array arguments cost more than the work
 def _field(mode, slide, t, x, p, var, pidx, f, J, fpc, ws1, ws2, ws3, wsJ1, wsJ2, wsP, gA, gB, gpA, gpB):
@@ -561,11 +566,12 @@ def _dense_component(F, y, s, i):
 
 
 @njit(cache=True)
-def _track_extrema(F, y, s_end, n, xmin, xmax, f0, f1, xtmp):
+def _track_extrema(F, y, s_end, n, xmin, xmax, f0, f1, xtmp, direction):
     """Update per-component extrema over a step segment ``s in [0, s_end]`` of the dense output.
 
-    ``f0``, ``f1`` are the derivatives at the segment's ends: a component whose
-    derivative keeps its sign has its extremes at the ends (updated by the caller).
+    ``f0``, ``f1`` are the time derivatives at the segment's ends (``direction``
+    the sign of the step): a component whose derivative keeps its sign has its
+    extremes at the ends (updated by the caller).
 
     Golden-section search to a bracket of 1e-5, then one parabolic step: the
     extreme value is then exact to far below the integration tolerance.
@@ -575,7 +581,8 @@ def _track_extrema(F, y, s_end, n, xmin, xmax, f0, f1, xtmp):
         if f0[i] * f1[i] > 0.0:
             continue
         for sense in (1.0, -1.0):
-            if (sense > 0.0 and f0[i] < 0.0) or (sense < 0.0 and f0[i] > 0.0):
+            rate = direction * f0[i]  # d x_i / d s at the start
+            if (sense > 0.0 and rate < 0.0) or (sense < 0.0 and rate > 0.0):
                 continue  # rising then falling has an inner maximum only, and vice versa
             a = 0.0
             b = s_end
@@ -699,12 +706,12 @@ def integrate_kernel(
     ev_cap = 16
     ev = np.zeros((ev_cap, 1 + 2 * n + n * n))  # t, x-, x+, S (row-major)
     ev_int = np.zeros((ev_cap, 5), dtype=np.int64)  # kind, transition, surface, mode_from, mode_to
-    n_ev = 0
+    n_ev = np.int64(0)  # typed, not literal: literal ints specialise (and compile) callees again
 
     rec_cap = 64 if record else 1
     rec = np.zeros((rec_cap, 3 + n))  # start, size, end fraction, start state
     rec_F = np.zeros((rec_cap, 7, n))
-    n_rec = 0
+    n_rec = np.int64(0)
 
     xmin = np.full(n, np.inf)
     xmax = np.full(n, -np.inf)
@@ -766,7 +773,7 @@ def integrate_kernel(
                 if watched[s]:
                     v = indicator(s, t, y[:n], p)  # noqa: F821
                     surf_old[s] = v
-                    sl = direction * _slope(mode, slide, 0, s, t, y[:n], K[0, :n], p, n, hx, hp, gtmp, gptmp)
+                    sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, n, hx, hp, gtmp, gptmp)
                     slope_old[s] = sl
                     if fixed_sign[s]:
                         continue
@@ -830,16 +837,16 @@ def integrate_kernel(
         # ---------------------------------------------------------------- events
         have_dense = False
         best_s = 2.0
-        best_kind = -1
-        best_idx = -1
-        best_tr = -1
+        best_kind = NONE
+        best_idx = NONE
+        best_tr = NONE
         if slide[0] == 0:
             for s in range(n_surfaces):
                 if not watched[s]:
                     continue
                 v = indicator(s, t_new, ynew[:n], p)  # noqa: F821
                 surf_new[s] = v
-                sl = direction * _slope(mode, slide, 0, s, t_new, ynew[:n], K[12, :n], p, n, hx, hp, gtmp, gptmp)
+                sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, n, hx, hp, gtmp, gptmp)
                 slope_new[s] = sl
                 sg = surf_sign[s]
                 sb = 2.0
@@ -849,17 +856,17 @@ def integrate_kernel(
                     if not have_dense:
                         _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
                         have_dense = True
-                    smin, vmin = _dip_search(0, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp)
+                    smin, vmin = _dip_search(KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp)
                     if vmin <= 0.0:
                         sb = smin
                 if sb <= 1.0:
                     if not have_dense:
                         _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
                         have_dense = True
-                    gb = _dense_event(0, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
+                    gb = _dense_event(KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
                     if gb > 0.0:
                         gb = -1e-300
-                    sr = _bracket_root(0, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
+                    sr = _bracket_root(KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
                     if sr < best_s:
                         # find a transition that fires at this crossing
                         _dense_eval(F, y, sr, xtmp)
@@ -873,23 +880,23 @@ def integrate_kernel(
                             if not guard(k, t + sr * h, xtmp, p):  # noqa: F821
                                 continue
                             best_s = sr
-                            best_kind = 0
+                            best_kind = KIND_INDICATOR
                             best_idx = s
                             best_tr = k
                             break
         else:
-            for kind in (1, 2):
-                v1 = _event_value(kind, 0, slide, t_new, ynew[:n], p, gtmp, gptmp)
+            for kind in (np.int64(1), np.int64(2)):
+                v1 = _event_value(kind, NONE, slide, t_new, ynew[:n], p, gtmp, gptmp)
                 if v1 <= 0.0:
                     if not have_dense:
                         _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
                         have_dense = True
-                    sr = _bracket_root(kind, 0, slide, 1.0, t, h, F, y, 0.0, 1.0, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
+                    sr = _bracket_root(kind, NONE, slide, 1.0, t, h, F, y, 0.0, 1.0, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
                     if sr < best_s:
                         best_s = sr
                         best_kind = kind
                         best_idx = slide[3]
-                        best_tr = -1
+                        best_tr = NONE
 
         if best_kind < 0:
             # ----------------------------------------------------------- accept whole step
@@ -897,7 +904,7 @@ def integrate_kernel(
                 if not have_dense:
                     _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
                     have_dense = True
-                _track_extrema(F, y, 1.0, n, xmin, xmax, K[0], K[12], xtmp)
+                _track_extrema(F, y, 1.0, n, xmin, xmax, K[0], K[12], xtmp, direction)
             for i in range(n):
                 xmin[i] = min(xmin[i], ynew[i])
                 xmax[i] = max(xmax[i], ynew[i])
@@ -927,7 +934,7 @@ def integrate_kernel(
             n_rejected += 1
             habs = best_s * habs * max(0.2, 0.9 * err_e ** (-1.0 / 8.0))
             continue
-        _track_extrema(F, y, best_s, n, xmin, xmax, K[0], K[12], xtmp)
+        _track_extrema(F, y, best_s, n, xmin, xmax, K[0], K[12], xtmp, direction)
         if record:
             rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, best_s, y[:n], F)
         # refine the event time by re-stepping from the step start (secant on the true RK solution)
