@@ -25,7 +25,6 @@ from types import ModuleType
 
 import numpy as np
 import sympy as sp
-from scipy.integrate._ivp import dop853_coefficients as dop853
 from sympy.printing.pycode import PythonCodePrinter
 
 from .affine import affine_form
@@ -33,6 +32,13 @@ from .model import TIME, PiecewiseSystem
 
 _TEMPLATE = Path(__file__).with_name("_kernel_source.py")
 _LOADED: dict[str, ModuleType] = {}
+
+
+def _dop853_tableau() -> dict[str, np.ndarray]:
+    """The Dormand-Prince 8(5,3) tableau of scipy's DOP853 (imported only when a kernel is generated)."""
+    from scipy.integrate._ivp import dop853_coefficients as dop853
+
+    return {name: np.asarray(getattr(dop853, name), dtype=float) for name in ("A", "B", "C", "E3", "E5", "D")}
 
 
 def cache_directory() -> Path:
@@ -122,8 +128,7 @@ def generate_source(system: PiecewiseSystem) -> str:
         "from numba import njit",
         "",
     ]
-    for name in ("A", "B", "C", "E3", "E5", "D"):
-        arr = np.asarray(getattr(dop853, name), dtype=float)
+    for name, arr in _dop853_tableau().items():
         src.append(f"RK_{name} = np.array({arr.tolist()!r})")
     src.append("")
 
@@ -342,8 +347,7 @@ def load_kernels(system: PiecewiseSystem) -> ModuleType:
 
     if isinstance(system, CompiledSystem):
         if system.fingerprint not in _LOADED:
-            tableau = {name: np.asarray(getattr(dop853, name), dtype=float) for name in ("A", "B", "C", "E3", "E5", "D")}
-            _LOADED[system.fingerprint] = build_module(system, _kernel_text(), tableau)
+            _LOADED[system.fingerprint] = build_module(system, _kernel_text(), _dop853_tableau())
         return _LOADED[system.fingerprint]
     path, digest = _module_path(system)
     if digest in _LOADED:
