@@ -529,10 +529,26 @@ def _slope(mode, slide, kind, idx, t, x, f, p, n, hx, hp, gtmp, gptmp):
 
 
 @njit(cache=True)
-def _grow_rows(a, cap):
-    """A copy of the 2-d array ``a`` with room for ``cap`` rows."""
-    b = np.zeros((cap, a.shape[1]), dtype=a.dtype)
-    b[: a.shape[0]] = a
+def _resized_rows(a, m):
+    """A copy of the first rows of the 2-d array ``a`` in an array of ``m`` rows (grown with zeros).
+
+    Plain loops: numba compiles slice assignments into much more code.
+    """
+    b = np.zeros((m, a.shape[1]), dtype=a.dtype)
+    for i in range(min(m, a.shape[0])):
+        for j in range(a.shape[1]):
+            b[i, j] = a[i, j]
+    return b
+
+
+@njit(cache=True)
+def _resized_steps(a, m):
+    """:func:`_resized_rows` for the stack of dense-output coefficients, shape (steps, 7, n)."""
+    b = np.zeros((m, a.shape[1], a.shape[2]))
+    for i in range(min(m, a.shape[0])):
+        for r in range(a.shape[1]):
+            for j in range(a.shape[2]):
+                b[i, r, j] = a[i, r, j]
     return b
 
 
@@ -540,15 +556,15 @@ def _grow_rows(a, cap):
 def _record_step(rec, rec_F, n_rec, t, h, s_end, x, F):
     """Append a step's dense output: row ``(start, size, end fraction, start state)`` and coefficients."""
     if n_rec == rec.shape[0]:
-        rec = _grow_rows(rec, 2 * n_rec)
-        grown = np.zeros((2 * n_rec, rec_F.shape[1], rec_F.shape[2]))
-        grown[:n_rec] = rec_F
-        rec_F = grown
+        rec = _resized_rows(rec, 2 * n_rec)
+        rec_F = _resized_steps(rec_F, 2 * n_rec)
     rec[n_rec, 0] = t
     rec[n_rec, 1] = h
     rec[n_rec, 2] = s_end
-    rec[n_rec, 3:] = x
-    rec_F[n_rec] = F
+    for i in range(x.shape[0]):
+        rec[n_rec, 3 + i] = x[i]
+        for r in range(7):
+            rec_F[n_rec, r, i] = F[r, i]
     return rec, rec_F, n_rec + 1
 
 
@@ -684,8 +700,11 @@ def integrate_kernel(
                 affine_parts(m, p, AFF_A[m], AFF_B[m], AFF_W[m, :2])  # noqa: F821
                 if var and pidx >= 0:
                     affine_parts_dp(m, p, Ap_all, Bp_all, wp_all)  # noqa: F821
-                    AFF_AP[m] = Ap_all[pidx]
-                    AFF_BP[m] = Bp_all[pidx]
+                    for i in range(n):
+                        for j in range(n):
+                            AFF_AP[m, i, j] = Ap_all[pidx, i, j]
+                        for j in range(3):
+                            AFF_BP[m, i, j] = Bp_all[pidx, i, j]
                     AFF_W[m, 2] = wp_all[pidx, 0]
                     AFF_W[m, 3] = wp_all[pidx, 1]
 
@@ -713,8 +732,8 @@ def integrate_kernel(
     rec_F = np.zeros((rec_cap, 7, n))
     n_rec = np.int64(0)
 
-    xmin = np.full(n, np.inf)
-    xmax = np.full(n, -np.inf)
+    xmin = np.zeros(n)
+    xmax = np.zeros(n)
     for i in range(n):
         xmin[i] = y[i]
         xmax[i] = y[i]
@@ -1116,8 +1135,8 @@ def integrate_kernel(
                 y[off + i] = psi_tmp[i]
         # log
         if n_ev == ev.shape[0]:
-            ev = _grow_rows(ev, 2 * n_ev)
-            ev_int = _grow_rows(ev_int, 2 * n_ev)
+            ev = _resized_rows(ev, 2 * n_ev)
+            ev_int = _resized_rows(ev_int, 2 * n_ev)
         ev[n_ev, 0] = t_e
         ev_int[n_ev, 0] = kind_logged
         ev_int[n_ev, 1] = best_tr
@@ -1170,8 +1189,17 @@ def integrate_kernel(
     if var:
         for i in range(n * n + n):
             out[1 + n + i] = y[n + i]
-    info = np.array([status, info_mode, info_surface, n_ev, n_steps, n_rejected, mode, slide[0], slide[1], slide[2], slide[3], slide[4]])
-    return info, out, ev_int[:n_ev].copy(), ev[:n_ev].copy(), rec[:n_rec].copy(), rec_F[:n_rec].copy()
+    info = np.zeros(12, dtype=np.int64)
+    info[0] = status
+    info[1] = info_mode
+    info[2] = info_surface
+    info[3] = n_ev
+    info[4] = n_steps
+    info[5] = n_rejected
+    info[6] = mode
+    for i in range(5):
+        info[7 + i] = slide[i]
+    return info, out, _resized_rows(ev_int, n_ev), _resized_rows(ev, n_ev), _resized_rows(rec, n_rec), _resized_steps(rec_F, n_rec)
 
 
 @njit(cache=True)
