@@ -816,6 +816,7 @@ def integrate_kernel(
             habs = remaining
         exact = exact_affine and slide[0] == 0 and AFFINE_MODES[mode]  # noqa: F821
         # attempt a step
+        rejected = False
         while True:
             h = direction * habs
             err = _step(exact, mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
@@ -824,6 +825,7 @@ def integrate_kernel(
             if finite and err <= 1.0:
                 break
             n_rejected += 1
+            rejected = True
             if not finite:
                 fin = True
                 for i in range(N):
@@ -941,6 +943,8 @@ def integrate_kernel(
                     if surf_new[s] != 0.0:
                         surf_sign[s] = 1.0 if surf_new[s] > 0 else -1.0
             fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
+            if rejected:
+                fac = min(fac, 1.0)  # no growth right after a rejection (Hairer & Wanner, II.4)
             habs = abs(h) * fac
             continue
 
