@@ -297,7 +297,9 @@ def _nontrivial(sol: Solution, autonomous: bool) -> np.ndarray:
     mu = np.asarray(sol.summary.multipliers, dtype=complex)
     if autonomous and mu.size:
         finite = np.where(np.isfinite(mu), np.abs(mu - 1.0), np.inf)
-        mu = np.delete(mu, int(np.argmin(finite)))
+        keep = np.ones(mu.size, dtype=bool)
+        keep[int(np.argmin(finite))] = False
+        mu = mu[keep]
     return mu
 
 

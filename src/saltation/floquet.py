@@ -50,10 +50,10 @@ def trivial_multiplier_error(mu: np.ndarray) -> float:
 def is_stable(mu: np.ndarray, *, autonomous: bool, tol: float = 1e-6) -> bool:
     """All multipliers inside the unit circle (the trivial one excepted for autonomous orbits)."""
     mu = np.asarray(mu, dtype=complex)
+    keep = np.abs(mu) < 1.0 + tol
     if autonomous and mu.size:
-        idx = int(np.argmin(np.where(np.isfinite(mu), np.abs(mu - 1.0), np.inf)))
-        mu = np.delete(mu, idx)
-    return bool(np.all(np.abs(mu) < 1.0 + tol))
+        keep[int(np.argmin(np.where(np.isfinite(mu), np.abs(mu - 1.0), np.inf)))] = True  # the trivial one
+    return bool(np.all(keep))
 
 
 @dataclass(frozen=True)

@@ -280,32 +280,39 @@ class ShootingProblem:
             x0, self.t0, self.t0 + self.sign * T, p, variational=True, parameter=pidx, tolerances=self.tolerances
         )
         M = traj.monodromy
-        f_end = np.zeros(n)
-        mode_end = self.system.mode_index(traj.mode1)
-        if traj.sliding_at_end:
-            # the kernel's end state lies on a sliding motion; its velocity is the sliding field
-            f_end = _sliding_velocity(self.flow, traj, p)
-        else:
-            self.flow._kernels.vector_field(mode_end, traj.t1, np.ascontiguousarray(traj.x1), p, f_end)
-        r = traj.x1 - x0
-        J = M - np.eye(n)
         jl = None
+        if not self.autonomous:
+            r = traj.x1 - x0
+            J = M - np.eye(n)
+            if pidx >= 0:
+                jl = traj.parameter_sensitivity.copy()
+                dT = self.system.period_derivative(p, pidx)
+                if dT:  # the period moves with the parameter: the end point moves along the flow
+                    jl += (self.sign * dT) * self._end_velocity(traj, p)
+            return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
+        if self.x_ref is None:
+            self.set_phase_reference(u, lam)
+        r = np.empty(n + 1)
+        r[:n] = traj.x1 - x0
+        r[n] = self.f_ref @ (x0 - self.x_ref)
+        J = np.zeros((n + 1, n + 1))
+        J[:n, :n] = M
+        J[:n, :n] -= np.eye(n)
+        J[:n, n] = self.sign * self._end_velocity(traj, p)
+        J[n, :n] = self.f_ref
         if pidx >= 0:
-            jl = traj.parameter_sensitivity.copy()
-            if not self.autonomous:
-                jl = jl + self.sign * f_end * self.system.period_derivative(p, pidx)
-        if self.autonomous:
-            if self.x_ref is None:
-                self.set_phase_reference(u, lam)
-            r = np.append(r, self.f_ref @ (x0 - self.x_ref))
-            Ja = np.zeros((n + 1, n + 1))
-            Ja[:n, :n] = J
-            Ja[:n, n] = self.sign * f_end
-            Ja[n, :n] = self.f_ref
-            J = Ja
-            if jl is not None:
-                jl = np.append(jl, 0.0)
+            jl = np.zeros(n + 1)
+            jl[:n] = traj.parameter_sensitivity
         return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
+
+    def _end_velocity(self, traj: Trajectory, p: np.ndarray) -> np.ndarray:
+        """The velocity at the end of a shot: the mode's field, or the sliding field on a sliding motion."""
+        if traj.sliding_at_end:
+            return _sliding_velocity(self.flow, traj, p)
+        f_end = np.zeros(self.system.n)
+        mode_end = self.system.mode_index(traj.mode1)
+        self.flow._kernels.vector_field(mode_end, traj.t1, np.ascontiguousarray(traj.x1), p, f_end)
+        return f_end
 
     def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
         """Summary of a solved point for a branch (multipliers, amplitude, events)."""
