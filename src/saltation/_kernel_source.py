@@ -943,8 +943,10 @@ def integrate_kernel(
                     if surf_new[s] != 0.0:
                         surf_sign[s] = 1.0 if surf_new[s] > 0 else -1.0
             fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
-            if rejected:
-                fac = min(fac, 1.0)  # no growth right after a rejection (Hairer & Wanner, II.4)
+            if rejected and not exact:
+                # no growth right after a rejection (Hairer & Wanner, II.4); an exact step's error
+                # (of its dense output) is a smooth function of h and needs no such caution
+                fac = min(fac, 1.0)
             habs = abs(h) * fac
             continue
 
