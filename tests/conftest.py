@@ -55,18 +55,18 @@ def oscillator_system() -> PiecewiseSystem:
 def filippov_system() -> PiecewiseSystem:
     """A planar Filippov system with an attracting sliding motion on ``y = 0``.
 
-    ``above`` (y > 0): ``[1, -1]``; ``below`` (y < 0): ``[2, 1 - x + q sin(omega t)]``.
-    Both fields push into ``y = 0`` while ``x < 1 + q sin(omega t)``; the sliding
+    ``above`` (y > 0): ``[1, -1]``; ``below`` (y < 0): ``[2, 1 - x + q sin(omega t + phi)]``.
+    Both fields push into ``y = 0`` while ``x < 1 + q sin(omega t + phi)``; the sliding
     motion leaves into ``below`` where that field turns tangent.  For ``q = 0``
     everything is in closed form (see test_sliding.py).
     """
     return PiecewiseSystem(
         name="test_filippov",
         states=["x", "y"],
-        parameters={"q": 0.0, "omega": 1.0},
+        parameters={"q": 0.0, "omega": 1.0, "phi": 0.0},
         modes=[
             Mode("above", ["1", "-1"], domain=["y > 0"]),
-            Mode("below", ["2", "1 - x + q*sin(omega*t)"], domain=["y < 0"]),
+            Mode("below", ["2", "1 - x + q*sin(omega*t + phi)"], domain=["y < 0"]),
         ],
         surfaces={"s": "y"},
         transitions=[

@@ -160,3 +160,26 @@ def test_extrema_agree_forward_and_backward(trilinear_flow, contact_orbit, exact
     np.testing.assert_allclose(bwd.x1, x0, atol=1e-8)
     np.testing.assert_allclose(bwd.x_max, fwd.x_max, rtol=0, atol=1e-8)
     np.testing.assert_allclose(bwd.x_min, fwd.x_min, rtol=0, atol=1e-8)
+
+
+@pytest.mark.parametrize("name", ["phi", "omega", "q"])
+def test_phase_shifted_forcing_with_sliding(filippov_flow, name):
+    """Forcing q sin(omega t + phi) in an affine mode, and sliding in between: the exact path's
+    state, monodromy and sensitivities to the forcing's phase, frequency and amplitude vs DOP853."""
+    from saltation.affine import affine_form as form_of
+
+    system = filippov_flow.system
+    below = form_of(system.fields[system.mode_index("below")], system.x, TIME)
+    assert below is not None and below.phase == sp.Symbol("phi", real=True)
+    p = filippov_flow.parameters({"q": 0.3, "omega": 1.3, "phi": 0.4})
+    j = system.parameter_index(name)
+    x0 = [-1.0, -0.8]
+    fast = filippov_flow.run(x0, 0.0, 9.0, p, variational=True, parameter=j)
+    ref = filippov_flow.run(x0, 0.0, 9.0, p, variational=True, parameter=j, tolerances=GENERAL_TIGHT)
+    kinds = [e.kind.name for e in fast.events]
+    assert "SLIDING_START" in kinds and "SLIDING_END" in kinds
+    assert fast.event_sequence == ref.event_sequence
+    np.testing.assert_allclose([e.t for e in fast.events], [e.t for e in ref.events], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(fast.x1, ref.x1, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(fast.monodromy, ref.monodromy, rtol=1e-8, atol=1e-8)
+    np.testing.assert_allclose(fast.parameter_sensitivity, ref.parameter_sensitivity, rtol=1e-8, atol=1e-8)
