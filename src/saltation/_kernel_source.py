@@ -1214,3 +1214,94 @@ def _needs_extrema(K, n):
         if K[0, i] * K[12, i] <= 0.0:
             return True
     return False
+
+
+SHOOT_CONVERGED = 0
+SHOOT_FAILED = 1  # an integration failed, the residual is not finite, or no step reduces it
+SHOOT_MAX_ITER = 2
+
+
+@njit(cache=True)
+def _shot(x, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
+          control_variational, exact_affine):
+    """One shot ``x -> x(t1)`` with the fundamental solution matrix; None-like (status != 0) on failure."""
+    mode = initial_mode(t0, x, p)  # noqa: F821
+    if mode < 0:
+        mode = 0  # not integrated: the caller sees the failure in info[0]
+        res = integrate_kernel(
+            t0, t0, x, mode, p, True, NONE, rtol, atol, 0.0, max_step, max_events, max_steps,
+            tr_table, n_surfaces, False, phi0, psi0, control_variational, exact_affine,
+        )
+        res[0][0] = STATUS_NON_FINITE
+        return res
+    return integrate_kernel(
+        t0, t1, x, mode, p, True, NONE, rtol, atol, 0.0, max_step, max_events, max_steps,
+        tr_table, n_surfaces, False, phi0, psi0, control_variational, exact_affine,
+    )
+
+
+@njit(cache=True)
+def shoot_forced(x0, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
+                 phi0, psi0, control_variational, exact_affine, tol, max_iter):
+    """Damped Newton on ``x(t1; x0) - x0 = 0`` (a forced system's period map), compiled.
+
+    The same iteration as ``saltation.shooting.newton(..., damped=True)``:
+    converged when ``|r| <= tol (1 + |x|)``; a step is halved (up to 8 times)
+    until the residual decreases.  Returns ``(code, iterations, x, residual
+    history, kernel result at x)``; on any failure the caller repeats the
+    iteration in Python, which raises the error that explains it.
+    """
+    n = x0.shape[0]
+    x = x0.copy()
+    history = np.zeros(max_iter + 1)
+    res = _shot(x, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
+                control_variational, exact_affine)
+    if res[0][0] != STATUS_OK:
+        return SHOOT_FAILED, 0, x, history[:0], res
+    r = np.empty(n)
+    du = np.empty(n)
+    xt = np.empty(n)
+    J = np.empty((n, n))
+    for it in range(max_iter + 1):
+        out = res[1]
+        rn = 0.0
+        xn = 0.0
+        for i in range(n):
+            r[i] = out[1 + i] - x[i]
+            rn += r[i] * r[i]
+            xn += x[i] * x[i]
+        rn = math.sqrt(rn)
+        history[it] = rn
+        if not math.isfinite(rn):
+            return SHOOT_FAILED, it, x, history[: it + 1], res
+        if rn <= tol * (1.0 + math.sqrt(xn)):
+            return SHOOT_CONVERGED, it, x, history[: it + 1], res
+        if it == max_iter:
+            break
+        for i in range(n):
+            for j in range(n):
+                J[i, j] = out[1 + n + i * n + j] - (1.0 if i == j else 0.0)
+            du[i] = -r[i]
+        du = np.linalg.solve(J, du)  # LinAlgError (singular) reaches the caller
+        accepted = False
+        for _ in range(9):
+            for i in range(n):
+                xt[i] = x[i] + du[i]
+            trial = _shot(xt, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
+                          phi0, psi0, control_variational, exact_affine)
+            if trial[0][0] == STATUS_OK:
+                rt = 0.0
+                for i in range(n):
+                    d = trial[1][1 + i] - xt[i]
+                    rt += d * d
+                if math.sqrt(rt) < rn:
+                    accepted = True
+                    res = trial
+                    for i in range(n):
+                        x[i] = xt[i]
+                    break
+            for i in range(n):
+                du[i] *= 0.5
+        if not accepted:
+            return SHOOT_FAILED, it, x, history[: it + 1], res
+    return SHOOT_MAX_ITER, max_iter, x, history, res

@@ -371,6 +371,34 @@ class Flow:
         )
         return self._unpack(out, x0, float(t0), m0, variational, parameter, dense)
 
+    def newton_period_map(
+        self, x0: Sequence[float], t0: float, t1: float, p: np.ndarray, *, tol: float, max_iter: int,
+        tolerances: Tolerances | None = None,
+    ) -> tuple[np.ndarray, list[float], Trajectory] | None:
+        """Damped Newton on ``x(t1; x0) = x0`` with the fixed span ``t1 - t0``, iterated in the kernel.
+
+        The iteration of :func:`saltation.shooting.newton` (``damped=True``)
+        without a return to Python per shot: for forced systems, whose period
+        is fixed.  Returns the solution, the residual history and the
+        trajectory from the solution (with its monodromy), or None when the
+        iteration fails (repeat it in Python for the error that explains it).
+        """
+        tol_ = tolerances or self.tolerances
+        x0 = np.array(x0, dtype=float).reshape(-1)
+        p = np.ascontiguousarray(p, dtype=float)
+        try:
+            code, _, x, history, out = self._kernels.shoot_forced(
+                x0, float(t0), float(t1), p, float(tol_.rtol), float(tol_.atol), float(tol_.max_step),
+                int(tol_.max_events), int(tol_.max_steps), self._table, self._n_surfaces, self._identity, self._zeros,
+                bool(tol_.control_variational), bool(tol_.exact_affine), float(tol), int(max_iter),
+            )
+        except np.linalg.LinAlgError:  # a singular Jacobian
+            return None
+        if code != 0:
+            return None
+        m0 = self.initial_mode(x, p, t0)
+        return x, history.tolist(), self._unpack(out, x.copy(), float(t0), m0, True, -1, False)
+
     def _unpack(self, out, x0, t0, m0, variational, parameter, dense) -> Trajectory:
         sys_ = self.system
         n = sys_.n

@@ -346,6 +346,18 @@ class ShootingProblem:
         u0 = np.asarray(u0, dtype=float)
         if self.autonomous:
             self.set_phase_reference(u0, lam)
+        else:
+            # the period is fixed: the whole iteration runs in the compiled kernel
+            T = self.period_of(u0, lam)
+            found = self.flow.newton_period_map(
+                u0, self.t0, self.t0 + self.sign * T, self.parameters_at(lam), tol=tol, max_iter=max_iter,
+                tolerances=self.tolerances,
+            )
+            if found is not None:
+                x, history, traj = found
+                n = self.system.n
+                ev = Evaluation(residual=traj.x1 - x, jac_u=traj.monodromy - np.eye(n), jac_lam=None, trajectory=traj)
+                return self.orbit(x, lam, ev, history)
 
         def fun(u):
             ev = self.evaluate(u, lam, need_lam=False)
