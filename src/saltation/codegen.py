@@ -291,8 +291,10 @@ def module_source(system: PiecewiseSystem) -> str:
 
 def _module_path(system: PiecewiseSystem) -> tuple[Path, str]:
     """Where the generated module of a model lives: named by a hash of the model's mathematics,
-    the integrator template and this code generator (so the source need not be generated to know)."""
-    key = "\0".join([system.fingerprint, _kernel_text(), Path(__file__).read_text()])
+    the integrator template and the code that generates it (this module and the affine-mode
+    detection), so the source need not be generated to know."""
+    generators = [Path(__file__).read_text(), Path(__file__).with_name("affine.py").read_text()]
+    key = "\0".join([system.fingerprint, _kernel_text(), *generators])
     digest = hashlib.sha256(key.encode()).hexdigest()[:20]
     return cache_directory() / f"{system.name}_{digest}.py", digest
 
