@@ -1186,12 +1186,13 @@ def integrate_kernel(
         need_signs = True
 
     # packed results (each returned array costs a conversion): see saltation.integrate._unpack
-    out = np.zeros(1 + 4 * n + n * n)
+    out = np.zeros(1 + 5 * n + n * n)
     out[0] = t
     for i in range(n):
         out[1 + i] = y[i]
         out[1 + n + n * n + n + i] = xmin[i]
         out[1 + n + n * n + 2 * n + i] = xmax[i]
+        out[1 + n + n * n + 3 * n + i] = K[0, i]  # the field (or sliding field) at the end
     if var:
         for i in range(n * n + n):
             out[1 + n + i] = y[n + i]
@@ -1219,23 +1220,25 @@ def _needs_extrema(K, n):
 SHOOT_CONVERGED = 0
 SHOOT_FAILED = 1  # an integration failed, the residual is not finite, or no step reduces it
 SHOOT_MAX_ITER = 2
+SHOOT_BAD_PERIOD = 3  # a period that is not positive (the caller's own iteration explains it)
 
 
 @njit(cache=True)
-def _shot(x, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
+def _shot(x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
           control_variational, exact_affine):
-    """One shot ``x -> x(t1)`` with the fundamental solution matrix; None-like (status != 0) on failure."""
+    """One shot ``x -> x(t1)`` with the fundamental solution matrix (and ``psi`` of parameter ``pidx``);
+    status != 0 on failure (also for a state in no mode)."""
     mode = initial_mode(t0, x, p)  # noqa: F821
     if mode < 0:
         mode = 0  # not integrated: the caller sees the failure in info[0]
         res = integrate_kernel(
-            t0, t0, x, mode, p, True, NONE, rtol, atol, 0.0, max_step, max_events, max_steps,
+            t0, t0, x, mode, p, True, pidx, rtol, atol, 0.0, max_step, max_events, max_steps,
             tr_table, n_surfaces, False, phi0, psi0, control_variational, exact_affine,
         )
         res[0][0] = STATUS_NON_FINITE
         return res
     return integrate_kernel(
-        t0, t1, x, mode, p, True, NONE, rtol, atol, 0.0, max_step, max_events, max_steps,
+        t0, t1, x, mode, p, True, pidx, rtol, atol, 0.0, max_step, max_events, max_steps,
         tr_table, n_surfaces, False, phi0, psi0, control_variational, exact_affine,
     )
 
@@ -1254,7 +1257,7 @@ def shoot_forced(x0, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_
     n = x0.shape[0]
     x = x0.copy()
     history = np.zeros(max_iter + 1)
-    res = _shot(x, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
+    res = _shot(x, t0, t1, p, NONE, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
                 control_variational, exact_affine)
     if res[0][0] != STATUS_OK:
         return SHOOT_FAILED, 0, x, history[:0], res
@@ -1287,7 +1290,7 @@ def shoot_forced(x0, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_
         for _ in range(9):
             for i in range(n):
                 xt[i] = x[i] + du[i]
-            trial = _shot(xt, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
+            trial = _shot(xt, t0, t1, p, NONE, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
                           phi0, psi0, control_variational, exact_affine)
             if trial[0][0] == STATUS_OK:
                 rt = 0.0
@@ -1305,3 +1308,95 @@ def shoot_forced(x0, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_
         if not accepted:
             return SHOOT_FAILED, it, x, history[: it + 1], res
     return SHOOT_MAX_ITER, max_iter, x, history, res
+
+
+@njit(cache=True)
+def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, p0, x_ref, f_ref, tol, max_newton,
+                     max_correction, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
+                     phi0, psi0, control_variational, exact_affine):
+    """Newton on the pseudo-arclength system of a shooting problem, compiled.
+
+    The iteration of ``saltation.continuation.Corrector.solve_bordered`` on
+    ``z = (u, lam)``: ``r(u, lam) = 0`` with ``normal . (z - z_pred) = 0``,
+    where ``r = x(t0 + sign T) - x0`` (``u = x0``, ``T`` the forcing period)
+    or, autonomous, also ``f_ref . (x0 - x_ref)`` (``u = (x0, T)``).
+    Converged when ``|r| <= tol (1 + |u|)``.  Returns ``(code, iterations, z,
+    residual history, [r | J_u | J_lam], kernel result at z)``.
+    """
+    m = z_pred.shape[0] - 1
+    n = phi0.shape[0]
+    z = z_pred.copy()
+    p = p0.copy()
+    history = np.zeros(max_newton + 1)
+    jac = np.zeros((m, m + 2))  # residual, then the Jacobian [J_u | J_lam]
+    Jb = np.zeros((m + 1, m + 1))
+    rhs = np.zeros(m + 1)
+    x = np.zeros(n)
+    for it in range(max_newton + 1):
+        p[lam_index] = z[m]
+        period = z[n] if autonomous else forcing_period(p)  # noqa: F821
+        for i in range(n):
+            x[i] = z[i]
+        span = period if period > 0.0 else 0.0  # (also for nan)
+        res = _shot(x, t0, t0 + sign * span, p, lam_index, rtol, atol, max_step, max_events, max_steps,
+                    tr_table, n_surfaces, phi0, psi0, control_variational, exact_affine)
+        if not period > 0.0:
+            return SHOOT_BAD_PERIOD, it, z, history[:it], jac, res
+        if res[0][0] != STATUS_OK:
+            return SHOOT_FAILED, it, z, history[:it], jac, res
+        out = res[1]
+        velocity = 1 + 4 * n + n * n
+        rn = 0.0
+        for i in range(n):
+            jac[i, 0] = out[1 + i] - z[i]
+        if autonomous:
+            acc = 0.0
+            for i in range(n):
+                acc += f_ref[i] * (z[i] - x_ref[i])
+            jac[n, 0] = acc
+        for i in range(m):
+            rn += jac[i, 0] * jac[i, 0]
+        rn = math.sqrt(rn)
+        history[it] = rn
+        un = 0.0
+        for i in range(m):
+            un += z[i] * z[i]
+        # the Jacobian at z (returned with the converged point: the tangent needs it)
+        for i in range(n):
+            for j in range(n):
+                jac[i, 1 + j] = out[1 + n + i * n + j] - (1.0 if i == j else 0.0)
+            jac[i, 1 + m] = out[1 + n + n * n + i]
+        if autonomous:
+            for i in range(n):
+                jac[i, 1 + n] = sign * out[velocity + i]
+                jac[n, 1 + i] = f_ref[i]
+        else:
+            dperiod = forcing_period_dp(p, lam_index)  # noqa: F821
+            for i in range(n):
+                jac[i, 1 + m] += sign * dperiod * out[velocity + i]
+        if not math.isfinite(rn):
+            return SHOOT_FAILED, it, z, history[: it + 1], jac, res
+        if rn <= tol * (1.0 + math.sqrt(un)):
+            return SHOOT_CONVERGED, it, z, history[: it + 1], jac, res
+        if it == max_newton:
+            break
+        for i in range(m):
+            for j in range(m + 1):
+                Jb[i, j] = jac[i, 1 + j]
+            rhs[i] = jac[i, 0]
+        acc = 0.0
+        for j in range(m + 1):
+            Jb[m, j] = normal[j]
+            acc += normal[j] * (z[j] - z_pred[j])
+        rhs[m] = acc
+        dz = np.linalg.solve(Jb, rhs)  # LinAlgError (singular) reaches the caller
+        dn = 0.0
+        zn = 0.0
+        for j in range(m + 1):
+            dn += dz[j] * dz[j]
+            zn += z[j] * z[j]
+        if math.sqrt(dn) > max_correction * (1.0 + math.sqrt(zn)):
+            break  # diverging
+        for j in range(m + 1):
+            z[j] -= dz[j]
+    return SHOOT_MAX_ITER, it, z, history[: it + 1], jac, res

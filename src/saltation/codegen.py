@@ -220,7 +220,22 @@ def generate_source(system: PiecewiseSystem) -> str:
         "            return m",
         "    return -1",
     ]
+    src += _period_source(system, em)
     return "\n".join(src) + "\n"
+
+
+def _period_source(system: PiecewiseSystem, em: _Emitter) -> list[str]:
+    """``forcing_period(p)`` and its derivative ``forcing_period_dp(p, k)`` (0 for autonomous models)."""
+    period = system.period_expr if system.period_expr is not None else sp.Integer(0)
+    src = ["@njit(cache=True)", "def forcing_period(p):"] + em.block([], "    ", result=period)
+    src += ["@njit(cache=True)", "def forcing_period_dp(p, k):"]
+    for k, pk in enumerate(system.p):
+        d = sp.diff(period, pk)
+        if d != 0:
+            src.append(f"    if k == {k}:")
+            src += em.block([], "        ", result=d)
+    src.append("    return 0.0")
+    return src
 
 
 def _affine_source(system: PiecewiseSystem, em: _Emitter, ind: str) -> list[str]:

@@ -54,6 +54,14 @@ def affine_parts(mode, p, A, B, w):
 def affine_parts_dp(mode, p, Ap, Bp, wp):
     return
 @njit
+def forcing_period(p):
+    return math.nan  # a Python callable: the compiled corrector is not used
+
+@njit
+def forcing_period_dp(p, k):
+    return math.nan
+
+@njit
 def vector_field_dp(mode, t, x, p, out):
     out[:, :] = 0.0
 

@@ -131,9 +131,15 @@ class Corrector:
         ConvergenceError
             If Newton does not converge in ``max_newton`` iterations.
         """
+        prob = self.problem
+        s = self.settings
+        compiled = getattr(prob, "correct", None)
+        found = compiled(z_pred, normal, tol=s.tol, max_newton=s.max_newton, max_correction=s.max_correction) if compiled else None
+        if found is not None:
+            z, ev, it = found
+            return Solution(z=z, evaluation=ev, summary=prob.describe(z[:-1], float(z[-1]), ev), iterations=it)
         z = z_pred.copy()
         history = []
-        prob = self.problem
         for it in range(self.settings.max_newton + 1):
             ev = prob.evaluate(z[:-1], float(z[-1]))
             rn = float(np.linalg.norm(ev.residual))

@@ -18,6 +18,7 @@ import numpy as np
 from .codegen import load_kernels, transition_table
 from .errors import (
     ChatteringError,
+    ConvergenceError,
     IntegrationError,
     ModelError,
     NonFiniteError,
@@ -38,6 +39,11 @@ class Status(enum.IntEnum):
     SLIDING_UNDEFINED = 5
     MAX_STEPS = 6
     TANGENTIAL = 7
+
+
+# outcomes of the kernel's Newton iterations (``shoot_forced``, ``correct_periodic``)
+_SHOOT_CONVERGED = 0
+_SHOOT_BAD_PERIOD = 3
 
 
 class EventKind(enum.IntEnum):
@@ -110,6 +116,9 @@ class Trajectory:
         Extremes of every state over the trajectory (from the dense output).
     sliding_at_end : bool
         Whether the trajectory ends on a sliding motion.
+    velocity_end : ndarray, shape (n,)
+        The vector field at the end: the final mode's, or Filippov's sliding
+        field when the trajectory ends on a sliding motion.
     n_steps, n_rejected : int
         Accepted and rejected steps.
     """
@@ -127,6 +136,7 @@ class Trajectory:
     x_min: np.ndarray
     x_max: np.ndarray
     sliding_at_end: bool
+    velocity_end: np.ndarray
     n_steps: int
     n_rejected: int
     _steps: tuple[np.ndarray, ...] | None = field(default=None, repr=False)
@@ -394,10 +404,63 @@ class Flow:
             )
         except np.linalg.LinAlgError:  # a singular Jacobian
             return None
-        if code != 0:
+        if code != _SHOOT_CONVERGED:
             return None
         m0 = self.initial_mode(x, p, t0)
         return x, history.tolist(), self._unpack(out, x.copy(), float(t0), m0, True, -1, False)
+
+    def correct_periodic(
+        self, z_pred: np.ndarray, normal: np.ndarray, p: np.ndarray, *, t0: float, sign: float, lam_index: int,
+        phase: tuple[np.ndarray, np.ndarray] | None, tol: float, max_newton: int, max_correction: float,
+        tolerances: Tolerances | None = None,
+    ) -> tuple[int, np.ndarray, list[float], np.ndarray, np.ndarray, np.ndarray, Trajectory] | None:
+        """Newton on the pseudo-arclength system of a shooting problem, iterated in the kernel.
+
+        ``z = (x0, lam)`` for forced systems (the forcing period follows
+        ``lam``), ``z = (x0, T, lam)`` for autonomous ones with the phase
+        condition ``f_ref . (x0 - x_ref) = 0`` (``phase = (x_ref, f_ref)``).
+        Returns ``(iterations, z, residual history, residual, J_u, J_lam,
+        trajectory at z)``, or None when the kernel cannot run this problem (a
+        forcing period given as a Python callable, a period that is not
+        positive, a singular bordered matrix): then iterate in Python.
+
+        Raises
+        ------
+        ConvergenceError
+            If Newton does not converge (with the residual history).
+        InitialModeError, IntegrationError
+            If a shot fails (the error of :meth:`run`).
+        """
+        sys_ = self.system
+        if phase is None and not isinstance(sys_, PiecewiseSystem):
+            return None  # the forcing period is a Python callable
+        tol_ = tolerances or self.tolerances
+        x_ref, f_ref = phase if phase is not None else (self._zeros, self._zeros)
+        p = np.ascontiguousarray(p, dtype=float)
+        try:
+            code, it, z, history, jac, out = self._kernels.correct_periodic(
+                np.ascontiguousarray(z_pred, dtype=float), np.ascontiguousarray(normal, dtype=float), float(t0),
+                float(sign), bool(phase is not None), int(lam_index), p, x_ref, f_ref, float(tol), int(max_newton),
+                float(max_correction), float(tol_.rtol), float(tol_.atol), float(tol_.max_step), int(tol_.max_events),
+                int(tol_.max_steps), self._table, self._n_surfaces, self._identity, self._zeros,
+                bool(tol_.control_variational), bool(tol_.exact_affine),
+            )
+        except np.linalg.LinAlgError:  # a singular bordered matrix
+            return None
+        if code == _SHOOT_BAD_PERIOD:
+            return None
+        n = sys_.n
+        x0 = z[:n].copy()
+        p_end = p.copy()
+        p_end[lam_index] = z[-1]
+        if code != _SHOOT_CONVERGED and int(out[0][0]) == Status.OK:
+            raise ConvergenceError("corrector did not converge", history.tolist())
+        m0 = int(self._kernels.initial_mode(float(t0), x0, p_end))
+        if m0 < 0:
+            self.system.initial_mode(x0, p_end, t0)  # raises with the full explanation
+        traj = self._unpack(out, x0, float(t0), m0, True, lam_index, False)  # raises a failed shot's error
+        m = len(z) - 1
+        return it, z, history.tolist(), jac[:, 0].copy(), jac[:, 1 : 1 + m].copy(), jac[:, 1 + m].copy(), traj
 
     def _unpack(self, out, x0, t0, m0, variational, parameter, dense) -> Trajectory:
         sys_ = self.system
@@ -408,7 +471,8 @@ class Flow:
         Phi = res[1 + n : 1 + n + n * n].reshape(n, n)
         psi = res[1 + n + n * n : 1 + 2 * n + n * n]
         xmin = res[1 + 2 * n + n * n : 1 + 3 * n + n * n]
-        xmax = res[1 + 3 * n + n * n :]
+        xmax = res[1 + 3 * n + n * n : 1 + 4 * n + n * n]
+        velocity = res[1 + 4 * n + n * n :]
         event_log = (ev[:, 0], ev_int, ev[:, 1 : 1 + n], ev[:, 1 + n : 1 + 2 * n], ev[:, 1 + 2 * n :].reshape(-1, n, n))
         rt, rh, rs, ry = rec[:, 0], rec[:, 1], rec[:, 2], rec[:, 3:]
         status = Status(int(info[0]))
@@ -429,6 +493,7 @@ class Flow:
             x_min=xmin,
             x_max=xmax,
             sliding_at_end=bool(info[7]),
+            velocity_end=velocity,
             n_steps=int(info[4]),
             n_rejected=int(info[5]),
             _steps=(rt, rh, rs, ry, rF) if dense else None,

@@ -288,7 +288,7 @@ class ShootingProblem:
                 jl = traj.parameter_sensitivity.copy()
                 dT = self.system.period_derivative(p, pidx)
                 if dT:  # the period moves with the parameter: the end point moves along the flow
-                    jl += (self.sign * dT) * self._end_velocity(traj, p)
+                    jl += (self.sign * dT) * traj.velocity_end
             return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
         if self.x_ref is None:
             self.set_phase_reference(u, lam)
@@ -298,21 +298,44 @@ class ShootingProblem:
         J = np.zeros((n + 1, n + 1))
         J[:n, :n] = M
         J[:n, :n] -= np.eye(n)
-        J[:n, n] = self.sign * self._end_velocity(traj, p)
+        J[:n, n] = self.sign * traj.velocity_end
         J[n, :n] = self.f_ref
         if pidx >= 0:
             jl = np.zeros(n + 1)
             jl[:n] = traj.parameter_sensitivity
         return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
 
-    def _end_velocity(self, traj: Trajectory, p: np.ndarray) -> np.ndarray:
-        """The velocity at the end of a shot: the mode's field, or the sliding field on a sliding motion."""
-        if traj.sliding_at_end:
-            return _sliding_velocity(self.flow, traj, p)
-        f_end = np.zeros(self.system.n)
-        mode_end = self.system.mode_index(traj.mode1)
-        self.flow._kernels.vector_field(mode_end, traj.t1, np.ascontiguousarray(traj.x1), p, f_end)
-        return f_end
+    def correct(
+        self, z_pred: np.ndarray, normal: np.ndarray, *, tol: float, max_newton: int, max_correction: float
+    ) -> tuple[np.ndarray, Evaluation, int] | None:
+        """The corrector of pseudo-arclength continuation, iterated in the compiled kernel.
+
+        Solves ``r(u, lam) = 0``, ``normal . (z - z_pred) = 0`` for
+        ``z = (u, lam)`` by the Newton iteration of
+        :meth:`saltation.continuation.Corrector.solve_bordered`.  Returns the
+        solution, its evaluation and the number of iterations, or None when
+        the kernel cannot run it (then iterate in Python).
+
+        Raises
+        ------
+        ConvergenceError
+            If Newton does not converge.
+        """
+        if self.lam_index < 0:
+            return None
+        phase = None
+        if self.autonomous:
+            if self.x_ref is None:
+                self.set_phase_reference(z_pred[:-1], float(z_pred[-1]))
+            phase = (self.x_ref, self.f_ref)
+        found = self.flow.correct_periodic(
+            z_pred, normal, self.p, t0=self.t0, sign=self.sign, lam_index=self.lam_index, phase=phase, tol=tol,
+            max_newton=max_newton, max_correction=max_correction, tolerances=self.tolerances,
+        )
+        if found is None:
+            return None
+        iterations, z, _, residual, jac_u, jac_lam, traj = found
+        return z, Evaluation(residual=residual, jac_u=jac_u, jac_lam=jac_lam, trajectory=traj), iterations
 
     def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
         """Summary of a solved point for a branch (multipliers, amplitude, events)."""
@@ -389,26 +412,6 @@ class ShootingProblem:
             residual_norm=float(history[-1]) if history else float(np.linalg.norm(ev.residual)),
             residuals=list(history),
         )
-
-
-def _sliding_velocity(flow: Flow, traj: Trajectory, p: np.ndarray) -> np.ndarray:
-    """Velocity at the end of a trajectory that ends on a sliding motion: Filippov's sliding field there."""
-    sys_ = flow.system
-    ev = [e for e in traj.events if e.kind == 1][-1]
-    a, b = sys_.mode_index(ev.mode_from), sys_.mode_index(ev.mode_to)
-    s = sys_.surface_index(ev.surface)
-    k = flow._kernels
-    x = np.ascontiguousarray(traj.x1)
-    fa = np.zeros(sys_.n)
-    fb = np.zeros(sys_.n)
-    k.vector_field(a, traj.t1, x, p, fa)
-    k.vector_field(b, traj.t1, x, p, fb)
-    g = np.zeros(sys_.n)
-    gp = np.zeros(max(sys_.n_params, 1))
-    sa = k.lie_derivative(a, s, traj.t1, x, p, g, gp)
-    sb = k.lie_derivative(b, s, traj.t1, x, p, g, gp)
-    alpha = sa / (sa - sb)
-    return fa + alpha * (fb - fa)
 
 
 def find_periodic_orbit(
