@@ -157,7 +157,7 @@ class SpecialPointDetector:
         secant = _unit(b.z - a.z)
         # a point's test values are kept for the next pair: both secants point along the branch,
         # so the tangent (fold test) is oriented alike
-        fold = _remembered("fold", lambda s: self.corrector.tangent(s, secant)[-1])
+        fold = _remembered("fold", lambda s: self._oriented_tangent(s, secant)[-1])
         if _crosses(fold(a), fold(b)):
             found.append(self.locate_smooth(a, b, index, SpecialPointKind.FOLD, fold))
         if self.equilibrium:
@@ -170,6 +170,12 @@ class SpecialPointDetector:
             if _crosses(g(a), g(b)):
                 found.append(self.locate_smooth(a, b, index, kind, g))
         return found
+
+    def _oriented_tangent(self, sol: Solution, direction: np.ndarray) -> np.ndarray:
+        """The unit tangent at ``sol`` oriented along ``direction`` (the one continuation computed, if any)."""
+        if sol.tangent is None:
+            return self.corrector.tangent(sol, direction)
+        return sol.tangent if sol.tangent @ direction >= 0.0 else -sol.tangent
 
     # -- location along the secant ----------------------------------------------------------
     def on_secant(self, a: Solution, b: Solution, sigma: float) -> Solution:
