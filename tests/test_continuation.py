@@ -243,3 +243,62 @@ def test_neimark_sacker_of_the_linear_response(tri_flow):
         mu = np.linalg.eigvals(expm(A * 2 * np.pi / w))
         assert np.allclose(np.sort_complex(p.multipliers), np.sort_complex(mu), atol=1e-8)
         assert p.stable == (p.parameter > 0)
+
+
+# -- a harder, impacting regime: period doubling and a closed branch ---------------------------
+#: stiff, lightly damped supports and strong forcing: the response curve from w = 0.5 leaves the
+#: symmetric branch at a grazing point onto a loop of one-sided contact orbits (and their mirror
+#: images), with a smooth period doubling on each half
+IMPACTING = {"k_f": 25.0, "c": 0.01, "f0": 0.6, "c_f": 0.5}
+LOOP_SETTINGS = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(0.5, 3.0), max_points=3000)
+
+
+@pytest.fixture(scope="module")
+def impacting_branch(tri_flow):
+    problem = ShootingProblem(tri_flow, IMPACTING | {"omega": 0.5}, continuation_parameter="omega")
+    x0 = linear_response_state(dict(TRI) | IMPACTING | {"omega": 0.5})
+    return continue_branch(problem, x0, 0.5, settings=LOOP_SETTINGS, directions=(1,))
+
+
+def test_period_doubling_located_where_a_multiplier_is_minus_one(tri_flow, impacting_branch):
+    """Reference: the monodromy by central differences of the period map (no saltation matrices)."""
+    from conftest import TIGHT, central_difference_jacobian
+
+    pds = [sp for sp in impacting_branch.special_points if sp.kind is SpecialPointKind.PERIOD_DOUBLING]
+    assert len(pds) == 2  # one on each half of the loop: mirror images, at the same frequency
+    assert pds[0].parameter == pytest.approx(pds[1].parameter, abs=1e-9)
+    for sp in pds:
+        p = tri_flow.parameters(IMPACTING | {"omega": sp.parameter})
+        T = 2 * np.pi / sp.parameter
+        fd = central_difference_jacobian(lambda x: tri_flow.run(x, 0.0, T, p, tolerances=TIGHT).x1, sp.state, 1e-6)
+        mu = np.linalg.eigvals(fd)
+        assert np.min(np.abs(mu + 1.0)) < 1e-6
+        # stability changes across it, by a real multiplier through -1
+        before, after = impacting_branch.points[sp.index], impacting_branch.points[sp.index + 1]
+        assert before.stable != after.stable
+        unstable = after if before.stable else before
+        worst = unstable.multipliers[np.argmax(np.abs(unstable.multipliers))]
+        assert abs(worst.imag) < 1e-12 and worst.real < -1.0
+
+
+def test_branch_stops_when_it_comes_round_a_loop(impacting_branch):
+    """The run meets its first special point of the loop again: it stops instead of circling
+    until max_points, and records each special point once."""
+    assert impacting_branch.stop_reason.name == "CLOSED_LOOP"
+    assert len(impacting_branch.points) < LOOP_SETTINGS.max_points // 10
+    sps = impacting_branch.special_points
+    keys = [(sp.kind, round(sp.parameter, 7), tuple(np.round(sp.state, 6))) for sp in sps]
+    assert len(keys) == len(set(keys))
+    assert {sp.kind for sp in sps} >= {SpecialPointKind.PERIOD_DOUBLING, SpecialPointKind.FOLD}
+
+
+def test_branch_stops_when_it_passes_its_start_again(tri_flow, impacting_branch):
+    """Started on the loop, the run ends one step past its first point."""
+    start = next(pt for pt in impacting_branch.points if 0.80 < pt.parameter < 0.82 and len(pt.events) == 2)
+    problem = ShootingProblem(tri_flow, IMPACTING | {"omega": start.parameter}, continuation_parameter="omega")
+    branch = continue_branch(problem, start.state, start.parameter, settings=LOOP_SETTINGS, directions=(1,))
+    assert branch.stop_reason.name == "CLOSED_LOOP"
+    assert 20 < len(branch.points) < LOOP_SETTINGS.max_points // 10
+    last = branch.points[-1]
+    gap = np.hypot(last.parameter - start.parameter, np.linalg.norm(last.state - start.state))
+    assert gap <= 1.5 * LOOP_SETTINGS.ds_max

@@ -14,6 +14,9 @@ equilibria): ``evaluate(u, lam) -> Evaluation``, ``describe``, ``accept``.
   where the tangent genuinely jumps and the step is accepted.
 * After every step, :mod:`saltation.bifurcations` looks for special points
   between the last two points and locates them.
+* A run stops when the branch closes: a step passes the first point again
+  in the same direction, or a special point is located a second time from
+  the same side (a loop that the run entered away from its start).
 """
 
 from __future__ import annotations
@@ -284,10 +287,17 @@ class Continuation:
                 self.branch.stop_reason = StopReason.MIN_STEP
                 return
             self._accept(new)
+            closed = self._passes_start(prev, new)
             if detector is not None:
                 for sp in detector.check(self.solutions[-2], self.solutions[-1], len(self.branch.points) - 2):
-                    self.branch.special_points.append(sp)
+                    if any(_same_special_point(sp, old) for old in self.branch.special_points):
+                        closed = True  # met again, from the same side: the branch has come round a loop
+                    else:
+                        self.branch.special_points.append(sp)
             yield self.branch.points[-1]
+            if closed:
+                self.branch.stop_reason = StopReason.CLOSED_LOOP
+                return
             if new.lam >= hi or new.lam <= lo:
                 self.branch.stop_reason = StopReason.PARAMETER_BOUND
                 return
@@ -312,6 +322,19 @@ class Continuation:
                 z = z + (0.5 * ds * ds / prev.step) * (prev.tangent - before.tangent)
         return z
 
+    def _passes_start(self, prev: Solution, new: Solution) -> bool:
+        """Whether the step from ``prev`` to ``new`` passes the run's first point again, in the same direction."""
+        if len(self.solutions) < 4:
+            return False
+        start = self.solutions[0]
+        step = new.z - prev.z
+        length = float(np.linalg.norm(step))
+        if length == 0.0 or step @ start.tangent <= 0.0:
+            return False
+        along = float(np.clip((start.z - prev.z) @ step / length**2, 0.0, 1.0))
+        gap = float(np.linalg.norm(prev.z + along * step - start.z))
+        return 0.0 < along < 1.0 and gap <= 0.05 * length
+
     def _accept(self, sol: Solution) -> None:
         self.problem.accept(sol.u, sol.lam)
         self.solutions.append(sol)
@@ -330,6 +353,17 @@ class Continuation:
                 iterations=sol.iterations,
             )
         )
+
+
+def _same_special_point(a, b, rtol: float = 1e-6) -> bool:
+    """The same special point located twice: kind, sides, parameter and state agree."""
+    return (
+        a.kind is b.kind
+        and a.events_minus == b.events_minus
+        and a.events_plus == b.events_plus
+        and abs(a.parameter - b.parameter) <= rtol * (1.0 + abs(b.parameter))
+        and float(np.linalg.norm(np.asarray(a.state) - np.asarray(b.state))) <= rtol * (1.0 + float(np.linalg.norm(b.state)))
+    )
 
 
 def continue_branch(
