@@ -513,7 +513,8 @@ def _dip_search(kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp):
 
 @njit(cache=True)
 def _slope(mode, slide, kind, idx, t, x, f, p, n, hx, hp, gtmp, gptmp):
-    """Time derivative of an event function along ``f`` (indicators: ``h_x f + h_t``)."""
+    """Time derivative of an event function along ``f`` (indicators: ``h_x f + h_t``; sliding exits:
+    the Lie derivative's ``s_x f + s_t``)."""
     if kind == 0:
         ht = indicator_grad(idx, t, x, p, hx, hp)  # noqa: F821
         acc = ht
@@ -522,7 +523,7 @@ def _slope(mode, slide, kind, idx, t, x, f, p, n, hx, hp, gtmp, gptmp):
         return acc
     m = slide[1] if kind == 1 else slide[2]
     lie_derivative(m, slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
-    acc = 0.0
+    acc = lie_derivative_dt(m, slide[3], t, x, p)  # noqa: F821
     for i in range(n):
         acc += gtmp[i] * f[i]
     return (slide[4] if kind == 1 else -slide[4]) * slide[5] * acc
@@ -962,56 +963,53 @@ def integrate_kernel(
         _track_extrema(F, y, best_s, n, xmin, xmax, K[0], K[12], xtmp, direction)
         if record:
             rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, best_s, y[:n], F)
-        # refine the event time by re-stepping from the step start (secant on the true RK solution)
+        # refine the event time: Newton on the event function of the stepped solution, with its exact
+        # slope along the augmented field; a correction far below the step is a first-order Taylor
+        # step of [x, Phi, psi] (its second-order term is below rounding), a larger one a re-step
         for i in range(N):
             ysave[i] = y[i]
         for i in range(N):
             Ksave[0, i] = K[0, i]
         sgn_ev = surf_sign[best_idx] if best_kind == 0 else 1.0
+        s_tiny = 2.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300))
         s_e = best_s
-        s_prev = -1.0
-        g_e = 1.0
-        g_prev = 0.0
-        for it in range(6):
-            if it > 0:  # the first state at the event is the checked step's
+        g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+        for it in range(8):
+            if g_e == 0.0:
+                break
+            _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, n, var, pidx, Ksave[1], W, WJ, WP, wv)
+            dg = sgn_ev * h * _slope(mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, n, hx, hp, gtmp, gptmp)
+            if dg == 0.0 or not math.isfinite(dg):
+                break
+            s_new = min(max(s_e - g_e / dg, 0.0), 1.0)
+            if abs(s_new - s_e) <= s_tiny:
+                break
+            if abs(s_new - s_e) <= 1e-9:
+                dt = (s_new - s_e) * h
+                for i in range(N):
+                    ynew[i] += dt * Ksave[1, i]
+            else:
                 for i in range(N):
                     K[0, i] = Ksave[0, i]
-                if s_e > 0.0:
-                    _step(exact, mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
-                          AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC)
+                if s_new > 0.0:
+                    _step(exact, mode, slide, t, ysave, s_new * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
+                          n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC)
                 else:
                     for i in range(N):
                         ynew[i] = ysave[i]
-            g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
-            if g_e == 0.0:
-                break
-            if s_prev < 0.0:
-                dg = (
-                    _dense_event(best_kind, best_idx, slide, sgn_ev, t, h, F, y, min(s_e + 1e-7, 1.0), p, xtmp, gtmp, gptmp)
-                    - _dense_event(best_kind, best_idx, slide, sgn_ev, t, h, F, y, max(s_e - 1e-7, 0.0), p, xtmp, gtmp, gptmp)
-                ) / (min(s_e + 1e-7, 1.0) - max(s_e - 1e-7, 0.0))
-            else:
-                dg = (g_e - g_prev) / (s_e - s_prev) if s_e != s_prev else 0.0
-            if dg == 0.0 or not math.isfinite(dg):
-                break
-            ds = -g_e / dg
-            s_prev = s_e
-            g_prev = g_e
-            s_new = min(max(s_e + ds, 0.0), 1.0)
-            if abs(s_new - s_e) <= 2.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300)):
-                break
             s_e = s_new
+            g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
         # make sure the event state lies on (or just past) the switching set, never before it
-        bump = 4.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300))
+        bump = 2.0 * s_tiny
         for it in range(40):
             if g_e <= 0.0 or s_e >= 1.0:
                 break
-            s_e = min(s_e + bump, 1.0)
-            bump *= 2.0
+            _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, n, var, pidx, Ksave[1], W, WJ, WP, wv)
+            ds = min(bump, 1.0 - s_e)
             for i in range(N):
-                K[0, i] = Ksave[0, i]
-            _step(exact, mode, slide, t, ysave, s_e * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
-                          AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC)
+                ynew[i] += ds * h * Ksave[1, i]
+            s_e += ds
+            bump *= 2.0
             g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
         t_e = t + s_e * h
         # state at the event (before it)
