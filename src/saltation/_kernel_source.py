@@ -231,6 +231,20 @@ LOBATTO_NODES, LOBATTO_TO_DENSE, LOBATTO_BOUND = _lobatto_interpolation()
 
 
 @njit(cache=True)
+def _affine_norm(A, B, om):
+    """Row-sum norm of the augmented matrix ``[[A, B], [0, omega J]]`` of an affine mode."""
+    mnorm = abs(om)
+    for i in range(A.shape[0]):
+        row = 0.0
+        for j in range(A.shape[1]):
+            row += abs(A[i, j])
+        for j in range(3):
+            row += abs(B[i, j])
+        mnorm = max(mnorm, row)
+    return mnorm
+
+
+@njit(cache=True)
 def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TZ, TP, TC):
     """One step of the exact flow of an affine mode; returns the dense output's error norm.
 
@@ -252,16 +266,11 @@ def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AF
     Ap = AFF_AP[mode]
     Bp = AFF_BP[mode]
     omp = AFF_W[mode, 2]
-    mnorm = abs(om)
+    mnorm = _affine_norm(A, B, om)
     bmax = 0.0
     for i in range(n):
-        row = 0.0
-        for j in range(n):
-            row += abs(A[i, j])
         for j in range(3):
-            row += abs(B[i, j])
             bmax = max(bmax, abs(B[i, j]))
-        mnorm = max(mnorm, row)
     if mnorm * abs(h) > 4.0:
         return (mnorm * abs(h) / 2.0) ** 8
     xs = TW[0]
@@ -773,6 +782,10 @@ def integrate_kernel(
         d1 = math.sqrt(d1 / n)
         habs = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
         habs = min(habs, tspan if tspan > 0 else 1.0)
+        if exact_affine and AFFINE_MODES[mode]:  # noqa: F821
+            # an exact step is good for h |M| of order one (``_exact_step``): start there, not from
+            # the estimate of a method of order 8 at these tolerances
+            habs = max(habs, 0.5 / max(_affine_norm(AFF_A[mode], AFF_B[mode], AFF_W[mode, 0]), 1e-300))
         habs = max(habs, 1e-6 * max(tspan, 1e-300))
         habs = min(habs, 0.1 * tspan) if tspan > 0 else habs
     habs = min(habs, max_step)
