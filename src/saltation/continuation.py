@@ -136,22 +136,24 @@ class Corrector:
         """
         prob = self.problem
         s = self.settings
-        compiled = getattr(prob, "correct", None)
-        found = compiled(z_pred, normal, tol=s.tol, max_newton=s.max_newton, max_correction=s.max_correction) if compiled else None
+        found = None
+        compiled = getattr(prob, "correct", None)  # shooting problems iterate in the compiled kernel
+        if compiled is not None:
+            found = compiled(z_pred, normal, tol=s.tol, max_newton=s.max_newton, max_correction=s.max_correction)
         if found is not None:
             z, ev, it = found
             return Solution(z=z, evaluation=ev, summary=prob.describe(z[:-1], float(z[-1]), ev), iterations=it)
         z = z_pred.copy()
         history = []
-        for it in range(self.settings.max_newton + 1):
+        for it in range(s.max_newton + 1):
             ev = prob.evaluate(z[:-1], float(z[-1]))
             rn = float(np.linalg.norm(ev.residual))
             history.append(rn)
             if not np.isfinite(rn):
                 break
-            if rn <= self.settings.tol * (1.0 + float(np.linalg.norm(z[:-1]))):
+            if rn <= s.tol * (1.0 + float(np.linalg.norm(z[:-1]))):
                 return Solution(z=z, evaluation=ev, summary=prob.describe(z[:-1], float(z[-1]), ev), iterations=it)
-            if it == self.settings.max_newton:
+            if it == s.max_newton:
                 break
             J = bordered(ev.jac_u, ev.jac_lam, normal)
             rhs = np.append(ev.residual, normal @ (z - z_pred))
@@ -159,7 +161,7 @@ class Corrector:
                 dz = np.linalg.solve(J, rhs)
             except np.linalg.LinAlgError:
                 break
-            if np.linalg.norm(dz) > self.settings.max_correction * (1.0 + np.linalg.norm(z)):
+            if np.linalg.norm(dz) > s.max_correction * (1.0 + np.linalg.norm(z)):
                 break  # diverging: let the step control shorten the step
             z = z - dz
         raise ConvergenceError("corrector did not converge", history)
