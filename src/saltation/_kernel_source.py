@@ -50,6 +50,9 @@ CHATTER_WINDOW = 20
 # integers: a literal int argument would make numba compile the callee once more for it
 KIND_INDICATOR = np.int64(0)
 NONE = np.int64(-1)
+# the same for flags passed to the integrator from compiled code (a literal True is a type of its own)
+ON = np.bool_(True)
+OFF = np.bool_(False)
 
 
 @njit(cache=True, inline="always")  # inlined: array arguments cost more than the work
@@ -1240,18 +1243,14 @@ def _shot(x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_ta
     """One shot ``x -> x(t1)`` with the fundamental solution matrix (and ``psi`` of parameter ``pidx``);
     status != 0 on failure (also for a state in no mode)."""
     mode = initial_mode(t0, x, p)  # noqa: F821
-    if mode < 0:
-        mode = 0  # not integrated: the caller sees the failure in info[0]
-        res = integrate_kernel(
-            t0, t0, x, mode, p, True, pidx, rtol, atol, 0.0, max_step, max_events, max_steps,
-            tr_table, n_surfaces, False, phi0, psi0, control_variational, exact_affine,
-        )
-        res[0][0] = STATUS_NON_FINITE
-        return res
-    return integrate_kernel(
-        t0, t1, x, mode, p, True, pidx, rtol, atol, 0.0, max_step, max_events, max_steps,
-        tr_table, n_surfaces, False, phi0, psi0, control_variational, exact_affine,
+    failed = mode < 0  # in no mode: not integrated, the caller sees the failure in info[0]
+    res = integrate_kernel(
+        t0, t0 if failed else t1, x, max(mode, NONE + 1), p, ON, pidx, rtol, atol, 0.0, max_step, max_events,
+        max_steps, tr_table, n_surfaces, OFF, phi0, psi0, control_variational, exact_affine,
     )
+    if failed:
+        res[0][0] = STATUS_NON_FINITE
+    return res
 
 
 @njit(cache=True)

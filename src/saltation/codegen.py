@@ -324,11 +324,23 @@ def _compile_in_worker(system: PiecewiseSystem) -> str:
     from .integrate import Flow
 
     flow = Flow(system)
-    x0 = np.zeros(system.n)
+    n, p = system.n, flow.parameters()
     try:
-        flow.run(x0, 0.0, 1e-3, flow.parameters(), variational=True, parameter=0 if system.n_params else -1)
-    except Exception:  # noqa: BLE001 - compiling is what matters here, not this tiny run
+        flow.run(np.zeros(n), 0.0, 1e-3, p, variational=True, parameter=0 if system.n_params else -1)
+    except Exception:  # noqa: BLE001 - compiling is what matters here, not these tiny runs
         pass
+    if system.n_params:  # the corrector of continuation
+        m = n + (1 if system.is_autonomous else 0)
+        normal = np.zeros(m + 1)
+        normal[-1] = 1.0
+        phase = (np.zeros(n), np.zeros(n)) if system.is_autonomous else None
+        try:
+            flow.correct_periodic(
+                np.zeros(m + 1), normal, p, t0=0.0, sign=1.0, lam_index=0, phase=phase, tol=1e-10, max_newton=0,
+                max_correction=1.0,
+            )
+        except Exception:  # noqa: BLE001
+            pass
     return system.name
 
 
