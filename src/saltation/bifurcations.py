@@ -257,25 +257,43 @@ class SpecialPointDetector:
                 m_lo, m_hi, backward=self.branch.backward, autonomous=self.autonomous,
                 mu_minus=lo.summary.multipliers, mu_plus=hi.summary.multipliers,
             )
-        return SpecialPoint(
-            kind=crossing.kind,
-            parameter=0.5 * (lo.lam + hi.lam),
-            bracket=(min(lo.lam, hi.lam), max(lo.lam, hi.lam)),
-            accuracy=float(np.linalg.norm(hi.z - lo.z)),
-            index=index,
-            state=lo.summary.state,
-            period=lo.summary.period,
-            amplitude=lo.summary.amplitude,
-            multipliers_minus=lo.summary.multipliers,
-            multipliers_plus=hi.summary.multipliers,
-            monodromy_minus=m_lo,
-            monodromy_plus=m_hi,
-            crossing_q=crossing.q,
-            crossing_point=crossing.point,
-            events_minus=lo.summary.events,
-            events_plus=hi.summary.events,
-            note=note,
+        return special_point_between(
+            lo, hi, crossing, index=index, bracket=(min(lo.lam, hi.lam), max(lo.lam, hi.lam)),
+            accuracy=float(np.linalg.norm(hi.z - lo.z)), monodromy_plus=m_hi, note=note,
         )
+
+
+def special_point_between(
+    lo: Solution,
+    hi: Solution,
+    crossing: SetValuedCrossing,
+    *,
+    index: int,
+    bracket: tuple[float, float],
+    accuracy: float,
+    monodromy_plus: np.ndarray | None,
+    note: str = "",
+) -> SpecialPoint:
+    """The record of a non-smooth point from the solutions on its two sides (``lo`` on the side of point ``index``)."""
+    return SpecialPoint(
+        kind=crossing.kind,
+        parameter=0.5 * (lo.lam + hi.lam),
+        bracket=bracket,
+        accuracy=accuracy,
+        index=index,
+        state=lo.summary.state,
+        period=lo.summary.period,
+        amplitude=lo.summary.amplitude,
+        multipliers_minus=lo.summary.multipliers,
+        multipliers_plus=hi.summary.multipliers,
+        monodromy_minus=lo.summary.monodromy,
+        monodromy_plus=monodromy_plus,
+        crossing_q=crossing.q,
+        crossing_point=crossing.point,
+        events_minus=lo.summary.events,
+        events_plus=hi.summary.events,
+        note=note,
+    )
 
 
 def _remembered(name: str, test: Callable[[Solution], float]) -> Callable[[Solution], float]:

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .bifurcations import classify_nonsmooth
+from .bifurcations import classify_nonsmooth, special_point_between
 from .branch import Branch, SpecialPoint
 from .continuation import Continuation, ContinuationSettings, Corrector, Solution, canonical_events
 from .errors import SaltationError
@@ -197,23 +197,11 @@ def follow_through_discontinuous_fold(
         end.summary.monodromy, None, autonomous=prob_f.autonomous,
         mu_minus=end.summary.multipliers, mu_plus=end_b.summary.multipliers,
     )
-    fold = SpecialPoint(
-        kind=crossing.kind,
-        parameter=0.5 * (end.lam + end_b.lam),
+    fold = special_point_between(
+        end, end_b, crossing, index=0,
         bracket=(min(end.lam, end_b.lam, lo), max(end.lam, end_b.lam, hi)),
         accuracy=abs(end.lam - end_b.lam),
-        index=0,
-        state=end.summary.state,
-        period=end.summary.period,
-        amplitude=end.summary.amplitude,
-        multipliers_minus=end.summary.multipliers,
-        multipliers_plus=end_b.summary.multipliers,
-        monodromy_minus=end.summary.monodromy,
-        monodromy_plus=None,
-        crossing_q=crossing.q,
-        crossing_point=crossing.point,
-        events_minus=end.summary.events,
-        events_plus=end_b.summary.events,
+        monodromy_plus=None,  # the other side's monodromy is a backward-time one
         note=(
             "end of the forward-time branch, joined to the infinitely unstable branch found by backward-time "
             "shooting; bracket from both branch ends"
