@@ -455,9 +455,7 @@ class Flow:
         p_end[lam_index] = z[-1]
         if code != _SHOOT_CONVERGED and int(out[0][0]) == Status.OK:
             raise ConvergenceError("corrector did not converge", history.tolist())
-        m0 = int(self._kernels.initial_mode(float(t0), x0, p_end))
-        if m0 < 0:
-            self.system.initial_mode(x0, p_end, t0)  # raises with the full explanation
+        m0 = self.initial_mode(x0, p_end, t0)  # raises for a state in no mode
         traj = self._unpack(out, x0, float(t0), m0, True, lam_index, False)  # raises a failed shot's error
         m = len(z) - 1
         return it, z, history.tolist(), jac[:, 0].copy(), jac[:, 1 : 1 + m].copy(), jac[:, 1 + m].copy(), traj
