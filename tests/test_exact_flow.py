@@ -96,6 +96,61 @@ def test_dense_output_of_exact_steps(trilinear_flow):
     assert traj.x_max[0] == pytest.approx(np.max(exact[:, 0]), abs=1e-10)
 
 
+def _exact_step_workspace(kernels, flow, p, pidx):
+    """The affine parts of every mode (and their derivatives by parameter ``pidx``), as the kernel sets them up."""
+    n, n_modes, n_par = flow.system.n, len(flow.system.mode_names), len(p)
+    A, B, W = np.zeros((n_modes, n, n)), np.zeros((n_modes, n, 3)), np.zeros((n_modes, 4))
+    Ap, Bp = np.zeros((n_modes, n, n)), np.zeros((n_modes, n, 3))
+    Ap_all, Bp_all, wp_all = np.zeros((n_par, n, n)), np.zeros((n_par, n, 3)), np.zeros((n_par, 2))
+    for m in range(n_modes):
+        kernels.affine_parts(m, p, A[m], B[m], W[m, :2])
+        kernels.affine_parts_dp(m, p, Ap_all, Bp_all, wp_all)
+        Ap[m], Bp[m], W[m, 2:] = Ap_all[pidx], Bp_all[pidx], wp_all[pidx]
+    return A, B, W, Ap, Bp
+
+
+@pytest.mark.parametrize("theta", [1e-4, 0.37, 1.0])
+def test_a_fraction_of_an_exact_step_is_the_exact_step_to_that_point(trilinear_flow, theta):
+    """A rejected step, the step to an event and the steps of its refinement re-use the series of the
+    step attempted first, summed at a fraction of it: [x, Phi, psi], the field at the end, the dense
+    output and its error bound must be those of a new series for the shorter step."""
+    k = trilinear_flow._kernels
+    system = trilinear_flow.system
+    n, N, rows = system.n, 2 * system.n + system.n**2, k.MAX_TAYLOR + 4
+    p = trilinear_flow.parameters({"omega": 1.0})
+    pidx = system.parameter_index("omega")  # the forcing's terms of the sensitivity count too
+    aff = _exact_step_workspace(k, trilinear_flow, p, pidx)
+    mode = system.mode_index("contact_1")
+    t, h = 0.7, 0.3
+    y = np.concatenate([[1.1, 0.4], [1.2, -0.3, 0.5, 0.9], [0.2, -0.7]])  # x, Phi (row-major), psi
+
+    def step(length, fraction_of=None):
+        K, ynew, F = np.zeros((16, N)), np.zeros(N), np.zeros((7, n))
+        TW, TP, TC = np.zeros((7, n)), np.zeros((3, n, n)), np.zeros((rows, N))
+        err = k._exact_step(mode, t, y, fraction_of or length, n, True, pidx, 1e-10, 1e-12, *aff, K, ynew, TW, TP, TC)
+        if fraction_of is not None:
+            err = k._exact_fraction(mode, t, y, fraction_of, length / fraction_of, n, True, 1e-10, 1e-12, *aff[:3],
+                                    K, ynew, TC)
+        k._exact_dense(y, ynew, n, TC, F)
+        dense = np.zeros((11, n))
+        for i, s in enumerate(np.linspace(0.0, 1.0, 11)):
+            k._dense_eval(F, y, s, dense[i])
+        return err, ynew, K[12, :n].copy(), dense
+
+    err_f, y_f, f_f, dense_f = step(theta * h, fraction_of=h)
+    err_s, y_s, f_s, dense_s = step(theta * h)
+    np.testing.assert_allclose(y_f, y_s, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(f_f, f_s, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(dense_f, dense_s, rtol=0, atol=1e-14)
+    # the same bound, up to the tail terms beyond the shorter step's own series (relative size ~ theta h |A|)
+    assert err_f == pytest.approx(err_s, rel=1e-3, abs=1e-300)
+    # and the step itself is the flow: against DOP853 at tight tolerances from the same state
+    ref = trilinear_flow.run(y[:n], t, t + theta * h, p, mode0="contact_1", variational=True, parameter=pidx,
+                             phi0=y[n : n + n * n].reshape(n, n), tolerances=GENERAL_TIGHT)
+    np.testing.assert_allclose(y_f[:n], ref.x1, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(y_f[n : n + n * n].reshape(n, n), ref.monodromy, rtol=0, atol=1e-12)
+
+
 # ---------------------------------------------------------------------------- against the general path
 @pytest.mark.parametrize("backward", [False, True], ids=["forward", "backward"])
 def test_contact_orbit_matches_the_general_integrator(trilinear_flow, contact_orbit, backward):

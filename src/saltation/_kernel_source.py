@@ -248,7 +248,7 @@ def _affine_norm(A, B, om):
 
 
 @njit(cache=True)
-def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TZ, TP, TC):
+def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TP, TC):
     """One step of the exact flow of an affine mode; returns the dense output's error norm.
 
     The mode's field is ``A x + B z`` with ``z = (1, cos theta, sin theta)``,
@@ -256,8 +256,10 @@ def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AF
     the sensitivity ``(psi, dz/dp)`` obey a linear system with constant
     coefficients, whose Taylor series is summed here until its terms fall below
     rounding: the step is exact for any ``h``.  The scaled Taylor coefficients of
-    ``x`` go to the rows of ``TC`` (row 0 is ``x``; their number goes to the last
-    row, see :func:`_exact_dense`), ``K[12]`` receives ``f(t + h, x(t + h))``.  The error
+    ``[x, Phi, psi]`` go to the rows of ``TC`` (row 0 is ``y``; their number, or 0
+    when there is no series, goes to row ``MAX_TAYLOR + 1``, the fraction of the
+    step they are summed at to row ``MAX_TAYLOR + 2``: see :func:`_exact_dense`
+    and :func:`_exact_fraction`), ``K[12]`` receives ``f(t + h, x(t + h))``.  The error
     returned bounds the error of the dense output (a degree-7 interpolant of the
     series) against the tolerances, and rejects steps long enough for the series
     to lose digits.
@@ -269,6 +271,7 @@ def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AF
     Ap = AFF_AP[mode]
     Bp = AFF_BP[mode]
     omp = AFF_W[mode, 2]
+    TC[MAX_TAYLOR + 1, 0] = 0.0
     mnorm = _affine_norm(A, B, om)
     bmax = 0.0
     for i in range(n):
@@ -283,21 +286,15 @@ def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AF
     st = TW[4]
     sn = TW[5]
     tail = TW[6]
-    z = TZ[0]
-    zn = TZ[1]
-    ze = TZ[2]
-    zen = TZ[3]
     Ps = TP[0]
     Pt = TP[1]
+    # the Taylor terms of z = (1, cos theta, sin theta) and of dz/dp (the first component is constant)
     theta = om * t + AFF_W[mode, 1]
-    z[0] = 1.0
-    z[1] = math.cos(theta)
-    z[2] = math.sin(theta)
-    if sens:
-        thp = omp * t + AFF_W[mode, 3]
-        ze[0] = 0.0
-        ze[1] = -thp * z[2]
-        ze[2] = thp * z[1]
+    z1 = math.cos(theta)
+    z2 = math.sin(theta)
+    thp = omp * t + AFF_W[mode, 3]
+    ze1 = -thp * z2
+    ze2 = thp * z1
     for i in range(n):
         xs[i] = y[i]
         xt[i] = y[i]
@@ -306,53 +303,40 @@ def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AF
         if sens:
             ss[i] = y[n + n * n + i]
             st[i] = ss[i]
+            TC[0, n + n * n + i] = ss[i]
         if var:
             for j in range(n):
                 Ps[i, j] = y[n + i * n + j]
                 Pt[i, j] = Ps[i, j]
+                TC[0, n + i * n + j] = Ps[i, j]
+    bz0 = 1.0  # the constant forcing term enters the first term only
     small = 0
     converged = False
     n_terms = 0
     for k in range(1, MAX_TAYLOR + 1):
         c = h / k
-        tnorm = 0.0
-        snorm = 0.0
         for i in range(n):
-            acc = B[i, 0] * z[0] + B[i, 1] * z[1] + B[i, 2] * z[2]
+            acc = B[i, 0] * bz0 + B[i, 1] * z1 + B[i, 2] * z2
             for j in range(n):
                 acc += A[i, j] * xt[j]
             xn[i] = c * acc
-            if sens:
-                acc = 0.0
+        if sens:
+            for i in range(n):
+                acc = B[i, 1] * ze1 + B[i, 2] * ze2 + Bp[i, 0] * bz0 + Bp[i, 1] * z1 + Bp[i, 2] * z2
                 for j in range(n):
                     acc += A[i, j] * st[j] + Ap[i, j] * xt[j]
-                for j in range(3):
-                    acc += B[i, j] * ze[j] + Bp[i, j] * z[j]
                 sn[i] = c * acc
-        if sens:
-            zen[0] = 0.0
-            zen[1] = c * (-om * ze[2] - omp * z[2])
-            zen[2] = c * (om * ze[1] + omp * z[1])
-            for j in range(3):
-                ze[j] = zen[j]
-        zn[0] = 0.0
-        zn[1] = -c * om * z[2]
-        zn[2] = c * om * z[1]
-        for j in range(3):
-            z[j] = zn[j]
-            tnorm = max(tnorm, bmax * abs(z[j]))
+            ze1, ze2 = c * (-om * ze2 - omp * z2), c * (om * ze1 + omp * z1)
+            for i in range(n):
+                st[i] = sn[i]
+                ss[i] += st[i]
+                TC[k, n + n * n + i] = st[i]
+        z1, z2 = -c * om * z2, c * om * z1
+        bz0 = 0.0
         for i in range(n):
             xt[i] = xn[i]
             xs[i] += xt[i]
-            tnorm = max(tnorm, abs(xt[i]))
-            snorm = max(snorm, abs(xs[i]))
             TC[k, i] = xt[i]
-            tail[i] += LOBATTO_BOUND[k] * abs(xt[i])
-            if sens:
-                st[i] = sn[i]
-                ss[i] += st[i]
-                tnorm = max(tnorm, abs(st[i]), abs(ze[0]), abs(ze[1]), abs(ze[2]))
-                snorm = max(snorm, abs(ss[i]))
         if var:
             for i in range(n):
                 for j in range(n):
@@ -364,6 +348,24 @@ def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AF
                 for j in range(n):
                     Pt[i, j] = TP[2, i, j]
                     Ps[i, j] += Pt[i, j]
+                    TC[k, n + i * n + j] = Pt[i, j]
+        if k < 7:
+            continue  # the test below needs two small terms from k = 7 on, the tail bound is zero below 8
+        # the term's and the partial sum's size (state, forcing, Phi, sensitivity)
+        tnorm = bmax * max(abs(z1), abs(z2))
+        snorm = 0.0
+        for i in range(n):
+            tail[i] += LOBATTO_BOUND[k] * abs(xt[i])
+            tnorm = max(tnorm, abs(xt[i]))
+            snorm = max(snorm, abs(xs[i]))
+        if sens:
+            tnorm = max(tnorm, abs(ze1), abs(ze2))
+            for i in range(n):
+                tnorm = max(tnorm, abs(st[i]))
+                snorm = max(snorm, abs(ss[i]))
+        if var:
+            for i in range(n):
+                for j in range(n):
                     tnorm = max(tnorm, abs(Pt[i, j]))
                     snorm = max(snorm, abs(Ps[i, j]))
         small = small + 1 if tnorm <= 1e-17 * snorm else 0
@@ -391,18 +393,59 @@ def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AF
         sc = atol + rtol * max(abs(y[i]), abs(xs[i]))
         err += (tail[i] / sc) ** 2
     TC[MAX_TAYLOR + 1, 0] = n_terms
+    TC[MAX_TAYLOR + 2, 0] = 1.0
+    return math.sqrt(err / n)
+
+
+@njit(cache=True)
+def _exact_fraction(mode, t, y, h, theta, n, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TC):
+    """The exact step of ``theta * h`` (``0 <= theta <= 1``) from the series of a step of ``h`` in ``TC``.
+
+    The Taylor series of the exact flow converges on the whole step, so a
+    shorter step (after a rejection, to an event, in its refinement) is the
+    same series summed at ``theta``: no new series.  Returns the error norm of
+    the shorter step's dense output, as :func:`_exact_step`.
+    """
+    A = AFF_A[mode]
+    B = AFF_B[mode]
+    n_terms = int(TC[MAX_TAYLOR + 1, 0])
+    N = n + n * n + n if var else n
+    for c in range(N):
+        v = 0.0
+        for k in range(n_terms - 1, 0, -1):
+            v = (v + TC[k, c]) * theta
+        ynew[c] = v + TC[0, c]
+    theta1 = AFF_W[mode, 0] * (t + theta * h) + AFF_W[mode, 1]
+    c1 = math.cos(theta1)
+    s1 = math.sin(theta1)
+    err = 0.0
+    for i in range(n):
+        acc = B[i, 0] + B[i, 1] * c1 + B[i, 2] * s1
+        for j in range(n):
+            acc += A[i, j] * ynew[j]
+        K[12, i] = acc
+        tail = 0.0
+        pw = theta ** 8
+        for k in range(8, n_terms):
+            tail += LOBATTO_BOUND[k] * abs(TC[k, i]) * pw
+            pw *= theta
+        sc = atol + rtol * max(abs(y[i]), abs(ynew[i]))
+        err += (tail / sc) ** 2
+    TC[MAX_TAYLOR + 2, 0] = theta
     return math.sqrt(err / n)
 
 
 @njit(cache=True)
 def _exact_dense(y, ynew, n, TC, F):
-    """Dense output of an exact step: its Taylor series interpolated at the Chebyshev-Lobatto points."""
+    """Dense output of an exact step: its Taylor series interpolated at the Chebyshev-Lobatto points
+    (of the fraction of the series' step that was taken, see :func:`_exact_fraction`)."""
     n_terms = int(TC[MAX_TAYLOR + 1, 0])
+    theta = TC[MAX_TAYLOR + 2, 0]
     for i in range(n):
         for r in range(7):
             F[r, i] = LOBATTO_TO_DENSE[r, 6] * (ynew[i] - y[i])
         for j in range(1, 7):
-            sj = LOBATTO_NODES[j]
+            sj = LOBATTO_NODES[j] * theta
             v = 0.0
             for k in range(n_terms - 1, 0, -1):
                 v = (v + TC[k, i]) * sj
@@ -410,12 +453,23 @@ def _exact_dense(y, ynew, n, TC, F):
                 F[r, i] += LOBATTO_TO_DENSE[r, j - 1] * v
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # inlined: a call passing this many arrays costs more than a short step's work
 def _step(exact, mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
-          AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC):
-    """A step of the exact flow (affine mode, not sliding) or of DOP853; returns the error norm."""
+          AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC):
+    """A step of the exact flow (affine mode, not sliding) or of DOP853; returns the error norm.
+
+    An exact step no longer than the one whose series ``TC`` holds from the
+    same ``(t, y)`` (its size in ``TC[MAX_TAYLOR + 3, 0]``, 0 for none: the
+    caller clears it when ``(t, y)`` moves on) is that series summed at a
+    fraction of its step.
+    """
     if exact:
-        return _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TZ, TP, TC)
+        base = TC[MAX_TAYLOR + 3, 0]
+        if base != 0.0 and 0.0 <= h / base <= 1.0:
+            return _exact_fraction(mode, t, y, base, h / base, n, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TC)
+        err = _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TP, TC)
+        TC[MAX_TAYLOR + 3, 0] = h if TC[MAX_TAYLOR + 1, 0] > 0.0 else 0.0
+        return err
     return _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
 
 
@@ -701,9 +755,10 @@ def integrate_kernel(
     AFF_AP = np.zeros((n_modes, n, n))
     AFF_BP = np.zeros((n_modes, n, 3))
     TW = np.zeros((7, n))
-    TZ = np.zeros((4, 3))
     TP = np.zeros((3, n, n))
-    TC = np.zeros((MAX_TAYLOR + 2, n))  # Taylor coefficients of x; the last row holds their number
+    # Taylor coefficients of [x, Phi, psi] of the last exact step; then their number, the fraction of
+    # the step taken and the step (see ``_step``)
+    TC = np.zeros((MAX_TAYLOR + 4, N))
     if exact_affine:
         Ap_all = np.zeros((max(npar, 1), n, n))
         Bp_all = np.zeros((max(npar, 1), n, 3))
@@ -795,6 +850,7 @@ def integrate_kernel(
 
     need_signs = True
     chatter_ring = np.zeros(CHATTER_WINDOW)
+    h_mode = np.zeros(n_modes)  # the step proposed last in each mode (0: none yet), to re-enter it with
 
     while status == STATUS_OK and (t_end - t) * direction > 0.0:
         if need_signs:
@@ -837,7 +893,7 @@ def integrate_kernel(
         while True:
             h = direction * habs
             err = _step(exact, mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
-                        AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC)
+                        AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
             finite = math.isfinite(err)
             if finite and err <= 1.0:
                 break
@@ -949,6 +1005,7 @@ def integrate_kernel(
             if record:
                 rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, 1.0, y[:n], F)
             t = t_new
+            TC[MAX_TAYLOR + 3, 0] = 0.0  # the series starts at the old (t, y)
             for i in range(N):
                 y[i] = ynew[i]
             for i in range(N):
@@ -965,13 +1022,15 @@ def integrate_kernel(
                 # (of its dense output) is a smooth function of h and needs no such caution
                 fac = min(fac, 1.0)
             habs = abs(h) * fac
+            if slide[0] == 0:
+                h_mode[mode] = habs
             continue
 
         # --------------------------------------------------------------- an event
         # the shortened step that ends at the event must pass the error test too: a step can
         # straddle a thin layer (e.g. where a sliding motion ends) that its own estimate missed
         err_e = _step(exact, mode, slide, t, y, best_s * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
-                      AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC)
+                      AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
         if err_e > 1.0 and best_s * habs > 100.0 * EPS * max(1.0, abs(t)):
             n_rejected += 1
             habs = best_s * habs * max(0.2, 0.9 * err_e ** (-1.0 / 8.0))
@@ -1009,7 +1068,7 @@ def integrate_kernel(
                     K[0, i] = Ksave[0, i]
                 if s_new > 0.0:
                     _step(exact, mode, slide, t, ysave, s_new * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
-                          n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TZ, TP, TC)
+                          n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
                 else:
                     for i in range(N):
                         ynew[i] = ysave[i]
@@ -1189,6 +1248,7 @@ def integrate_kernel(
                 t = t_e
                 break
         t = t_e
+        TC[MAX_TAYLOR + 3, 0] = 0.0
         if abs(t_end - t) <= 4.0 * EPS * max(1.0, abs(t)):
             t = t_end
         _aug_rhs_called(mode, slide, t, y, p, n, var, pidx, K[0], W, WJ, WP, wv)
@@ -1196,7 +1256,10 @@ def integrate_kernel(
             if not math.isfinite(K[0, i]):
                 status = STATUS_NON_FINITE
                 info_mode = mode
-        habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
+        if slide[0] == 0 and h_mode[mode] > 0.0:
+            habs = h_mode[mode]  # the step that suited this mode when it was left: a better guess than the old mode's
+        else:
+            habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
         need_signs = True
 
     # packed results (each returned array costs a conversion): see saltation.integrate._unpack

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import cmath
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import lapack
 
 
 def multipliers_from_monodromy(monodromy: np.ndarray, *, backward: bool = False) -> np.ndarray:
@@ -20,10 +22,34 @@ def multipliers_from_monodromy(monodromy: np.ndarray, *, backward: bool = False)
         backward multiplier becomes an infinite forward one (an infinitely
         unstable orbit).
     """
-    mu = np.linalg.eigvals(np.asarray(monodromy, dtype=float)).astype(complex)
+    mu = eigenvalues(monodromy)
     if backward:
         mu = reciprocal(mu)
     return sort_multipliers(mu)
+
+
+def eigenvalues(matrix: np.ndarray) -> np.ndarray:
+    """Eigenvalues of a real square matrix, complex.
+
+    LAPACK's ``dgeev`` (what :func:`numpy.linalg.eigvals` calls) through
+    :mod:`scipy.linalg.lapack`, without numpy's per-call dispatch, which costs
+    several times the work for the small matrices of a monodromy.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the matrix is not finite or the QR algorithm does not converge.
+    """
+    a = np.asarray(matrix, dtype=float)
+    if not np.isfinite(a).all():
+        raise np.linalg.LinAlgError("matrix contains infs or NaNs: no eigenvalues")
+    wr, wi, _, _, info = lapack.dgeev(a, compute_vl=0, compute_vr=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"eigenvalues did not converge (LAPACK dgeev info = {info})")
+    mu = np.empty(wr.shape, dtype=complex)
+    mu.real = wr
+    mu.imag = wi
+    return mu
 
 
 def reciprocal(mu: np.ndarray, *, zero: float = 1e-13) -> np.ndarray:
@@ -37,8 +63,8 @@ def reciprocal(mu: np.ndarray, *, zero: float = 1e-13) -> np.ndarray:
 def sort_multipliers(mu: np.ndarray) -> np.ndarray:
     """Sort by decreasing magnitude, then by argument (deterministic order)."""
     mu = np.asarray(mu, dtype=complex)
-    key = np.lexsort((-np.angle(mu), -np.abs(mu)))
-    return mu[key]
+    values = mu.tolist()  # a plain sort: numpy's lexsort costs more for a handful of values
+    return mu[sorted(range(len(values)), key=lambda k: (-abs(values[k]), -cmath.phase(values[k])))]
 
 
 def trivial_multiplier_error(mu: np.ndarray) -> float:

@@ -473,10 +473,9 @@ class Flow:
         velocity = res[1 + 4 * n + n * n :]
         event_log = (ev[:, 0], ev_int, ev[:, 1 : 1 + n], ev[:, 1 + n : 1 + 2 * n], ev[:, 1 + 2 * n :].reshape(-1, n, n))
         rt, rh, rs, ry = rec[:, 0], rec[:, 1], rec[:, 2], rec[:, 3:]
-        status = Status(int(info[0]))
         names = sys_.mode_names
-        if status != Status.OK:
-            raise _error(status, sys_, info, float(t), x, _switching_events(sys_, event_log))
+        if info[0] != Status.OK:
+            raise _error(Status(int(info[0])), sys_, info, float(t), x, _switching_events(sys_, event_log))
         return Trajectory(
             system=sys_,
             t0=t0,

@@ -371,16 +371,14 @@ class ShootingProblem:
             self.set_phase_reference(u0, lam)
         else:
             # the period is fixed: the whole iteration runs in the compiled kernel
-            T = self.period_of(u0, lam)
+            p = self.parameters_at(lam)
+            T = self.system.forcing_period(p)
             found = self.flow.newton_period_map(
-                u0, self.t0, self.t0 + self.sign * T, self.parameters_at(lam), tol=tol, max_iter=max_iter,
-                tolerances=self.tolerances,
+                u0, self.t0, self.t0 + self.sign * T, p, tol=tol, max_iter=max_iter, tolerances=self.tolerances,
             )
             if found is not None:
                 x, history, traj = found
-                n = self.system.n
-                ev = Evaluation(residual=traj.x1 - x, jac_u=traj.monodromy - np.eye(n), jac_lam=None, trajectory=traj)
-                return self.orbit(x, lam, ev, history)
+                return self.orbit(x, lam, traj, history, period=T, parameters=p)
 
         def fun(u):
             ev = self.evaluate(u, lam, need_lam=False)
@@ -390,26 +388,31 @@ class ShootingProblem:
         u, history, ev = newton(
             fun, u0, tol=tol, max_iter=max_iter, what=f"shooting ({direction} time) for {self.system.name!r}", damped=True
         )
-        return self.orbit(u, lam, ev, history)
+        return self.orbit(u, lam, ev.trajectory, history)
 
-    def orbit(self, u: np.ndarray, lam: float | None, ev: Evaluation, history: Sequence[float] = ()) -> PeriodicOrbit:
-        """Package a solved point as a :class:`PeriodicOrbit`."""
-        traj = ev.trajectory
-        M = traj.monodromy
+    def orbit(
+        self, u: np.ndarray, lam: float | None, trajectory: Trajectory, history: Sequence[float], *,
+        period: float | None = None, parameters: np.ndarray | None = None,
+    ) -> PeriodicOrbit:
+        """Package a solved point ``u`` and its trajectory over one period as a :class:`PeriodicOrbit`.
+
+        ``period`` and ``parameters`` (at ``lam``) when the caller has them already.
+        """
+        M = trajectory.monodromy
         return PeriodicOrbit(
             system_name=self.system.name,
             state0=np.array(u[: self.system.n]),
-            period=self.period_of(u, lam),
+            period=self.period_of(u, lam) if period is None else period,
             t0=self.t0,
             backward=self.backward,
             autonomous=self.autonomous,
-            parameters=self.parameters_at(lam),
+            parameters=self.parameters_at(lam) if parameters is None else parameters,
             monodromy=M,
             multipliers=multipliers_from_monodromy(M, backward=self.backward),
-            trajectory=traj,
+            trajectory=trajectory,
             converged=True,
             iterations=max(len(history) - 1, 0),
-            residual_norm=float(history[-1]) if history else float(np.linalg.norm(ev.residual)),
+            residual_norm=float(history[-1]),
             residuals=list(history),
         )
 
