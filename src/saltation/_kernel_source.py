@@ -1262,8 +1262,13 @@ def integrate_kernel(
             habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
         need_signs = True
 
-    # packed results (each returned array costs a conversion): see saltation.integrate._unpack
-    out = np.zeros(1 + 5 * n + n * n)
+    # packed results, two arrays (each returned array costs a conversion): see saltation.integrate._unpack.
+    # floats: t, x, Phi, psi, x_min, x_max, f at the end; the event log's rows (t, x-, x+, S); the steps'
+    # rows (start, size, end fraction, start state); their dense-output coefficients
+    n_out = 1 + 5 * n + n * n
+    w_ev = ev.shape[1]
+    w_rec = rec.shape[1]
+    out = np.zeros(n_out + n_ev * w_ev + n_rec * (w_rec + 7 * n))
     out[0] = t
     for i in range(n):
         out[1 + i] = y[i]
@@ -1273,7 +1278,23 @@ def integrate_kernel(
     if var:
         for i in range(n * n + n):
             out[1 + n + i] = y[n + i]
-    info = np.zeros(12, dtype=np.int64)
+    at = n_out
+    for r in range(n_ev):
+        for j in range(w_ev):
+            out[at] = ev[r, j]
+            at += 1
+    for r in range(n_rec):
+        for j in range(w_rec):
+            out[at] = rec[r, j]
+            at += 1
+    for r in range(n_rec):
+        for q in range(7):
+            for j in range(n):
+                out[at] = rec_F[r, q, j]
+                at += 1
+    # integers: status, mode and surface of a failure, events, steps, rejected steps, final mode,
+    # sliding state (5); the event log's rows (kind, transition, surface, mode from, mode to)
+    info = np.zeros(12 + 5 * n_ev, dtype=np.int64)
     info[0] = status
     info[1] = info_mode
     info[2] = info_surface
@@ -1283,7 +1304,10 @@ def integrate_kernel(
     info[6] = mode
     for i in range(5):
         info[7 + i] = slide[i]
-    return info, out, _resized_rows(ev_int, n_ev), _resized_rows(ev, n_ev), _resized_rows(rec, n_rec), _resized_steps(rec_F, n_rec)
+    for r in range(n_ev):
+        for j in range(5):
+            info[12 + 5 * r + j] = ev_int[r, j]
+    return info, out
 
 
 @njit(cache=True)

@@ -62,9 +62,8 @@ def reciprocal(mu: np.ndarray, *, zero: float = 1e-13) -> np.ndarray:
 
 def sort_multipliers(mu: np.ndarray) -> np.ndarray:
     """Sort by decreasing magnitude, then by argument (deterministic order)."""
-    mu = np.asarray(mu, dtype=complex)
-    values = mu.tolist()  # a plain sort: numpy's lexsort costs more for a handful of values
-    return mu[sorted(range(len(values)), key=lambda k: (-abs(values[k]), -cmath.phase(values[k])))]
+    values = np.asarray(mu, dtype=complex).tolist()  # a plain sort: numpy's lexsort costs more for a few values
+    return np.array(sorted(values, key=lambda z: (-abs(z), -cmath.phase(z))), dtype=complex)
 
 
 def trivial_multiplier_error(mu: np.ndarray) -> float:

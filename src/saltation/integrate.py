@@ -43,6 +43,7 @@ class Status(enum.IntEnum):
 
 # outcomes of the kernel's Newton iterations (``shoot_forced``, ``correct_periodic``)
 _SHOOT_CONVERGED = 0
+_STATUS_OK = 0  # Status.OK as a plain int: an enum member costs a class attribute lookup per integration
 _SHOOT_BAD_PERIOD = 3
 
 
@@ -407,7 +408,7 @@ class Flow:
         if code != _SHOOT_CONVERGED:
             return None
         m0 = self.initial_mode(x, p, t0)
-        return x, history.tolist(), self._unpack(out, x.copy(), float(t0), m0, True, -1, False)
+        return x, history.tolist(), self._unpack(out, x, float(t0), m0, True, -1, False)
 
     def correct_periodic(
         self, z_pred: np.ndarray, normal: np.ndarray, p: np.ndarray, *, t0: float, sign: float, lam_index: int,
@@ -463,18 +464,20 @@ class Flow:
     def _unpack(self, out, x0, t0, m0, variational, parameter, dense) -> Trajectory:
         sys_ = self.system
         n = sys_.n
-        info, res, ev_int, ev, rec, rF = out
+        info, res = out  # the kernel's two packed arrays (see the end of ``integrate_kernel``)
+        n_ev, n_out, w_ev = int(info[3]), 1 + 5 * n + n * n, 1 + 2 * n + n * n
+        ev_int = info[12:].reshape(n_ev, 5)
+        ev = res[n_out : n_out + n_ev * w_ev].reshape(n_ev, w_ev)
         t = res[0]
         x = res[1 : 1 + n]
         Phi = res[1 + n : 1 + n + n * n].reshape(n, n)
         psi = res[1 + n + n * n : 1 + 2 * n + n * n]
         xmin = res[1 + 2 * n + n * n : 1 + 3 * n + n * n]
         xmax = res[1 + 3 * n + n * n : 1 + 4 * n + n * n]
-        velocity = res[1 + 4 * n + n * n :]
+        velocity = res[1 + 4 * n + n * n : n_out]
         event_log = (ev[:, 0], ev_int, ev[:, 1 : 1 + n], ev[:, 1 + n : 1 + 2 * n], ev[:, 1 + 2 * n :].reshape(-1, n, n))
-        rt, rh, rs, ry = rec[:, 0], rec[:, 1], rec[:, 2], rec[:, 3:]
         names = sys_.mode_names
-        if info[0] != Status.OK:
+        if info[0] != _STATUS_OK:
             raise _error(Status(int(info[0])), sys_, info, float(t), x, _switching_events(sys_, event_log))
         return Trajectory(
             system=sys_,
@@ -493,8 +496,16 @@ class Flow:
             velocity_end=velocity,
             n_steps=int(info[4]),
             n_rejected=int(info[5]),
-            _steps=(rt, rh, rs, ry, rF) if dense else None,
+            _steps=_steps(res[n_out + n_ev * w_ev :], n) if dense else None,
         )
+
+
+def _steps(packed: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
+    """The kernel's record of steps: starts, sizes, end fractions, start states, dense-output coefficients."""
+    w_rec = 3 + n
+    n_rec = packed.size // (w_rec + 7 * n)
+    rec = packed[: n_rec * w_rec].reshape(n_rec, w_rec)
+    return rec[:, 0], rec[:, 1], rec[:, 2], rec[:, 3:], packed[n_rec * w_rec :].reshape(n_rec, 7, n)
 
 
 def _switching_events(system: PiecewiseSystem, event_log: tuple[np.ndarray, ...]) -> list[SwitchingEvent]:
