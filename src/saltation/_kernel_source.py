@@ -1341,159 +1341,161 @@ def _shot(x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_ta
 
 
 @njit(cache=True)
-def shoot_forced(x0, t0, t1, p, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
-                 phi0, psi0, control_variational, exact_affine, tol, max_iter):
-    """Damped Newton on ``x(t1; x0) - x0 = 0`` (a forced system's period map), compiled.
-
-    The same iteration as ``saltation.shooting.newton(..., damped=True)``:
-    converged when ``|r| <= tol (1 + |x|)``; a step is halved (up to 8 times)
-    until the residual decreases.  Returns ``(code, iterations, x, residual
-    history, kernel result at x)``; on any failure the caller repeats the
-    iteration in Python, which raises the error that explains it.
-    """
-    n = x0.shape[0]
-    x = x0.copy()
-    history = np.zeros(max_iter + 1)
-    res = _shot(x, t0, t1, p, NONE, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
-                control_variational, exact_affine)
-    if res[0][0] != STATUS_OK:
-        return SHOOT_FAILED, 0, x, history[:0], res
-    r = np.empty(n)
-    du = np.empty(n)
-    xt = np.empty(n)
-    J = np.empty((n, n))
-    for it in range(max_iter + 1):
-        out = res[1]
-        rn = 0.0
-        xn = 0.0
-        for i in range(n):
-            r[i] = out[1 + i] - x[i]
-            rn += r[i] * r[i]
-            xn += x[i] * x[i]
-        rn = math.sqrt(rn)
-        history[it] = rn
-        if not math.isfinite(rn):
-            return SHOOT_FAILED, it, x, history[: it + 1], res
-        if rn <= tol * (1.0 + math.sqrt(xn)):
-            return SHOOT_CONVERGED, it, x, history[: it + 1], res
-        if it == max_iter:
-            break
-        for i in range(n):
-            for j in range(n):
-                J[i, j] = out[1 + n + i * n + j] - (1.0 if i == j else 0.0)
-            du[i] = -r[i]
-        du = np.linalg.solve(J, du)  # LinAlgError (singular) reaches the caller
-        accepted = False
-        for _ in range(9):
-            for i in range(n):
-                xt[i] = x[i] + du[i]
-            trial = _shot(xt, t0, t1, p, NONE, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
-                          phi0, psi0, control_variational, exact_affine)
-            if trial[0][0] == STATUS_OK:
-                rt = 0.0
-                for i in range(n):
-                    d = trial[1][1 + i] - xt[i]
-                    rt += d * d
-                if math.sqrt(rt) < rn:
-                    accepted = True
-                    res = trial
-                    for i in range(n):
-                        x[i] = xt[i]
-                    break
-            for i in range(n):
-                du[i] *= 0.5
-        if not accepted:
-            return SHOOT_FAILED, it, x, history[: it + 1], res
-    return SHOOT_MAX_ITER, max_iter, x, history, res
+def _periodic_shot(z, n, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step, max_events, max_steps,
+                   tr_table, n_surfaces, phi0, psi0, control_variational, exact_affine):
+    """The shot of one Newton iterate ``z = (x0[, T][, lam])`` over its period (forced: ``span``, or the
+    forcing period at ``lam`` when ``span`` is 0); returns ``(ok, result)``, ``ok`` False for a period
+    that is not positive (``p``, ``x``: work arrays)."""
+    m_u = n + 1 if autonomous else n
+    if lam_index >= 0 and z.shape[0] > m_u:
+        p[lam_index] = z[m_u]
+    if autonomous:
+        period = z[n]
+    else:
+        period = span if span > 0.0 else forcing_period(p)  # noqa: F821
+    for i in range(n):
+        x[i] = z[i]
+    span = period if period > 0.0 else 0.0  # (also for nan)
+    res = _shot(x, t0, t0 + sign * span, p, lam_index, rtol, atol, max_step, max_events, max_steps,
+                tr_table, n_surfaces, phi0, psi0, control_variational, exact_affine)
+    return period > 0.0, res
 
 
 @njit(cache=True)
-def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, p0, x_ref, f_ref, tol, max_newton,
-                     max_correction, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
-                     phi0, psi0, control_variational, exact_affine):
-    """Newton on the pseudo-arclength system of a shooting problem, compiled.
+def _periodic_residual(out, z, n, autonomous, x_ref, f_ref, r):
+    """Residual of the periodic-orbit equations at ``z`` into ``r``: ``x(t0 + sign T) - x0`` and,
+    autonomous, the phase condition ``f_ref . (x0 - x_ref)``; returns its norm."""
+    rn = 0.0
+    for i in range(n):
+        r[i] = out[1 + i] - z[i]
+        rn += r[i] * r[i]
+    if autonomous:
+        acc = 0.0
+        for i in range(n):
+            acc += f_ref[i] * (z[i] - x_ref[i])
+        r[n] = acc
+        rn += acc * acc
+    return math.sqrt(rn)
 
-    The iteration of ``saltation.continuation.Corrector.solve_bordered`` on
-    ``z = (u, lam)``: ``r(u, lam) = 0`` with ``normal . (z - z_pred) = 0``,
-    where ``r = x(t0 + sign T) - x0`` (``u = x0``, ``T`` the forcing period)
-    or, autonomous, also ``f_ref . (x0 - x_ref)`` (``u = (x0, T)``).
+
+@njit(cache=True)
+def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref, tol, max_newton,
+                     max_correction, damped, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
+                     phi0, psi0, control_variational, exact_affine):
+    """Newton on the periodic-orbit equations of a shooting problem, compiled.
+
+    ``u = x0`` (forced: the period is ``span``, or when ``span`` is 0 the
+    forcing period, which follows ``lam``) or ``u = (x0, T)`` (autonomous, with the phase condition
+    ``f_ref . (x0 - x_ref) = 0``); ``r(u, lam) = x(t0 + sign T) - x0``.
+
+    * ``damped`` False, ``z = (u, lam)``: the iteration of
+      ``saltation.continuation.Corrector.solve_bordered``, ``r = 0`` with
+      ``normal . (z - z_pred) = 0`` (pseudo-arclength), which stops when a
+      correction exceeds ``max_correction (1 + |z|)``.
+    * ``damped`` True, ``z = u`` (``lam`` fixed, ``normal`` unused): the
+      iteration of ``saltation.shooting.newton(..., damped=True)`` on
+      ``r = 0``; a step is halved (up to 8 times) until the residual
+      decreases.
+
     Converged when ``|r| <= tol (1 + |u|)``.  Returns ``(code, iterations, z,
     residual history, [r | J_u | J_lam], kernel result at z)``.
     """
-    m = z_pred.shape[0] - 1
+    m_u = n_u = phi0.shape[0] + (1 if autonomous else 0)  # unknowns u (and rows of r)
+    m_z = z_pred.shape[0]  # m_u, or m_u + 1 with lam
     n = phi0.shape[0]
     z = z_pred.copy()
+    zt = z_pred.copy()
     p = p0.copy()
-    history = np.zeros(max_newton + 1)
-    jac = np.zeros((m, m + 2))  # residual, then the Jacobian [J_u | J_lam]
-    Jb = np.zeros((m + 1, m + 1))
-    rhs = np.zeros(m + 1)
     x = np.zeros(n)
-    for it in range(max_newton + 1):
-        p[lam_index] = z[m]
-        period = z[n] if autonomous else forcing_period(p)  # noqa: F821
-        for i in range(n):
-            x[i] = z[i]
-        span = period if period > 0.0 else 0.0  # (also for nan)
-        res = _shot(x, t0, t0 + sign * span, p, lam_index, rtol, atol, max_step, max_events, max_steps,
-                    tr_table, n_surfaces, phi0, psi0, control_variational, exact_affine)
-        if not period > 0.0:
+    history = np.zeros(max_newton + 1)
+    jac = np.zeros((m_u, m_u + 2))  # residual, then the Jacobian [J_u | J_lam]
+    Jb = np.zeros((m_z, m_z))
+    rhs = np.zeros(m_z)
+    r = np.zeros(m_u)
+    velocity = 1 + 4 * n + n * n
+    dz = np.zeros(m_z)
+    rn = np.inf
+    it = 0
+    trial = 0  # > 0: zt is the trial point of a damped step, halved trial - 1 times
+    res = (np.zeros(12, dtype=np.int64), np.zeros(1))  # the kernel result at z, from the first shot on
+    # one call site of the shot: the integrator is compiled into this function once
+    while True:
+        cand = zt if trial > 0 else z
+        ok, res_c = _periodic_shot(cand, n, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step,
+                                   max_events, max_steps, tr_table, n_surfaces, phi0, psi0, control_variational,
+                                   exact_affine)
+        if trial > 0:
+            if ok and res_c[0][0] == STATUS_OK and _periodic_residual(res_c[1], zt, n, autonomous, x_ref, f_ref, r) < rn:
+                for j in range(m_z):
+                    z[j] = zt[j]
+                trial = 0
+                it += 1
+            elif trial == 9:
+                return SHOOT_FAILED, it, z, history[: it + 1], jac, res
+            else:
+                for j in range(m_z):
+                    dz[j] *= 0.5
+                    zt[j] = z[j] - dz[j]
+                trial += 1
+                continue
+        res = res_c
+        if not ok:
             return SHOOT_BAD_PERIOD, it, z, history[:it], jac, res
         if res[0][0] != STATUS_OK:
             return SHOOT_FAILED, it, z, history[:it], jac, res
         out = res[1]
-        velocity = 1 + 4 * n + n * n
-        rn = 0.0
-        for i in range(n):
-            jac[i, 0] = out[1 + i] - z[i]
-        if autonomous:
-            acc = 0.0
-            for i in range(n):
-                acc += f_ref[i] * (z[i] - x_ref[i])
-            jac[n, 0] = acc
-        for i in range(m):
-            rn += jac[i, 0] * jac[i, 0]
-        rn = math.sqrt(rn)
+        rn = _periodic_residual(out, z, n, autonomous, x_ref, f_ref, r)
         history[it] = rn
         un = 0.0
-        for i in range(m):
+        for i in range(n_u):
             un += z[i] * z[i]
-        # the Jacobian at z (returned with the converged point: the tangent needs it)
+        # the residual and the Jacobian at z (returned with the converged point: the tangent needs them)
+        for i in range(m_u):
+            jac[i, 0] = r[i]
         for i in range(n):
             for j in range(n):
                 jac[i, 1 + j] = out[1 + n + i * n + j] - (1.0 if i == j else 0.0)
-            jac[i, 1 + m] = out[1 + n + n * n + i]
+            jac[i, 1 + m_u] = out[1 + n + n * n + i] if lam_index >= 0 else 0.0
         if autonomous:
             for i in range(n):
                 jac[i, 1 + n] = sign * out[velocity + i]
                 jac[n, 1 + i] = f_ref[i]
-        else:
+        elif lam_index >= 0 and span == 0.0:
             dperiod = forcing_period_dp(p, lam_index)  # noqa: F821
             for i in range(n):
-                jac[i, 1 + m] += sign * dperiod * out[velocity + i]
+                jac[i, 1 + m_u] += sign * dperiod * out[velocity + i]
         if not math.isfinite(rn):
             return SHOOT_FAILED, it, z, history[: it + 1], jac, res
         if rn <= tol * (1.0 + math.sqrt(un)):
             return SHOOT_CONVERGED, it, z, history[: it + 1], jac, res
         if it == max_newton:
             break
-        for i in range(m):
-            for j in range(m + 1):
+        for i in range(m_u):
+            for j in range(m_z):
                 Jb[i, j] = jac[i, 1 + j]
             rhs[i] = jac[i, 0]
-        acc = 0.0
-        for j in range(m + 1):
-            Jb[m, j] = normal[j]
-            acc += normal[j] * (z[j] - z_pred[j])
-        rhs[m] = acc
-        dz = np.linalg.solve(Jb, rhs)  # LinAlgError (singular) reaches the caller
+        if m_z > m_u:  # the pseudo-arclength row
+            acc = 0.0
+            for j in range(m_z):
+                Jb[m_u, j] = normal[j]
+                acc += normal[j] * (z[j] - z_pred[j])
+            rhs[m_u] = acc
+        step = np.linalg.solve(Jb, rhs)  # LinAlgError (singular) reaches the caller
+        for j in range(m_z):
+            dz[j] = step[j]
+        if damped:
+            for j in range(m_z):
+                zt[j] = z[j] - dz[j]
+            trial = 1
+            continue
         dn = 0.0
         zn = 0.0
-        for j in range(m + 1):
+        for j in range(m_z):
             dn += dz[j] * dz[j]
             zn += z[j] * z[j]
         if math.sqrt(dn) > max_correction * (1.0 + math.sqrt(zn)):
             break  # diverging
-        for j in range(m + 1):
+        for j in range(m_z):
             z[j] -= dz[j]
+        it += 1
     return SHOOT_MAX_ITER, it, z, history[: it + 1], jac, res

@@ -41,7 +41,7 @@ class Status(enum.IntEnum):
     TANGENTIAL = 7
 
 
-# outcomes of the kernel's Newton iterations (``shoot_forced``, ``correct_periodic``)
+# outcomes of the kernel's Newton iterations (``correct_periodic``)
 _SHOOT_CONVERGED = 0
 _STATUS_OK = 0  # Status.OK as a plain int: an enum member costs a class attribute lookup per integration
 _SHOOT_BAD_PERIOD = 3
@@ -397,18 +397,22 @@ class Flow:
         tol_ = tolerances or self.tolerances
         x0 = np.array(x0, dtype=float).reshape(-1)
         p = np.ascontiguousarray(p, dtype=float)
+        t0, span = float(t0), float(t1) - float(t0)
+        if not span:
+            return None
         try:
-            code, _, x, history, out = self._kernels.shoot_forced(
-                x0, float(t0), float(t1), p, float(tol_.rtol), float(tol_.atol), float(tol_.max_step),
+            code, _, x, history, _, out = self._kernels.correct_periodic(
+                x0, self._zeros, t0, math.copysign(1.0, span), False, -1, abs(span), p, self._zeros, self._zeros,
+                float(tol), int(max_iter), 0.0, True, float(tol_.rtol), float(tol_.atol), float(tol_.max_step),
                 int(tol_.max_events), int(tol_.max_steps), self._table, self._n_surfaces, self._identity, self._zeros,
-                bool(tol_.control_variational), bool(tol_.exact_affine), float(tol), int(max_iter),
+                bool(tol_.control_variational), bool(tol_.exact_affine),
             )
         except np.linalg.LinAlgError:  # a singular Jacobian
             return None
         if code != _SHOOT_CONVERGED:
             return None
         m0 = self.initial_mode(x, p, t0)
-        return x, history.tolist(), self._unpack(out, x, float(t0), m0, True, -1, False)
+        return x, history.tolist(), self._unpack(out, x, t0, m0, True, -1, False)
 
     def correct_periodic(
         self, z_pred: np.ndarray, normal: np.ndarray, p: np.ndarray, *, t0: float, sign: float, lam_index: int,
@@ -441,8 +445,8 @@ class Flow:
         try:
             code, it, z, history, jac, out = self._kernels.correct_periodic(
                 np.ascontiguousarray(z_pred, dtype=float), np.ascontiguousarray(normal, dtype=float), float(t0),
-                float(sign), bool(phase is not None), int(lam_index), p, x_ref, f_ref, float(tol), int(max_newton),
-                float(max_correction), float(tol_.rtol), float(tol_.atol), float(tol_.max_step), int(tol_.max_events),
+                float(sign), bool(phase is not None), int(lam_index), 0.0, p, x_ref, f_ref, float(tol),
+                int(max_newton), float(max_correction), False, float(tol_.rtol), float(tol_.atol), float(tol_.max_step), int(tol_.max_events),
                 int(tol_.max_steps), self._table, self._n_surfaces, self._identity, self._zeros,
                 bool(tol_.control_variational), bool(tol_.exact_affine),
             )
