@@ -161,3 +161,30 @@ def test_equilibrium_is_not_eq18_as_printed(belt_flow):
         atol=1e-12,
     )
     assert eq.stable
+
+
+# ----------------------------------------------------------------- eigenvalues (LAPACK dgeev)
+def test_eigenvalues_against_numpy_and_invariants():
+    """floquet.eigenvalues calls dgeev directly: the same spectrum as numpy.linalg.eigvals, conjugate
+    pairs and real eigenvalues kept exactly, and trace and determinant reproduced."""
+    from saltation.floquet import eigenvalues
+
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 3, 6):
+        for _ in range(50):
+            a = rng.normal(size=(n, n))
+            mu = eigenvalues(a)
+            ref = np.linalg.eigvals(a).astype(complex)
+            np.testing.assert_allclose(np.sort_complex(mu), np.sort_complex(ref), rtol=0, atol=1e-12)
+            assert np.sum(mu).real == pytest.approx(np.trace(a), abs=1e-12)
+            assert np.prod(mu).real == pytest.approx(np.linalg.det(a), rel=1e-10, abs=1e-12)
+            assert sorted(mu.imag.tolist()) == sorted((-mu.imag).tolist())  # exact conjugate pairs
+    rotation = np.array([[0.0, -2.0], [2.0, 0.0]])
+    np.testing.assert_allclose(np.sort_complex(eigenvalues(rotation)), [-2j, 2j], rtol=0, atol=1e-15)
+
+
+def test_eigenvalues_of_a_non_finite_matrix_raise():
+    from saltation.floquet import eigenvalues
+
+    with pytest.raises(np.linalg.LinAlgError, match="infs or NaNs"):
+        eigenvalues(np.array([[1.0, np.nan], [0.0, 1.0]]))
