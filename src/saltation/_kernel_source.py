@@ -816,6 +816,7 @@ def integrate_kernel(
     surf_old = np.zeros(n_surfaces)
     slope_old = np.zeros(n_surfaces)
     watched = np.zeros(n_surfaces, dtype=np.bool_)
+    fires = np.zeros(n_surfaces, dtype=np.int64)  # new signs with a transition: 1 for -1, 2 for +1, 3 both
     fixed_sign = np.zeros(n_surfaces, dtype=np.bool_)
     surf_new = np.zeros(n_surfaces)
     slope_new = np.zeros(n_surfaces)
@@ -857,10 +858,13 @@ def integrate_kernel(
             # sign memory of every surface watched in this mode, in the direction of travel
             for s in range(n_surfaces):
                 watched[s] = False
+                fires[s] = 0
             if slide[0] == 0:
                 for k in range(n_tr):
                     if tr_table[k, 0] == mode:
                         watched[tr_table[k, 1]] = True
+                        dk = tr_table[k, 2]
+                        fires[tr_table[k, 1]] |= 3 if dk == 0 else (1 if dk < 0 else 2)
             for s in range(n_surfaces):
                 if watched[s]:
                     v = indicator(s, t, y[:n], p)  # noqa: F821
@@ -953,6 +957,8 @@ def integrate_kernel(
                     smin, vmin = _dip_search(KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp)
                     if vmin <= 0.0:
                         sb = smin
+                if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
+                    sb = 2.0  # no transition of this mode crosses this way: nothing to locate
                 if sb <= 1.0:
                     if not have_dense:
                         _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
@@ -1293,8 +1299,8 @@ def integrate_kernel(
                 out[at] = rec_F[r, q, j]
                 at += 1
     # integers: status, mode and surface of a failure, events, steps, rejected steps, final mode,
-    # sliding state (5); the event log's rows (kind, transition, surface, mode from, mode to)
-    info = np.zeros(12 + 5 * n_ev, dtype=np.int64)
+    # sliding state (5), initial mode; the event log's rows (kind, transition, surface, mode from, mode to)
+    info = np.zeros(13 + 5 * n_ev, dtype=np.int64)
     info[0] = status
     info[1] = info_mode
     info[2] = info_surface
@@ -1304,9 +1310,10 @@ def integrate_kernel(
     info[6] = mode
     for i in range(5):
         info[7 + i] = slide[i]
+    info[12] = mode0
     for r in range(n_ev):
         for j in range(5):
-            info[12 + 5 * r + j] = ev_int[r, j]
+            info[13 + 5 * r + j] = ev_int[r, j]
     return info, out
 
 
@@ -1417,7 +1424,7 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
     rn = np.inf
     it = 0
     trial = 0  # > 0: zt is the trial point of a damped step, halved trial - 1 times
-    res = (np.zeros(12, dtype=np.int64), np.zeros(1))  # the kernel result at z, from the first shot on
+    res = (np.zeros(13, dtype=np.int64), np.zeros(1))  # the kernel result at z, from the first shot on
     # one call site of the shot: the integrator is compiled into this function once
     while True:
         cand = zt if trial > 0 else z

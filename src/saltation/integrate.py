@@ -279,6 +279,16 @@ class Tolerances:
         if not self.max_step > 0:
             raise ValueError(f"max_step must be positive, got {self.max_step}")
 
+    @cached_property
+    def kernel_arguments(self) -> tuple[tuple[float, float], tuple[float, int, int], tuple[bool, bool]]:
+        """The settings as the kernel takes them: ``(rtol, atol)``, ``(max_step, max_events, max_steps)``,
+        ``(control_variational, exact_affine)``, typed once."""
+        return (
+            (float(self.rtol), float(self.atol)),
+            (float(self.max_step), int(self.max_events), int(self.max_steps)),
+            (bool(self.control_variational), bool(self.exact_affine)),
+        )
+
 
 class Flow:
     """The compiled flow of one model: integrate, with events and saltation matrices.
@@ -374,11 +384,10 @@ class Flow:
         if not -1 <= parameter < sys_.n_params:
             raise ModelError(f"parameter index {parameter} out of range")
         phi = self._identity if phi0 is None else np.ascontiguousarray(phi0, dtype=float)
+        steps, limits, flags = tol.kernel_arguments
         out = self._kernels.integrate_kernel(
-            t0, t1, x0, int(m0), p, bool(variational), int(parameter),
-            float(tol.rtol), float(tol.atol), 0.0, float(tol.max_step), int(tol.max_events), int(tol.max_steps),
-            self._table, self._n_surfaces, bool(dense), phi, self._zeros, bool(tol.control_variational),
-            bool(tol.exact_affine),
+            t0, t1, x0, int(m0), p, bool(variational), int(parameter), *steps, 0.0, *limits,
+            self._table, self._n_surfaces, bool(dense), phi, self._zeros, *flags,
         )
         return self._unpack(out, x0, float(t0), m0, variational, parameter, dense)
 
@@ -394,7 +403,7 @@ class Flow:
         trajectory from the solution (with its monodromy), or None when the
         iteration fails (repeat it in Python for the error that explains it).
         """
-        tol_ = tolerances or self.tolerances
+        steps, limits, flags = (tolerances or self.tolerances).kernel_arguments
         x0 = np.array(x0, dtype=float).reshape(-1)
         p = np.ascontiguousarray(p, dtype=float)
         t0, span = float(t0), float(t1) - float(t0)
@@ -403,16 +412,14 @@ class Flow:
         try:
             code, _, x, history, _, out = self._kernels.correct_periodic(
                 x0, self._zeros, t0, math.copysign(1.0, span), False, -1, abs(span), p, self._zeros, self._zeros,
-                float(tol), int(max_iter), 0.0, True, float(tol_.rtol), float(tol_.atol), float(tol_.max_step),
-                int(tol_.max_events), int(tol_.max_steps), self._table, self._n_surfaces, self._identity, self._zeros,
-                bool(tol_.control_variational), bool(tol_.exact_affine),
+                float(tol), int(max_iter), 0.0, True, *steps, *limits, self._table, self._n_surfaces, self._identity,
+                self._zeros, *flags,
             )
         except np.linalg.LinAlgError:  # a singular Jacobian
             return None
         if code != _SHOOT_CONVERGED:
             return None
-        m0 = self.initial_mode(x, p, t0)
-        return x, history.tolist(), self._unpack(out, x, t0, m0, True, -1, False)
+        return x, history.tolist(), self._unpack(out, x, t0, int(out[0][12]), True, -1, False)
 
     def correct_periodic(
         self, z_pred: np.ndarray, normal: np.ndarray, p: np.ndarray, *, t0: float, sign: float, lam_index: int,
@@ -439,16 +446,15 @@ class Flow:
         sys_ = self.system
         if phase is None and not isinstance(sys_, PiecewiseSystem):
             return None  # the forcing period is a Python callable
-        tol_ = tolerances or self.tolerances
+        steps, limits, flags = (tolerances or self.tolerances).kernel_arguments
         x_ref, f_ref = phase if phase is not None else (self._zeros, self._zeros)
         p = np.ascontiguousarray(p, dtype=float)
         try:
             code, it, z, history, jac, out = self._kernels.correct_periodic(
                 np.ascontiguousarray(z_pred, dtype=float), np.ascontiguousarray(normal, dtype=float), float(t0),
                 float(sign), bool(phase is not None), int(lam_index), 0.0, p, x_ref, f_ref, float(tol),
-                int(max_newton), float(max_correction), False, float(tol_.rtol), float(tol_.atol), float(tol_.max_step), int(tol_.max_events),
-                int(tol_.max_steps), self._table, self._n_surfaces, self._identity, self._zeros,
-                bool(tol_.control_variational), bool(tol_.exact_affine),
+                int(max_newton), float(max_correction), False, *steps, *limits, self._table, self._n_surfaces,
+                self._identity, self._zeros, *flags,
             )
         except np.linalg.LinAlgError:  # a singular bordered matrix
             return None
@@ -458,9 +464,11 @@ class Flow:
         x0 = z[:n].copy()
         p_end = p.copy()
         p_end[lam_index] = z[-1]
-        if code != _SHOOT_CONVERGED and int(out[0][0]) == Status.OK:
+        ok = int(out[0][0]) == _STATUS_OK
+        if code != _SHOOT_CONVERGED and ok:
             raise ConvergenceError("corrector did not converge", history.tolist())
-        m0 = self.initial_mode(x0, p_end, t0)  # raises for a state in no mode
+        # the shot's initial mode; after a failure the rule itself, which raises for a state in no mode
+        m0 = int(out[0][12]) if ok else self.initial_mode(x0, p_end, t0)
         traj = self._unpack(out, x0, float(t0), m0, True, lam_index, False)  # raises a failed shot's error
         m = len(z) - 1
         return it, z, history.tolist(), jac[:, 0].copy(), jac[:, 1 : 1 + m].copy(), jac[:, 1 + m].copy(), traj
@@ -470,7 +478,7 @@ class Flow:
         n = sys_.n
         info, res = out  # the kernel's two packed arrays (see the end of ``integrate_kernel``)
         n_ev, n_out, w_ev = int(info[3]), 1 + 5 * n + n * n, 1 + 2 * n + n * n
-        ev_int = info[12:].reshape(n_ev, 5)
+        ev_int = info[13:].reshape(n_ev, 5)
         ev = res[n_out : n_out + n_ev * w_ev].reshape(n_ev, w_ev)
         t = res[0]
         x = res[1 : 1 + n]
