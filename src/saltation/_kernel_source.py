@@ -1386,6 +1386,24 @@ def _periodic_residual(out, z, n, autonomous, x_ref, f_ref, r):
 
 
 @njit(cache=True)
+def _newton_result(code, it, z, history, n_history, jac, res):
+    """``correct_periodic``'s result: ``(code, iterations, [z | residual history | jac], ints, floats)``,
+    the last two the kernel result at ``z`` (each returned array costs a conversion)."""
+    m = z.shape[0]
+    packed = np.empty(m + n_history + jac.size)
+    for i in range(m):
+        packed[i] = z[i]
+    for i in range(n_history):
+        packed[m + i] = history[i]
+    at = m + n_history
+    for i in range(jac.shape[0]):
+        for j in range(jac.shape[1]):
+            packed[at] = jac[i, j]
+            at += 1
+    return code, it, packed, res[0], res[1]
+
+
+@njit(cache=True)
 def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref, tol, max_newton,
                      max_correction, damped, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
                      phi0, psi0, control_variational, exact_affine):
@@ -1404,8 +1422,9 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
       ``r = 0``; a step is halved (up to 8 times) until the residual
       decreases.
 
-    Converged when ``|r| <= tol (1 + |u|)``.  Returns ``(code, iterations, z,
-    residual history, [r | J_u | J_lam], kernel result at z)``.
+    Converged when ``|r| <= tol (1 + |u|)``.  Returns ``(code, iterations, [z |
+    residual history | r, J_u, J_lam by rows], ints, floats)``, the last two the
+    kernel result at z (see :func:`_newton_result`).
     """
     m_u = n_u = phi0.shape[0] + (1 if autonomous else 0)  # unknowns u (and rows of r)
     m_z = z_pred.shape[0]  # m_u, or m_u + 1 with lam
@@ -1438,7 +1457,7 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
                 trial = 0
                 it += 1
             elif trial == 9:
-                return SHOOT_FAILED, it, z, history[: it + 1], jac, res
+                return _newton_result(SHOOT_FAILED, it, z, history, it + 1, jac, res)
             else:
                 for j in range(m_z):
                     dz[j] *= 0.5
@@ -1447,9 +1466,9 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
                 continue
         res = res_c
         if not ok:
-            return SHOOT_BAD_PERIOD, it, z, history[:it], jac, res
+            return _newton_result(SHOOT_BAD_PERIOD, it, z, history, it, jac, res)
         if res[0][0] != STATUS_OK:
-            return SHOOT_FAILED, it, z, history[:it], jac, res
+            return _newton_result(SHOOT_FAILED, it, z, history, it, jac, res)
         out = res[1]
         rn = _periodic_residual(out, z, n, autonomous, x_ref, f_ref, r)
         history[it] = rn
@@ -1472,9 +1491,9 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
             for i in range(n):
                 jac[i, 1 + m_u] += sign * dperiod * out[velocity + i]
         if not math.isfinite(rn):
-            return SHOOT_FAILED, it, z, history[: it + 1], jac, res
+            return _newton_result(SHOOT_FAILED, it, z, history, it + 1, jac, res)
         if rn <= tol * (1.0 + math.sqrt(un)):
-            return SHOOT_CONVERGED, it, z, history[: it + 1], jac, res
+            return _newton_result(SHOOT_CONVERGED, it, z, history, it + 1, jac, res)
         if it == max_newton:
             break
         for i in range(m_u):
@@ -1505,4 +1524,4 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
         for j in range(m_z):
             z[j] -= dz[j]
         it += 1
-    return SHOOT_MAX_ITER, it, z, history[: it + 1], jac, res
+    return _newton_result(SHOOT_MAX_ITER, it, z, history, it + 1, jac, res)

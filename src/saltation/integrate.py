@@ -410,7 +410,7 @@ class Flow:
         if not span:
             return None
         try:
-            code, _, x, history, _, out = self._kernels.correct_periodic(
+            code, _, packed, *out = self._kernels.correct_periodic(
                 x0, self._zeros, t0, math.copysign(1.0, span), False, -1, abs(span), p, self._zeros, self._zeros,
                 float(tol), int(max_iter), 0.0, True, *steps, *limits, self._table, self._n_surfaces, self._identity,
                 self._zeros, *flags,
@@ -419,6 +419,7 @@ class Flow:
             return None
         if code != _SHOOT_CONVERGED:
             return None
+        x, history, _ = _newton_unpack(packed, x0.size, x0.size)
         return x, history.tolist(), self._unpack(out, x, t0, int(out[0][12]), True, -1, False)
 
     def correct_periodic(
@@ -450,7 +451,7 @@ class Flow:
         x_ref, f_ref = phase if phase is not None else (self._zeros, self._zeros)
         p = np.ascontiguousarray(p, dtype=float)
         try:
-            code, it, z, history, jac, out = self._kernels.correct_periodic(
+            code, it, packed, *out = self._kernels.correct_periodic(
                 np.ascontiguousarray(z_pred, dtype=float), np.ascontiguousarray(normal, dtype=float), float(t0),
                 float(sign), bool(phase is not None), int(lam_index), 0.0, p, x_ref, f_ref, float(tol),
                 int(max_newton), float(max_correction), False, *steps, *limits, self._table, self._n_surfaces,
@@ -461,6 +462,7 @@ class Flow:
         if code == _SHOOT_BAD_PERIOD:
             return None
         n = sys_.n
+        z, history, jac = _newton_unpack(packed, len(z_pred), len(z_pred) - 1)
         x0 = z[:n].copy()
         p_end = p.copy()
         p_end[lam_index] = z[-1]
@@ -510,6 +512,12 @@ class Flow:
             n_rejected=int(info[5]),
             _steps=_steps(res[n_out + n_ev * w_ev :], n) if dense else None,
         )
+
+
+def _newton_unpack(packed: np.ndarray, m_z: int, m_u: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The kernel Newton's packed result: ``z``, the residual history and ``[r | J_u | J_lam]`` (``m_u`` rows)."""
+    n_jac = m_u * (m_u + 2)
+    return packed[:m_z], packed[m_z : packed.size - n_jac], packed[packed.size - n_jac :].reshape(m_u, m_u + 2)
 
 
 def _steps(packed: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
