@@ -148,3 +148,36 @@ def test_bouncing_ball_impacts(oscillator_flow):
         lambda x0: oscillator_flow.run(x0, 0.0, t_end, p, mode0="ball", tolerances=TIGHT).x1, [1.0, 0.0], 1e-6
     )
     np.testing.assert_allclose(traj.monodromy, fd, atol=1e-7)
+
+
+# ----------------------------------------------------------------- rates of the event functions
+def test_indicator_rates_against_central_differences():
+    """The generated ``indicator_rate(s, t, x, f, p) = h_t + h_x f`` that event detection evaluates at
+    every step: against central differences of ``h`` along ``(1, f)`` in ``(t, x)``, for a moving
+    surface (``h_t != 0``) and a state-only one. The model functions run as plain Python here."""
+    from saltation import Crossing, Mode, PiecewiseSystem, Transition
+    from saltation.codegen import generate_source
+
+    system = PiecewiseSystem(
+        name="test_moving_wall",
+        states=["x", "v"],
+        parameters={"a": 0.3, "w": 2.0, "k": 1.5},
+        modes=[Mode("left", ["v", "-k*x"], domain=["x - a*sin(w*t) < 0"]), Mode("right", ["v", "-x"])],
+        surfaces={"moving": "x - a*sin(w*t)", "energy": "k*x**2 + v**2 - 1"},
+        transitions=[
+            Transition("left", "moving", Crossing.RISING, "right"),
+            Transition("right", "moving", Crossing.FALLING, "left"),
+        ],
+    )
+    namespace = {"njit": lambda *args, **kwargs: (lambda f: f)}
+    source = generate_source(system).replace("from numba import njit\n", "")
+    exec(compile(source, "<generated>", "exec"), namespace)  # noqa: S102
+    indicator, rate = namespace["indicator"], namespace["indicator_rate"]
+    p = system.parameter_vector()
+    rng = np.random.default_rng(3)
+    eps = 1e-6
+    for _ in range(20):
+        t, x, f = rng.normal(), rng.normal(size=2), rng.normal(size=2)
+        for s in range(2):
+            fd = (indicator(s, t + eps, x + eps * f, p) - indicator(s, t - eps, x - eps * f, p)) / (2 * eps)
+            assert rate(s, t, x, f, p) == pytest.approx(fd, rel=1e-8, abs=1e-8)

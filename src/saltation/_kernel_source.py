@@ -578,15 +578,11 @@ def _dip_search(kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp):
 
 
 @njit(cache=True)
-def _slope(mode, slide, kind, idx, t, x, f, p, n, hx, hp, gtmp, gptmp):
+def _slope(mode, slide, kind, idx, t, x, f, p, n, gtmp, gptmp):
     """Time derivative of an event function along ``f`` (indicators: ``h_x f + h_t``; sliding exits:
     the Lie derivative's ``s_x f + s_t``)."""
     if kind == 0:
-        ht = indicator_grad(idx, t, x, p, hx, hp)  # noqa: F821
-        acc = ht
-        for i in range(n):
-            acc += hx[i] * f[i]
-        return acc
+        return indicator_rate(idx, t, x, f, p)  # noqa: F821
     m = slide[1] if kind == 1 else slide[2]
     lie_derivative(m, slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
     acc = lie_derivative_dt(m, slide[3], t, x, p)  # noqa: F821
@@ -869,7 +865,7 @@ def integrate_kernel(
                 if watched[s]:
                     v = indicator(s, t, y[:n], p)  # noqa: F821
                     surf_old[s] = v
-                    sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, n, hx, hp, gtmp, gptmp)
+                    sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, n, gtmp, gptmp)
                     slope_old[s] = sl
                     if fixed_sign[s]:
                         continue
@@ -944,7 +940,7 @@ def integrate_kernel(
                     continue
                 v = indicator(s, t_new, ynew[:n], p)  # noqa: F821
                 surf_new[s] = v
-                sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, n, hx, hp, gtmp, gptmp)
+                sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, n, gtmp, gptmp)
                 slope_new[s] = sl
                 sg = surf_sign[s]
                 sb = 2.0
@@ -1059,7 +1055,7 @@ def integrate_kernel(
             if g_e == 0.0:
                 break
             _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, n, var, pidx, Ksave[1], W, WJ, WP, wv)
-            dg = sgn_ev * h * _slope(mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, n, hx, hp, gtmp, gptmp)
+            dg = sgn_ev * h * _slope(mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, n, gtmp, gptmp)
             if dg == 0.0 or not math.isfinite(dg):
                 break
             s_new = min(max(s_e - g_e / dg, 0.0), 1.0)

@@ -65,6 +65,11 @@ class _Printer(PythonCodePrinter):
         return repr(float(expr))
 
 
+def _rate_symbol(i: int) -> sp.Symbol:
+    """Component ``i`` of the velocity ``f`` an indicator's rate is taken along (printed ``f[i]``)."""
+    return sp.Symbol(f"_rate_f{i}")
+
+
 @dataclass(frozen=True)
 class _Assignment:
     target: str
@@ -78,6 +83,7 @@ class _Emitter:
         names = {s: f"x[{i}]" for i, s in enumerate(system.x)}
         names |= {s: f"p[{i}]" for i, s in enumerate(system.p)}
         names[TIME] = "t"
+        names |= {_rate_symbol(i): f"f[{i}]" for i in range(system.n)}
         self.printer = _Printer(names)
 
     def block(self, assignments: list[_Assignment], indent: str, result: sp.Expr | None = None) -> list[str]:
@@ -165,6 +171,13 @@ def generate_source(system: PiecewiseSystem) -> str:
         body += em.block(assigns, ind, result=d.h_t)
         grad_cases.append((s, body))
     src += _dispatch("indicator_grad", "surface, t, x, p, hx, hp", "surface", grad_cases, "0.0")
+    # h_t + h_x f: the rate of an indicator along a velocity f (event detection, every step)
+    rate_cases = []
+    for s in surfaces:
+        d = system.surface_derivatives(s)
+        rate = d.h_t + sum((d.h_x[0, i] * _rate_symbol(i) for i in range(system.n)), sp.Integer(0))
+        rate_cases.append((s, em.block([], ind, result=rate)))
+    src += _dispatch("indicator_rate", "surface, t, x, f, p", "surface", rate_cases, "0.0")
 
     # Lie derivatives h_x f + h_t (with gradients) for the pairs used by transitions (sliding)
     pairs = sorted(
