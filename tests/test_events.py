@@ -180,4 +180,4 @@ def test_indicator_rates_against_central_differences():
         t, x, f = rng.normal(), rng.normal(size=2), rng.normal(size=2)
         for s in range(2):
             fd = (indicator(s, t + eps, x + eps * f, p) - indicator(s, t - eps, x - eps * f, p)) / (2 * eps)
-            assert rate(s, t, x, f, p) == pytest.approx(fd, rel=1e-8, abs=1e-8)
+            assert rate(s, t, x, f, p, np.zeros(2), np.zeros(3)) == pytest.approx(fd, rel=1e-8, abs=1e-8)

@@ -248,6 +248,26 @@ def _affine_norm(A, B, om):
 
 
 @njit(cache=True)
+def _exact_end(mode, t_end, x, y, tail, n, rtol, atol, AFF_A, AFF_B, AFF_W, K):
+    """End of an exact step at ``t_end`` in state ``x`` (from ``y``): ``K[12] = f(t_end, x)``; returns the
+    error norm of the step's dense output, whose bound per component is ``tail``."""
+    A = AFF_A[mode]
+    B = AFF_B[mode]
+    theta = AFF_W[mode, 0] * t_end + AFF_W[mode, 1]
+    c1 = math.cos(theta)
+    s1 = math.sin(theta)
+    err = 0.0
+    for i in range(n):
+        acc = B[i, 0] + B[i, 1] * c1 + B[i, 2] * s1
+        for j in range(n):
+            acc += A[i, j] * x[j]
+        K[12, i] = acc
+        sc = atol + rtol * max(abs(y[i]), abs(x[i]))
+        err += (tail[i] / sc) ** 2
+    return math.sqrt(err / n)
+
+
+@njit(cache=True)
 def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TP, TC):
     """One step of the exact flow of an affine mode; returns the dense output's error norm.
 
@@ -375,30 +395,19 @@ def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AF
             break
     if not converged:
         return np.inf
-    theta1 = om * (t + h) + AFF_W[mode, 1]
-    c1 = math.cos(theta1)
-    s1 = math.sin(theta1)
-    err = 0.0
     for i in range(n):
         ynew[i] = xs[i]
         if var:
             for j in range(n):
                 ynew[n + i * n + j] = Ps[i, j]
             ynew[n + n * n + i] = ss[i] if sens else 0.0
-    for i in range(n):
-        acc = B[i, 0] + B[i, 1] * c1 + B[i, 2] * s1
-        for j in range(n):
-            acc += A[i, j] * xs[j]
-        K[12, i] = acc
-        sc = atol + rtol * max(abs(y[i]), abs(xs[i]))
-        err += (tail[i] / sc) ** 2
     TC[MAX_TAYLOR + 1, 0] = n_terms
     TC[MAX_TAYLOR + 2, 0] = 1.0
-    return math.sqrt(err / n)
+    return _exact_end(mode, t + h, xs, y, tail, n, rtol, atol, AFF_A, AFF_B, AFF_W, K)
 
 
 @njit(cache=True)
-def _exact_fraction(mode, t, y, h, theta, n, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TC):
+def _exact_fraction(mode, t, y, h, theta, n, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TW, TC):
     """The exact step of ``theta * h`` (``0 <= theta <= 1``) from the series of a step of ``h`` in ``TC``.
 
     The Taylor series of the exact flow converges on the whole step, so a
@@ -406,8 +415,6 @@ def _exact_fraction(mode, t, y, h, theta, n, var, rtol, atol, AFF_A, AFF_B, AFF_
     same series summed at ``theta``: no new series.  Returns the error norm of
     the shorter step's dense output, as :func:`_exact_step`.
     """
-    A = AFF_A[mode]
-    B = AFF_B[mode]
     n_terms = int(TC[MAX_TAYLOR + 1, 0])
     N = n + n * n + n if var else n
     for c in range(N):
@@ -415,24 +422,15 @@ def _exact_fraction(mode, t, y, h, theta, n, var, rtol, atol, AFF_A, AFF_B, AFF_
         for k in range(n_terms - 1, 0, -1):
             v = (v + TC[k, c]) * theta
         ynew[c] = v + TC[0, c]
-    theta1 = AFF_W[mode, 0] * (t + theta * h) + AFF_W[mode, 1]
-    c1 = math.cos(theta1)
-    s1 = math.sin(theta1)
-    err = 0.0
+    tail = TW[6]
     for i in range(n):
-        acc = B[i, 0] + B[i, 1] * c1 + B[i, 2] * s1
-        for j in range(n):
-            acc += A[i, j] * ynew[j]
-        K[12, i] = acc
-        tail = 0.0
+        tail[i] = 0.0
         pw = theta ** 8
         for k in range(8, n_terms):
-            tail += LOBATTO_BOUND[k] * abs(TC[k, i]) * pw
+            tail[i] += LOBATTO_BOUND[k] * abs(TC[k, i]) * pw
             pw *= theta
-        sc = atol + rtol * max(abs(y[i]), abs(ynew[i]))
-        err += (tail / sc) ** 2
     TC[MAX_TAYLOR + 2, 0] = theta
-    return math.sqrt(err / n)
+    return _exact_end(mode, t + theta * h, ynew, y, tail, n, rtol, atol, AFF_A, AFF_B, AFF_W, K)
 
 
 @njit(cache=True)
@@ -466,7 +464,7 @@ def _step(exact, mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytm
     if exact:
         base = TC[MAX_TAYLOR + 3, 0]
         if base != 0.0 and 0.0 <= h / base <= 1.0:
-            return _exact_fraction(mode, t, y, base, h / base, n, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TC)
+            return _exact_fraction(mode, t, y, base, h / base, n, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TW, TC)
         err = _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TP, TC)
         TC[MAX_TAYLOR + 3, 0] = h if TC[MAX_TAYLOR + 1, 0] > 0.0 else 0.0
         return err
@@ -578,11 +576,11 @@ def _dip_search(kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp):
 
 
 @njit(cache=True)
-def _slope(mode, slide, kind, idx, t, x, f, p, n, gtmp, gptmp):
+def _slope(mode, slide, kind, idx, t, x, f, p, n, hx, hp, gtmp, gptmp):
     """Time derivative of an event function along ``f`` (indicators: ``h_x f + h_t``; sliding exits:
     the Lie derivative's ``s_x f + s_t``)."""
     if kind == 0:
-        return indicator_rate(idx, t, x, f, p)  # noqa: F821
+        return indicator_rate(idx, t, x, f, p, hx, hp)  # noqa: F821
     m = slide[1] if kind == 1 else slide[2]
     lie_derivative(m, slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
     acc = lie_derivative_dt(m, slide[3], t, x, p)  # noqa: F821
@@ -865,7 +863,7 @@ def integrate_kernel(
                 if watched[s]:
                     v = indicator(s, t, y[:n], p)  # noqa: F821
                     surf_old[s] = v
-                    sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, n, gtmp, gptmp)
+                    sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, n, hx, hp, gtmp, gptmp)
                     slope_old[s] = sl
                     if fixed_sign[s]:
                         continue
@@ -940,7 +938,7 @@ def integrate_kernel(
                     continue
                 v = indicator(s, t_new, ynew[:n], p)  # noqa: F821
                 surf_new[s] = v
-                sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, n, gtmp, gptmp)
+                sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, n, hx, hp, gtmp, gptmp)
                 slope_new[s] = sl
                 sg = surf_sign[s]
                 sb = 2.0
@@ -1055,7 +1053,7 @@ def integrate_kernel(
             if g_e == 0.0:
                 break
             _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, n, var, pidx, Ksave[1], W, WJ, WP, wv)
-            dg = sgn_ev * h * _slope(mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, n, gtmp, gptmp)
+            dg = sgn_ev * h * _slope(mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, n, hx, hp, gtmp, gptmp)
             if dg == 0.0 or not math.isfinite(dg):
                 break
             s_new = min(max(s_e - g_e / dg, 0.0), 1.0)

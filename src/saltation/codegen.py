@@ -177,7 +177,8 @@ def generate_source(system: PiecewiseSystem) -> str:
         d = system.surface_derivatives(s)
         rate = d.h_t + sum((d.h_x[0, i] * _rate_symbol(i) for i in range(system.n)), sp.Integer(0))
         rate_cases.append((s, em.block([], ind, result=rate)))
-    src += _dispatch("indicator_rate", "surface, t, x, f, p", "surface", rate_cases, "0.0")
+    # (hx, hp: work arrays for an indicator_rate built on indicator_grad, as CompiledSystem's; unused here)
+    src += _dispatch("indicator_rate", "surface, t, x, f, p, hx, hp", "surface", rate_cases, "0.0")
 
     # Lie derivatives h_x f + h_t (with gradients) for the pairs used by transitions (sliding)
     pairs = sorted(

@@ -47,10 +47,8 @@ OPTIONAL = (
 
 _DEFAULTS = '''
 @njit
-def indicator_rate(surface, t, x, f, p):
-    hx = np.zeros(x.shape[0])  # h_t + h_x f from the model's indicator_grad
-    hp = np.zeros(max(p.shape[0], 1))
-    acc = indicator_grad(surface, t, x, p, hx, hp)
+def indicator_rate(surface, t, x, f, p, hx, hp):
+    acc = indicator_grad(surface, t, x, p, hx, hp)  # h_t + h_x f from the model's indicator_grad
     for i in range(x.shape[0]):
         acc += hx[i] * f[i]
     return acc
