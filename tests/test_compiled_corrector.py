@@ -132,3 +132,22 @@ def test_end_velocity_of_a_mode_and_of_a_sliding_motion(filippov_flow, trilinear
         traj = trilinear_flow.run(contact_orbit.state0, 0.0, t1, p)
         assert not traj.sliding_at_end
         np.testing.assert_allclose(traj.velocity_end, _time_derivative(trilinear_flow, contact_orbit.state0, t1, p), atol=1e-8)
+
+
+def test_pivoted_solve_against_lapack(trilinear_flow):
+    """The kernel's Newton solve (Gaussian elimination with partial pivoting) against numpy.linalg.solve
+    (LAPACK dgesv), on random matrices, one that needs row exchanges, and singular ones."""
+    solve = trilinear_flow._kernels._solve_pivoted
+    rng = np.random.default_rng(7)
+    matrices = [rng.standard_normal((m, m)) for m in (1, 2, 3, 4, 6)]
+    matrices.append(np.array([[0.0, 2.0, 1.0], [1.0, 0.0, 0.0], [3.0, 1.0, 4.0]]))  # zero leading pivot
+    for A in matrices:
+        b = rng.standard_normal(A.shape[0])
+        expected = np.linalg.solve(A, b)
+        x = np.zeros_like(b)
+        assert solve(A.copy(), b.copy(), x)
+        cond = np.linalg.cond(A)
+        assert np.max(np.abs(x - expected)) <= 1e-14 * cond * (1.0 + np.max(np.abs(expected)))
+        assert np.max(np.abs(A @ x - b)) <= 1e-13 * (1.0 + np.max(np.abs(b)))
+    for A in (np.array([[1.0, 2.0], [2.0, 4.0]]), np.zeros((3, 3)), np.array([[np.nan, 0.0], [0.0, 1.0]])):
+        assert not solve(A.copy(), np.ones(A.shape[0]), np.zeros(A.shape[0]))

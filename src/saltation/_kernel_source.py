@@ -1323,9 +1323,10 @@ SHOOT_CONVERGED = 0
 SHOOT_FAILED = 1  # an integration failed, the residual is not finite, or no step reduces it
 SHOOT_MAX_ITER = 2
 SHOOT_BAD_PERIOD = 3  # a period that is not positive (the caller's own iteration explains it)
+SHOOT_SINGULAR = 4  # a Newton matrix with a zero (or not finite) pivot (the caller's own iteration explains it)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # inlined: each library level links and re-optimizes the integrator
 def _shot(x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
           control_variational, exact_affine):
     """One shot ``x -> x(t1)`` with the fundamental solution matrix (and ``psi`` of parameter ``pidx``);
@@ -1341,7 +1342,7 @@ def _shot(x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_ta
     return res
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # inlined: see _shot
 def _periodic_shot(z, n, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step, max_events, max_steps,
                    tr_table, n_surfaces, phi0, psi0, control_variational, exact_affine):
     """The shot of one Newton iterate ``z = (x0[, T][, lam])`` over its period (forced: ``span``, or the
@@ -1377,6 +1378,42 @@ def _periodic_residual(out, z, n, autonomous, x_ref, f_ref, r):
         r[n] = acc
         rn += acc * acc
     return math.sqrt(rn)
+
+
+@njit(cache=True)
+def _solve_pivoted(A, b, x):
+    """Solve ``A x = b`` by Gaussian elimination with partial pivoting (LAPACK's ``dgesv`` algorithm),
+    overwriting ``A`` and ``b``; False for a zero or not finite pivot.
+
+    The Newton matrices are (n + 2) x (n + 2) at most; numba's ``np.linalg.solve``
+    would add seconds of compilation per model for them.
+    """
+    m = b.shape[0]
+    for k in range(m):
+        piv = k
+        big = abs(A[k, k])
+        for i in range(k + 1, m):
+            if abs(A[i, k]) > big:
+                big = abs(A[i, k])
+                piv = i
+        if not (big > 0.0) or not math.isfinite(big):
+            return False
+        if piv != k:
+            for j in range(m):
+                A[k, j], A[piv, j] = A[piv, j], A[k, j]
+            b[k], b[piv] = b[piv], b[k]
+        for i in range(k + 1, m):
+            factor = A[i, k] / A[k, k]
+            if factor != 0.0:
+                for j in range(k + 1, m):
+                    A[i, j] -= factor * A[k, j]
+                b[i] -= factor * b[k]
+    for k in range(m - 1, -1, -1):
+        acc = b[k]
+        for j in range(k + 1, m):
+            acc -= A[k, j] * x[j]
+        x[k] = acc / A[k, k]
+    return True
 
 
 @njit(cache=True)
@@ -1438,6 +1475,8 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
     it = 0
     trial = 0  # > 0: zt is the trial point of a damped step, halved trial - 1 times
     res = (np.zeros(13, dtype=np.int64), np.zeros(1))  # the kernel result at z, from the first shot on
+    code = SHOOT_MAX_ITER
+    n_history = 0
     # one call site of the shot: the integrator is compiled into this function once
     while True:
         cand = zt if trial > 0 else z
@@ -1451,7 +1490,8 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
                 trial = 0
                 it += 1
             elif trial == 9:
-                return _newton_result(SHOOT_FAILED, it, z, history, it + 1, jac, res)
+                code, n_history = SHOOT_FAILED, it + 1
+                break
             else:
                 for j in range(m_z):
                     dz[j] *= 0.5
@@ -1460,9 +1500,11 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
                 continue
         res = res_c
         if not ok:
-            return _newton_result(SHOOT_BAD_PERIOD, it, z, history, it, jac, res)
+            code, n_history = SHOOT_BAD_PERIOD, it
+            break
         if res[0][0] != STATUS_OK:
-            return _newton_result(SHOOT_FAILED, it, z, history, it, jac, res)
+            code, n_history = SHOOT_FAILED, it
+            break
         out = res[1]
         rn = _periodic_residual(out, z, n, autonomous, x_ref, f_ref, r)
         history[it] = rn
@@ -1484,10 +1526,13 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
             dperiod = forcing_period_dp(p, lam_index)  # noqa: F821
             for i in range(n):
                 jac[i, 1 + m_u] += sign * dperiod * out[velocity + i]
+        n_history = it + 1
         if not math.isfinite(rn):
-            return _newton_result(SHOOT_FAILED, it, z, history, it + 1, jac, res)
+            code = SHOOT_FAILED
+            break
         if rn <= tol * (1.0 + math.sqrt(un)):
-            return _newton_result(SHOOT_CONVERGED, it, z, history, it + 1, jac, res)
+            code = SHOOT_CONVERGED
+            break
         if it == max_newton:
             break
         for i in range(m_u):
@@ -1500,9 +1545,9 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
                 Jb[m_u, j] = normal[j]
                 acc += normal[j] * (z[j] - z_pred[j])
             rhs[m_u] = acc
-        step = np.linalg.solve(Jb, rhs)  # LinAlgError (singular) reaches the caller
-        for j in range(m_z):
-            dz[j] = step[j]
+        if not _solve_pivoted(Jb, rhs, dz):
+            code = SHOOT_SINGULAR
+            break
         if damped:
             for j in range(m_z):
                 zt[j] = z[j] - dz[j]
@@ -1518,4 +1563,5 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
         for j in range(m_z):
             z[j] -= dz[j]
         it += 1
-    return _newton_result(SHOOT_MAX_ITER, it, z, history, it + 1, jac, res)
+    # one call of the result (each literal code as an argument would compile it once more)
+    return _newton_result(code, it, z, history, n_history, jac, res)

@@ -45,6 +45,7 @@ class Status(enum.IntEnum):
 _SHOOT_CONVERGED = 0
 _STATUS_OK = 0  # Status.OK as a plain int: an enum member costs a class attribute lookup per integration
 _SHOOT_BAD_PERIOD = 3
+_SHOOT_SINGULAR = 4
 
 
 class EventKind(enum.IntEnum):
@@ -409,15 +410,12 @@ class Flow:
         t0, span = float(t0), float(t1) - float(t0)
         if not span:
             return None
-        try:
-            code, _, packed, *out = self._kernels.correct_periodic(
-                x0, self._zeros, t0, math.copysign(1.0, span), False, -1, abs(span), p, self._zeros, self._zeros,
-                float(tol), int(max_iter), 0.0, True, *steps, *limits, self._table, self._n_surfaces, self._identity,
-                self._zeros, *flags,
-            )
-        except np.linalg.LinAlgError:  # a singular Jacobian
-            return None
-        if code != _SHOOT_CONVERGED:
+        code, _, packed, *out = self._kernels.correct_periodic(
+            x0, self._zeros, t0, math.copysign(1.0, span), False, -1, abs(span), p, self._zeros, self._zeros,
+            float(tol), int(max_iter), 0.0, True, *steps, *limits, self._table, self._n_surfaces, self._identity,
+            self._zeros, *flags,
+        )
+        if code != _SHOOT_CONVERGED:  # also a singular Jacobian
             return None
         x, history, _ = _newton_unpack(packed, x0.size, x0.size)
         return x, history.tolist(), self._unpack(out, x, t0, int(out[0][12]), True, -1, False)
@@ -450,16 +448,13 @@ class Flow:
         steps, limits, flags = (tolerances or self.tolerances).kernel_arguments
         x_ref, f_ref = phase if phase is not None else (self._zeros, self._zeros)
         p = np.ascontiguousarray(p, dtype=float)
-        try:
-            code, it, packed, *out = self._kernels.correct_periodic(
-                np.ascontiguousarray(z_pred, dtype=float), np.ascontiguousarray(normal, dtype=float), float(t0),
-                float(sign), bool(phase is not None), int(lam_index), 0.0, p, x_ref, f_ref, float(tol),
-                int(max_newton), float(max_correction), False, *steps, *limits, self._table, self._n_surfaces,
-                self._identity, self._zeros, *flags,
-            )
-        except np.linalg.LinAlgError:  # a singular bordered matrix
-            return None
-        if code == _SHOOT_BAD_PERIOD:
+        code, it, packed, *out = self._kernels.correct_periodic(
+            np.ascontiguousarray(z_pred, dtype=float), np.ascontiguousarray(normal, dtype=float), float(t0),
+            float(sign), bool(phase is not None), int(lam_index), 0.0, p, x_ref, f_ref, float(tol),
+            int(max_newton), float(max_correction), False, *steps, *limits, self._table, self._n_surfaces,
+            self._identity, self._zeros, *flags,
+        )
+        if code == _SHOOT_BAD_PERIOD or code == _SHOOT_SINGULAR:  # (a singular bordered matrix)
             return None
         n = sys_.n
         z, history, jac = _newton_unpack(packed, len(z_pred), len(z_pred) - 1)
