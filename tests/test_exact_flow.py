@@ -127,11 +127,11 @@ def test_a_fraction_of_an_exact_step_is_the_exact_step_to_that_point(trilinear_f
     def step(length, fraction_of=None):
         K, ynew, F = np.zeros((16, N)), np.zeros(N), np.zeros((7, n))
         TW, TP, TC = np.zeros((7, n)), np.zeros((3, n, n)), np.zeros((rows, N))
-        err = k._exact_step(mode, t, y, fraction_of or length, n, True, pidx, 1e-10, 1e-12, *aff, K, ynew, TW, TP, TC)
+        err = k._exact_step(mode, t, y, fraction_of or length, True, pidx, 1e-10, 1e-12, *aff, K, ynew, TW, TP, TC)
         if fraction_of is not None:
-            err = k._exact_fraction(mode, t, y, fraction_of, length / fraction_of, n, True, 1e-10, 1e-12, *aff[:3],
+            err = k._exact_fraction(mode, t, y, fraction_of, length / fraction_of, True, 1e-10, 1e-12, *aff[:3],
                                     K, ynew, TW, TC)
-        k._exact_dense(y, ynew, n, TC, F)
+        k._exact_dense(y, ynew, TC, F)
         dense = np.zeros((11, n))
         for i, s in enumerate(np.linspace(0.0, 1.0, 11)):
             k._dense_eval(F, y, s, dense[i])

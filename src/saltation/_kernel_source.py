@@ -63,7 +63,7 @@ def _field(mode, slide, t, x, p, var, pidx, f, J, fpc, ws1, ws2, ws3, wsJ1, wsJ2
     is Filippov's ``f_a + alpha (f_b - f_a)`` with ``alpha = s_a / (s_a - s_b)``,
     ``s_m = h_x f_m + h_t``.
     """
-    n = x.shape[0]
+    n = N_STATE  # noqa: F821
     if slide[0] == 0:
         vector_field(mode, t, x, p, f)  # noqa: F821
         if var:
@@ -105,8 +105,9 @@ def _field(mode, slide, t, x, p, var, pidx, f, J, fpc, ws1, ws2, ws3, wsJ1, wsJ2
 
 
 @njit(cache=True, inline="always")  # inlined: array arguments cost more than the work
-def _aug_rhs(mode, slide, t, y, p, n, var, pidx, dy, W, WJ, WP, wv):
+def _aug_rhs(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
     """Right-hand side of the augmented system ``[x, Phi (row-major), psi]``."""
+    n = N_STATE  # noqa: F821
     x = y[:n]
     f = wv[0]
     fpc = wv[1]
@@ -130,9 +131,10 @@ def _aug_rhs(mode, slide, t, y, p, n, var, pidx, dy, W, WJ, WP, wv):
 
 
 @njit(cache=True)
-def _aug_rhs_called(mode, slide, t, y, p, n, var, pidx, dy, W, WJ, WP, wv):
+def _aug_rhs_called(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
     """:func:`_aug_rhs` as a call, for the places outside the stepper (inlining there only costs compile time)."""
-    _aug_rhs(mode, slide, t, y, p, n, var, pidx, dy, W, WJ, WP, wv)
+    n = N_STATE  # noqa: F821
+    _aug_rhs(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv)
 
 
 @njit(cache=True)
@@ -142,12 +144,13 @@ def _field_called(mode, slide, t, x, p, f, WJ, WP, wv, W):
 
 
 @njit(cache=True)
-def _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err):
+def _rk_step(mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err):
     """One DOP853 step from ``(t, y)`` with ``K[0] = f(t, y)`` given; returns the error norm.
 
     The error is measured on the first ``n_err`` components (the state, or the
     state and the variational components).
     """
+    n = N_STATE  # noqa: F821
     N = y.shape[0]
     for s in range(1, 13):  # stages 1-11, then the solution (stage 12: the field at its end)
         yst = ytmp if s < 12 else ynew
@@ -159,7 +162,7 @@ def _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W
                     acc += a * K[j, i]
             yst[i] = y[i] + h * acc
         # one call site: the field is inlined here, once
-        _aug_rhs(mode, slide, t + RK_C[s] * h if s < 12 else t + h, yst, p, n, var, pidx, K[s], W, WJ, WP, wv)  # noqa: F821
+        _aug_rhs(mode, slide, t + RK_C[s] * h if s < 12 else t + h, yst, p, var, pidx, K[s], W, WJ, WP, wv)  # noqa: F821
     e5 = 0.0
     e3 = 0.0
     for i in range(n_err):
@@ -177,8 +180,9 @@ def _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W
 
 
 @njit(cache=True)
-def _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv):
+def _dense_coefficients(mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv):
     """Coefficients of the 7th-order continuous extension of the state ``x`` only."""
+    n = N_STATE  # noqa: F821
     for s in range(13, 16):
         for i in range(n):
             acc = 0.0
@@ -187,7 +191,7 @@ def _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP,
                 if a != 0.0:
                     acc += a * K[j, i]
             xtmp[i] = y[i] + h * acc
-        _aug_rhs_called(mode, slide, t + RK_C[s] * h, xtmp, p, n, False, -1, K[s], W, WJ, WP, wv)  # noqa: F821
+        _aug_rhs_called(mode, slide, t + RK_C[s] * h, xtmp, p, False, -1, K[s], W, WJ, WP, wv)  # noqa: F821
     for i in range(n):
         dyi = ynew[i] - y[i]
         F[0, i] = dyi
@@ -233,9 +237,9 @@ LOBATTO_NODES, LOBATTO_TO_DENSE, LOBATTO_BOUND = _lobatto_interpolation()
 def _affine_norm(A, B, om):
     """Row-sum norm of the augmented matrix ``[[A, B], [0, omega J]]`` of an affine mode."""
     mnorm = abs(om)
-    for i in range(A.shape[0]):
+    for i in range(N_STATE):  # noqa: F821
         row = 0.0
-        for j in range(A.shape[1]):
+        for j in range(N_STATE):  # noqa: F821
             row += abs(A[i, j])
         for j in range(3):
             row += abs(B[i, j])
@@ -244,9 +248,10 @@ def _affine_norm(A, B, om):
 
 
 @njit(cache=True)
-def _exact_end(mode, t_end, x, y, tail, n, rtol, atol, AFF_A, AFF_B, AFF_W, K):
+def _exact_end(mode, t_end, x, y, tail, rtol, atol, AFF_A, AFF_B, AFF_W, K):
     """End of an exact step at ``t_end`` in state ``x`` (from ``y``): ``K[12] = f(t_end, x)``; returns the
     error norm of the step's dense output, whose bound per component is ``tail``."""
+    n = N_STATE  # noqa: F821
     A = AFF_A[mode]
     B = AFF_B[mode]
     theta = AFF_W[mode, 0] * t_end + AFF_W[mode, 1]
@@ -264,7 +269,7 @@ def _exact_end(mode, t_end, x, y, tail, n, rtol, atol, AFF_A, AFF_B, AFF_W, K):
 
 
 @njit(cache=True)
-def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TP, TC):
+def _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TP, TC):
     """One step of the exact flow of an affine mode; returns the dense output's error norm.
 
     The mode's field is ``A x + B z`` with ``z = (1, cos theta, sin theta)``,
@@ -280,6 +285,7 @@ def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AF
     series) against the tolerances, and rejects steps long enough for the series
     to lose digits.
     """
+    n = N_STATE  # noqa: F821
     A = AFF_A[mode]
     B = AFF_B[mode]
     om = AFF_W[mode, 0]
@@ -399,11 +405,11 @@ def _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AF
             ynew[n + n * n + i] = ss[i] if sens else 0.0
     TC[MAX_TAYLOR + 1, 0] = n_terms
     TC[MAX_TAYLOR + 2, 0] = 1.0
-    return _exact_end(mode, t + h, xs, y, tail, n, rtol, atol, AFF_A, AFF_B, AFF_W, K)
+    return _exact_end(mode, t + h, xs, y, tail, rtol, atol, AFF_A, AFF_B, AFF_W, K)
 
 
 @njit(cache=True)
-def _exact_fraction(mode, t, y, h, theta, n, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TW, TC):
+def _exact_fraction(mode, t, y, h, theta, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TW, TC):
     """The exact step of ``theta * h`` (``0 <= theta <= 1``) from the series of a step of ``h`` in ``TC``.
 
     The Taylor series of the exact flow converges on the whole step, so a
@@ -411,6 +417,7 @@ def _exact_fraction(mode, t, y, h, theta, n, var, rtol, atol, AFF_A, AFF_B, AFF_
     same series summed at ``theta``: no new series.  Returns the error norm of
     the shorter step's dense output, as :func:`_exact_step`.
     """
+    n = N_STATE  # noqa: F821
     n_terms = int(TC[MAX_TAYLOR + 1, 0])
     N = n + n * n + n if var else n
     for c in range(N):
@@ -426,13 +433,14 @@ def _exact_fraction(mode, t, y, h, theta, n, var, rtol, atol, AFF_A, AFF_B, AFF_
             tail[i] += LOBATTO_BOUND[k] * abs(TC[k, i]) * pw
             pw *= theta
     TC[MAX_TAYLOR + 2, 0] = theta
-    return _exact_end(mode, t + theta * h, ynew, y, tail, n, rtol, atol, AFF_A, AFF_B, AFF_W, K)
+    return _exact_end(mode, t + theta * h, ynew, y, tail, rtol, atol, AFF_A, AFF_B, AFF_W, K)
 
 
 @njit(cache=True)
-def _exact_dense(y, ynew, n, TC, F):
+def _exact_dense(y, ynew, TC, F):
     """Dense output of an exact step: its Taylor series interpolated at the Chebyshev-Lobatto points
     (of the fraction of the series' step that was taken, see :func:`_exact_fraction`)."""
+    n = N_STATE  # noqa: F821
     n_terms = int(TC[MAX_TAYLOR + 1, 0])
     theta = TC[MAX_TAYLOR + 2, 0]
     for i in range(n):
@@ -448,7 +456,7 @@ def _exact_dense(y, ynew, n, TC, F):
 
 
 @njit(cache=True, inline="always")  # inlined: a call passing this many arrays costs more than a short step's work
-def _step(exact, mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+def _step(exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
           AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC):
     """A step of the exact flow (affine mode, not sliding) or of DOP853; returns the error norm.
 
@@ -457,28 +465,30 @@ def _step(exact, mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytm
     caller clears it when ``(t, y)`` moves on) is that series summed at a
     fraction of its step.
     """
+    n = N_STATE  # noqa: F821
     if exact:
         base = TC[MAX_TAYLOR + 3, 0]
         if base != 0.0 and 0.0 <= h / base <= 1.0:
-            return _exact_fraction(mode, t, y, base, h / base, n, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TW, TC)
-        err = _exact_step(mode, t, y, h, n, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TP, TC)
+            return _exact_fraction(mode, t, y, base, h / base, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TW, TC)
+        err = _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TP, TC)
         TC[MAX_TAYLOR + 3, 0] = h if TC[MAX_TAYLOR + 1, 0] > 0.0 else 0.0
         return err
-    return _rk_step(mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
+    return _rk_step(mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
 
 
 @njit(cache=True)
-def _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC):
+def _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC):
     """Dense-output coefficients of the step just taken (by :func:`_step`)."""
+    n = N_STATE  # noqa: F821
     if exact:
-        _exact_dense(y, ynew, n, TC, F)
+        _exact_dense(y, ynew, TC, F)
     else:
-        _dense_coefficients(mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv)
+        _dense_coefficients(mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv)
 
 
 @njit(cache=True)
 def _dense_eval(F, y, s, out):
-    n = out.shape[0]
+    n = N_STATE  # noqa: F821
     for i in range(n):
         v = 0.0
         for k in range(7):
@@ -572,9 +582,10 @@ def _dip_search(kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp):
 
 
 @njit(cache=True)
-def _slope(mode, slide, kind, idx, t, x, f, p, n, hx, hp, gtmp, gptmp):
+def _slope(mode, slide, kind, idx, t, x, f, p, hx, hp, gtmp, gptmp):
     """Time derivative of an event function along ``f`` (indicators: ``h_x f + h_t``; sliding exits:
     the Lie derivative's ``s_x f + s_t``)."""
+    n = N_STATE  # noqa: F821
     if kind == 0:
         return indicator_rate(idx, t, x, f, p, hx, hp)  # noqa: F821
     m = slide[1] if kind == 1 else slide[2]
@@ -639,7 +650,7 @@ def _dense_component(F, y, s, i):
 
 
 @njit(cache=True)
-def _track_extrema(F, y, s_end, n, xmin, xmax, f0, f1, xtmp, direction):
+def _track_extrema(F, y, s_end, xmin, xmax, f0, f1, xtmp, direction):
     """Update per-component extrema over a step segment ``s in [0, s_end]`` of the dense output.
 
     ``f0``, ``f1`` are the time derivatives at the segment's ends (``direction``
@@ -649,6 +660,7 @@ def _track_extrema(F, y, s_end, n, xmin, xmax, f0, f1, xtmp, direction):
     Golden-section search to a bracket of 1e-5, then one parabolic step: the
     extreme value is then exact to far below the integration tolerance.
     """
+    n = N_STATE  # noqa: F821
     invphi = 0.6180339887498949
     for i in range(n):
         if f0[i] * f1[i] > 0.0:
@@ -702,7 +714,7 @@ def integrate_kernel(
 
     Returns a tuple (see ``saltation.integrate._unpack``).
     """
-    n = x0.shape[0]
+    n = N_STATE  # noqa: F821
     npar = p.shape[0]
     N = n + n * n + n if var else n
     n_err = N if (var and control_variational) else n
@@ -811,7 +823,7 @@ def integrate_kernel(
     surf_new = np.zeros(n_surfaces)
     slope_new = np.zeros(n_surfaces)
 
-    _aug_rhs_called(mode, slide, t, y, p, n, var, pidx, K[0], W, WJ, WP, wv)
+    _aug_rhs_called(mode, slide, t, y, p, var, pidx, K[0], W, WJ, WP, wv)
     for i in range(n):
         if not math.isfinite(K[0, i]) or not math.isfinite(y[i]):
             status = STATUS_NON_FINITE
@@ -859,7 +871,7 @@ def integrate_kernel(
                 if watched[s]:
                     v = indicator(s, t, y[:n], p)  # noqa: F821
                     surf_old[s] = v
-                    sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, n, hx, hp, gtmp, gptmp)
+                    sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, hx, hp, gtmp, gptmp)
                     slope_old[s] = sl
                     if fixed_sign[s]:
                         continue
@@ -886,7 +898,7 @@ def integrate_kernel(
         rejected = False
         while True:
             h = direction * habs
-            err = _step(exact, mode, slide, t, y, h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+            err = _step(exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
                         AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
             finite = math.isfinite(err)
             if finite and err <= 1.0:
@@ -934,7 +946,7 @@ def integrate_kernel(
                     continue
                 v = indicator(s, t_new, ynew[:n], p)  # noqa: F821
                 surf_new[s] = v
-                sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, n, hx, hp, gtmp, gptmp)
+                sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
                 slope_new[s] = sl
                 sg = surf_sign[s]
                 sb = 2.0
@@ -942,7 +954,7 @@ def integrate_kernel(
                     sb = 1.0
                 elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
                     if not have_dense:
-                        _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
+                        _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                         have_dense = True
                     smin, vmin = _dip_search(KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp)
                     if vmin <= 0.0:
@@ -951,7 +963,7 @@ def integrate_kernel(
                     sb = 2.0  # no transition of this mode crosses this way: nothing to locate
                 if sb <= 1.0:
                     if not have_dense:
-                        _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
+                        _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                         have_dense = True
                     gb = _dense_event(KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
                     if gb > 0.0:
@@ -979,7 +991,7 @@ def integrate_kernel(
                 v1 = _event_value(kind, NONE, slide, t_new, ynew[:n], p, gtmp, gptmp)
                 if v1 <= 0.0:
                     if not have_dense:
-                        _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
+                        _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                         have_dense = True
                     sr = _bracket_root(kind, NONE, slide, 1.0, t, h, F, y, 0.0, 1.0, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
                     if sr < best_s:
@@ -990,11 +1002,11 @@ def integrate_kernel(
 
         if best_kind < 0:
             # ----------------------------------------------------------- accept whole step
-            if record or _needs_extrema(K, n):
+            if record or _needs_extrema(K):
                 if not have_dense:
-                    _dense(exact, mode, slide, t, y, ynew, h, p, n, K, F, xtmp, W, WJ, WP, wv, TC)
+                    _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                     have_dense = True
-                _track_extrema(F, y, 1.0, n, xmin, xmax, K[0], K[12], xtmp, direction)
+                _track_extrema(F, y, 1.0, xmin, xmax, K[0], K[12], xtmp, direction)
             for i in range(n):
                 xmin[i] = min(xmin[i], ynew[i])
                 xmax[i] = max(xmax[i], ynew[i])
@@ -1025,13 +1037,13 @@ def integrate_kernel(
         # --------------------------------------------------------------- an event
         # the shortened step that ends at the event must pass the error test too: a step can
         # straddle a thin layer (e.g. where a sliding motion ends) that its own estimate missed
-        err_e = _step(exact, mode, slide, t, y, best_s * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+        err_e = _step(exact, mode, slide, t, y, best_s * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
                       AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
         if err_e > 1.0 and best_s * habs > 100.0 * EPS * max(1.0, abs(t)):
             n_rejected += 1
             habs = best_s * habs * max(0.2, 0.9 * err_e ** (-1.0 / 8.0))
             continue
-        _track_extrema(F, y, best_s, n, xmin, xmax, K[0], K[12], xtmp, direction)
+        _track_extrema(F, y, best_s, xmin, xmax, K[0], K[12], xtmp, direction)
         if record:
             rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, best_s, y[:n], F)
         # refine the event time: Newton on the event function of the stepped solution, with its exact
@@ -1048,8 +1060,8 @@ def integrate_kernel(
         for it in range(8):
             if g_e == 0.0:
                 break
-            _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, n, var, pidx, Ksave[1], W, WJ, WP, wv)
-            dg = sgn_ev * h * _slope(mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, n, hx, hp, gtmp, gptmp)
+            _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
+            dg = sgn_ev * h * _slope(mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, hx, hp, gtmp, gptmp)
             if dg == 0.0 or not math.isfinite(dg):
                 break
             s_new = min(max(s_e - g_e / dg, 0.0), 1.0)
@@ -1063,7 +1075,7 @@ def integrate_kernel(
                 for i in range(N):
                     K[0, i] = Ksave[0, i]
                 if s_new > 0.0:
-                    _step(exact, mode, slide, t, ysave, s_new * h, p, n, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
+                    _step(exact, mode, slide, t, ysave, s_new * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
                           n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
                 else:
                     for i in range(N):
@@ -1075,7 +1087,7 @@ def integrate_kernel(
         for it in range(40):
             if g_e <= 0.0 or s_e >= 1.0:
                 break
-            _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, n, var, pidx, Ksave[1], W, WJ, WP, wv)
+            _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
             ds = min(bump, 1.0 - s_e)
             for i in range(N):
                 ynew[i] += ds * h * Ksave[1, i]
@@ -1247,7 +1259,7 @@ def integrate_kernel(
         TC[MAX_TAYLOR + 3, 0] = 0.0
         if abs(t_end - t) <= 4.0 * EPS * max(1.0, abs(t)):
             t = t_end
-        _aug_rhs_called(mode, slide, t, y, p, n, var, pidx, K[0], W, WJ, WP, wv)
+        _aug_rhs_called(mode, slide, t, y, p, var, pidx, K[0], W, WJ, WP, wv)
         for i in range(n):
             if not math.isfinite(K[0, i]):
                 status = STATUS_NON_FINITE
@@ -1308,7 +1320,8 @@ def integrate_kernel(
 
 
 @njit(cache=True)
-def _needs_extrema(K, n):
+def _needs_extrema(K):
+    n = N_STATE  # noqa: F821
     for i in range(n):
         if K[0, i] * K[12, i] <= 0.0:
             return True
@@ -1339,11 +1352,12 @@ def _shot(x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_ta
 
 
 @njit(cache=True, inline="always")  # inlined: see _shot
-def _periodic_shot(z, n, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step, max_events, max_steps,
+def _periodic_shot(z, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step, max_events, max_steps,
                    tr_table, n_surfaces, phi0, psi0, control_variational, exact_affine):
     """The shot of one Newton iterate ``z = (x0[, T][, lam])`` over its period (forced: ``span``, or the
     forcing period at ``lam`` when ``span`` is 0); returns ``(ok, result)``, ``ok`` False for a period
     that is not positive (``p``, ``x``: work arrays)."""
+    n = N_STATE  # noqa: F821
     m_u = n + 1 if autonomous else n
     if lam_index >= 0 and z.shape[0] > m_u:
         p[lam_index] = z[m_u]
@@ -1360,9 +1374,10 @@ def _periodic_shot(z, n, t0, sign, autonomous, lam_index, span, p, x, rtol, atol
 
 
 @njit(cache=True)
-def _periodic_residual(out, z, n, autonomous, x_ref, f_ref, r):
+def _periodic_residual(out, z, autonomous, x_ref, f_ref, r):
     """Residual of the periodic-orbit equations at ``z`` into ``r``: ``x(t0 + sign T) - x0`` and,
     autonomous, the phase condition ``f_ref . (x0 - x_ref)``; returns its norm."""
+    n = N_STATE  # noqa: F821
     rn = 0.0
     for i in range(n):
         r[i] = out[1 + i] - z[i]
@@ -1455,7 +1470,7 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
     """
     m_u = n_u = phi0.shape[0] + (1 if autonomous else 0)  # unknowns u (and rows of r)
     m_z = z_pred.shape[0]  # m_u, or m_u + 1 with lam
-    n = phi0.shape[0]
+    n = N_STATE  # noqa: F821
     z = z_pred.copy()
     zt = z_pred.copy()
     p = p0.copy()
@@ -1476,11 +1491,11 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
     # one call site of the shot: the integrator is compiled into this function once
     while True:
         cand = zt if trial > 0 else z
-        ok, res_c = _periodic_shot(cand, n, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step,
+        ok, res_c = _periodic_shot(cand, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step,
                                    max_events, max_steps, tr_table, n_surfaces, phi0, psi0, control_variational,
                                    exact_affine)
         if trial > 0:
-            if ok and res_c[0][0] == STATUS_OK and _periodic_residual(res_c[1], zt, n, autonomous, x_ref, f_ref, r) < rn:
+            if ok and res_c[0][0] == STATUS_OK and _periodic_residual(res_c[1], zt, autonomous, x_ref, f_ref, r) < rn:
                 for j in range(m_z):
                     z[j] = zt[j]
                 trial = 0
@@ -1502,7 +1517,7 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
             code, n_history = SHOOT_FAILED, it
             break
         out = res[1]
-        rn = _periodic_residual(out, z, n, autonomous, x_ref, f_ref, r)
+        rn = _periodic_residual(out, z, autonomous, x_ref, f_ref, r)
         history[it] = rn
         un = 0.0
         for i in range(n_u):

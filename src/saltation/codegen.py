@@ -136,6 +136,7 @@ def generate_source(system: PiecewiseSystem) -> str:
     ]
     for name, arr in _dop853_tableau().items():
         src.append(f"RK_{name} = np.array({arr.tolist()!r})")
+    src.append(f"N_STATE = {system.n}  # a compile-time constant: loops over the state have a known length")
     src.append("")
 
     modes = range(len(system.modes))

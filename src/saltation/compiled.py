@@ -219,6 +219,7 @@ def build_module(system: CompiledSystem, kernel_text: str, tableau: dict[str, np
     namespace = module.__dict__
     namespace.update({"np": np, "math": math, "njit": numba.njit})
     namespace.update({f"RK_{k}": v for k, v in tableau.items()})
+    namespace["N_STATE"] = system.n  # a compile-time constant: loops over the state have a known length
     namespace["AFFINE_MODES"] = np.zeros(len(system.mode_names), dtype=np.bool_)  # no exact flows: fields are opaque
     exec(compile(_DEFAULTS, f"<saltation defaults for {system.name}>", "exec"), namespace)  # noqa: S102
     namespace.update(system.functions)

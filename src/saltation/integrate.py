@@ -385,6 +385,8 @@ class Flow:
         if not -1 <= parameter < sys_.n_params:
             raise ModelError(f"parameter index {parameter} out of range")
         phi = self._identity if phi0 is None else np.ascontiguousarray(phi0, dtype=float)
+        if phi.shape != (sys_.n, sys_.n):
+            raise ModelError(f"initial fundamental matrix must have shape ({sys_.n}, {sys_.n}), got {phi.shape}")
         steps, limits, flags = tol.kernel_arguments
         out = self._kernels.integrate_kernel(
             t0, t1, x0, int(m0), p, bool(variational), int(parameter), *steps, 0.0, *limits,
