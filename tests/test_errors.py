@@ -96,6 +96,13 @@ def test_initial_state_in_no_mode(filippov_flow):
     assert "[0.25, 0.0]" in message and "test_filippov" in message
 
 
+def test_initial_fundamental_matrix_of_the_wrong_shape(trilinear_flow):
+    """The kernel reads phi0 as n x n (n is a constant of the compiled model): another shape is refused."""
+    p = trilinear_flow.parameters()
+    with pytest.raises(ModelError, match=r"\(2, 2\), got \(3, 3\)"):
+        trilinear_flow.run([0.1, 0.0], 0.0, 1.0, p, variational=True, phi0=np.eye(3))
+
+
 def test_initial_state_on_the_wall(oscillator_flow):
     p = oscillator_flow.parameters({"a": 0.5})
     with pytest.raises(InitialModeError, match=r"\[0\.5, 0\.0\]"):
