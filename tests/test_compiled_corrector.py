@@ -151,3 +151,23 @@ def test_pivoted_solve_against_lapack(trilinear_flow):
         assert np.max(np.abs(A @ x - b)) <= 1e-13 * (1.0 + np.max(np.abs(b)))
     for A in (np.array([[1.0, 2.0], [2.0, 4.0]]), np.zeros((3, 3)), np.array([[np.nan, 0.0], [0.0, 1.0]])):
         assert not solve(A.copy(), np.ones(A.shape[0]), np.zeros(A.shape[0]))
+
+
+def test_singular_bordered_matrix_is_left_to_the_python_iteration(trilinear_flow, contact_orbit):
+    """A zero pseudo-arclength normal makes the bordered matrix singular: the kernel's solve reports it
+    (no step is taken) and Flow.correct_periodic returns None, so the Python iteration explains it."""
+    p = trilinear_flow.parameters({"omega": 1.0})
+    lam = trilinear_flow.system.parameter_index("omega")
+    z = np.append(contact_orbit.state0 + 1e-3, 1.0)  # off the orbit: Newton must solve
+    kwargs = dict(t0=0.0, sign=1.0, lam_index=lam, phase=None, tol=1e-10, max_newton=5, max_correction=1.0)
+    assert trilinear_flow.correct_periodic(z, np.zeros(3), p, **kwargs) is None
+    k, flow = trilinear_flow._kernels, trilinear_flow
+    steps, limits, flags = flow.tolerances.kernel_arguments
+    code, it, *_ = k.correct_periodic(
+        z, np.zeros(3), 0.0, 1.0, False, lam, 0.0, p, flow._zeros, flow._zeros, 1e-10, 5, 1.0, False, *steps,
+        *limits, flow._table, flow._n_surfaces, flow._identity, flow._zeros, *flags,
+    )
+    assert code == k.SHOOT_SINGULAR and it == 0
+    normal = np.array([0.0, 0.0, 1.0])  # the same point with a proper normal converges
+    it, z_new, *_ = trilinear_flow.correct_periodic(z, normal, p, **kwargs)
+    assert it >= 1 and abs(z_new[-1] - 1.0) < 1e-12
