@@ -77,6 +77,16 @@ def filippov_system() -> PiecewiseSystem:
     )
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _models_compiled_in_parallel() -> None:
+    """On an empty kernel cache, compile the models most tests share at once, one process each, instead
+    of one after another as the tests first use them (models already cached are skipped)."""
+    from saltation.codegen import compile_in_parallel
+    from saltation.models import chain
+
+    compile_in_parallel([trilinear(), block_on_belt(), oscillator_system(), filippov_system(), chain(1), chain(2)])
+
+
 @pytest.fixture(scope="session")
 def trilinear_flow() -> Flow:
     return Flow(trilinear())

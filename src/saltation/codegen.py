@@ -363,11 +363,13 @@ def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = No
     """Compile the kernels of several models at once, one process per model (a cold cache only).
 
     Models whose kernels are cached already are skipped; each model is compiled
-    in a fresh interpreter (so this is safe from any script) and the calling
-    process then loads the kernels from the cache.  Returns the names compiled.
+    in a fresh interpreter (so this is safe from any script), at most ``workers``
+    (default: the number of cores) at a time, and the calling process then loads
+    the kernels from the cache.  Returns the names compiled.
     """
     import pickle
     import subprocess
+    from concurrent.futures import ThreadPoolExecutor
 
     todo = [s for s in systems if not is_compiled(s)]
     workers = min(len(todo), workers or os.cpu_count() or 1)
@@ -375,13 +377,14 @@ def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = No
         return []
     code = "import pickle, sys; from saltation.codegen import _compile_in_worker; _compile_in_worker(pickle.load(open(sys.argv[1], 'rb')))"
     with tempfile.TemporaryDirectory() as tmp:
-        procs = []
-        for k, system in enumerate(todo):
+
+        def compile_one(k: int) -> None:
             path = Path(tmp) / f"model{k}.pickle"
-            path.write_bytes(pickle.dumps(system))
-            procs.append(subprocess.Popen([sys.executable, "-c", code, str(path)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-        for proc in procs:
-            proc.wait()
+            path.write_bytes(pickle.dumps(todo[k]))
+            subprocess.run([sys.executable, "-c", code, str(path)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+        with ThreadPoolExecutor(workers) as pool:
+            list(pool.map(compile_one, range(len(todo))))
     return [s.name for s in todo]
 
 
