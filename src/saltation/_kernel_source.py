@@ -116,12 +116,15 @@ def _aug_rhs(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
     for i in range(n):
         dy[i] = f[i]
     if var:
+        # J Phi by rows of J (contiguous inner loops; the zeros of a sparse J are skipped)
         for i in range(n):
             for j in range(n):
-                acc = 0.0
-                for k in range(n):
-                    acc += J[i, k] * y[n + k * n + j]
-                dy[n + i * n + j] = acc
+                dy[n + i * n + j] = 0.0
+            for k in range(n):
+                a = J[i, k]
+                if a != 0.0:
+                    for j in range(n):
+                        dy[n + i * n + j] += a * y[n + k * n + j]
         off = n + n * n
         for i in range(n):
             acc = 0.0
@@ -360,12 +363,15 @@ def _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_A
             xs[i] += xt[i]
             TC[k, i] = xt[i]
         if var:
+            # the term c A Pt by rows of A (contiguous inner loops; the zeros of a sparse A are skipped)
             for i in range(n):
                 for j in range(n):
-                    acc = 0.0
-                    for l in range(n):
-                        acc += A[i, l] * Pt[l, j]
-                    TP[2, i, j] = c * acc
+                    TP[2, i, j] = 0.0
+                for l in range(n):
+                    a = c * A[i, l]
+                    if a != 0.0:
+                        for j in range(n):
+                            TP[2, i, j] += a * Pt[l, j]
             for i in range(n):
                 for j in range(n):
                     Pt[i, j] = TP[2, i, j]
