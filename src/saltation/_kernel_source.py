@@ -1474,9 +1474,9 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
     residual history | r, J_u, J_lam by rows], ints, floats)``, the last two the
     kernel result at z (see :func:`_newton_result`).
     """
-    m_u = n_u = phi0.shape[0] + (1 if autonomous else 0)  # unknowns u (and rows of r)
-    m_z = z_pred.shape[0]  # m_u, or m_u + 1 with lam
     n = N_STATE  # noqa: F821
+    m_u = n_u = n + (1 if autonomous else 0)  # unknowns u (and rows of r)
+    m_z = z_pred.shape[0]  # m_u, or m_u + 1 with lam
     z = z_pred.copy()
     zt = z_pred.copy()
     p = p0.copy()
