@@ -136,7 +136,6 @@ def _aug_rhs(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
 @njit(cache=True)
 def _aug_rhs_called(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
     """:func:`_aug_rhs` as a call, for the places outside the stepper (inlining there only costs compile time)."""
-    n = N_STATE  # noqa: F821
     _aug_rhs(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv)
 
 
@@ -153,7 +152,6 @@ def _rk_step(mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, W
     The error is measured on the first ``n_err`` components (the state, or the
     state and the variational components).
     """
-    n = N_STATE  # noqa: F821
     N = y.shape[0]
     for s in range(1, 13):  # stages 1-11, then the solution (stage 12: the field at its end)
         yst = ytmp if s < 12 else ynew
@@ -471,7 +469,6 @@ def _step(exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, 
     caller clears it when ``(t, y)`` moves on) is that series summed at a
     fraction of its step.
     """
-    n = N_STATE  # noqa: F821
     if exact:
         base = TC[MAX_TAYLOR + 3, 0]
         if base != 0.0 and 0.0 <= h / base <= 1.0:
@@ -485,7 +482,6 @@ def _step(exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, 
 @njit(cache=True)
 def _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC):
     """Dense-output coefficients of the step just taken (by :func:`_step`)."""
-    n = N_STATE  # noqa: F821
     if exact:
         _exact_dense(y, ynew, TC, F)
     else:
@@ -718,7 +714,7 @@ def integrate_kernel(
 ):
     """Integrate from ``t0`` to ``t_end`` (either direction), event by event.
 
-    Returns a tuple (see ``saltation.integrate._unpack``).
+    Returns ``(ints, floats)``, two packed arrays (see ``saltation.integrate.Flow._unpack``).
     """
     n = N_STATE  # noqa: F821
     npar = p.shape[0]
@@ -1276,7 +1272,7 @@ def integrate_kernel(
             habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
         need_signs = True
 
-    # packed results, two arrays (each returned array costs a conversion): see saltation.integrate._unpack.
+    # packed results, two arrays (each returned array costs a conversion): see saltation.integrate.Flow._unpack.
     # floats: t, x, Phi, psi, x_min, x_max, f at the end; the event log's rows (t, x-, x+, S); the steps'
     # rows (start, size, end fraction, start state); their dense-output coefficients
     n_out = 1 + 5 * n + n * n
