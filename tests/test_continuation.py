@@ -9,6 +9,7 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 
 from saltation import Flow
+from saltation.bifurcations import classify_nonsmooth
 from saltation.branch import SpecialPointKind
 from saltation.continuation import Continuation, ContinuationSettings, continue_branch
 from saltation.models import block_on_belt, trilinear
@@ -105,16 +106,32 @@ def one_sided_monodromies(w):
 
 
 def test_one_sided_multipliers_at_corners(tri_branch):
+    """M- and M+ are the limits at the boundary orbit: eig(expm(A T)) and the same product with S_1a and
+    S_2a inserted at the touching instants (the contact lasts zero time), at the located parameter."""
     branch, _ = tri_branch
-    for sp in branch.special_points:
-        if not sp.kind.is_nonsmooth:
-            continue
+    corners = [sp for sp in branch.special_points if sp.kind.is_nonsmooth]
+    assert len(corners) == 2
+    for sp in corners:
+        assert sp.limits == "exact"
         m_free, m_contact = one_sided_monodromies(sp.parameter)
         free_side, contact_side = (
             (sp.multipliers_minus, sp.multipliers_plus) if not sp.events_minus else (sp.multipliers_plus, sp.multipliers_minus)
         )
-        assert np.allclose(np.sort_complex(free_side), np.sort_complex(np.linalg.eigvals(m_free)), atol=1e-7)
-        assert np.allclose(np.sort_complex(contact_side), np.sort_complex(np.linalg.eigvals(m_contact)), atol=2e-4)
+        np.testing.assert_allclose(np.sort_complex(free_side), np.sort_complex(np.linalg.eigvals(m_free)), rtol=0, atol=1e-9)
+        np.testing.assert_allclose(np.sort_complex(contact_side), np.sort_complex(np.linalg.eigvals(m_contact)), rtol=0, atol=1e-9)
+        # the crossing of the set-valued multipliers, from the reference matrices
+        ref = classify_nonsmooth(*((m_free, m_contact) if not sp.events_minus else (m_contact, m_free)))
+        assert ref.kind is sp.kind
+        if ref.q is not None:
+            assert sp.crossing_q == pytest.approx(ref.q, abs=1e-9)
+        # the stated accuracy covers the distance to the exact corner (closed-form frequency)
+        w_exact = min(corner_frequencies(), key=lambda w: abs(w - sp.parameter))
+        m_free_exact, m_contact_exact = one_sided_monodromies(w_exact)
+        err = max(
+            np.abs(np.sort_complex(free_side) - np.sort_complex(np.linalg.eigvals(m_free_exact))).max(),
+            np.abs(np.sort_complex(contact_side) - np.sort_complex(np.linalg.eigvals(m_contact_exact))).max(),
+        )
+        assert err <= sp.multipliers_accuracy < 1e-8
 
 
 def test_branch_invariants(tri_branch, belt_diagram):

@@ -279,7 +279,10 @@ def test_csv_rejects_ragged_points(tmp_path):
 
 # --- special-point records --------------------------------------------------
 
-COMMON = {"model", "kind", "parameter", "value", "amplitude", "bracket", "accuracy", "crossing_point", "note"}
+COMMON = {
+    "model", "kind", "parameter", "value", "amplitude", "bracket", "accuracy", "crossing_point", "note",
+    "multipliers_accuracy", "limits",
+}
 
 
 def test_record_of_smooth_point():

@@ -38,6 +38,7 @@ STATUS_NON_FINITE = 4
 STATUS_SLIDING_UNDEFINED = 5
 STATUS_MAX_STEPS = 6
 STATUS_TANGENTIAL = 7
+STATUS_OUTSIDE_DOMAIN = 8  # a transition led outside the target mode's domain, and no exit of it holds
 
 EVENT_TRANSITION = 0
 EVENT_SLIDING_START = 1
@@ -854,6 +855,8 @@ def integrate_kernel(
     habs = min(habs, max_step)
 
     need_signs = True
+    pending = NONE  # a transition to fire at once, without a step (see below)
+    last_kind = EVENT_TRANSITION  # kind of the last event (the start counts as a transition)
     chatter_ring = np.zeros(CHATTER_WINDOW)
     h_mode = np.zeros(n_modes)  # the step proposed last in each mode (0: none yet), to re-enter it with
 
@@ -883,219 +886,255 @@ def integrate_kernel(
                         surf_sign[s] = 1.0 if sl > 0 else -1.0
                     else:
                         surf_sign[s] = 1.0 if v >= 0 else -1.0
+            # A state outside the domain of its mode (a transition has led there at a corner of
+            # switching surfaces): the exit that holds already (the state lies beyond its surface, in
+            # the transition's direction, and its guard holds; the surface just crossed excepted) fires
+            # at once. Domain and guards are taken a hair along the motion, so that a condition that is
+            # zero here (on the surface just crossed) counts on the side the motion goes to.
+            dt_nudge = direction * 1e-10 * max(1.0, abs(t))
+            for i in range(n):
+                xtmp[i] = y[i] + dt_nudge * K[0, i]
+            # (after a transition, or at the start; a sliding motion ends on its surface by construction)
+            if slide[0] == 0 and last_kind == EVENT_TRANSITION and not in_domain(mode, t + dt_nudge, xtmp, p):  # noqa: F821
+                for k in range(n_tr):
+                    if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
+                        continue
+                    s = tr_table[k, 1]
+                    if fixed_sign[s] or surf_sign[s] != tr_table[k, 2]:
+                        continue
+                    if guard(k, t + dt_nudge, xtmp, p):  # noqa: F821
+                        pending = k
+                        break
+                if pending < 0 and n_ev > 0:
+                    status = STATUS_OUTSIDE_DOMAIN
+                    info_mode = mode
+                    break
             for s in range(n_surfaces):
                 fixed_sign[s] = False
             need_signs = False
 
-        if n_steps >= max_steps:
-            status = STATUS_MAX_STEPS
-            info_mode = mode
-            break
-        remaining = abs(t_end - t)
-        habs = min(habs, max_step)
-        if habs >= remaining or remaining - habs < 1e-12 * remaining:
-            habs = remaining
-        exact = exact_affine and slide[0] == 0 and AFFINE_MODES[mode]  # noqa: F821
-        # attempt a step
-        rejected = False
-        while True:
+        at_once = pending >= 0
+        if at_once:
+            # a transition has just led into a mode whose exit already holds: that exit fires at once,
+            # a segment of zero length, with both saltation matrices (never a step outside the domain)
+            best_kind = KIND_INDICATOR
+            best_idx = tr_table[pending, 1]
+            best_tr = pending
+            pending = NONE
+            s_e = 0.0
             h = direction * habs
-            err = _step(exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
-                        AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
-            finite = math.isfinite(err)
-            if finite and err <= 1.0:
+            for i in range(N):
+                ynew[i] = y[i]
+        else:
+            if n_steps >= max_steps:
+                status = STATUS_MAX_STEPS
+                info_mode = mode
                 break
-            n_rejected += 1
-            rejected = True
-            if not finite:
-                fin = True
-                for i in range(N):
-                    if not math.isfinite(ynew[i]):
-                        fin = False
-                if not fin and habs < 1e-10 * max(1.0, abs(t)):
-                    status = STATUS_NON_FINITE
+            remaining = abs(t_end - t)
+            habs = min(habs, max_step)
+            if habs >= remaining or remaining - habs < 1e-12 * remaining:
+                habs = remaining
+            exact = exact_affine and slide[0] == 0 and AFFINE_MODES[mode]  # noqa: F821
+            # attempt a step
+            rejected = False
+            while True:
+                h = direction * habs
+                err = _step(exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+                            AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
+                finite = math.isfinite(err)
+                if finite and err <= 1.0:
+                    break
+                n_rejected += 1
+                rejected = True
+                if not finite:
+                    fin = True
+                    for i in range(N):
+                        if not math.isfinite(ynew[i]):
+                            fin = False
+                    if not fin and habs < 1e-10 * max(1.0, abs(t)):
+                        status = STATUS_NON_FINITE
+                        info_mode = mode
+                        break
+                    habs *= 0.2
+                else:
+                    habs *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
+                if habs < 10.0 * EPS * max(1.0, abs(t)):
+                    status = STATUS_STEP_TOO_SMALL
                     info_mode = mode
                     break
-                habs *= 0.2
-            else:
-                habs *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
-            if habs < 10.0 * EPS * max(1.0, abs(t)):
-                status = STATUS_STEP_TOO_SMALL
-                info_mode = mode
+            if status != STATUS_OK:
                 break
-        if status != STATUS_OK:
-            break
-        n_steps += 1
-        t_new = t + h
-        if habs == remaining:
-            t_new = t_end
-        for i in range(n):
-            if not math.isfinite(ynew[i]) or not math.isfinite(K[12, i]):
-                status = STATUS_NON_FINITE
-                info_mode = mode
-        if status != STATUS_OK:
-            break
-
-        # ---------------------------------------------------------------- events
-        have_dense = False
-        best_s = 2.0
-        best_kind = NONE
-        best_idx = NONE
-        best_tr = NONE
-        if slide[0] == 0:
-            for s in range(n_surfaces):
-                if not watched[s]:
-                    continue
-                v = indicator(s, t_new, ynew[:n], p)  # noqa: F821
-                surf_new[s] = v
-                sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
-                slope_new[s] = sl
-                sg = surf_sign[s]
-                sb = 2.0
-                if sg * v <= 0.0:
-                    sb = 1.0
-                elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
-                    if not have_dense:
-                        _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                        have_dense = True
-                    smin, vmin = _dip_search(KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp)
-                    if vmin <= 0.0:
-                        sb = smin
-                if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
-                    sb = 2.0  # no transition of this mode crosses this way: nothing to locate
-                if sb <= 1.0:
-                    if not have_dense:
-                        _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                        have_dense = True
-                    gb = _dense_event(KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
-                    if gb > 0.0:
-                        gb = -1e-300
-                    sr = _bracket_root(KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
-                    if sr < best_s:
-                        # find a transition that fires at this crossing
-                        _dense_eval(F, y, sr, xtmp)
-                        cross = -sg  # new sign in the direction of travel
-                        for k in range(n_tr):
-                            if tr_table[k, 0] != mode or tr_table[k, 1] != s:
-                                continue
-                            dk = tr_table[k, 2]
-                            if dk != 0 and dk != cross:
-                                continue
-                            if not guard(k, t + sr * h, xtmp, p):  # noqa: F821
-                                continue
-                            best_s = sr
-                            best_kind = KIND_INDICATOR
-                            best_idx = s
-                            best_tr = k
-                            break
-        else:
-            for kind in (np.int64(1), np.int64(2)):
-                v1 = _event_value(kind, NONE, slide, t_new, ynew[:n], p, gtmp, gptmp)
-                if v1 <= 0.0:
-                    if not have_dense:
-                        _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                        have_dense = True
-                    sr = _bracket_root(kind, NONE, slide, 1.0, t, h, F, y, 0.0, 1.0, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
-                    if sr < best_s:
-                        best_s = sr
-                        best_kind = kind
-                        best_idx = slide[3]
-                        best_tr = NONE
-
-        if best_kind < 0:
-            # ----------------------------------------------------------- accept whole step
-            if record or _needs_extrema(K):
-                if not have_dense:
-                    _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                    have_dense = True
-                _track_extrema(F, y, 1.0, xmin, xmax, K[0], K[12], xtmp, direction)
+            n_steps += 1
+            t_new = t + h
+            if habs == remaining:
+                t_new = t_end
             for i in range(n):
-                xmin[i] = min(xmin[i], ynew[i])
-                xmax[i] = max(xmax[i], ynew[i])
-            if record:
-                rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, 1.0, y[:n], F)
-            t = t_new
-            TC[MAX_TAYLOR + 3, 0] = 0.0  # the series starts at the old (t, y)
-            for i in range(N):
-                y[i] = ynew[i]
-            for i in range(N):
-                K[0, i] = K[12, i]
-            for s in range(n_surfaces):
-                if watched[s]:
-                    surf_old[s] = surf_new[s]
-                    slope_old[s] = slope_new[s]
-                    if surf_new[s] != 0.0:
-                        surf_sign[s] = 1.0 if surf_new[s] > 0 else -1.0
-            fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
-            if rejected and not exact:
-                # no growth right after a rejection (Hairer & Wanner, II.4); an exact step's error
-                # (of its dense output) is a smooth function of h and needs no such caution
-                fac = min(fac, 1.0)
-            habs = abs(h) * fac
-            if slide[0] == 0:
-                h_mode[mode] = habs
-            continue
+                if not math.isfinite(ynew[i]) or not math.isfinite(K[12, i]):
+                    status = STATUS_NON_FINITE
+                    info_mode = mode
+            if status != STATUS_OK:
+                break
 
-        # --------------------------------------------------------------- an event
-        # the shortened step that ends at the event must pass the error test too: a step can
-        # straddle a thin layer (e.g. where a sliding motion ends) that its own estimate missed
-        err_e = _step(exact, mode, slide, t, y, best_s * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
-                      AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
-        if err_e > 1.0 and best_s * habs > 100.0 * EPS * max(1.0, abs(t)):
-            n_rejected += 1
-            habs = best_s * habs * max(0.2, 0.9 * err_e ** (-1.0 / 8.0))
-            continue
-        _track_extrema(F, y, best_s, xmin, xmax, K[0], K[12], xtmp, direction)
-        if record:
-            rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, best_s, y[:n], F)
-        # refine the event time: Newton on the event function of the stepped solution, with its exact
-        # slope along the augmented field; a correction far below the step is a first-order Taylor
-        # step of [x, Phi, psi] (its second-order term is below rounding), a larger one a re-step
-        for i in range(N):
-            ysave[i] = y[i]
-        for i in range(N):
-            Ksave[0, i] = K[0, i]
-        sgn_ev = surf_sign[best_idx] if best_kind == 0 else 1.0
-        s_tiny = 2.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300))
-        s_e = best_s
-        g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
-        for it in range(8):
-            if g_e == 0.0:
-                break
-            _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
-            dg = sgn_ev * h * _slope(mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, hx, hp, gtmp, gptmp)
-            if dg == 0.0 or not math.isfinite(dg):
-                break
-            s_new = min(max(s_e - g_e / dg, 0.0), 1.0)
-            if abs(s_new - s_e) <= s_tiny:
-                break
-            if abs(s_new - s_e) <= 1e-9:
-                dt = (s_new - s_e) * h
-                for i in range(N):
-                    ynew[i] += dt * Ksave[1, i]
+            # ---------------------------------------------------------------- events
+            have_dense = False
+            best_s = 2.0
+            best_kind = NONE
+            best_idx = NONE
+            best_tr = NONE
+            if slide[0] == 0:
+                for s in range(n_surfaces):
+                    if not watched[s]:
+                        continue
+                    v = indicator(s, t_new, ynew[:n], p)  # noqa: F821
+                    surf_new[s] = v
+                    sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
+                    slope_new[s] = sl
+                    sg = surf_sign[s]
+                    sb = 2.0
+                    if sg * v <= 0.0:
+                        sb = 1.0
+                    elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
+                        if not have_dense:
+                            _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                            have_dense = True
+                        smin, vmin = _dip_search(KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp)
+                        if vmin <= 0.0:
+                            sb = smin
+                    if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
+                        sb = 2.0  # no transition of this mode crosses this way: nothing to locate
+                    if sb <= 1.0:
+                        if not have_dense:
+                            _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                            have_dense = True
+                        gb = _dense_event(KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
+                        if gb > 0.0:
+                            gb = -1e-300
+                        sr = _bracket_root(KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
+                        if sr < best_s:
+                            # find a transition that fires at this crossing
+                            _dense_eval(F, y, sr, xtmp)
+                            cross = -sg  # new sign in the direction of travel
+                            for k in range(n_tr):
+                                if tr_table[k, 0] != mode or tr_table[k, 1] != s:
+                                    continue
+                                dk = tr_table[k, 2]
+                                if dk != 0 and dk != cross:
+                                    continue
+                                if not guard(k, t + sr * h, xtmp, p):  # noqa: F821
+                                    continue
+                                best_s = sr
+                                best_kind = KIND_INDICATOR
+                                best_idx = s
+                                best_tr = k
+                                break
             else:
+                for kind in (np.int64(1), np.int64(2)):
+                    v1 = _event_value(kind, NONE, slide, t_new, ynew[:n], p, gtmp, gptmp)
+                    if v1 <= 0.0:
+                        if not have_dense:
+                            _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                            have_dense = True
+                        sr = _bracket_root(kind, NONE, slide, 1.0, t, h, F, y, 0.0, 1.0, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
+                        if sr < best_s:
+                            best_s = sr
+                            best_kind = kind
+                            best_idx = slide[3]
+                            best_tr = NONE
+
+            if best_kind < 0:
+                # ----------------------------------------------------------- accept whole step
+                if record or _needs_extrema(K):
+                    if not have_dense:
+                        _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                        have_dense = True
+                    _track_extrema(F, y, 1.0, xmin, xmax, K[0], K[12], xtmp, direction)
+                for i in range(n):
+                    xmin[i] = min(xmin[i], ynew[i])
+                    xmax[i] = max(xmax[i], ynew[i])
+                if record:
+                    rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, 1.0, y[:n], F)
+                t = t_new
+                TC[MAX_TAYLOR + 3, 0] = 0.0  # the series starts at the old (t, y)
                 for i in range(N):
-                    K[0, i] = Ksave[0, i]
-                if s_new > 0.0:
-                    _step(exact, mode, slide, t, ysave, s_new * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
-                          n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
+                    y[i] = ynew[i]
+                for i in range(N):
+                    K[0, i] = K[12, i]
+                for s in range(n_surfaces):
+                    if watched[s]:
+                        surf_old[s] = surf_new[s]
+                        slope_old[s] = slope_new[s]
+                        if surf_new[s] != 0.0:
+                            surf_sign[s] = 1.0 if surf_new[s] > 0 else -1.0
+                fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
+                if rejected and not exact:
+                    # no growth right after a rejection (Hairer & Wanner, II.4); an exact step's error
+                    # (of its dense output) is a smooth function of h and needs no such caution
+                    fac = min(fac, 1.0)
+                habs = abs(h) * fac
+                if slide[0] == 0:
+                    h_mode[mode] = habs
+                continue
+
+            # --------------------------------------------------------------- an event
+            # the shortened step that ends at the event must pass the error test too: a step can
+            # straddle a thin layer (e.g. where a sliding motion ends) that its own estimate missed
+            err_e = _step(exact, mode, slide, t, y, best_s * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+                          AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
+            if err_e > 1.0 and best_s * habs > 100.0 * EPS * max(1.0, abs(t)):
+                n_rejected += 1
+                habs = best_s * habs * max(0.2, 0.9 * err_e ** (-1.0 / 8.0))
+                continue
+            _track_extrema(F, y, best_s, xmin, xmax, K[0], K[12], xtmp, direction)
+            if record:
+                rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, best_s, y[:n], F)
+            # refine the event time: Newton on the event function of the stepped solution, with its exact
+            # slope along the augmented field; a correction far below the step is a first-order Taylor
+            # step of [x, Phi, psi] (its second-order term is below rounding), a larger one a re-step
+            for i in range(N):
+                ysave[i] = y[i]
+            for i in range(N):
+                Ksave[0, i] = K[0, i]
+            sgn_ev = surf_sign[best_idx] if best_kind == 0 else 1.0
+            s_tiny = 2.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300))
+            s_e = best_s
+            g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+            for it in range(8):
+                if g_e == 0.0:
+                    break
+                _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
+                dg = sgn_ev * h * _slope(mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, hx, hp, gtmp, gptmp)
+                if dg == 0.0 or not math.isfinite(dg):
+                    break
+                s_new = min(max(s_e - g_e / dg, 0.0), 1.0)
+                if abs(s_new - s_e) <= s_tiny:
+                    break
+                if abs(s_new - s_e) <= 1e-9:
+                    dt = (s_new - s_e) * h
+                    for i in range(N):
+                        ynew[i] += dt * Ksave[1, i]
                 else:
                     for i in range(N):
-                        ynew[i] = ysave[i]
-            s_e = s_new
-            g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
-        # make sure the event state lies on (or just past) the switching set, never before it
-        bump = 2.0 * s_tiny
-        for it in range(40):
-            if g_e <= 0.0 or s_e >= 1.0:
-                break
-            _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
-            ds = min(bump, 1.0 - s_e)
-            for i in range(N):
-                ynew[i] += ds * h * Ksave[1, i]
-            s_e += ds
-            bump *= 2.0
-            g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+                        K[0, i] = Ksave[0, i]
+                    if s_new > 0.0:
+                        _step(exact, mode, slide, t, ysave, s_new * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
+                              n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
+                    else:
+                        for i in range(N):
+                            ynew[i] = ysave[i]
+                s_e = s_new
+                g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+            # make sure the event state lies on (or just past) the switching set, never before it
+            bump = 2.0 * s_tiny
+            for it in range(40):
+                if g_e <= 0.0 or s_e >= 1.0:
+                    break
+                _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
+                ds = min(bump, 1.0 - s_e)
+                for i in range(N):
+                    ynew[i] += ds * h * Ksave[1, i]
+                s_e += ds
+                bump *= 2.0
+                g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
         t_e = t + s_e * h
         # state at the event (before it)
         for i in range(N):
@@ -1131,6 +1170,8 @@ def integrate_kernel(
             for i in range(n):
                 sig_b += hx[i] * fb[i]
             cross = 1.0 if direction * den > 0 else -1.0
+            if at_once:
+                cross = 1.0 if tr_table[k, 2] > 0 else -1.0  # fired at once: the side it leads to is known
             if den == 0.0 or not math.isfinite(den):
                 status = STATUS_TANGENTIAL
                 info_mode = mode
@@ -1238,6 +1279,7 @@ def integrate_kernel(
             for j in range(n):
                 ev[n_ev, 1 + 2 * n + i * n + j] = S[i, j]
         chatter_ring[n_ev % CHATTER_WINDOW] = t_e
+        last_kind = kind_logged
         n_ev += 1
         for i in range(n):
             y[i] = xplus[i]

@@ -20,14 +20,15 @@ complex pair); if it stays on one side it is a jump without crossing.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
 from .continuation import Corrector, Solution, canonical_events
+from .boundary import one_sided_limits
 from .errors import SaltationError
-from .floquet import set_valued_multipliers
+from .floquet import multipliers_from_monodromy, set_valued_multipliers
 
 
 @dataclass(frozen=True)
@@ -245,22 +246,86 @@ class SpecialPointDetector:
                 sa, lo = sm, mid
             else:
                 sb, hi = sm, mid
-        return self.nonsmooth_point(lo, hi, index)
+        return self.nonsmooth_point(lo, hi, index, far=(a, b))
 
-    def nonsmooth_point(self, lo: Solution, hi: Solution, index: int, note: str = "") -> SpecialPoint:
-        """Special point record from the two one-sided solutions around a non-smooth point."""
-        m_lo, m_hi = lo.summary.monodromy, hi.summary.monodromy
+    def nonsmooth_point(
+        self, lo: Solution, hi: Solution, index: int, note: str = "", *, far: tuple[Solution, Solution] | None = None
+    ) -> SpecialPoint:
+        """Special point record from the two one-sided solutions around a non-smooth point.
+
+        Where the two sides differ by segments of zero length (a corner
+        collision), ``M-`` and ``M+`` are the exact limits at the boundary
+        orbit (:mod:`saltation.boundary`), and the point is placed at the
+        boundary orbit used.  Otherwise they are the monodromies of ``lo`` and
+        ``hi``.  ``far`` are the branch points beyond ``lo`` and ``hi`` (on the
+        same sides), used to estimate how well the multipliers are known.
+        """
+        bracket = (min(lo.lam, hi.lam), max(lo.lam, hi.lam))
+        accuracy = float(np.linalg.norm(hi.z - lo.z))
         if self.equilibrium:
             crossing = SetValuedCrossing(SpecialPointKind.NONSMOOTH_NO_CROSSING, None, None)
-        else:
-            crossing = classify_nonsmooth(
-                m_lo, m_hi, backward=self.branch.backward, autonomous=self.autonomous,
-                mu_minus=lo.summary.multipliers, mu_plus=hi.summary.multipliers,
+            return special_point_between(
+                lo, hi, crossing, index=index, bracket=bracket, accuracy=accuracy,
+                monodromy_plus=hi.summary.monodromy, note=note,
             )
-        return special_point_between(
-            lo, hi, crossing, index=index, bracket=(min(lo.lam, hi.lam), max(lo.lam, hi.lam)),
-            accuracy=float(np.linalg.norm(hi.z - lo.z)), monodromy_plus=m_hi, note=note,
+        limits = self._limits(lo, hi, far)
+        if limits is None:
+            m_lo, m_hi = lo.summary.monodromy, hi.summary.monodromy
+            mu_lo, mu_hi = lo.summary.multipliers, hi.summary.multipliers
+            how, mu_accuracy, at = "nearest_orbits", _sqrt_extrapolated_error(lo, hi, far), None
+        else:
+            m_lo, m_hi, how, mu_accuracy, at = limits
+            mu_lo = multipliers_from_monodromy(m_lo, backward=self.branch.backward)
+            mu_hi = multipliers_from_monodromy(m_hi, backward=self.branch.backward)
+        crossing = classify_nonsmooth(
+            m_lo, m_hi, backward=self.branch.backward, autonomous=self.autonomous, mu_minus=mu_lo, mu_plus=mu_hi,
         )
+        sp = special_point_between(
+            lo, hi, crossing, index=index, bracket=bracket, accuracy=accuracy, monodromy_plus=m_hi, note=note,
+        )
+        return replace(
+            sp, parameter=sp.parameter if at is None else at.lam,
+            state=sp.state if at is None else at.summary.state,
+            period=sp.period if at is None else at.summary.period,
+            amplitude=sp.amplitude if at is None else at.summary.amplitude,
+            multipliers_minus=mu_lo, multipliers_plus=mu_hi, monodromy_minus=m_lo,
+            multipliers_accuracy=mu_accuracy, limits=how,
+        )
+
+    def _limits(self, lo: Solution, hi: Solution, far: tuple[Solution, Solution] | None):
+        """Exact one-sided monodromies ``(M_lo, M_hi, how, accuracy, boundary solution)``, or None."""
+        flow = getattr(self.problem, "flow", None)
+        if flow is None:
+            return None
+        lo_fewer = len(lo.summary.events) <= len(hi.summary.events)
+        without, with_ = (lo, hi) if lo_fewer else (hi, lo)
+        traj_wo, traj_w = without.evaluation.trajectory, with_.evaluation.trajectory
+        if traj_wo is None or traj_w is None:
+            return None
+        try:
+            lim = one_sided_limits(
+                flow, traj_wo, traj_w, self.problem.parameters_at(without.lam),
+                tolerances=getattr(self.problem, "tolerances", None),
+            )
+        except SaltationError:
+            return None
+        if lim is None:
+            return None
+        # the limits are exact at ``without``, within the bracket of the true boundary: over that width
+        # they move by about its length times |dM/dlam|, estimated on the side without the segments
+        width = abs(hi.lam - lo.lam)
+        rate = 0.0
+        if far is not None:
+            other = far[0] if lo_fewer else far[1]
+            if other.summary.monodromy is not None and other.lam != without.lam:
+                rate = float(np.linalg.norm(other.summary.monodromy - lim.monodromy_without)) / abs(other.lam - without.lam)
+        scale = max(1.0, float(np.linalg.norm(lim.monodromy_with)))
+        mu_accuracy = width * rate + 1e-13 * scale
+        how = "exact" if lim.exact else "nearest_saltation"
+        if not lim.exact:
+            mu_accuracy += float(np.linalg.norm(traj_w.monodromy - lim.monodromy_with))
+        m_lo, m_hi = (lim.monodromy_without, lim.monodromy_with) if lo_fewer else (lim.monodromy_with, lim.monodromy_without)
+        return m_lo, m_hi, how, mu_accuracy, without
 
 
 def special_point_between(
@@ -294,6 +359,28 @@ def special_point_between(
         events_plus=hi.summary.events,
         note=note,
     )
+
+
+def _sqrt_extrapolated_error(lo: Solution, hi: Solution, far: tuple[Solution, Solution] | None) -> float:
+    """Error estimate of the monodromies of the two bracketing orbits as one-sided limits.
+
+    On a side whose monodromy moves like the square root of the distance to
+    the boundary, ``M(d) = M(0) + C sqrt(d)``: ``C`` from the bracket end and
+    the branch point beyond it, the error ``C sqrt(d)`` at the bracket end.
+    """
+    if far is None:
+        return float("nan")
+    mid = 0.5 * (lo.lam + hi.lam)
+    worst = 0.0
+    for near, other in ((lo, far[0]), (hi, far[1])):
+        if near.summary.monodromy is None or other.summary.monodromy is None:
+            return float("nan")
+        d_near, d_far = abs(near.lam - mid), abs(other.lam - mid)
+        if d_far <= d_near:
+            continue
+        c = float(np.linalg.norm(other.summary.monodromy - near.summary.monodromy)) / (np.sqrt(d_far) - np.sqrt(d_near))
+        worst = max(worst, c * np.sqrt(d_near))
+    return worst
 
 
 def _remembered(name: str, test: Callable[[Solution], float]) -> Callable[[Solution], float]:

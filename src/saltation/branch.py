@@ -120,6 +120,16 @@ class SpecialPoint:
         The multiplier on the unit circle at ``crossing_q``.
     events_minus, events_plus : tuple of str
         Event sequences on either side.
+    multipliers_accuracy : float
+        How well the multipliers (one-sided or not) are known: an estimate of
+        the error of their matrices (``nan`` when unknown).
+    limits : str
+        How the one-sided multipliers were obtained: ``"exact"`` (limits at
+        the boundary orbit, closed-form saltation matrices at the corner),
+        ``"nearest_saltation"`` (limits at the boundary orbit with the
+        saltation matrices of the nearest orbit), ``"nearest_orbits"`` (the
+        monodromies of the two orbits bracketing the point), or ``""``.
+    note : str
     """
 
     kind: SpecialPointKind
@@ -140,6 +150,8 @@ class SpecialPoint:
     events_minus: tuple[str, ...] = ()
     events_plus: tuple[str, ...] = ()
     note: str = ""
+    multipliers_accuracy: float = float("nan")
+    limits: str = ""
 
 
 @dataclass

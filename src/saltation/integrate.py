@@ -39,6 +39,7 @@ class Status(enum.IntEnum):
     SLIDING_UNDEFINED = 5
     MAX_STEPS = 6
     TANGENTIAL = 7
+    OUTSIDE_DOMAIN = 8
 
 
 # outcomes of the kernel's Newton iterations (``correct_periodic``)
@@ -332,6 +333,19 @@ class Flow:
             return self.system.initial_mode(x0, p, t0)  # raises with the full explanation
         return m
 
+    def indicator(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> float:
+        """The indicator ``h(t, x, p)`` of a switching surface (by index or name)."""
+        s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
+        return float(self._kernels.indicator(int(s), float(t), np.ascontiguousarray(x, dtype=float), p))
+
+    def indicator_gradient(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+        """``(h_x, h_t, h_p)`` of a switching surface at ``(t, x)``."""
+        s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
+        hx = np.zeros(self.system.n)
+        hp = np.zeros(max(self.system.n_params, 1))
+        ht = self._kernels.indicator_grad(int(s), float(t), np.ascontiguousarray(x, dtype=float), p, hx, hp)
+        return hx, float(ht), hp[: self.system.n_params]
+
     def run(
         self,
         x0: Sequence[float],
@@ -345,6 +359,7 @@ class Flow:
         dense: bool = False,
         tolerances: Tolerances | None = None,
         phi0: np.ndarray | None = None,
+        disabled: Sequence[int] = (),
     ) -> Trajectory:
         """Integrate from ``t0`` to ``t1`` (``t1 < t0`` integrates backward in time).
 
@@ -364,6 +379,10 @@ class Flow:
             Index of a parameter whose sensitivity ``dx/dp`` to carry (-1: none).
         dense : bool
             Keep the dense output for :meth:`Trajectory.sample`.
+        disabled : sequence of int
+            Indices of transitions that never fire in this run (the orbit
+            passes their surfaces as if they were not there): the virtual
+            orbits that define a grazing (:mod:`saltation.grazing`).
 
         Raises
         ------
@@ -388,9 +407,14 @@ class Flow:
         if phi.shape != (sys_.n, sys_.n):
             raise ModelError(f"initial fundamental matrix must have shape ({sys_.n}, {sys_.n}), got {phi.shape}")
         steps, limits, flags = tol.kernel_arguments
+        table = self._table
+        if len(disabled):
+            table = table.copy()
+            for k in disabled:
+                table[int(k), 0] = -1  # a source mode that is never current
         out = self._kernels.integrate_kernel(
             t0, t1, x0, int(m0), p, bool(variational), int(parameter), *steps, 0.0, *limits,
-            self._table, self._n_surfaces, bool(dense), phi, self._zeros, *flags,
+            table, self._n_surfaces, bool(dense), phi, self._zeros, *flags,
         )
         return self._unpack(out, x0, float(t0), m0, variational, parameter, dense)
 
@@ -568,6 +592,13 @@ def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, 
         )
     if status == Status.TANGENTIAL:
         return IntegrationError(f"switching event exactly tangent to surface {surface!r} {where}: the saltation matrix is undefined")
+    if status == Status.OUTSIDE_DOMAIN:
+        last = events[-1] if events else None
+        via = f" after {last.mode_from!r} -> {last.mode_to!r} on surface {last.surface!r}" if last else ""
+        return IntegrationError(
+            f"the state lies outside the domain of mode {mode!r}{via} {where}, and no transition of that mode "
+            "leads out of it there: the model's domains and transitions disagree at this corner"
+        )
     if status == Status.MAX_STEPS:
         return IntegrationError(f"more steps than max_steps {where}")
     return IntegrationError(f"integration failed with status {status.name} {where}")

@@ -187,6 +187,8 @@ def _special_point_to_dict(sp: SpecialPoint) -> dict[str, Any]:
         "events_minus": list(sp.events_minus),
         "events_plus": list(sp.events_plus),
         "note": sp.note,
+        "multipliers_accuracy": _enc_float(sp.multipliers_accuracy),
+        "limits": sp.limits,
     }
 
 
@@ -211,6 +213,8 @@ def _special_point_from_dict(d: dict[str, Any]) -> SpecialPoint:
         events_minus=tuple(d.get("events_minus", ())),
         events_plus=tuple(d.get("events_plus", ())),
         note=d.get("note", ""),
+        multipliers_accuracy=_dec_float(d.get("multipliers_accuracy", "nan")),
+        limits=d.get("limits", ""),
     )
 
 
@@ -542,7 +546,9 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
         ``parameter`` (the parameter's name), ``value`` (its located value), ``amplitude``;
         then ``multipliers`` for a smooth point, or ``multipliers_minus``,
         ``multipliers_plus`` and ``crossing_q`` for a non-smooth one; then ``bracket``,
-        ``accuracy``, ``crossing_point`` and ``note``. Multipliers are ``[re, im]`` pairs,
+        ``accuracy``, ``crossing_point``, ``note``, ``multipliers_accuracy`` (an estimate of the
+        multipliers' error) and ``limits`` (how the one-sided multipliers were obtained:
+        ``"exact"``, ``"nearest_saltation"``, ``"nearest_orbits"``). Multipliers are ``[re, im]`` pairs,
         an infinite one the string ``"inf"``; absent values are ``null``.
     """
     rec: dict[str, Any] = {
@@ -562,6 +568,8 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
     rec["accuracy"] = _enc_float(sp.accuracy)
     rec["crossing_point"] = None if sp.crossing_point is None else _enc_complex(sp.crossing_point)
     rec["note"] = sp.note
+    rec["multipliers_accuracy"] = _enc_float(sp.multipliers_accuracy)
+    rec["limits"] = sp.limits
     return rec
 
 

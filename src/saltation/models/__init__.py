@@ -2,6 +2,7 @@
 
 from .block_on_belt import WRegion, block_on_belt
 from .chain import chain
+from .impact_oscillator import impact_oscillator
 from .trilinear import trilinear
 
-__all__ = ["WRegion", "block_on_belt", "chain", "trilinear"]
+__all__ = ["WRegion", "block_on_belt", "chain", "impact_oscillator", "trilinear"]

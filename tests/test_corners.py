@@ -1,0 +1,75 @@
+"""Orbits that pass within a hair of a corner of switching surfaces are never corrupted.
+
+Near the paper's w_A and w_B the free orbit touches the corner of Sigma_1a and Sigma_1b
+(and of Sigma_2a, Sigma_2b): a contact of depth d lasts O(sqrt(d)). A transition into
+contact may then land where the contact force is already negative; the exit must fire at
+once (a zero-length segment), never a contact that is never left.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from saltation.integrate import Tolerances
+from saltation.models.trilinear import DEFAULTS as TRI
+from saltation.paper import linear_response_state
+
+M, C, K, F0, XC, CF = (TRI[k] for k in ("m", "c", "k", "f0", "x_c", "c_f"))
+
+
+def corner_frequencies():
+    w2 = np.roots([M**2, C**2 - 2 * K * M, K**2 - (F0 / XC) ** 2])
+    return np.sort(np.sqrt(w2[w2 > 0].real))
+
+
+W_A, W_B = corner_frequencies()
+# the free orbit at these frequencies reaches the supports by a depth of about d |dA/dw|
+NEAR_CORNER = [W_A + d for d in (1e-8, 1e-10, 1e-12, 1e-13)] + [W_B - d for d in (1e-8, 1e-10, 1e-12, 1e-13)]
+
+
+def contact_pairs(events) -> bool:
+    """Every entry into a contact is followed by the exit from that contact."""
+    modes = [(e.mode_from, e.mode_to) for e in events]
+    if len(modes) % 2:
+        return False
+    return all(a[1] == b[0] != "free" and a[0] == b[1] == "free" for a, b in zip(modes[::2], modes[1::2]))
+
+
+@pytest.mark.parametrize("exact", [True, False], ids=["exact", "dop853"])
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8, 1e-10])
+def test_near_corner_orbits_pair_their_events_and_end_right(trilinear_flow, exact, rtol):
+    flow = trilinear_flow
+    tol = Tolerances(rtol=rtol, atol=1e-2 * rtol, exact_affine=exact)
+    reference_tol = Tolerances(rtol=1e-13, atol=1e-15)
+    for w in NEAR_CORNER:
+        p = flow.parameters({"omega": w})
+        x0 = linear_response_state(dict(TRI, omega=w))
+        T = 2 * np.pi / w
+        traj = flow.run(x0, 0.0, T, p, tolerances=tol)
+        ref = flow.run(x0, 0.0, T, p, tolerances=reference_tol)
+        assert contact_pairs(traj.events), (w, [(e.mode_from, e.mode_to) for e in traj.events])
+        assert contact_pairs(ref.events)
+        assert traj.mode1 == "free"
+        # The state error of the method, eps ~ rtol over a period (50 rtol bounds it on the no-contact
+        # orbits), may decide whether a contact of depth eps happens at all. Such a contact lasts
+        # 2 sqrt(2 eps / a) and changes the velocity by at most c_f/m times the entry velocity
+        # sqrt(2 a eps) (S_1a, eq. 11): the state after one period is right to that.
+        eps = 50.0 * rtol
+        a_max = (K * XC + F0) / M + 1.0  # |x''| near the supports, with margin
+        bound = eps + 2.0 * CF / M * np.sqrt(2.0 * a_max * eps)
+        assert np.abs(traj.x1 - ref.x1).max() <= bound, (w, np.abs(traj.x1 - ref.x1).max(), bound)
+
+
+def test_a_transition_beyond_an_exit_fires_the_exit_at_once(trilinear_flow):
+    """Entering contact where the contact force is already negative: a zero-length contact with both
+    saltation matrices, S_1b S_1a = S_1a (eqs. 11, 12)."""
+    flow = trilinear_flow
+    p = flow.parameters({"omega": 1.0})
+    # on Sigma_1a, moving into the support (v > 0) but with k_f (x - x_c) + c_f v < 0 is impossible;
+    # start in contact with a negative contact force instead: the exit through h1b fires at t0
+    x0 = np.array([XC + 1e-3, -0.1])  # k_f 1e-3 - c_f 0.1 < 0
+    traj = flow.run(x0, 0.0, 0.1, p, mode0="contact_1", variational=True)
+    first = traj.events[0]
+    assert first.t == 0.0 and first.mode_from == "contact_1" and first.mode_to == "free" and first.surface == "h1b"
+    np.testing.assert_allclose(first.x_minus, x0, rtol=0, atol=0)
