@@ -26,9 +26,10 @@ import numpy as np
 
 from .branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
 from .continuation import Corrector, Solution, canonical_events
-from .boundary import one_sided_limits
+from .boundary import one_sided_limits, saltation_at_corner, zero_length_segments
 from .errors import SaltationError
 from .floquet import multipliers_from_monodromy, set_valued_multipliers
+from .grazing import locate_grazing
 
 
 @dataclass(frozen=True)
@@ -270,6 +271,9 @@ class SpecialPointDetector:
             )
         limits = self._limits(lo, hi, far)
         if limits is None:
+            grazing = grazing_point(self.problem, lo, hi, index)
+            if grazing is not None:
+                return grazing
             m_lo, m_hi = lo.summary.monodromy, hi.summary.monodromy
             mu_lo, mu_hi = lo.summary.multipliers, hi.summary.multipliers
             how, mu_accuracy, at = "nearest_orbits", _sqrt_extrapolated_error(lo, hi, far), None
@@ -358,6 +362,88 @@ def special_point_between(
         events_minus=lo.summary.events,
         events_plus=hi.summary.events,
         note=note,
+    )
+
+
+def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoint | None:
+    """The record of a grazing between two branch points, located by its defining system.
+
+    ``lo`` (the side of point ``index``) and ``hi`` differ by events on a
+    surface that the orbit on one side misses: the grazing orbit is located
+    from the orbit that misses it (:func:`saltation.grazing.locate_grazing`).
+    Its monodromy is the limit on that side.  On the crossing side the limit
+    is the grazing orbit with the crossing's saltation matrices inserted at
+    the instant of tangency when they stay bounded (a continuous field), and
+    unbounded otherwise (an impact: ``S = O(1/v)``): the largest multiplier
+    there is reported as ``inf``, the others are those of the nearest orbit.
+    Returns None when the change is not a grazing (or the problem is not a
+    forward-time shooting problem of a forced model).
+    """
+    flow = getattr(problem, "flow", None)
+    if flow is None or problem.system.is_autonomous or problem.backward:
+        return None
+    lo_fewer = len(lo.summary.events) <= len(hi.summary.events)
+    without, with_ = (lo, hi) if lo_fewer else (hi, lo)
+    traj_wo, traj_w = without.evaluation.trajectory, with_.evaluation.trajectory
+    if traj_wo is None or traj_w is None:
+        return None
+    span = abs(traj_wo.t1 - traj_wo.t0)
+    groups = zero_length_segments(traj_wo.events, traj_w.events, time_tol=1e-3 * span)
+    if not groups:
+        return None
+    first = traj_w.events[groups[0][0]]
+    try:
+        orbit = locate_grazing(
+            flow, without.u[: problem.system.n], without.lam, problem.lam_name, first.transition, first.t,
+            parameters=problem.parameters_at(without.lam), t0=problem.t0, tolerances=problem.tolerances,
+        )
+    except SaltationError:
+        return None
+    width = abs(hi.lam - lo.lam)
+    if abs(orbit.parameter - 0.5 * (lo.lam + hi.lam)) > width + 1e-9 * (1.0 + abs(orbit.parameter)):
+        return None  # a grazing elsewhere: not the change between these points
+    p = problem.parameters_at(orbit.parameter)
+    transitions = [traj_w.events[i].transition for i in groups[0]]
+    P = saltation_at_corner(problem.system, transitions, orbit.t_graze, orbit.x_graze, p)
+    m_without = orbit.monodromy
+    mu_without = multipliers_from_monodromy(m_without)
+    if P is not None and np.linalg.norm(P) < 1e8:
+        phi = orbit.fundamental_to_graze
+        m_with = m_without @ np.linalg.solve(phi, P @ phi)
+        mu_with = multipliers_from_monodromy(m_with)
+        bounded = "bounded: the crossing's saltation matrices at the tangency are finite"
+    else:
+        m_with = None
+        nearest = np.asarray(with_.summary.multipliers, dtype=complex)
+        keep = np.argsort(np.abs(nearest))[:-1]
+        mu_with = np.concatenate([[complex(np.inf, 0.0)], nearest[keep]])
+        bounded = ("unbounded: the crossing's saltation matrix grows like 1/sqrt(distance); the largest "
+                   "multiplier on that side is infinite in the limit, the others are those of the nearest orbit")
+    side = "plus" if lo_fewer else "minus"
+    surface = problem.system.transitions[orbit.transition].surface
+    m_lo, m_hi = (m_without, m_with) if lo_fewer else (m_with, m_without)
+    mu_lo, mu_hi = (mu_without, mu_with) if lo_fewer else (mu_with, mu_without)
+    traj = orbit.trajectory
+    return SpecialPoint(
+        kind=SpecialPointKind.GRAZING,
+        parameter=orbit.parameter,
+        bracket=(orbit.parameter - orbit.accuracy, orbit.parameter + orbit.accuracy),
+        accuracy=orbit.accuracy,
+        index=index,
+        state=orbit.state0,
+        period=orbit.period,
+        amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
+        multipliers_minus=mu_lo,
+        multipliers_plus=mu_hi,
+        monodromy_minus=m_lo,
+        monodromy_plus=m_hi,
+        events_minus=lo.summary.events,
+        events_plus=hi.summary.events,
+        note=f"grazing of surface {surface!r} at t = {orbit.t_graze:.10g}; the side with the crossing is '{side}', {bounded}",
+        # the grazing orbit is exact to the located parameter; the finite multipliers of an unbounded side
+        # are those of the nearest orbit, of unknown accuracy
+        multipliers_accuracy=(orbit.accuracy * float(np.linalg.norm(m_without)) + 1e-13) if m_with is not None else float("nan"),
+        limits="grazing",
     )
 
 

@@ -21,6 +21,7 @@ class SpecialPointKind(enum.Enum):
     DISCONTINUOUS_FLIP = "discontinuous_flip"
     DISCONTINUOUS_NEIMARK_SACKER = "discontinuous_neimark_sacker"
     NONSMOOTH_NO_CROSSING = "nonsmooth_no_crossing"
+    GRAZING = "grazing"
 
     @property
     def is_nonsmooth(self) -> bool:
@@ -33,6 +34,7 @@ NONSMOOTH_KINDS = frozenset(
         SpecialPointKind.DISCONTINUOUS_FLIP,
         SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER,
         SpecialPointKind.NONSMOOTH_NO_CROSSING,
+        SpecialPointKind.GRAZING,
     }
 )
 

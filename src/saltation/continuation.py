@@ -23,13 +23,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .branch import Branch, BranchKind, BranchPoint, StopReason
 from .errors import ConvergenceError, SaltationError
-from .shooting import Evaluation, EquilibriumProblem, SolutionSummary
+from .shooting import Evaluation, EquilibriumProblem, ShootingProblem, SolutionSummary
 
 
 @dataclass(frozen=True)
@@ -285,12 +285,20 @@ class Continuation:
                     continue
                 new = cand
                 break
+            jumped = None
+            if new is None and detector is not None:
+                jumped = self._through_grazing(prev)
+                if jumped is not None:
+                    new, grazing = jumped
             if new is None:
                 self.branch.stop_reason = StopReason.MIN_STEP
                 return
             self._accept(new)
             closed = self._passes_start(prev, new)
-            if detector is not None:
+            if jumped is not None:
+                self.branch.special_points.append(replace(grazing, index=len(self.branch.points) - 2))
+                ds = s.ds
+            elif detector is not None:
                 for sp in detector.check(self.solutions[-2], self.solutions[-1], len(self.branch.points) - 2):
                     if any(_same_special_point(sp, old) for old in self.branch.special_points):
                         closed = True  # met again, from the same side: the branch has come round a loop
@@ -307,6 +315,64 @@ class Continuation:
                 ds = min(ds * 1.5, s.ds_max)
             elif new.iterations >= 6:
                 ds = max(ds * 0.5, s.ds_min)
+
+    def _through_grazing(self, prev: Solution):
+        """Past a grazing that stopped the corrector: ``(first solution beyond, grazing special point)`` or None.
+
+        Near a grazing the branch on the crossing side leaves the grazing orbit
+        with a tangent of unbounded slope (its monodromy grows like
+        ``1/sqrt(d)``), and pseudo-arclength steps from the side that misses
+        the surface fail.  When the last orbit nearly touches a surface that
+        a transition of its mode would cross, the grazing orbit is located by
+        its defining system (:mod:`saltation.grazing`), and the branch is
+        restarted just beyond it, at growing distances, from the grazing
+        orbit's state.
+        """
+        from .bifurcations import grazing_point
+        from .grazing import grazing_candidates, locate_grazing
+
+        prob = self.problem
+        if not isinstance(prob, ShootingProblem) or prob.autonomous or prob.backward:
+            return None
+        flow, p = prob.flow, prob.parameters_at(prev.lam)
+        T = prob.period_of(prev.u, prev.lam)
+        try:
+            traj = flow.run(prev.u, prob.t0, prob.t0 + T, p, dense=True, tolerances=prob.tolerances)
+        except SaltationError:
+            return None
+        direction = 1.0 if prev.tangent[-1] >= 0 else -1.0
+        s = self.settings
+        for transition, t_guess in grazing_candidates(flow, traj, p):
+            try:
+                orbit = locate_grazing(
+                    flow, prev.u, prev.lam, prob.lam_name, transition, t_guess, parameters=p, t0=prob.t0,
+                    tolerances=prob.tolerances,
+                )
+            except SaltationError:
+                continue
+            ahead = (orbit.parameter - prev.lam) * direction
+            if not -1e-9 <= ahead <= 4.0 * s.ds_max:
+                continue
+            z_graze = np.append(orbit.state0, orbit.parameter)
+            for delta in (1e-6, 1e-5, 1e-4, 1e-3, 1e-2):
+                lam = orbit.parameter + direction * delta * max(1.0, abs(orbit.parameter))
+                if not s.bounds[0] <= lam <= s.bounds[1]:
+                    break
+                try:
+                    start = prob.solve(orbit.state0, lam)
+                    cand = self.corrector.solve_fixed(start.state0, lam)
+                except SaltationError:
+                    continue
+                if len(cand.summary.events) == len(prev.summary.events):
+                    continue  # the same side again: not across the grazing
+                away = cand.z - z_graze
+                cand.tangent = self.corrector.tangent(cand, away / np.linalg.norm(away))
+                cand.step = float(np.linalg.norm(away))
+                special = grazing_point(prob, prev, cand, len(self.branch.points) - 1)
+                if special is None:
+                    continue
+                return cand, special
+        return None
 
     def _predict(self, ds: float) -> np.ndarray:
         """Predictor along the last tangent, with the curvature of the last step where the branch is smooth.
