@@ -231,10 +231,10 @@ def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_
     return found
 
 
-def square_root_growth(distances: np.ndarray, magnitudes: np.ndarray) -> float:
-    """The exponent ``a`` of ``|mu| ~ d^a``, fitted in log-log (about -1/2 on the crossing side of a grazing)."""
+def growth_exponent(distances: np.ndarray, magnitudes: np.ndarray) -> float:
+    """The exponent ``a`` of ``y ~ d^a``, fitted in log-log (-1/2 for the period map near a grazing)."""
     slope, _ = np.polyfit(np.log(np.asarray(distances, float)), np.log(np.asarray(magnitudes, float)), 1)
     return float(slope)
 
 
-__all__ = ["GrazingOrbit", "grazing_candidates", "indicator_rate", "locate_grazing", "square_root_growth", "tangency_time"]
+__all__ = ["GrazingOrbit", "grazing_candidates", "indicator_rate", "locate_grazing", "growth_exponent", "tangency_time"]
