@@ -152,6 +152,7 @@ def test_impacting_orbits_against_closed_form(impact_flow):
     """State, period-1 condition and multipliers of impacting orbits vs the closed-form impact map."""
     stops = [2.7, 2.6, 2.5, 2.4, 2.3]
     for s, (u, state0) in zip(stops, reference_orbits(stops)):
+        np.testing.assert_allclose(impact_map(s, u), u, rtol=0, atol=1e-12)  # a fixed point of the closed form
         orbit = find_periodic_orbit(impact_flow, state0 + 1e-3, parameters={"s": s})
         (t_impact,) = [t for _, t in orbit.events]
         assert u[0] % T == pytest.approx(t_impact, abs=1e-9)
@@ -161,18 +162,6 @@ def test_impacting_orbits_against_closed_form(impact_flow):
         # O(h^4) plus rounding ~1e-15 |P| / h = 5e-10 |P|; |mu| reaches 150 at s = 2.7
         scale = np.abs(mu_ref).max()
         np.testing.assert_allclose(np.sort_complex(orbit.multipliers), mu_ref, rtol=0, atol=1e-7 * scale)
-
-
-def orbit_with_impact_velocity(v):
-    """The impacting period-1 orbit whose impact velocity is v: solve y(t_i + T) = (s, v) from
-    (s, -r v) at t_i for (t_i, s). Smooth in v (unlike in s, where the orbit has a square root)."""
-    def residual(z):
-        t_i, s = z
-        return flow_closed_form([s, -R * v], t_i, t_i + T) - [s, v]
-
-    t_i, s = fsolve(residual, [GRAZING_TIME, S_STAR], xtol=1e-15)
-    assert np.abs(residual([t_i, s])).max() < 1e-13
-    return s, flow_closed_form([s, -R * v], t_i % T, T)
 
 
 def test_growth_exponent_near_grazing(impact_flow):

@@ -299,13 +299,10 @@ class SpecialPointDetector:
     def _limits(self, lo: Solution, hi: Solution, far: tuple[Solution, Solution] | None):
         """Exact one-sided monodromies ``(M_lo, M_hi, how, accuracy, boundary solution)``, or None."""
         flow = getattr(self.problem, "flow", None)
-        if flow is None:
+        sides = _sides(lo, hi)
+        if flow is None or sides is None:
             return None
-        lo_fewer = len(lo.summary.events) <= len(hi.summary.events)
-        without, with_ = (lo, hi) if lo_fewer else (hi, lo)
-        traj_wo, traj_w = without.evaluation.trajectory, with_.evaluation.trajectory
-        if traj_wo is None or traj_w is None:
-            return None
+        lo_fewer, without, with_, traj_wo, traj_w = sides
         try:
             lim = one_sided_limits(
                 flow, traj_wo, traj_w, self.problem.parameters_at(without.lam),
@@ -365,6 +362,16 @@ def special_point_between(
     )
 
 
+def _sides(lo: Solution, hi: Solution):
+    """``(lo has fewer events, side without the extra events, side with them, their trajectories)``, or None."""
+    lo_fewer = len(lo.summary.events) <= len(hi.summary.events)
+    without, with_ = (lo, hi) if lo_fewer else (hi, lo)
+    traj_wo, traj_w = without.evaluation.trajectory, with_.evaluation.trajectory
+    if traj_wo is None or traj_w is None:
+        return None
+    return lo_fewer, without, with_, traj_wo, traj_w
+
+
 def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoint | None:
     """The record of a grazing between two branch points, located by its defining system.
 
@@ -380,13 +387,10 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     forward-time shooting problem of a forced model).
     """
     flow = getattr(problem, "flow", None)
-    if flow is None or problem.system.is_autonomous or problem.backward:
+    sides = _sides(lo, hi)
+    if flow is None or sides is None or problem.system.is_autonomous or problem.backward:
         return None
-    lo_fewer = len(lo.summary.events) <= len(hi.summary.events)
-    without, with_ = (lo, hi) if lo_fewer else (hi, lo)
-    traj_wo, traj_w = without.evaluation.trajectory, with_.evaluation.trajectory
-    if traj_wo is None or traj_w is None:
-        return None
+    lo_fewer, without, with_, traj_wo, traj_w = sides
     span = abs(traj_wo.t1 - traj_wo.t0)
     groups = zero_length_segments(traj_wo.events, traj_w.events, time_tol=1e-3 * span)
     if not groups:
