@@ -42,12 +42,22 @@ def flow_closed_form(y, t_from, t_to):
     return harmonic(t_to) + expm(A * (t_to - t_from)) @ (np.asarray(y) - harmonic(t_from))
 
 
+EIGENVALUES, EIGENVECTORS = np.linalg.eig(A)
+
+
+def flow_closed_form_many(y, t_from, ts):
+    """flow_closed_form at many times, with expm(A tau) = V exp(Lambda tau) V^-1."""
+    tau = np.asarray(ts) - t_from
+    E = np.einsum("ij,mj,jk->mik", EIGENVECTORS, np.exp(np.outer(tau, EIGENVALUES)), np.linalg.inv(EIGENVECTORS)).real
+    return harmonic(np.asarray(ts)).T + E @ (np.asarray(y) - harmonic(t_from))
+
+
 def next_impact(s, t_i, v_plus):
     """The next time after t_i where x reaches s from below, and the velocity there."""
     y0 = np.array([s, v_plus])
     x = lambda t: flow_closed_form(y0, t_i, t)[0] - s  # noqa: E731
     ts = t_i + np.linspace(1e-9, 3 * T, 6001)
-    xs = np.array([x(t) for t in ts])
+    xs = flow_closed_form_many(y0, t_i, ts)[:, 0] - s
     rising = np.nonzero((xs[:-1] < 0) & (xs[1:] >= 0))[0]
     if v_plus > 0 or rising.size == 0:
         return t_i + 10 * T, 1e3  # no impact from below: far from a fixed point
