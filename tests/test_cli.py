@@ -267,6 +267,26 @@ def test_continue_writes_branch_that_loads_back(tmp_path, capsys):
     assert json.loads((tmp_path / "trilinear_omega_special_points.json").read_text()) == []
 
 
+def test_continue_records_and_passes_a_grazing(tmp_path, capsys):
+    """The impact oscillator from its non-impacting orbit at s = 3 down to s = 2.5: the grazing at
+    s* = 1 / sqrt((1 - w^2)^2 + (2 zeta w)^2) is in the special-points file, and the branch goes on
+    onto impacting orbits."""
+    import json
+
+    status = cli.main([
+        "continue", "impact_oscillator", "--param", "s", "--from", "3.0", "--to", "2.5", "--out", str(tmp_path),
+        "--no-progress",
+    ])
+    assert status == 0, capsys.readouterr().err
+    records = json.loads((tmp_path / "impact_oscillator_s_special_points.json").read_text())
+    zeta, w = 0.05, 0.8
+    (grazing,) = [r for r in records if r["kind"] == "grazing"]
+    assert grazing["value"] == pytest.approx(1 / np.hypot(1 - w**2, 2 * zeta * w), abs=1e-9)
+    assert grazing["limits"] == "grazing" and "inf" in grazing["multipliers_plus"]
+    branch = json.loads((tmp_path / "impact_oscillator_s_branch.json").read_text())
+    assert min(pt["parameter"] for pt in branch["points"]) == pytest.approx(2.5)
+
+
 def test_continue_rejects_unknown_parameter(tmp_path, capsys):
     status = cli.main(["continue", "trilinear", "--param", "nope", "--from", "0.6", "--to", "0.8", "--out", str(tmp_path)])
     assert status != 0

@@ -47,6 +47,7 @@ SPECIAL_POINT_MARKERS: dict[SpecialPointKind, tuple[str, str]] = {
     SpecialPointKind.DISCONTINUOUS_FLIP: ("P", "discontinuous flip"),
     SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER: ("X", "discontinuous Neimark-Sacker"),
     SpecialPointKind.NONSMOOTH_NO_CROSSING: ("v", "non-smooth point, no crossing"),
+    SpecialPointKind.GRAZING: ("h", "grazing"),
 }
 
 #: Axis label per amplitude measure; ``{x}`` is the name of the first state.
