@@ -74,7 +74,7 @@ def impact_map(s, u):
 
 def impacting_orbit(s, guess):
     """Fixed point (t_i, v+) of the impact map, and the orbit's state at t = 0."""
-    u = fsolve(lambda u: impact_map(s, u) - u, guess, xtol=1e-14)
+    u = fsolve(lambda u: impact_map(s, u) - u, guess, xtol=1e-13)
     t_i, v_plus = u
     t_i = t_i % T
     state0 = flow_closed_form([s, v_plus], t_i, T)  # the state at t = T, that is at t = 0 on the orbit
@@ -114,8 +114,9 @@ def reference_orbits(stops):
 
 
 def impact_state(flow, s):
-    """The state at t = 0 of the impacting period-1 orbit at s (from the closed form)."""
-    stops = np.linspace(S_STAR - 1e-3, s, 2 + int((S_STAR - s) / 0.05))
+    """The state at t = 0 of the impacting period-1 orbit at s (from the closed form, walking down from
+    s* - 0.02, where the walk's first guess is good)."""
+    stops = np.linspace(S_STAR - 0.02, s, 2 + int((S_STAR - s) / 0.05))
     return reference_orbits(stops)[-1][1]
 
 
@@ -197,7 +198,7 @@ def orbit_with_impact_velocity(v):
         t_i, s = z
         return flow_closed_form([s, -R * v], t_i, t_i + T) - [s, v]
 
-    t_i, s = fsolve(residual, [GRAZING_TIME, S_STAR], xtol=1e-15)
+    t_i, s = fsolve(residual, [GRAZING_TIME, S_STAR], xtol=1e-13)
     assert np.abs(residual([t_i, s])).max() < 1e-13
     return s, flow_closed_form([s, -R * v], t_i % T, T)
 
