@@ -108,12 +108,15 @@ def _closed_form_saltation(system: PiecewiseSystem, transition: int):
     return sp.lambdify((system.t, list(system.x), list(system.p)), S, modules="numpy")
 
 
+@lru_cache(maxsize=256)
+def _reset_function(system: PiecewiseSystem, transition: int):
+    return sp.lambdify((system.t, list(system.x), list(system.p)), system.resets[transition], modules="numpy")
+
+
 def _reset(system: PiecewiseSystem, transition: int, t: float, x: np.ndarray, p: np.ndarray) -> np.ndarray:
-    g = system.resets[transition]
-    if g is None:
+    if system.resets[transition] is None:
         return x
-    fun = sp.lambdify((system.t, list(system.x), list(system.p)), g, modules="numpy")
-    return np.asarray(fun(t, list(x), list(p)), dtype=float).reshape(-1)
+    return np.asarray(_reset_function(system, transition)(t, list(x), list(p)), dtype=float).reshape(-1)
 
 
 def saltation_at_corner(
@@ -173,13 +176,12 @@ def one_sided_limits(
     if groups is None:
         return None
     run = lambda t: flow.run(without.x0, t0, t, p, mode0=without.mode0, tolerances=tolerances)  # noqa: E731
-    direction = 1.0 if t1 >= t0 else -1.0
     M_wo = without.monodromy
     times, states = [], []
     exact = True
     conjugated = []
     for g in groups:
-        t_star = _touch_time(flow, run, [ev_w[i] for i in g], p, t0, t1, direction)
+        t_star = _touch_time(flow, run, [ev_w[i] for i in g], p, t0, t1)
         if t_star is None:
             return None
         traj = flow.run(without.x0, t0, t_star, p, mode0=without.mode0, variational=True, tolerances=tolerances)
@@ -206,7 +208,7 @@ def one_sided_limits(
     )
 
 
-def _touch_time(flow, run, group: Sequence[SwitchingEvent], p, t0, t1, direction) -> float | None:
+def _touch_time(flow, run, group: Sequence[SwitchingEvent], p, t0, t1) -> float | None:
     """The instant where the boundary orbit passes the corner of the group's surfaces.
 
     A surface of the group that the boundary orbit crosses transversally near
