@@ -463,11 +463,9 @@ def _sqrt_extrapolated_error(lo: Solution, hi: Solution, far: tuple[Solution, So
     mid = 0.5 * (lo.lam + hi.lam)
     worst = 0.0
     for near, other in ((lo, far[0]), (hi, far[1])):
-        if near.summary.monodromy is None or other.summary.monodromy is None:
-            return float("nan")
         d_near, d_far = abs(near.lam - mid), abs(other.lam - mid)
-        if d_far <= d_near:
-            continue
+        if near.summary.monodromy is None or other.summary.monodromy is None or d_far <= d_near:
+            return float("nan")  # no second point on that side: the error is not known
         c = float(np.linalg.norm(other.summary.monodromy - near.summary.monodromy)) / (np.sqrt(d_far) - np.sqrt(d_near))
         worst = max(worst, c * np.sqrt(d_near))
     return worst
