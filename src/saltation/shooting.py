@@ -196,6 +196,10 @@ class ShootingProblem:
     t0 : float
         Initial time (forced systems: the phase of the forcing).
     tolerances : Tolerances, optional
+    periods : int
+        Forced systems: the number of forcing periods the orbit takes to
+        close (2 for the branch born at a period doubling).  Such problems
+        iterate Newton in Python rather than in the compiled kernel.
     """
 
     def __init__(
@@ -207,7 +211,13 @@ class ShootingProblem:
         backward: bool = False,
         t0: float = 0.0,
         tolerances: Tolerances | None = None,
+        periods: int = 1,
     ):
+        if int(periods) != periods or periods < 1:
+            raise ModelError(f"periods must be a positive integer, got {periods!r}")
+        if periods != 1 and flow.system.is_autonomous:
+            raise ModelError(f"model {flow.system.name!r} is autonomous: its period is an unknown, not a number of periods")
+        self.periods = int(periods)
         self.flow = flow
         self.system = flow.system
         self.p = flow.parameters(parameters)
@@ -265,7 +275,7 @@ class ShootingProblem:
         self.f_ref = f / norm
 
     def period_of(self, u: np.ndarray, lam: float | None = None) -> float:
-        return float(u[-1]) if self.autonomous else self.system.forcing_period(self.parameters_at(lam))
+        return float(u[-1]) if self.autonomous else self.periods * self.system.forcing_period(self.parameters_at(lam))
 
     def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
         """Residual ``r(u, lam)`` and its exact Jacobians."""
@@ -286,7 +296,7 @@ class ShootingProblem:
             J = M - np.eye(n)
             if pidx >= 0:
                 jl = traj.parameter_sensitivity.copy()
-                dT = self.system.period_derivative(p, pidx)
+                dT = self.periods * self.system.period_derivative(p, pidx)
                 if dT:  # the period moves with the parameter: the end point moves along the flow
                     jl += (self.sign * dT) * traj.velocity_end
             return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
@@ -321,8 +331,8 @@ class ShootingProblem:
         ConvergenceError
             If Newton does not converge.
         """
-        if self.lam_index < 0:
-            return None
+        if self.lam_index < 0 or self.periods != 1:
+            return None  # the kernel's corrector closes orbits after one forcing period
         phase = None
         if self.autonomous:
             if self.x_ref is None:
@@ -372,7 +382,7 @@ class ShootingProblem:
         else:
             # the period is fixed: the whole iteration runs in the compiled kernel
             p = self.parameters_at(lam)
-            T = self.system.forcing_period(p)
+            T = self.period_of(u0, lam)
             found = self.flow.newton_period_map(
                 u0, self.t0, self.t0 + self.sign * T, p, tol=tol, max_iter=max_iter, tolerances=self.tolerances,
             )

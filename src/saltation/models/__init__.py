@@ -1,8 +1,9 @@
 """Models shipped with saltation, each a short file that reads like its source."""
 
 from .block_on_belt import WRegion, block_on_belt
+from .bouncing_ball import bouncing_ball
 from .chain import chain
 from .impact_oscillator import impact_oscillator
 from .trilinear import trilinear
 
-__all__ = ["WRegion", "block_on_belt", "chain", "impact_oscillator", "trilinear"]
+__all__ = ["WRegion", "block_on_belt", "bouncing_ball", "chain", "impact_oscillator", "trilinear"]
