@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
-from scipy.optimize import brentq
+from scipy.optimize import brentq, fsolve
 
 from saltation import Flow
 from saltation.bifurcations import classify_nonsmooth
@@ -172,6 +172,46 @@ def stick_slip_fold_reference():
         return sol.y_events[0][0][1]
 
     return brentq(lambda v: max_velocity(v) - (v - eta), 1.0, 1.2, xtol=1e-13)
+
+
+def switch_model_fold_reference():
+    """The fold of the switch model (eq. 17, eta = 1e-4), independently: the touching point (x_g, v_dr - eta)
+    on the band's edge, the stick phase in closed form (v = v_dr - eta exp(-sqrt(k/m) t), x = x_g + v_dr t)
+    up to k x + c v = F_stick, the slip arc by solve_ivp to its velocity maximum, which must be the
+    touching point again: fsolve on (x_g, v_dr)."""
+    k, c, m, f_slip, f_stick, eta = (BELT[n] for n in ("k", "c", "m", "F_slip", "F_stick", "eta"))
+    w_s = np.sqrt(k / m)
+
+    def rhs(t, y):
+        return [y[1], (-k * y[0] - c * y[1] + f_slip) / m]
+
+    def velocity_max(t, y):
+        return (-k * y[0] - c * y[1] + f_slip) / m
+
+    velocity_max.direction = -1
+
+    def residual(z):
+        x_g, v_dr = z
+        stick_force = lambda t: k * (x_g + v_dr * t) + c * (v_dr - eta * np.exp(-w_s * t)) - f_stick  # noqa: E731
+        t_e = brentq(stick_force, 0.0, 100.0, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+        y_e = [x_g + v_dr * t_e, v_dr - eta * np.exp(-w_s * t_e)]
+        sol = solve_ivp(rhs, [0, 30], y_e, events=velocity_max, rtol=1e-13, atol=1e-15, method="DOP853")
+        x_m, v_m = sol.y_events[0][0]
+        return [x_m - x_g, v_m - (v_dr - eta)]
+
+    z = fsolve(residual, [0.89, stick_slip_fold_reference()], xtol=1e-13)
+    assert np.abs(residual(z)).max() < 1e-12
+    return z[1]
+
+
+def test_stick_slip_fold_located_by_tangential_return(belt_diagram):
+    """The paper's stick-slip fold is where the slip arc that leaves the stick band returns to it
+    tangentially: located by that condition, not as the midpoint of two branch ends."""
+    (fold,) = [sp for sp in belt_diagram.special_points if sp.kind is SpecialPointKind.DISCONTINUOUS_FOLD]
+    assert "returns tangentially to surface 'band_lower'" in fold.note
+    assert fold.accuracy < 1e-10
+    # the reference integrates to rtol 1e-13 (errors ~1e-12 in the touching point)
+    assert fold.parameter == pytest.approx(switch_model_fold_reference(), abs=1e-9)
 
 
 def test_stick_slip_fold_and_unstable_branch(belt_diagram):

@@ -13,7 +13,7 @@ the two branches.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -21,6 +21,8 @@ from .bifurcations import classify_nonsmooth, special_point_between
 from .branch import Branch, SpecialPoint
 from .continuation import Continuation, ContinuationSettings, Corrector, Solution, canonical_events
 from .errors import SaltationError
+from .grazing import locate_tangential_return
+from .integrate import EventKind
 from .shooting import ShootingProblem
 
 
@@ -207,8 +209,54 @@ def follow_through_discontinuous_fold(
             "shooting; bracket from both branch ends"
         ),
     )
+    fold = _fold_by_tangential_return(prob_f, end, fold)
     branch.special_points.insert(0, fold)
     return branch, fold
+
+
+def _fold_by_tangential_return(problem: ShootingProblem, end: Solution, fold: SpecialPoint) -> SpecialPoint:
+    """The fold located by its defining condition, where the stable orbit's return is tangential.
+
+    At the end of the stable branch of a stick-slip cycle, the slip arc that
+    leaves the stick phase returns to it tangentially: the entry into the
+    stick phase whose crossing is the slowest (``|dh/dt|`` relative to
+    ``|h_x| |f|``) is the one that turns tangent.  The fold is located by
+    :func:`saltation.grazing.locate_tangential_return` from there; when that
+    fails the record keeps the bracket of the two branch ends.
+    """
+    flow = problem.flow
+    traj = end.evaluation.trajectory
+    p = problem.parameters_at(end.lam)
+    best, slowest = None, np.inf
+    for e in traj.events:
+        if e.kind != EventKind.TRANSITION:
+            continue
+        f = flow.vector_field(e.mode_from, e.t, e.x_minus, p)
+        hx, ht, _ = flow.indicator_gradient(e.surface, e.t, e.x_minus, p)
+        rate = abs(hx @ f + ht) / max(np.linalg.norm(hx) * np.linalg.norm(f), 1e-300)
+        if rate < slowest:
+            best, slowest = e, rate
+    if best is None:
+        return fold
+    try:
+        found = locate_tangential_return(
+            flow, best.x_minus, end.lam, problem.lam_name, best.transition, problem.period_of(end.u, end.lam),
+            parameters=p, tolerances=problem.tolerances,
+        )
+    except SaltationError:
+        return fold
+    lo, hi = fold.bracket
+    if not lo - 10 * (hi - lo) <= found.parameter <= hi + 10 * (hi - lo):
+        return fold  # a tangency elsewhere
+    return replace(
+        fold, parameter=found.parameter, bracket=(found.parameter - found.accuracy, found.parameter + found.accuracy),
+        accuracy=found.accuracy,
+        note=(
+            f"located where the orbit returns tangentially to surface {best.surface!r} and enters "
+            f"{best.mode_to!r} there (the branch ends bracket it: {lo:.12g} .. {hi:.12g}); joined to the infinitely "
+            "unstable branch found by backward-time shooting"
+        ),
+    )
 
 
 def _point_of(cont: Continuation, sol: Solution):

@@ -196,6 +196,123 @@ def locate_grazing(
     raise ConvergenceError(f"grazing of surface {system.surface_names[surface]!r} did not converge in {max_iter} iterations", history)
 
 
+@dataclass(frozen=True)
+class TangentialReturn:
+    """A periodic orbit that returns to a surface tangentially and enters its transition there.
+
+    Attributes
+    ----------
+    parameter : float
+    state : ndarray, shape (n,)
+        The touching point (on the surface).
+    period : float
+        Time from the touching point around the orbit back to it.
+    transition : int
+        The transition entered at the touch (into a stick phase, for example).
+    accuracy : float
+        Estimate of the error of ``parameter`` (the Newton correction that would follow).
+    residuals : list of float
+    """
+
+    parameter: float
+    state: np.ndarray
+    period: float
+    transition: int
+    accuracy: float
+    residuals: list[float]
+
+
+def locate_tangential_return(
+    flow: Flow,
+    x_touch: Sequence[float],
+    lam: float,
+    lam_name: str,
+    transition: int,
+    period: float,
+    *,
+    parameters=None,
+    tol: float = 1e-12,
+    max_iter: int = 30,
+    fd_step: float = 1e-7,
+    tolerances=None,
+) -> TangentialReturn:
+    """Locate an orbit whose return to a surface is tangential, for an autonomous model.
+
+    The defining system of the fold of a stick-slip cycle (the slip arc that
+    leaves the stick band returns to it tangentially).  The unknowns are the
+    touching point ``x_g``, kept on the surface (coordinates ``y`` in the
+    surface's tangent plane at the guess, projected back onto the surface
+    along ``h_x``), and the parameter.  From ``x_g``, in the target mode of
+    ``transition``, the orbit is integrated (that transition disabled) until
+    its indicator reaches its next extremum, at ``t_r``; the equations are
+    ``x(t_r) - x_g = 0``.  Newton's method with a Jacobian by central
+    differences (the extremum time moves with the unknowns).
+
+    Raises
+    ------
+    ConvergenceError
+        If Newton's method does not converge or no return is found.
+    """
+    system = flow.system
+    tr = system.transitions[transition]
+    surface = system.surface_index(tr.surface)
+    j = system.parameter_index(lam_name)
+    p = flow.parameters(parameters).copy()
+    n = system.n
+    disabled = (int(transition),)
+    history: list[float] = []
+    base = np.asarray(x_touch, dtype=float)
+    hx0, _, _ = flow.indicator_gradient(surface, 0.0, base, p)
+    tangent = np.linalg.svd(hx0.reshape(1, -1))[2][1:].T  # (n, n-1): an orthonormal basis of the tangent plane
+    t_r = float(period)
+
+    def touch_point(w: np.ndarray, q: np.ndarray) -> np.ndarray:
+        x = base + tangent @ w[:-1]
+        for _ in range(8):  # onto the surface, along its gradient
+            h = flow.indicator(surface, 0.0, x, q)
+            hx, _, _ = flow.indicator_gradient(surface, 0.0, x, q)
+            x = x - h * hx / (hx @ hx)
+            if abs(h) <= 1e-15 * (1.0 + float(np.linalg.norm(x))):
+                break
+        return x
+
+    def residual(w: np.ndarray, t_guess: float) -> tuple[np.ndarray, float, np.ndarray]:
+        q = p.copy()
+        q[j] = w[-1]
+        x = touch_point(w, q)
+        found = tangency_time(flow, x, 0.0, q, surface, t_guess, 1.5 * t_guess, mode0=tr.target, disabled=disabled,
+                              tolerances=tolerances)
+        if found is None:
+            raise ConvergenceError(f"tangential return to surface {tr.surface!r}: no return found", history)
+        end = flow.run(x, 0.0, found, q, mode0=tr.target, disabled=disabled, tolerances=tolerances)
+        return end.x1 - x, found, x
+
+    w = np.append(np.zeros(n - 1), float(lam))
+    for it in range(max_iter + 1):
+        r, t_r, x = residual(w, t_r)
+        rn = float(np.linalg.norm(r))
+        history.append(rn)
+        J = np.empty((n, n))
+        for i in range(n):
+            step = fd_step * max(1.0, abs(w[i]))
+            e = np.zeros(n)
+            e[i] = step
+            J[:, i] = (residual(w + e, t_r)[0] - residual(w - e, t_r)[0]) / (2 * step)
+        try:
+            dw = np.linalg.solve(J, -r)
+        except np.linalg.LinAlgError:
+            raise ConvergenceError("tangential return: singular Jacobian", history) from None
+        if rn <= tol * (1.0 + float(np.linalg.norm(x))):
+            return TangentialReturn(
+                parameter=float(w[-1]), state=x, period=t_r, transition=int(transition),
+                accuracy=abs(float(dw[-1])) + 4e-16 * max(1.0, abs(float(w[-1]))), residuals=history,
+            )
+        if it == max_iter:
+            break
+        w = w + dw
+    raise ConvergenceError(f"tangential return to surface {tr.surface!r} did not converge", history)
+
+
 def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_gap: float = 1e-2) -> list[tuple[int, float]]:
     """Transitions whose surface the orbit nearly touches without crossing: ``(transition, time)`` pairs.
 
@@ -237,4 +354,4 @@ def growth_exponent(distances: np.ndarray, magnitudes: np.ndarray) -> float:
     return float(slope)
 
 
-__all__ = ["GrazingOrbit", "grazing_candidates", "indicator_rate", "locate_grazing", "growth_exponent", "tangency_time"]
+__all__ = ["GrazingOrbit", "TangentialReturn", "locate_tangential_return", "grazing_candidates", "indicator_rate", "locate_grazing", "growth_exponent", "tangency_time"]

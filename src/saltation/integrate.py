@@ -338,6 +338,12 @@ class Flow:
         s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
         return float(self._kernels.indicator(int(s), float(t), np.ascontiguousarray(x, dtype=float), p))
 
+    def vector_field(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
+        """The vector field ``f(t, x, p)`` of a mode."""
+        f = np.zeros(self.system.n)
+        self._kernels.vector_field(self.system.mode_index(mode), float(t), np.ascontiguousarray(x, dtype=float), p, f)
+        return f
+
     def indicator_gradient(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
         """``(h_x, h_t, h_p)`` of a switching surface at ``(t, x)``."""
         s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
