@@ -38,7 +38,6 @@ STATUS_NON_FINITE = 4
 STATUS_SLIDING_UNDEFINED = 5
 STATUS_MAX_STEPS = 6
 STATUS_TANGENTIAL = 7
-STATUS_OUTSIDE_DOMAIN = 8  # a transition led outside the target mode's domain, and no exit of it holds
 
 EVENT_TRANSITION = 0
 EVENT_SLIDING_START = 1
@@ -905,10 +904,9 @@ def integrate_kernel(
                     if guard(k, t + dt_nudge, xtmp, p):  # noqa: F821
                         pending = k
                         break
-                if pending < 0 and n_ev > 0:
-                    status = STATUS_OUTSIDE_DOMAIN
-                    info_mode = mode
-                    break
+                # no exit holds: the domain fails by rounding only (a condition on the surface just
+                # crossed, with the motion nearly tangent to it), or the model's domains and
+                # transitions disagree; the kernel cannot tell the two apart and goes on
             for s in range(n_surfaces):
                 fixed_sign[s] = False
             need_signs = False

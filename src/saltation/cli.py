@@ -617,12 +617,31 @@ def _special_points_text(records: list[dict]) -> str:
     return special_point_table(records) if records else "no special points located"
 
 
+def periodic_start(args: argparse.Namespace, flow, overrides: dict[str, float], p: np.ndarray, x0: np.ndarray | None):
+    """The shooting problem over ``--param`` and its first unknowns: a periodic orbit from ``--x0`` (or
+    the end of a transient) and ``--period`` (or an estimate), forward or ``--backward``."""
+    from .shooting import ShootingProblem, find_periodic_orbit
+
+    system = flow.system
+    if not system.is_autonomous and args.period is not None:
+        raise UsageError(f"model {system.name!r} is forced: drop --period")
+    period = args.period
+    if x0 is None or (system.is_autonomous and period is None):
+        traj, _ = transient(flow, args.model, p, x0, t0=0.0, backward=args.backward)
+        x0 = traj.x1.copy() if x0 is None else x0
+        if system.is_autonomous and period is None:
+            period = estimate_period(traj)
+    orbit = find_periodic_orbit(flow, x0, parameters=overrides, period=period, backward=args.backward)
+    problem = ShootingProblem(flow, overrides, continuation_parameter=args.param, backward=args.backward)
+    return problem, problem.pack(orbit.state0, orbit.period if system.is_autonomous else None)
+
+
 def cmd_continue(args: argparse.Namespace) -> int:
     """``saltation continue``: follow one branch of a shipped model and write its data and plot."""
     from . import io, plotting
     from .continuation import Continuation, ContinuationSettings
     from .diagram import follow_through_discontinuous_fold
-    from .shooting import EquilibriumProblem, ShootingProblem, find_periodic_orbit
+    from .shooting import EquilibriumProblem
 
     system = build_model(args.model)
     system.parameter_index(args.param)
@@ -648,17 +667,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
             guess = x0 if x0 is not None else np.zeros(system.n)
             u0 = problem.solve(guess, start).state
         else:
-            if not system.is_autonomous and args.period is not None:
-                raise UsageError(f"model {system.name!r} is forced: drop --period")
-            period = args.period
-            if x0 is None or (system.is_autonomous and period is None):
-                traj, _ = transient(flow, args.model, p, x0, t0=0.0, backward=args.backward)
-                x0 = traj.x1.copy() if x0 is None else x0
-                if system.is_autonomous and period is None:
-                    period = estimate_period(traj)
-            orbit = find_periodic_orbit(flow, x0, parameters=overrides, period=period, backward=args.backward)
-            problem = ShootingProblem(flow, overrides, continuation_parameter=args.param, backward=args.backward)
-            u0 = problem.pack(orbit.state0, orbit.period if system.is_autonomous else None)
+            problem, u0 = periodic_start(args, flow, overrides, p, x0)
         cont = Continuation(problem, settings)
         for point in cont.run(u0, start, direction=direction):
             if counter:
@@ -727,6 +736,119 @@ def _add_continue_parser(sub) -> None:
     p.add_argument("--max-points", metavar="N", type=int, default=2000, help="largest number of points (default 2000)")
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(handler=cmd_continue)
+
+
+# --------------------------------------------------------------------------------------------
+# locus
+# --------------------------------------------------------------------------------------------
+
+def _range(option: str):
+    def parse(text: str) -> tuple[float, float]:
+        parts = text.split(",")
+        if len(parts) != 2:
+            raise argparse.ArgumentTypeError(f"{option} takes two numbers A,B, got {text!r}")
+        a, b = (_finite(v) for v in parts)
+        if a == b:
+            raise argparse.ArgumentTypeError(f"{option}: the two ends must differ, got {text!r}")
+        return a, b
+
+    return parse
+
+
+def cmd_locus(args: argparse.Namespace) -> int:
+    """``saltation locus``: continue the special points of one kind of a branch in a second parameter."""
+    from . import plotting
+    from .branch import SpecialPointKind
+    from .continuation import Continuation, ContinuationSettings
+    from .loci import follow_locus
+
+    try:
+        kind = SpecialPointKind(args.kind)
+    except ValueError:
+        raise UsageError(f"unknown kind {args.kind!r}; kinds are {', '.join(k.value for k in SpecialPointKind)}") from None
+    system = build_model(args.model)
+    for name in (args.param, args.param2):
+        system.parameter_index(name)
+    if args.param == args.param2:
+        raise UsageError("--param and --param2 must differ")
+    (start, stop), (lo2, hi2) = args.range, args.range2
+    overrides = parse_sets(args.set, system)
+    overrides[args.param] = start
+    flow = make_flow(system)
+    p = flow.parameters(overrides)
+    if not lo2 <= p[system.parameter_index(args.param2)] <= hi2 and not hi2 <= p[system.parameter_index(args.param2)] <= lo2:
+        raise UsageError(f"the value of {args.param2} ({p[system.parameter_index(args.param2)]:g}) lies outside --range2")
+    x0 = parse_vector(args.x0, system) if args.x0 is not None else None
+    settings = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(min(start, stop), max(start, stop)))
+    update, close = _progress_bar(not args.no_progress)
+    counter = (lambda point: update(f"{args.model}: {args.param}", 0)) if update else None
+    try:
+        problem, u0 = periodic_start(args, flow, overrides, p, x0)
+        cont = Continuation(problem, settings)
+        for point in cont.run(u0, start, direction=1 if stop > start else -1):
+            if counter:
+                counter(point)
+        points = [sp for sp in cont.branch.special_points if sp.kind is kind]
+        curve_settings = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(min(lo2, hi2), max(lo2, hi2)))
+        counter2 = (lambda point: update(f"{args.model}: {kind.value} over {args.param2}", 0)) if update else None
+        loci = [follow_locus(problem, sp, args.param2, curve_settings.bounds, settings=curve_settings, progress=counter2)
+                for sp in points]
+    finally:
+        close()
+    record = {
+        "model": system.name, "kind": kind.value, "param": args.param, "param2": args.param2,
+        "curves": [locus.record() for locus in loci],
+    }
+    if args.out is not None:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        stem = out / f"{system.name}_{kind.value}_{args.param}_{args.param2}_locus"
+        stem.with_suffix(".json").write_text(json.dumps(record, indent=1))
+        plotting.save_figure(plotting.plot_loci(loci, title=f"{system.name}: {kind.value}"), stem)
+    if args.json:
+        print(json.dumps(record))
+    else:
+        print(f"{len(loci)} curve(s) of {kind.value} points of {system.name} in ({args.param}, {args.param2})")
+        for k, locus in enumerate(loci):
+            print(f"  curve {k}: {len(locus.points)} points; {locus.stop_reason}")
+            for c in locus.special_points:
+                print(f"    {c.kinds[0]} -> {c.kinds[1]} at {args.param} = {c.values[0]:.8g}, {args.param2} = "
+                      f"{c.values[1]:.8g} (within {c.accuracy:.2g})")
+        if args.out is not None:
+            print(f"written to {stem}.json (.png, .pdf)")
+    return 0
+
+
+def _add_locus_parser(sub) -> None:
+    p = sub.add_parser(
+        "locus",
+        help="continue the special points of one kind of a branch in a second parameter (two-parameter curves)",
+        description=_paragraph(
+            """Follow the branch of periodic orbits of MODEL from the start state over --param in --range
+            (as 'continue' does), take every special point of kind --kind on it, and continue each as a
+            curve in (--param, --param2) with --param2 in --range2, in both directions, by its defining
+            system: grazing and corner collisions by periodicity plus tangency, folds and period
+            doublings by periodicity plus a bordered test function. Where the kind of a corner changes
+            along its curve (a codimension-two point) the curve records it. --json prints
+            {"model", "kind", "param", "param2", "curves": [{"points": [[value of param, value of
+            param2], ...], "stop_reason", "special_points"}]}; --out writes the same and a plot."""
+        ),
+    )
+    p.add_argument("model", metavar="MODEL", help=MODEL_HELP.format(names=model_names()))
+    p.add_argument("--kind", metavar="KIND", required=True,
+                   help="a SpecialPointKind value: fold, period_doubling, grazing, discontinuous_fold, nonsmooth_no_crossing, ...")
+    p.add_argument("--param", metavar="NAME", required=True, help="the parameter of the branch")
+    p.add_argument("--range", metavar="A,B", type=_range("--range"), required=True, help="the branch from A towards B")
+    p.add_argument("--param2", metavar="NAME2", required=True, help="the second parameter")
+    p.add_argument("--range2", metavar="C,D", type=_range("--range2"), required=True, help="the range of the second parameter")
+    p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="override a parameter (repeat for several)")
+    p.add_argument("--x0", metavar="V1,V2,...", help="guess of the start state (default: the end of a transient)")
+    p.add_argument("--period", metavar="T", type=_positive("--period"), help="period guess for autonomous models")
+    p.add_argument("--backward", action="store_true", help="shoot in backward time")
+    p.add_argument("--out", metavar="DIR", help="write the curves (JSON) and their plot here")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    p.set_defaults(handler=cmd_locus)
 
 
 # --------------------------------------------------------------------------------------------
@@ -844,6 +966,7 @@ def _add_sweep_parser(sub) -> None:
 SUBCOMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [
     _add_orbit_parser,
     _add_continue_parser,
+    _add_locus_parser,
     _add_paper_parser,
     _add_sweep_parser,
 ]

@@ -113,6 +113,72 @@ def tangency_time(
     return None
 
 
+@dataclass(frozen=True)
+class GrazingSystem:
+    """The defining system of a grazing at ``(x0, p)`` and its exact derivatives.
+
+    ``residual = (x(t0 + T) - x0, h(t_g, x(t_g)))``; ``jac_x`` its derivative
+    in ``x0`` (``(n + 1, n)``), ``jac_p`` in the requested parameters
+    (``(n + 1, k)``), by the envelope theorem for the tangency row.
+    """
+
+    residual: np.ndarray
+    jac_x: np.ndarray
+    jac_p: np.ndarray
+    t_graze: float
+    x_graze: np.ndarray
+    period: float
+    monodromy: np.ndarray
+    fundamental_to_graze: np.ndarray
+    trajectory: Trajectory
+
+
+def grazing_system(
+    flow: Flow, x0: np.ndarray, p: np.ndarray, transition: int, t_guess: float, params: Sequence[int], *,
+    t0: float = 0.0, tolerances=None, history: list[float] | None = None, also_disabled: Sequence[int] = (),
+) -> GrazingSystem:
+    """Evaluate the defining system of a grazing of a forced orbit (see the module docstring).
+
+    ``also_disabled``: further transitions the virtual orbit passes (surfaces
+    it touches at the same time, such as the other support of a symmetric orbit).
+
+    Raises
+    ------
+    ModelError
+        For an autonomous model (its grazing needs the period as an unknown: not covered yet).
+    ConvergenceError
+        If no tangency is found near ``t_guess``.
+    """
+    system = flow.system
+    if system.is_autonomous:
+        raise ModelError(f"locating a grazing is implemented for forced models; {system.name!r} is autonomous")
+    surface = system.surface_index(system.transitions[transition].surface)
+    n = system.n
+    disabled = (int(transition), *map(int, also_disabled))
+    T = system.forcing_period(p)
+    runs = [flow.run(x0, t0, t0 + T, p, variational=True, parameter=j, disabled=disabled, tolerances=tolerances)
+            for j in params]
+    full = runs[0]
+    t_g = tangency_time(flow, x0, t0, p, surface, t_guess, T, mode0=full.mode0, disabled=disabled, tolerances=tolerances)
+    if t_g is None:
+        raise ConvergenceError(f"grazing of surface {system.surface_names[surface]!r}: no tangency near t = {t_guess:.6g}",
+                               history or [])
+    parts = [flow.run(x0, t0, t_g, p, variational=True, parameter=j, mode0=full.mode0, disabled=disabled,
+                      tolerances=tolerances) for j in params]
+    part = parts[0]
+    hx, _, hp = flow.indicator_gradient(surface, t_g, part.x1, p)
+    residual = np.append(full.x1 - x0, flow.indicator(surface, t_g, part.x1, p))
+    jac_x = np.vstack([full.monodromy - np.eye(n), hx @ part.monodromy])
+    jac_p = np.empty((n + 1, len(params)))
+    for c, (j, run, to_g) in enumerate(zip(params, runs, parts)):
+        jac_p[:n, c] = run.parameter_sensitivity + system.period_derivative(p, j) * run.velocity_end
+        jac_p[n, c] = hx @ to_g.parameter_sensitivity + hp[j]
+    return GrazingSystem(
+        residual=residual, jac_x=jac_x, jac_p=jac_p, t_graze=t_g, x_graze=part.x1, period=T,
+        monodromy=full.monodromy, fundamental_to_graze=part.monodromy, trajectory=full,
+    )
+
+
 def locate_grazing(
     flow: Flow,
     x0: Sequence[float],
@@ -151,49 +217,36 @@ def locate_grazing(
         For an autonomous model (its grazing needs the period as an unknown: not covered yet).
     """
     system = flow.system
-    if system.is_autonomous:
-        raise ModelError(f"locating a grazing is implemented for forced models; {system.name!r} is autonomous")
-    surface = system.surface_index(system.transitions[transition].surface)
     j = system.parameter_index(lam_name)
     p = flow.parameters(parameters).copy()
     n = system.n
     z = np.append(np.asarray(x0, dtype=float), float(lam))
-    disabled = (int(transition),)
     history: list[float] = []
     t_g = float(t_guess)
     for it in range(max_iter + 1):
         p[j] = z[-1]
-        T = system.forcing_period(p)
-        full = flow.run(z[:n], t0, t0 + T, p, variational=True, parameter=j, disabled=disabled, tolerances=tolerances)
-        found = tangency_time(flow, z[:n], t0, p, surface, t_g, T, mode0=full.mode0, disabled=disabled, tolerances=tolerances)
-        if found is None:
-            raise ConvergenceError(f"grazing of surface {system.surface_names[surface]!r}: no tangency near t = {t_g:.6g}", history)
-        t_g = found
-        part = flow.run(z[:n], t0, t_g, p, variational=True, parameter=j, mode0=full.mode0, disabled=disabled, tolerances=tolerances)
-        hx, _, hp = flow.indicator_gradient(surface, t_g, part.x1, p)
-        residual = np.append(full.x1 - z[:n], flow.indicator(surface, t_g, part.x1, p))
-        rn = float(np.linalg.norm(residual))
+        gs = grazing_system(flow, z[:n], p, transition, t_g, (j,), t0=t0, tolerances=tolerances, history=history)
+        t_g = gs.t_graze
+        J = np.column_stack([gs.jac_x, gs.jac_p[:, 0]])
+        rn = float(np.linalg.norm(gs.residual))
         history.append(rn)
-        J = np.zeros((n + 1, n + 1))
-        J[:n, :n] = full.monodromy - np.eye(n)
-        J[:n, n] = full.parameter_sensitivity + system.period_derivative(p, j) * full.velocity_end
-        J[n, :n] = hx @ part.monodromy
-        J[n, n] = hx @ part.parameter_sensitivity + hp[j]
         try:
-            dz = np.linalg.solve(J, -residual)
+            dz = np.linalg.solve(J, -gs.residual)
         except np.linalg.LinAlgError:
             raise ConvergenceError("grazing: singular Jacobian of the defining system", history) from None
         if rn <= tol * (1.0 + float(np.linalg.norm(z))):
             # the Newton correction that would follow estimates the error that is left
             return GrazingOrbit(
-                parameter=float(z[-1]), state0=z[:n].copy(), period=T, t_graze=t_g, x_graze=part.x1.copy(),
-                transition=int(transition), monodromy=full.monodromy.copy(), fundamental_to_graze=part.monodromy.copy(),
-                trajectory=full, accuracy=abs(float(dz[-1])) + 4e-16 * max(1.0, abs(float(z[-1]))), residuals=history,
+                parameter=float(z[-1]), state0=z[:n].copy(), period=gs.period, t_graze=t_g,
+                x_graze=gs.x_graze.copy(), transition=int(transition), monodromy=gs.monodromy.copy(),
+                fundamental_to_graze=gs.fundamental_to_graze.copy(), trajectory=gs.trajectory,
+                accuracy=abs(float(dz[-1])) + 4e-16 * max(1.0, abs(float(z[-1]))), residuals=history,
             )
         if it == max_iter:
             break
         z = z + dz
-    raise ConvergenceError(f"grazing of surface {system.surface_names[surface]!r} did not converge in {max_iter} iterations", history)
+    surface = system.transitions[transition].surface
+    raise ConvergenceError(f"grazing of surface {surface!r} did not converge in {max_iter} iterations", history)
 
 
 @dataclass(frozen=True)
@@ -354,4 +407,4 @@ def growth_exponent(distances: np.ndarray, magnitudes: np.ndarray) -> float:
     return float(slope)
 
 
-__all__ = ["GrazingOrbit", "TangentialReturn", "locate_tangential_return", "grazing_candidates", "indicator_rate", "locate_grazing", "growth_exponent", "tangency_time"]
+__all__ = ["GrazingOrbit", "GrazingSystem", "grazing_system", "TangentialReturn", "locate_tangential_return", "grazing_candidates", "indicator_rate", "locate_grazing", "growth_exponent", "tangency_time"]

@@ -39,7 +39,6 @@ class Status(enum.IntEnum):
     SLIDING_UNDEFINED = 5
     MAX_STEPS = 6
     TANGENTIAL = 7
-    OUTSIDE_DOMAIN = 8
 
 
 # outcomes of the kernel's Newton iterations (``correct_periodic``)
@@ -598,13 +597,6 @@ def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, 
         )
     if status == Status.TANGENTIAL:
         return IntegrationError(f"switching event exactly tangent to surface {surface!r} {where}: the saltation matrix is undefined")
-    if status == Status.OUTSIDE_DOMAIN:
-        last = events[-1] if events else None
-        via = f" after {last.mode_from!r} -> {last.mode_to!r} on surface {last.surface!r}" if last else ""
-        return IntegrationError(
-            f"the state lies outside the domain of mode {mode!r}{via} {where}, and no transition of that mode "
-            "leads out of it there: the model's domains and transitions disagree at this corner"
-        )
     if status == Status.MAX_STEPS:
         return IntegrationError(f"more steps than max_steps {where}")
     return IntegrationError(f"integration failed with status {status.name} {where}")

@@ -27,6 +27,7 @@ __all__ = [
     "MEASURE_LABELS",
     "PhaseCurve",
     "SPECIAL_POINT_MARKERS",
+    "plot_loci",
     "plot_multipliers",
     "plot_phase_plane",
     "plot_response",
@@ -498,3 +499,22 @@ def save_figure(fig: Figure, stem: str | PathLike[str], *, dpi: int = 200) -> tu
     fig.savefig(png, dpi=dpi)
     fig.savefig(pdf)
     return png, pdf
+
+
+def plot_loci(loci, *, title: str = ""):
+    """Two-parameter curves of special points (:class:`saltation.loci.Locus`), codimension-two points marked."""
+    fig = Figure(figsize=(6.4, 4.8), layout="constrained")
+    ax = fig.add_subplot()
+    for k, locus in enumerate(loci):
+        pts = np.asarray(locus.points)
+        if pts.size:
+            ax.plot(pts[:, 0], pts[:, 1], "-", color=f"C{k % 10}", label=f"curve {k}")
+        for c in locus.special_points:
+            ax.plot(*c.values, "o", color="k", markersize=5)
+            ax.annotate(f"{c.kinds[0]} -> {c.kinds[1]}", c.values, textcoords="offset points", xytext=(6, 6), fontsize=7)
+    if loci:
+        ax.set_xlabel(loci[0].param)
+        ax.set_ylabel(loci[0].param2)
+        ax.legend(loc="best", fontsize=8)
+    ax.set_title(title)
+    return fig
