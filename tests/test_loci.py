@@ -1,0 +1,123 @@
+"""Two-parameter curves of special points against closed forms and independent computations."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from saltation import Flow, cli
+from saltation.branch import SpecialPointKind
+from saltation.continuation import ContinuationSettings, continue_branch
+from saltation.integrate import Tolerances
+from saltation.loci import follow_locus
+from saltation.models import impact_oscillator
+from saltation.models.impact_oscillator import DEFAULTS as IMPACT
+from saltation.models.trilinear import DEFAULTS as TRI
+from saltation.paper import linear_response_state
+from saltation.shooting import ShootingProblem
+
+M, C, K, XC = (TRI[k] for k in ("m", "c", "k", "x_c"))
+F0_RANGE = (0.05, 0.4)
+
+
+@pytest.fixture(scope="module")
+def trilinear_loci(trilinear_flow):
+    problem = ShootingProblem(trilinear_flow, {"omega": 0.6}, continuation_parameter="omega")
+    branch = continue_branch(
+        problem, linear_response_state(dict(TRI, omega=0.6)), 0.6,
+        settings=ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(0.6, 1.6)), directions=(1,),
+    )
+    settings = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=F0_RANGE)
+    loci = {sp.kind: follow_locus(problem, sp, "f0", F0_RANGE, settings=settings) for sp in branch.special_points}
+    return problem, loci
+
+
+def test_corner_curves_against_closed_form(trilinear_loci):
+    """The corners at w_A and w_B, where the free orbit's amplitude is x_c: f0 = x_c sqrt((k - m w^2)^2 + (c w)^2)."""
+    _, loci = trilinear_loci
+    for kind in (SpecialPointKind.NONSMOOTH_NO_CROSSING, SpecialPointKind.DISCONTINUOUS_FOLD):
+        locus = loci[kind]
+        w, f0 = locus.points.T
+        assert len(w) > 50
+        # the defining system is solved to 1e-10 in the residual; the closed form is exact
+        np.testing.assert_allclose(f0, XC * np.sqrt((K - M * w**2) ** 2 + (C * w) ** 2), rtol=0, atol=1e-9)
+        assert "reached a parameter bound" in locus.stop_reason
+        assert f0.min() == pytest.approx(F0_RANGE[0]) or f0.max() == pytest.approx(F0_RANGE[1])
+
+
+def test_fold_curve_points_satisfy_the_fold_conditions(trilinear_loci, trilinear_flow):
+    """At points of the smooth fold curve: periodic, and the period map (by central differences of
+    DOP853 integrations, no variational equation) has a multiplier +1."""
+    _, loci = trilinear_loci
+    locus = loci[SpecialPointKind.FOLD]
+    assert len(locus.points) > 20
+    tol = Tolerances(rtol=1e-12, atol=1e-14, exact_affine=False)
+    for (w, f0), x0 in list(zip(locus.points, locus.states))[:: max(1, len(locus.points) // 6)]:
+        p = trilinear_flow.parameters({"omega": w, "f0": f0})
+        T = 2 * np.pi / w
+        assert np.abs(trilinear_flow.run(x0, 0.0, T, p, tolerances=tol).x1 - x0).max() < 1e-9
+        h = 1e-6
+        J = np.column_stack([
+            (trilinear_flow.run(x0 + h * e, 0.0, T, p, tolerances=tol).x1
+             - trilinear_flow.run(x0 - h * e, 0.0, T, p, tolerances=tol).x1) / (2 * h)
+            for e in np.eye(2)
+        ])
+        # central differences: O(h^2) plus rounding 1e-12 / h, about 1e-6
+        assert np.min(np.abs(np.linalg.eigvals(J) - 1.0)) < 1e-5
+
+
+def test_the_fold_curve_is_born_at_a_corner(trilinear_loci):
+    """A codimension-two point on the w_B corner curve: the corner's set-valued multipliers stop crossing
+    the unit circle where the smooth fold curve ends on it (the fold is born at the corner)."""
+    _, loci = trilinear_loci
+    corner = loci[SpecialPointKind.DISCONTINUOUS_FOLD]
+    births = [c for c in corner.special_points if set(c.kinds) == {"nonsmooth_no_crossing", "discontinuous_fold"}]
+    assert births
+    fold = loci[SpecialPointKind.FOLD]
+    assert "the corrector failed" in fold.stop_reason  # the fold curve ends: it does not go on past the corner
+    end = fold.points[np.argmin(fold.points[:, 1])]  # its low-forcing end
+    nearest = min(births, key=lambda c: np.hypot(*(np.array(c.values) - end)))
+    step = np.max(np.linalg.norm(np.diff(fold.points, axis=0), axis=1))
+    assert np.hypot(*(np.array(nearest.values) - end)) <= nearest.accuracy + step
+
+
+def test_grazing_curve_of_the_impact_oscillator_against_closed_form():
+    flow = Flow(impact_oscillator())
+    zeta = IMPACT["zeta"]
+    problem = ShootingProblem(flow, {"s": 3.0}, continuation_parameter="s")
+    w = IMPACT["omega"]
+    det = (1 - w**2) ** 2 + (2 * zeta * w) ** 2
+    x0 = np.array([(1 - w**2) / det, 2 * zeta * w**2 / det])
+    branch = continue_branch(problem, x0, 3.0, settings=ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(2.5, 3.0)),
+                             directions=(-1,))
+    (grazing,) = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.GRAZING]
+    locus = follow_locus(problem, grazing, "omega", (0.6, 0.95))
+    s, omega = locus.points.T
+    np.testing.assert_allclose(s, 1 / np.sqrt((1 - omega**2) ** 2 + (2 * zeta * omega) ** 2), rtol=0, atol=1e-9)
+    assert omega.min() == pytest.approx(0.6) and omega.max() == pytest.approx(0.95)
+    assert set(locus.kinds) == {"grazing"}  # an impact: unbounded all along, no codimension-two point
+
+
+def test_locus_command_line_contract(tmp_path, capsys):
+    status = cli.main([
+        "locus", "trilinear", "--kind", "nonsmooth_no_crossing", "--param", "omega", "--range", "0.6,1.6",
+        "--param2", "f0", "--range2", "0.05,0.4", "--json", "--no-progress", "--out", str(tmp_path),
+    ])
+    out, err = capsys.readouterr()
+    assert status == 0, err
+    record = json.loads(out)
+    assert set(record) == {"model", "kind", "param", "param2", "curves"}
+    assert (record["model"], record["kind"], record["param"], record["param2"]) == ("trilinear", "nonsmooth_no_crossing", "omega", "f0")
+    (curve,) = record["curves"]
+    assert set(curve) == {"points", "stop_reason", "special_points"}
+    w, f0 = np.array(curve["points"]).T
+    np.testing.assert_allclose(f0, XC * np.sqrt((K - M * w**2) ** 2 + (C * w) ** 2), rtol=0, atol=1e-9)
+    written = json.loads((tmp_path / "trilinear_nonsmooth_no_crossing_omega_f0_locus.json").read_text())
+    assert written == record
+    assert (tmp_path / "trilinear_nonsmooth_no_crossing_omega_f0_locus.png").exists()
+    # bad usage: exit 2, one line
+    assert cli.main(["locus", "trilinear", "--kind", "nope", "--param", "omega", "--range", "0.6,1.6",
+                     "--param2", "f0", "--range2", "0.05,0.4"]) == 2
+    assert "unknown kind 'nope'" in capsys.readouterr().err
