@@ -83,10 +83,11 @@ def _models_compiled_in_parallel() -> None:
     of one after another as the tests first use them (models already cached are skipped)."""
     from saltation.codegen import compile_in_parallel
     from saltation.models import bouncing_ball, chain, impact_oscillator
+    from saltation.paper import smoothed_block_on_belt
 
     compile_in_parallel(
         [trilinear(), block_on_belt(), oscillator_system(), filippov_system(), chain(1), chain(2), impact_oscillator(),
-         bouncing_ball()]
+         bouncing_ball(), smoothed_block_on_belt()]
     )
 
 

@@ -867,8 +867,12 @@ def cmd_paper(args: argparse.Namespace) -> int:
         close()
     written = paper.write(results, Path(args.out))
     print(_special_points_text(results.special_point_records()))
-    print(f"{len(written)} files written to {args.out}: figures fig3, fig4, fig6, fig7 (PNG and PDF), branch data "
-          "(JSON, CSV) and special_points.json")
+    if results.smoothing:
+        print()
+        print("the block-on-belt model smoothed (saltation.regularize), its stable branch followed in forward time:")
+        print(paper.smoothing_table(results.smoothing))
+    print(f"{len(written)} files written to {args.out}: figures fig3, fig4, fig6, fig7, fig8 (PNG and PDF), branch "
+          "data (JSON, CSV), special_points.json and smoothing_table.json")
     return 0
 
 

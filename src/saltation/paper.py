@@ -21,6 +21,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import json
+
 import numpy as np
 
 from . import io, plotting
@@ -32,6 +34,7 @@ from .errors import SaltationError
 from .floquet import multipliers_from_monodromy
 from .integrate import Flow
 from .models import block_on_belt, trilinear
+from .regularize import regularize
 from .shooting import EquilibriumProblem, ShootingProblem, find_periodic_orbit
 
 Progress = Callable[[str, int], None] | None
@@ -60,6 +63,45 @@ class PaperSettings:
     phase_plane_v_dr: float = 1.0
 
 
+#: Smoothing widths of the regularized block-on-belt model (below the stick band's eta = 1e-4, which the
+#: smoothing must resolve for a stick-slip cycle to exist at all).
+SMOOTHING_WIDTHS = (1e-5, 3e-6, 1e-6)
+
+
+@dataclass(frozen=True)
+class SmoothingRow:
+    """What forward continuation of the regularized block-on-belt model reaches, for one width.
+
+    Attributes
+    ----------
+    epsilon : float
+        Smoothing width (:func:`saltation.regularize.regularize`).
+    turning_point : float
+        The largest ``v_dr`` of the forward branch (where it turns, or stops).
+    points_beyond : int
+        Points of the forward branch past its turning point (on the smoothed unstable branch).
+    largest_multiplier : float
+        The largest ``|mu|`` the forward branch reaches.
+    stop_reason : str
+    unstable_multiplier : float
+        ``|mu|`` of the smoothed unstable cycle at ``v_dr = 1`` found by backward-time shooting
+        (``inf`` when its backward multiplier is below ``1e-13``: beyond double precision).
+    unstable_amplitude : float
+        Its amplitude, against the discontinuous model's infinitely unstable cycle.
+    """
+
+    epsilon: float
+    turning_point: float
+    points_beyond: int
+    largest_multiplier: float
+    stop_reason: str
+    unstable_multiplier: float
+    unstable_amplitude: float
+
+    def record(self) -> dict:
+        return {k: (v if isinstance(v, str) else (float(v) if np.isfinite(v) else "inf")) for k, v in self.__dict__.items()}
+
+
 @dataclass
 class PaperResults:
     """Everything :func:`compute` produces."""
@@ -67,6 +109,8 @@ class PaperResults:
     trilinear_branch: Branch
     block_on_belt: BifurcationDiagram
     phase_plane: dict[str, np.ndarray] = field(default_factory=dict)
+    smoothing: list[SmoothingRow] = field(default_factory=list)
+    smoothed_branches: list[Branch] = field(default_factory=list)
 
     def special_point_records(self) -> list[dict]:
         """Public records of every located special point (the contract of ``special_points.json``)."""
@@ -175,13 +219,76 @@ def phase_plane(v_dr: float = 1.0) -> dict[str, np.ndarray]:
     }
 
 
+def smoothed_block_on_belt():
+    """The block-on-belt model smoothed by :func:`saltation.regularize.regularize` (width a parameter)."""
+    return regularize(block_on_belt(), SMOOTHING_WIDTHS[0])
+
+
+def smoothing_study(
+    settings: PaperSettings = PaperSettings(), progress: Progress = None, widths: tuple[float, ...] = SMOOTHING_WIDTHS,
+    v_start: float = 0.8,
+) -> tuple[list[SmoothingRow], list[Branch]]:
+    """The paper's smoothing claim, shown: the regularized model's stable branch, followed in forward time.
+
+    For each width the branch from ``v_start`` upward turns near the fold of the discontinuous model;
+    past it the smoothed unstable cycle is so unstable (its multiplier grows without bound as the
+    width shrinks; by backward-time shooting: ``unstable_multiplier``) that forward continuation
+    stops within a few points of the turning point, or at it.
+    """
+    flow = Flow(smoothed_block_on_belt())
+    switch = Flow(block_on_belt())
+    unstable = find_periodic_orbit(switch, [1.0, -0.95], period=6.3, backward=True)  # the discontinuous model's
+    lo, hi = settings.v_dr_range
+    rows, branches = [], []
+    counter = _counter(progress, "smoothed block-on-belt")
+    for eps in widths:
+        values = {"v_dr": v_start, "epsilon": eps}
+        start = flow.run([0.0, v_start], 0.0, 60.0, flow.parameters(values))
+        orbit = find_periodic_orbit(flow, start.x1, parameters=values, period=6.5)
+        problem = ShootingProblem(flow, values, continuation_parameter="v_dr")
+        cset = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(v_start, hi), max_points=400)
+        branch = continue_branch(problem, problem.pack(orbit.state0, orbit.period), v_start, settings=cset,
+                                 directions=(1,), progress=counter, label=f"smoothed, epsilon = {eps:g}")
+        lam = branch.parameter
+        k = int(np.argmax(lam))
+        try:
+            smooth_unstable = find_periodic_orbit(flow, unstable.state0, parameters={"epsilon": eps},
+                                                  period=unstable.period, backward=True)
+            mu_u, amp_u = float(np.max(np.abs(smooth_unstable.multipliers))), smooth_unstable.amplitude
+        except SaltationError:
+            mu_u, amp_u = float("nan"), float("nan")
+        rows.append(SmoothingRow(
+            epsilon=eps, turning_point=float(lam[k]), points_beyond=len(branch) - 1 - k,
+            largest_multiplier=float(max(np.max(np.abs(pt.multipliers)) for pt in branch.points)),
+            stop_reason=branch.stop_reason.value, unstable_multiplier=mu_u, unstable_amplitude=amp_u,
+        ))
+        branches.append(branch)
+    return rows, branches
+
+
+def smoothing_table(rows: list[SmoothingRow], unstable_amplitude: float | None = None) -> str:
+    """A plain-text table of :func:`smoothing_study`."""
+    head = (f"{'epsilon':>8} {'turns at v_dr':>14} {'points past':>11} {'largest |mu| reached':>21} "
+            f"{'|mu| of unstable cycle at v_dr=1':>33} {'its amplitude':>14}")
+    lines = [head]
+    for r in rows:
+        lines.append(f"{r.epsilon:>8.0e} {r.turning_point:>14.8f} {r.points_beyond:>11d} {r.largest_multiplier:>21.4g} "
+                     f"{r.unstable_multiplier:>33.4g} {r.unstable_amplitude:>14.6f}")
+    if unstable_amplitude is not None:
+        lines.append(f"{'':>8} the discontinuous model's infinitely unstable cycle at v_dr=1 has amplitude {unstable_amplitude:.6f}")
+    return "\n".join(lines)
+
+
 def compute(settings: PaperSettings = PaperSettings(), progress: Progress = None) -> PaperResults:
-    """Compute the data of Figs. 3, 4, 6 and 7 (compiling both models at once on a cold cache)."""
-    compile_in_parallel([trilinear(), block_on_belt()])
+    """Compute the data of Figs. 3, 4, 6 and 7 and the smoothing study (compiling the models at once on a cold cache)."""
+    compile_in_parallel([trilinear(), block_on_belt(), smoothed_block_on_belt()])
+    rows, smoothed = smoothing_study(settings, progress)
     return PaperResults(
         trilinear_branch=trilinear_diagram(settings, progress),
         block_on_belt=block_on_belt_diagram(settings, progress),
         phase_plane=phase_plane(settings.phase_plane_v_dr),
+        smoothing=rows,
+        smoothed_branches=smoothed,
     )
 
 
@@ -212,6 +319,25 @@ def write(results: PaperResults, out: Path) -> list[Path]:
     np.savez(out / "fig6_phase_plane.npz", **{k: np.asarray(v) for k, v in pp.items()})
     written.append(out / "fig6_phase_plane.npz")
     written.append(io.save_special_points_json(results.special_point_records(), out / "special_points.json"))
+    if results.smoothing:
+        stable, unstable = results.block_on_belt.branches[:2]
+        fig8 = plotting.plot_response([stable, unstable], special_points=False)
+        ax = fig8.axes[0]
+        ax.plot([], [], "k-", label="stable (discontinuous model)")
+        ax.plot([], [], "k-.", label="infinitely unstable (backward time)")
+        for k, (row, br) in enumerate(zip(results.smoothing, results.smoothed_branches)):
+            ax.plot(br.parameter, br.amplitude, "-", color=f"C{k}", lw=1.0, label=f"smoothed, epsilon = {row.epsilon:g}")
+            ax.plot(br.parameter[-1], br.amplitude[-1], "x", color=f"C{k}")
+        ax.set_xlim(0.8, 1.12)
+        ax.set_ylim(1.9, 2.45)
+        ax.legend(loc="lower left", fontsize=7)
+        ax.set_title("Smoothed models follow the stable branch and stop at its fold (x: last point);\n"
+                     "the infinitely unstable branch is found by backward shooting of the discontinuous model",
+                     fontsize=8)
+        written += plotting.save_figure(fig8, out / "fig8_block_on_belt_smoothed", dpi=150)
+        path = out / "smoothing_table.json"
+        path.write_text(json.dumps([r.record() for r in results.smoothing], indent=1))
+        written.append(path)
     return written
 
 
@@ -250,6 +376,8 @@ __all__ = [
     "block_on_belt_diagram",
     "compute",
     "phase_plane",
+    "smoothing_study",
+    "smoothing_table",
     "special_point_table",
     "trilinear_diagram",
     "write",
