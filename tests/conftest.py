@@ -82,12 +82,12 @@ def _models_compiled_in_parallel() -> None:
     """On an empty kernel cache, compile the models most tests share at once, one process each, instead
     of one after another as the tests first use them (models already cached are skipped)."""
     from saltation.codegen import compile_in_parallel
-    from saltation.models import bouncing_ball, chain, impact_oscillator
+    from saltation.models import bouncing_ball, chain, friction_oscillator, impact_oscillator
     from saltation.paper import smoothed_block_on_belt
 
     compile_in_parallel(
         [trilinear(), block_on_belt(), oscillator_system(), filippov_system(), chain(1), chain(2), impact_oscillator(),
-         bouncing_ball(), smoothed_block_on_belt()]
+         bouncing_ball(), smoothed_block_on_belt(), friction_oscillator()]
     )
 
 

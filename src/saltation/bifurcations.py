@@ -30,6 +30,8 @@ from .boundary import one_sided_limits, saltation_at_corner, zero_length_segment
 from .errors import SaltationError
 from .floquet import multipliers_from_monodromy, set_valued_multipliers
 from .grazing import locate_grazing
+from .integrate import EventKind
+from .sliding import crossing_sliding_change, locate_crossing_sliding
 
 
 @dataclass(frozen=True)
@@ -271,9 +273,10 @@ class SpecialPointDetector:
             )
         limits = self._limits(lo, hi, far)
         if limits is None:
-            grazing = grazing_point(self.problem, lo, hi, index)
-            if grazing is not None:
-                return grazing
+            for locate in (grazing_point, crossing_sliding_point):
+                found = locate(self.problem, lo, hi, index)
+                if found is not None:
+                    return found
             m_lo, m_hi = lo.summary.monodromy, hi.summary.monodromy
             mu_lo, mu_hi = lo.summary.multipliers, hi.summary.multipliers
             how, mu_accuracy, at = "nearest_orbits", _sqrt_extrapolated_error(lo, hi, far), None
@@ -362,6 +365,58 @@ def special_point_between(
     )
 
 
+def crossing_sliding_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoint | None:
+    """The record of a crossing-sliding between two branch points, located by its defining system.
+
+    One side starts sliding as it reaches the surface; the other first crosses
+    into the far mode ``B`` and comes back to slide.  The point is where the
+    orbit reaches the surface exactly where ``f_B`` is tangent to it
+    (:func:`saltation.sliding.locate_crossing_sliding`).  Its one-sided
+    multipliers are those of the two bracketing orbits (the segment in ``B``
+    shrinks linearly), and their difference is the stated accuracy bound.
+    """
+    flow = getattr(problem, "flow", None)
+    sides = _sides(lo, hi)
+    if flow is None or sides is None or problem.system.is_autonomous or problem.backward:
+        return None
+    lo_fewer, without, with_, traj_wo, traj_w = sides
+    change = crossing_sliding_change(traj_wo, traj_w)
+    if change is None:
+        return None
+    i, crossing = change
+    try:
+        found = locate_crossing_sliding(
+            flow, without.u[: problem.system.n], without.lam, problem.lam_name, i, crossing.mode_to,
+            parameters=problem.parameters_at(without.lam), t0=problem.t0, tolerances=problem.tolerances,
+        )
+    except SaltationError:
+        return None
+    width = abs(hi.lam - lo.lam)
+    if abs(found.parameter - 0.5 * (lo.lam + hi.lam)) > width + 1e-9 * (1.0 + abs(found.parameter)):
+        return None
+    traj = found.trajectory
+    return SpecialPoint(
+        kind=SpecialPointKind.CROSSING_SLIDING,
+        parameter=found.parameter,
+        bracket=(found.parameter - found.accuracy, found.parameter + found.accuracy),
+        accuracy=found.accuracy,
+        index=index,
+        state=found.state0,
+        period=problem.period_of(found.state0, found.parameter),
+        amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
+        multipliers_minus=lo.summary.multipliers,
+        multipliers_plus=hi.summary.multipliers,
+        monodromy_minus=lo.summary.monodromy,
+        monodromy_plus=hi.summary.monodromy,
+        events_minus=lo.summary.events,
+        events_plus=hi.summary.events,
+        note=(f"the orbit reaches surface {crossing.surface!r} at t = {found.t_hit:.10g} exactly where the field of "
+              f"{crossing.mode_to!r} is tangent to it: the boundary of the sliding region"),
+        multipliers_accuracy=float(np.linalg.norm(hi.summary.monodromy - lo.summary.monodromy)),
+        limits="nearest_orbits",
+    )
+
+
 def _sides(lo: Solution, hi: Solution):
     """``(lo has fewer events, side without the extra events, side with them, their trajectories)``, or None."""
     lo_fewer = len(lo.summary.events) <= len(hi.summary.events)
@@ -407,11 +462,23 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     if abs(orbit.parameter - 0.5 * (lo.lam + hi.lam)) > width + 1e-9 * (1.0 + abs(orbit.parameter)):
         return None  # a grazing elsewhere: not the change between these points
     p = problem.parameters_at(orbit.parameter)
-    transitions = [traj_w.events[i].transition for i in groups[0]]
-    P = saltation_at_corner(problem.system, transitions, orbit.t_graze, orbit.x_graze, p)
+    group = [traj_w.events[i] for i in groups[0]]
+    sliding = any(e.kind != EventKind.TRANSITION for e in group)
+    P = None if sliding else saltation_at_corner(problem.system, [e.transition for e in group], orbit.t_graze, orbit.x_graze, p)
     m_without = orbit.monodromy
     mu_without = multipliers_from_monodromy(m_without)
-    if P is not None and np.linalg.norm(P) < 1e8:
+    if sliding:
+        # the orbit grazes the boundary of a sliding region: the sliding segment's saltation matrices are
+        # 0/0 at the tangency; those of the nearest orbit with the segment stand in for their limit
+        P = np.eye(problem.system.n)
+        for e in group:
+            P = e.saltation @ P
+        phi = orbit.fundamental_to_graze
+        m_with = m_without @ np.linalg.solve(phi, P @ phi)
+        mu_with = multipliers_from_monodromy(m_with)
+        bounded = ("a sliding segment: the limit uses the saltation matrices of the nearest orbit that slides "
+                   f"(multipliers known to about {np.linalg.norm(with_.summary.monodromy - m_with):.1e})")
+    elif P is not None and np.linalg.norm(P) < 1e8:
         phi = orbit.fundamental_to_graze
         m_with = m_without @ np.linalg.solve(phi, P @ phi)
         mu_with = multipliers_from_monodromy(m_with)
@@ -429,7 +496,7 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     mu_lo, mu_hi = (mu_without, mu_with) if lo_fewer else (mu_with, mu_without)
     traj = orbit.trajectory
     return SpecialPoint(
-        kind=SpecialPointKind.GRAZING,
+        kind=SpecialPointKind.GRAZING_SLIDING if sliding else SpecialPointKind.GRAZING,
         parameter=orbit.parameter,
         bracket=(orbit.parameter - orbit.accuracy, orbit.parameter + orbit.accuracy),
         accuracy=orbit.accuracy,
@@ -446,8 +513,12 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
         note=f"grazing of surface {surface!r} at t = {orbit.t_graze:.10g}; the side with the crossing is '{side}', {bounded}",
         # the grazing orbit is exact to the located parameter; the finite multipliers of an unbounded side
         # are those of the nearest orbit, of unknown accuracy
-        multipliers_accuracy=(orbit.accuracy * float(np.linalg.norm(m_without)) + 1e-13) if m_with is not None else float("nan"),
-        limits="grazing",
+        multipliers_accuracy=(
+            float("nan") if m_with is None
+            else float(np.linalg.norm(with_.summary.monodromy - m_with)) if sliding
+            else orbit.accuracy * float(np.linalg.norm(m_without)) + 1e-13
+        ),
+        limits="nearest_saltation" if sliding else "grazing",
     )
 
 

@@ -75,8 +75,9 @@ def zero_length_segments(
     Every event of ``without`` must appear in ``with_`` with the same
     transition at nearly the same time (within ``time_tol``); the others form
     groups of consecutive events, each an excursion that leaves a mode and
-    returns to it.  Returns the groups as index lists into ``with_``, or None
-    when the two sequences do not differ that way.
+    returns to it (a sliding motion started and left counts: grazing-sliding).
+    Returns the groups as index lists into ``with_``, or None when the two
+    sequences do not differ that way.
     """
     extra: list[int] = []
     j = 0
@@ -96,7 +97,7 @@ def zero_length_segments(
             groups.append([i])
     for g in groups:
         first, last = with_[g[0]], with_[g[-1]]
-        if any(with_[i].kind != EventKind.TRANSITION for i in g) or first.mode_from != last.mode_to:
+        if first.mode_from != last.mode_to or first.kind == EventKind.SLIDING_END:
             return None
     return groups
 
@@ -188,7 +189,8 @@ def one_sided_limits(
         phi = traj.monodromy
         if np.linalg.cond(phi) > 1e10:
             return None
-        P = saltation_at_corner(system, [ev_w[i].transition for i in g], t_star, traj.x1, p)
+        transitions_only = all(ev_w[i].kind == EventKind.TRANSITION for i in g)
+        P = saltation_at_corner(system, [ev_w[i].transition for i in g], t_star, traj.x1, p) if transitions_only else None
         if P is None:
             exact = False
             P = np.eye(system.n)

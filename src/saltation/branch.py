@@ -22,6 +22,8 @@ class SpecialPointKind(enum.Enum):
     DISCONTINUOUS_NEIMARK_SACKER = "discontinuous_neimark_sacker"
     NONSMOOTH_NO_CROSSING = "nonsmooth_no_crossing"
     GRAZING = "grazing"
+    GRAZING_SLIDING = "grazing_sliding"
+    CROSSING_SLIDING = "crossing_sliding"
 
     @property
     def is_nonsmooth(self) -> bool:
@@ -35,6 +37,8 @@ NONSMOOTH_KINDS = frozenset(
         SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER,
         SpecialPointKind.NONSMOOTH_NO_CROSSING,
         SpecialPointKind.GRAZING,
+        SpecialPointKind.GRAZING_SLIDING,
+        SpecialPointKind.CROSSING_SLIDING,
     }
 )
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from .errors import SaltationError
 from .model import PiecewiseSystem
-from .models import block_on_belt, bouncing_ball, impact_oscillator, trilinear
+from .models import block_on_belt, bouncing_ball, friction_oscillator, impact_oscillator, trilinear
 
 PROG = "saltation"
 
@@ -36,12 +36,14 @@ MODELS: dict[str, Callable[..., PiecewiseSystem]] = {
     "block_on_belt": block_on_belt,
     "impact_oscillator": impact_oscillator,
     "bouncing_ball": bouncing_ball,
+    "friction_oscillator": friction_oscillator,
 }
 
 #: One-line summaries of the shipped models (for --help).
 MODEL_SUMMARIES: dict[str, str] = {
     "trilinear": "forced mass on a spring and damper between two compliant supports (forcing f0 sin(omega t))",
     "block_on_belt": "stick-slip oscillator: a mass on a spring and damper riding a belt at v_dr",
+    "friction_oscillator": "forced oscillator with Coulomb friction F on a belt moving at v_b (a Filippov system: sticking is sliding)",
     "bouncing_ball": "a ball bouncing on a table that vibrates as A sin(omega t) (gravity g, restitution e)",
     "impact_oscillator": "forced damped oscillator x'' + 2 zeta x' + x = cos(omega t) against a rigid stop at x = s (restitution r)",
 }

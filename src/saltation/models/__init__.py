@@ -3,7 +3,8 @@
 from .block_on_belt import WRegion, block_on_belt
 from .bouncing_ball import bouncing_ball
 from .chain import chain
+from .friction_oscillator import friction_oscillator
 from .impact_oscillator import impact_oscillator
 from .trilinear import trilinear
 
-__all__ = ["WRegion", "block_on_belt", "bouncing_ball", "chain", "impact_oscillator", "trilinear"]
+__all__ = ["WRegion", "block_on_belt", "bouncing_ball", "chain", "friction_oscillator", "impact_oscillator", "trilinear"]
