@@ -141,3 +141,20 @@ def test_branch_switching_rejects_other_points(ball):
         follow_period_doubled_branch(problem, replace(pd, kind=SpecialPointKind.FOLD))
     with pytest.raises(ModelError, match="positive integer"):
         ShootingProblem(problem.flow, periods=0)
+
+
+def test_period_doubling_curve_against_closed_form(ball):
+    """The period doubling continued in (A, e): Gamma = A w^2 / g at the doubling is
+    sqrt((pi (1 - e) / (1 + e))^2 + (2 (1 + e^2) / (1 + e)^2)^2) (Holmes 1982; from the closed-form
+    impact map's trace, tr J = -(1 + det J), det J = e^2)."""
+    from saltation.loci import follow_locus
+
+    _, problem, branch = ball
+    (pd,) = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.PERIOD_DOUBLING]
+    locus = follow_locus(problem, pd, "e", (0.3, 0.7))
+    A, e = locus.points.T
+    assert e.min() == pytest.approx(0.3) and e.max() == pytest.approx(0.7)
+    reference = G / W**2 * np.sqrt((np.pi * (1 - e) / (1 + e)) ** 2 + (2 * (1 + e**2) / (1 + e) ** 2) ** 2)
+    # the bordered test function's derivatives by central differences (h = 1e-6): Newton still converges
+    # to the residual tolerance 1e-10, so the curve is exact to about that
+    np.testing.assert_allclose(A, reference, rtol=0, atol=1e-9)
