@@ -71,6 +71,8 @@ TARGETS = {
     "event_time_error": 1e-12,
     "chain_exponent": 3.0,
     "sweep_s": 1.0,
+    "corner_curve_s_per_200_points": 1.0,
+    "fold_curve_s_per_200_points": 1.0,
 }
 
 
@@ -315,7 +317,44 @@ def bench_sweep(quick: bool) -> dict:
     return out
 
 
+def bench_loci(quick: bool) -> dict:
+    """Locating special points (in period maps: the time of one located point over that of one period
+    map with its monodromy) and two-parameter curves (the trilinear corner and fold curves in (omega, f0),
+    scaled to 200 points)."""
+    from saltation.continuation import ContinuationSettings, continue_branch
+    from saltation.grazing import locate_grazing
+    from saltation.loci import follow_locus
+    from saltation.models import impact_oscillator
+    from saltation.paper import linear_response_state
+    from saltation.shooting import ShootingProblem
+
+    flow = Flow(trilinear())
+    p = flow.parameters({"omega": 1.0})
+    x0 = find_periodic_orbit(flow, flow.run([0.0, 0.0], 0.0, 100 * 2 * math.pi, p).x1, parameters={"omega": 1.0}).state0
+    t_map = median_time(lambda: flow.run(x0, 0.0, 2 * math.pi, p, variational=True, parameter=7), 50 if quick else 500)
+    problem = ShootingProblem(flow, {"omega": 0.6}, continuation_parameter="omega")
+    branch = continue_branch(problem, linear_response_state(dict(flow.system.defaults, omega=0.6)), 0.6,
+                             settings=ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(0.6, 1.6)), directions=(1,))
+    corner = next(sp for sp in branch.special_points if sp.kind.value == "discontinuous_fold")
+    fold = next(sp for sp in branch.special_points if sp.kind.value == "fold")
+    out = {"period_map_ms": t_map * 1e3}
+    for name, sp in (("corner", corner), ("fold", fold)):
+        settings = ContinuationSettings(ds=0.002, ds_max=0.002, bounds=(0.05, 0.4), max_points=200)
+        t, locus = timed_runs(lambda sp=sp: follow_locus(problem, sp, "f0", (0.05, 0.4), settings=settings), quick)
+        out[f"{name}_curve_points"] = len(locus.points)
+        out[f"{name}_curve_s_per_200_points"] = t * 200 / len(locus.points)
+    impact = Flow(impact_oscillator())
+    w = impact.system.defaults["omega"]
+    det = (1 - w**2) ** 2 + (0.1 * w) ** 2
+    guess = np.array([(1 - w**2) / det, 0.1 * w * w / det])
+    t_graze = median_time(lambda: locate_grazing(impact, guess, 2.9, "s", 0, 0.3, parameters={"s": 2.9}), 5 if quick else 30)
+    out["grazing_location_ms"] = t_graze * 1e3
+    out["grazing_location_in_period_maps"] = t_graze / t_map
+    return out
+
+
 BENCHMARKS = {
+    "loci": bench_loci,
     "orbit": bench_orbit,
     "fig3": bench_fig3,
     "fig7": bench_fig7,
@@ -391,6 +430,10 @@ def table(results: dict) -> str:
         ("chain growth exponent, period map", "chain_exponent_period_map", None, None),
         ("sweep 161 x 200 periods (s)", "sweep_s", "sweep_scipy_s", "sweep_ratio_vs_scipy"),
         ("sweep, one worker (s)", "sweep_1_worker_s", None, None),
+        ("one period map with monodromy (ms)", "period_map_ms", None, None),
+        ("grazing located (in period maps)", "grazing_location_in_period_maps", None, None),
+        ("corner curve, 200 points (s)", "corner_curve_s_per_200_points", None, None),
+        ("fold curve, 200 points (s)", "fold_curve_s_per_200_points", None, None),
     ]
     lines = [f"{'benchmark':38s} {'saltation':>11s} {'scipy':>11s} {'ratio':>8s}  target"]
     for label, k, kb, kr in rows:

@@ -25,7 +25,7 @@ and located between two curve points (its ``accuracy`` is their distance).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -169,6 +169,7 @@ class GrazingCurve(_CurveProblem):
         self.transition = int(transition)
         self.t_guess = float(t_guess)
         self.others = [(int(k), float(t)) for k, t in others]  # touched at the same time (by symmetry): passed too
+        self.kinds: list[str] = []  # the corner's kind at every accepted point
         self.t_start = float(t_guess)  # the others' touches keep their offsets from the first one's, in periods
         self.period_start = self.system.forcing_period(self.p)
         self.t0 = float(t0)
@@ -193,14 +194,15 @@ class GrazingCurve(_CurveProblem):
         return self._summary(u, gs.monodromy, gs.period, gs.trajectory)
 
     def accept(self, u: np.ndarray, lam: float) -> None:
-        if self._last is not None:
+        if self._last is not None:  # the accepted point's own evaluation (the corrector's last)
             self.t_guess = self._last.t_graze
+            self.kinds.append(self.corner_kind(u, lam, self.t_guess, gs=self._last))
 
     def snapshot(self) -> dict:
-        return {"t_guess": self.t_guess, "_last": None}
+        return {"t_guess": self.t_guess, "_last": None, "kinds": []}
 
-    def corner_kind(self, u: np.ndarray, lam: float, t_guess: float) -> tuple[str, float]:
-        """The kind of the non-smooth point at a curve point, and its instant of tangency.
+    def corner_kind(self, u: np.ndarray, lam: float, t_guess: float, *, gs=None) -> str:
+        """The kind of the non-smooth point at a curve point (``gs``: its grazing system, if evaluated).
 
         The set-valued multipliers between the grazing orbit's monodromy and the
         same with the excursion's saltation matrices inserted, classified as on a
@@ -209,8 +211,9 @@ class GrazingCurve(_CurveProblem):
         n = self.system.n
         p = self.parameters_at(u, lam)
         disabled = [self.transition] + [k for k, _ in self.others]
-        gs = grazing_system(self.flow, u[:n], p, self.transition, t_guess, (self.j1,), t0=self.t0,
-                            tolerances=self.tolerances, also_disabled=disabled[1:])
+        if gs is None:
+            gs = grazing_system(self.flow, u[:n], p, self.transition, t_guess, (self.j1,), t0=self.t0,
+                                tolerances=self.tolerances, also_disabled=disabled[1:])
         product = np.eye(n)
         stretch = gs.period / self.period_start
         touches = [(self.transition, gs.t_graze)] + [(k, gs.t_graze + (t - self.t_start) * stretch) for k, t in self.others]
@@ -224,10 +227,10 @@ class GrazingCurve(_CurveProblem):
             to_k = self.flow.run(u[:n], self.t0, t_k, p, variational=True, disabled=disabled, tolerances=self.tolerances)
             P = saltation_at_corner(self.system, self._excursion(k, t_k, to_k.x1, p), t_k, to_k.x1, p)
             if P is None or not np.linalg.norm(P) < 1e8:
-                return SpecialPointKind.GRAZING.value, gs.t_graze
+                return SpecialPointKind.GRAZING.value
             phi = to_k.monodromy
             product = np.linalg.solve(phi, P @ phi) @ product
-        return classify_nonsmooth(gs.monodromy, gs.monodromy @ product).kind.value, gs.t_graze
+        return classify_nonsmooth(gs.monodromy, gs.monodromy @ product).kind.value
 
     def _excursion(self, transition: int, t: float, x: np.ndarray, p: np.ndarray) -> list[int]:
         """A grazed transition, then the exit back that holds at the corner (a surface through it), if any."""
@@ -313,20 +316,18 @@ def follow_locus(
                                                         tolerances=problem.tolerances)
         curve = GrazingCurve(problem.flow, p, problem.lam_name, second, transition, t_g, t0=problem.t0,
                              tolerances=problem.tolerances, others=others)
-        classify = curve.corner_kind
+        classify = True
     elif point.kind in (SpecialPointKind.FOLD, SpecialPointKind.PERIOD_DOUBLING):
         curve = MultiplierCurve(problem, p, second, mu=1.0 if point.kind is SpecialPointKind.FOLD else -1.0)
-        classify = None
+        classify = False
     else:
         raise ModelError(f"no two-parameter continuation for special points of kind {point.kind.value}")
     settings = settings or ContinuationSettings(bounds=bounds)
-    if tuple(settings.bounds) != tuple(bounds):
-        from dataclasses import replace
-
-        settings = replace(settings, bounds=bounds)
+    # the curve's own turning points and the multipliers of its orbits are not special points of the curve
+    settings = replace(settings, bounds=bounds, detect=False)
     u0 = np.append(np.asarray(point.state, dtype=float), point.parameter)
     lam0 = float(p[curve.lam_index])
-    runs, reasons = [], []
+    runs, reasons, kinds_by_run = [], [], []
     start = curve.snapshot()
     for direction in (1, -1):
         curve.restore(start)  # each direction starts from the special point's own guesses
@@ -335,20 +336,14 @@ def follow_locus(
             if progress is not None:
                 progress(pt)
         runs.append([sol.z.copy() for sol in cont.solutions])
+        kinds_by_run.append(list(getattr(curve, "kinds", [])))
         reasons.append(f"{'increasing' if direction > 0 else 'decreasing'} {second}: {cont.branch.stop_reason.value}")
     zs = list(reversed(runs[1]))[:-1] + runs[0]
     n = problem.system.n
     points = np.array([[z[n], z[n + 1]] for z in zs])
     locus = Locus(kind=point.kind, param=problem.lam_name, param2=second, points=points,
                   states=np.array([z[:n] for z in zs]), stop_reason="; ".join(reasons))
-    if classify is not None:
-        kinds_by_run = []
-        for run in runs:  # along each run from the start, each tangency time guessed by the one before
-            t_g, kinds = start["t_guess"], []
-            for z in run:
-                kind, t_g = classify(z[: n + 1], z[n + 1], t_g)
-                kinds.append(kind)
-            kinds_by_run.append(kinds)
+    if classify:
         locus.kinds = list(reversed(kinds_by_run[1]))[:-1] + kinds_by_run[0]
         for a in range(len(zs) - 1):
             if locus.kinds[a] != locus.kinds[a + 1]:
