@@ -26,7 +26,7 @@ import json
 import numpy as np
 
 from . import io, plotting
-from .branch import Branch, SpecialPoint
+from .branch import Branch
 from .codegen import compile_in_parallel
 from .continuation import Continuation, ContinuationSettings, continue_branch
 from .diagram import BifurcationDiagram, follow_through_discontinuous_fold
