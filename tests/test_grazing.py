@@ -20,7 +20,8 @@ from scipy.optimize import brentq, fsolve
 from saltation import Flow
 from saltation.branch import SpecialPointKind
 from saltation.continuation import ContinuationSettings, continue_branch
-from saltation.grazing import locate_grazing, growth_exponent
+from saltation.errors import ModelError
+from saltation.grazing import growth_exponent, locate_grazing
 from saltation.models import impact_oscillator
 from saltation.models.impact_oscillator import DEFAULTS
 from saltation.shooting import ShootingProblem, find_periodic_orbit
@@ -217,3 +218,34 @@ def test_impacting_fixed_points_near_grazing_grow_like_one_over_distance(impact_
         distances.append(S_STAR - s)
         magnitudes.append(np.abs(orbit.multipliers).max())
     assert growth_exponent(np.array(distances), np.array(magnitudes)) == pytest.approx(-1.0, abs=0.02)
+
+
+def test_grazing_of_an_autonomous_limit_cycle():
+    """r' = r (1 - r^2), theta' = 1 in Cartesian form: the unit circle, period 2 pi, multipliers 1 and
+    exp(-4 pi). A soft wall beyond x = s (an extra force -k (x - s), continuous at the wall): the cycle
+    grazes it at s = 1, located with the period as an unknown and a phase condition; the field is
+    continuous, so the saltation matrices are the identity and both one-sided limits are the cycle's."""
+    from saltation import Crossing, Mode, PiecewiseSystem, Transition
+
+    field = ["x*(1 - x**2 - y**2) - y", "y*(1 - x**2 - y**2) + x"]
+    system = PiecewiseSystem(
+        name="test_circle_with_soft_wall", states=["x", "y"], parameters={"s": 1.3, "k": 3.0},
+        modes=[Mode("beyond", [field[0] + " - k*(x - s)", field[1]], domain=["x - s > 0"]), Mode("inside", field)],
+        surfaces={"wall": "x - s"},
+        transitions=[Transition("inside", "wall", Crossing.RISING, "beyond"),
+                     Transition("beyond", "wall", Crossing.FALLING, "inside")],
+    )
+    flow = Flow(system)
+    problem = ShootingProblem(flow, {"s": 1.3}, continuation_parameter="s")
+    branch = continue_branch(problem, problem.pack([0.0, -1.0], 2 * np.pi), 1.3,
+                             settings=ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(0.8, 1.3)), directions=(-1,))
+    (g,) = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.GRAZING]
+    # DOP853 (a nonlinear field) at the location's rtol 1e-12: the stated accuracy includes that error
+    assert abs(g.parameter - 1.0) <= g.accuracy < 1e-10
+    assert g.period == pytest.approx(2 * np.pi, abs=1e-9)
+    for side in (g.multipliers_minus, g.multipliers_plus):  # the monodromy from DOP853 at rtol 1e-12
+        np.testing.assert_allclose(np.sort(np.abs(side)), [np.exp(-4 * np.pi), 1.0], rtol=1e-6, atol=1e-9)
+    assert "bounded" in g.note
+    # a locate_grazing without a period guess for an autonomous model is an error that says so
+    with pytest.raises(ModelError, match="give the period guess"):
+        locate_grazing(flow, [0.0, -1.0], 1.2, "s", 0, np.pi / 2)

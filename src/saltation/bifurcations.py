@@ -439,11 +439,11 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     unbounded otherwise (an impact: ``S = O(1/v)``): the largest multiplier
     there is reported as ``inf``, the others are those of the nearest orbit.
     Returns None when the change is not a grazing (or the problem is not a
-    forward-time shooting problem of a forced model).
+    forward-time shooting problem).
     """
     flow = getattr(problem, "flow", None)
     sides = _sides(lo, hi)
-    if flow is None or sides is None or problem.system.is_autonomous or problem.backward:
+    if flow is None or sides is None or problem.backward:
         return None
     lo_fewer, without, with_, traj_wo, traj_w = sides
     span = abs(traj_wo.t1 - traj_wo.t0)
@@ -455,6 +455,7 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
         orbit = locate_grazing(
             flow, without.u[: problem.system.n], without.lam, problem.lam_name, first.transition, first.t,
             parameters=problem.parameters_at(without.lam), t0=problem.t0, tolerances=problem.tolerances,
+            period=problem.period_of(without.u, without.lam) if problem.system.is_autonomous else None,
         )
     except SaltationError:
         return None

@@ -9,7 +9,8 @@ grazing (Nordmark's square-root map: the saltation matrix of an impact is
 ``O(1/v)`` in the impact velocity ``v ~ sqrt(d)``), so no convex combination
 of two finite matrices describes the jump of the multipliers.
 
-The defining system, for a forced system with ``z = (x0, lam)``:
+The defining system, for a forced system with ``z = (x0, lam)`` (an
+autonomous one adds the period to the unknowns and a phase condition):
 
 * periodicity ``x(t0 + T; x0, lam) - x0 = 0`` (``n`` equations), of the
   *virtual* orbit that passes the grazed surface as if it were not there
@@ -25,13 +26,21 @@ Jacobians and converges quadratically.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import brentq
 
 from .errors import ConvergenceError, ModelError
 from .integrate import Flow, Trajectory
+
+
+def location_tolerances(flow: Flow, tolerances=None):
+    """The integration tolerances of a special point's defining system: those given, at most
+    ``rtol = 1e-12``, ``atol = 1e-14`` (a location costs a few tens of period maps; tight tolerances keep
+    the integration error below the location's target where DOP853 steps)."""
+    tol = tolerances or flow.tolerances
+    return replace(tol, rtol=min(tol.rtol, 1e-12), atol=min(tol.atol, 1e-14))
 
 
 @dataclass(frozen=True)
@@ -131,31 +140,35 @@ class GrazingSystem:
     monodromy: np.ndarray
     fundamental_to_graze: np.ndarray
     trajectory: Trajectory
+    jac_period: np.ndarray
 
 
 def grazing_system(
     flow: Flow, x0: np.ndarray, p: np.ndarray, transition: int, t_guess: float, params: Sequence[int], *,
     t0: float = 0.0, tolerances=None, history: list[float] | None = None, also_disabled: Sequence[int] = (),
+    period: float | None = None,
 ) -> GrazingSystem:
-    """Evaluate the defining system of a grazing of a forced orbit (see the module docstring).
+    """Evaluate the defining system of a grazing of a periodic orbit (see the module docstring).
 
     ``also_disabled``: further transitions the virtual orbit passes (surfaces
     it touches at the same time, such as the other support of a symmetric orbit).
+    ``period``: the period of an autonomous orbit (an unknown of its defining
+    system, whose column ``d residual / dT = (f(x(T)), 0)`` is ``jac_period``).
 
     Raises
     ------
     ModelError
-        For an autonomous model (its grazing needs the period as an unknown: not covered yet).
+        For an autonomous model without ``period``.
     ConvergenceError
         If no tangency is found near ``t_guess``.
     """
     system = flow.system
-    if system.is_autonomous:
-        raise ModelError(f"locating a grazing is implemented for forced models; {system.name!r} is autonomous")
+    if system.is_autonomous and period is None:
+        raise ModelError(f"model {system.name!r} is autonomous: its grazing system needs the period")
     surface = system.surface_index(system.transitions[transition].surface)
     n = system.n
     disabled = (int(transition), *map(int, also_disabled))
-    T = system.forcing_period(p)
+    T = float(period) if system.is_autonomous else system.forcing_period(p)
     runs = [flow.run(x0, t0, t0 + T, p, variational=True, parameter=j, disabled=disabled, tolerances=tolerances)
             for j in params]
     full = runs[0]
@@ -176,6 +189,7 @@ def grazing_system(
     return GrazingSystem(
         residual=residual, jac_x=jac_x, jac_p=jac_p, t_graze=t_g, x_graze=part.x1, period=T,
         monodromy=full.monodromy, fundamental_to_graze=part.monodromy, trajectory=full,
+        jac_period=np.append(full.velocity_end, 0.0),
     )
 
 
@@ -192,8 +206,9 @@ def locate_grazing(
     tol: float = 1e-12,
     max_iter: int = 20,
     tolerances=None,
+    period: float | None = None,
 ) -> GrazingOrbit:
-    """Locate a grazing orbit of a forced system by Newton's method on its defining system.
+    """Locate a grazing periodic orbit by Newton's method on its defining system.
 
     Parameters
     ----------
@@ -208,39 +223,65 @@ def locate_grazing(
         The transition whose surface the orbit grazes (disabled along the way).
     t_guess : float
         Guess of the instant of tangency.
+    period : float, optional
+        Autonomous models: the guess of the period, then an unknown too, with
+        the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` anchored at the guess.
 
     Raises
     ------
     ConvergenceError
         If Newton's method does not converge (with the residual history).
     ModelError
-        For an autonomous model (its grazing needs the period as an unknown: not covered yet).
+        For an autonomous model without a period guess.
     """
     system = flow.system
+    tolerances = location_tolerances(flow, tolerances)
     j = system.parameter_index(lam_name)
     p = flow.parameters(parameters).copy()
     n = system.n
-    z = np.append(np.asarray(x0, dtype=float), float(lam))
+    autonomous = system.is_autonomous
+    if autonomous and period is None:
+        raise ModelError(f"model {system.name!r} is autonomous: give the period guess to locate its grazing")
+    x_ref = np.asarray(x0, dtype=float).copy()
+    p[j] = float(lam)
+    if autonomous:
+        f_ref = flow.vector_field(flow.initial_mode(x_ref, p, t0), t0, x_ref, p)
+        f_ref = f_ref / np.linalg.norm(f_ref)
+        z = np.concatenate([x_ref, [float(period), float(lam)]])
+    else:
+        z = np.append(x_ref, float(lam))
     history: list[float] = []
     t_g = float(t_guess)
     for it in range(max_iter + 1):
         p[j] = z[-1]
-        gs = grazing_system(flow, z[:n], p, transition, t_g, (j,), t0=t0, tolerances=tolerances, history=history)
+        gs = grazing_system(flow, z[:n], p, transition, t_g, (j,), t0=t0, tolerances=tolerances, history=history,
+                            period=z[n] if autonomous else None)
         t_g = gs.t_graze
-        J = np.column_stack([gs.jac_x, gs.jac_p[:, 0]])
-        rn = float(np.linalg.norm(gs.residual))
+        if autonomous:  # unknowns (x0, T, lam): the phase condition closes the system
+            J = np.zeros((n + 2, n + 2))
+            J[: n + 1, :n] = gs.jac_x
+            J[: n + 1, n] = gs.jac_period
+            J[: n + 1, n + 1] = gs.jac_p[:, 0]
+            J[n + 1, :n] = f_ref
+            residual = np.append(gs.residual, f_ref @ (z[:n] - x_ref))
+        else:
+            J = np.column_stack([gs.jac_x, gs.jac_p[:, 0]])
+            residual = gs.residual
+        rn = float(np.linalg.norm(residual))
         history.append(rn)
         try:
-            dz = np.linalg.solve(J, -gs.residual)
+            dz = np.linalg.solve(J, -residual)
         except np.linalg.LinAlgError:
             raise ConvergenceError("grazing: singular Jacobian of the defining system", history) from None
         if rn <= tol * (1.0 + float(np.linalg.norm(z))):
-            # the Newton correction that would follow estimates the error that is left
+            # the Newton correction that would follow, plus the integration error carried to the parameter
+            # through the inverse Jacobian, estimate the error that is left
+            carried = float(np.abs(np.linalg.inv(J)[-1]).sum()) * flow.integration_error(gs.trajectory, tolerances)
             return GrazingOrbit(
                 parameter=float(z[-1]), state0=z[:n].copy(), period=gs.period, t_graze=t_g,
                 x_graze=gs.x_graze.copy(), transition=int(transition), monodromy=gs.monodromy.copy(),
                 fundamental_to_graze=gs.fundamental_to_graze.copy(), trajectory=gs.trajectory,
-                accuracy=abs(float(dz[-1])) + 4e-16 * max(1.0, abs(float(z[-1]))), residuals=history,
+                accuracy=abs(float(dz[-1])) + carried + 4e-16 * max(1.0, abs(float(z[-1]))), residuals=history,
             )
         if it == max_iter:
             break
@@ -307,6 +348,7 @@ def locate_tangential_return(
         If Newton's method does not converge or no return is found.
     """
     system = flow.system
+    tolerances = location_tolerances(flow, tolerances)
     tr = system.transitions[transition]
     surface = system.surface_index(tr.surface)
     j = system.parameter_index(lam_name)
@@ -356,9 +398,13 @@ def locate_tangential_return(
         except np.linalg.LinAlgError:
             raise ConvergenceError("tangential return: singular Jacobian", history) from None
         if rn <= tol * (1.0 + float(np.linalg.norm(x))):
+            q = p.copy()
+            q[j] = w[-1]
+            orbit = flow.run(x, 0.0, t_r, q, mode0=tr.target, disabled=disabled, tolerances=tolerances)
+            carried = float(np.abs(np.linalg.inv(J)[-1]).sum()) * flow.integration_error(orbit, tolerances)
             return TangentialReturn(
                 parameter=float(w[-1]), state=x, period=t_r, transition=int(transition),
-                accuracy=abs(float(dw[-1])) + 4e-16 * max(1.0, abs(float(w[-1]))), residuals=history,
+                accuracy=abs(float(dw[-1])) + carried + 4e-16 * max(1.0, abs(float(w[-1]))), residuals=history,
             )
         if it == max_iter:
             break
@@ -407,4 +453,4 @@ def growth_exponent(distances: np.ndarray, magnitudes: np.ndarray) -> float:
     return float(slope)
 
 
-__all__ = ["GrazingOrbit", "GrazingSystem", "grazing_system", "TangentialReturn", "locate_tangential_return", "grazing_candidates", "indicator_rate", "locate_grazing", "growth_exponent", "tangency_time"]
+__all__ = ["location_tolerances", "GrazingOrbit", "GrazingSystem", "grazing_system", "TangentialReturn", "locate_tangential_return", "grazing_candidates", "indicator_rate", "locate_grazing", "growth_exponent", "tangency_time"]

@@ -337,6 +337,22 @@ class Flow:
         s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
         return float(self._kernels.indicator(int(s), float(t), np.ascontiguousarray(x, dtype=float), p))
 
+    def integration_error(self, traj: Trajectory, tolerances: Tolerances | None = None) -> float:
+        """An estimate of the global error of a trajectory's end state.
+
+        Zero (rounding) when every mode it visits was stepped with the exact flow
+        (affine modes, ``exact_affine``) and it never slides; otherwise ``rtol``
+        times the state's size times the number of events plus one (the error of
+        DOP853 per stretch between events, at the requested tolerance).
+        """
+        tol = tolerances or self.tolerances
+        affine = self._kernels.AFFINE_MODES
+        visited = {traj.mode0, traj.mode1, *(e.mode_to for e in traj.events), *(e.mode_from for e in traj.events)}
+        sliding = any(e.kind != EventKind.TRANSITION for e in traj.events) or traj.sliding_at_end
+        if tol.exact_affine and not sliding and all(affine[self.system.mode_index(m)] for m in visited):
+            return 1e-14 * (1.0 + float(np.abs(traj.x1).max()))
+        return tol.rtol * (1.0 + float(np.abs(traj.x1).max())) * (1 + len(traj.events))
+
     def vector_field(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
         """The vector field ``f(t, x, p)`` of a mode."""
         f = np.zeros(self.system.n)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ConvergenceError, ModelError
+from .grazing import location_tolerances
 from .integrate import EventKind, Flow, SwitchingEvent, Trajectory
 
 
@@ -43,7 +44,8 @@ class CrossingSliding:
     far_mode : str
         The mode ``B`` whose field is tangent to the surface there.
     accuracy : float
-        The Newton correction of the parameter that would follow (an error estimate).
+        The Newton correction of the parameter that would follow, plus the
+        integration error carried to the parameter (an error estimate).
     residuals : list of float
     trajectory : Trajectory
     """
@@ -98,6 +100,7 @@ def locate_crossing_sliding(
         For an autonomous model.
     """
     system = flow.system
+    tolerances = location_tolerances(flow, tolerances)
     if system.is_autonomous:
         raise ModelError(f"locating a crossing-sliding is implemented for forced models; {system.name!r} is autonomous")
     j = system.parameter_index(lam_name)
@@ -138,9 +141,11 @@ def locate_crossing_sliding(
         dz = np.linalg.solve(J, -residual)
         if rn <= tol * (1.0 + float(np.linalg.norm(z))):
             hit = traj.events[index]
+            carried = float(np.abs(np.linalg.inv(J)[-1]).sum()) * flow.integration_error(full, tolerances)
             return CrossingSliding(
                 parameter=float(z[-1]), state0=z[:n].copy(), t_hit=hit.t, x_hit=hit.x_minus.copy(), far_mode=far_mode,
-                accuracy=abs(float(dz[-1])) + 4e-16 * max(1.0, abs(float(z[-1]))), residuals=history, trajectory=full,
+                accuracy=abs(float(dz[-1])) + carried + 4e-16 * max(1.0, abs(float(z[-1]))), residuals=history,
+                trajectory=full,
             )
         if it == max_iter:
             break
