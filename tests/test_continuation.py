@@ -359,3 +359,33 @@ def test_branch_stops_when_it_passes_its_start_again(tri_flow, impacting_branch)
     last = branch.points[-1]
     gap = np.hypot(last.parameter - start.parameter, np.linalg.norm(last.state - start.state))
     assert gap <= 1.5 * LOOP_SETTINGS.ds_max
+
+
+def test_stick_slip_fold_stable_side_limit(belt_diagram, belt_flow):
+    """Towards the tangential return, the stable cycle's second multiplier grows like d^(-1/2) (the entry
+    into the stick band turns tangent: its saltation matrix is O(1/sqrt(d))), so its limit at the fold is
+    unbounded. Checked on orbits at d = 1e-5 and 1e-4 with the period map's Jacobian by central
+    differences (no saltation matrices)."""
+    from saltation.shooting import find_periodic_orbit
+
+    (fold,) = [sp for sp in belt_diagram.special_points if sp.kind is SpecialPointKind.DISCONTINUOUS_FOLD]
+    assert fold.limits.startswith("extrapolated (unbounded")
+    assert np.isinf(np.abs(fold.multipliers_minus)).sum() == 1
+    stable = belt_diagram.branches[0]
+    near = stable.points[int(np.argmax(stable.parameter))]
+    mags = []
+    for d in (1e-4, 1e-5):
+        v = fold.parameter - d
+        orbit = find_periodic_orbit(belt_flow, near.state, parameters={"v_dr": v}, period=near.period)
+        p = belt_flow.parameters({"v_dr": v})
+        h = 1e-8
+        J = np.column_stack([
+            (belt_flow.run(orbit.state0 + h * e, 0.0, orbit.period, p).x1
+             - belt_flow.run(orbit.state0 - h * e, 0.0, orbit.period, p).x1) / (2 * h)
+            for e in np.eye(2)
+        ])
+        mu = np.linalg.eigvals(J)
+        mags.append(abs(mu[np.argmax(np.abs(mu - 1.0))]))
+        np.testing.assert_allclose(np.sort(np.abs(orbit.multipliers)), np.sort(np.abs(mu)), rtol=0, atol=1e-5)
+    # d^(-1/2): a tenfold smaller distance, a sqrt(10) larger multiplier (to 10 %: the O(1) term)
+    assert mags[1] / mags[0] == pytest.approx(np.sqrt(10.0), rel=0.1)

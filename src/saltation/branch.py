@@ -134,7 +134,9 @@ class SpecialPoint:
         the boundary orbit, closed-form saltation matrices at the corner),
         ``"nearest_saltation"`` (limits at the boundary orbit with the
         saltation matrices of the nearest orbit), ``"nearest_orbits"`` (the
-        monodromies of the two orbits bracketing the point), or ``""``.
+        monodromies of the two orbits bracketing the point), ``"extrapolated"``
+        (the limit along the branch, its square-root behaviour extrapolated),
+        ``"grazing"``, or ``""``.
     note : str
     """
 

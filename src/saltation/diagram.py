@@ -209,12 +209,14 @@ def follow_through_discontinuous_fold(
             "shooting; bracket from both branch ends"
         ),
     )
-    fold = _fold_by_tangential_return(prob_f, end, fold)
+    fold = _fold_by_tangential_return(prob_f, end, fold, forward.corrector)
     branch.special_points.insert(0, fold)
     return branch, fold
 
 
-def _fold_by_tangential_return(problem: ShootingProblem, end: Solution, fold: SpecialPoint) -> SpecialPoint:
+def _fold_by_tangential_return(
+    problem: ShootingProblem, end: Solution, fold: SpecialPoint, corrector: Corrector | None = None
+) -> SpecialPoint:
     """The fold located by its defining condition, where the stable orbit's return is tangential.
 
     At the end of the stable branch of a stick-slip cycle, the slip arc that
@@ -248,15 +250,63 @@ def _fold_by_tangential_return(problem: ShootingProblem, end: Solution, fold: Sp
     lo, hi = fold.bracket
     if not lo - 10 * (hi - lo) <= found.parameter <= hi + 10 * (hi - lo):
         return fold  # a tangency elsewhere
+    limit = None if corrector is None else _stable_side_limit(corrector, end, found.parameter)
+    extra = {}
+    if limit is not None:
+        mu, error, how = limit
+        extra = {"multipliers_minus": mu, "multipliers_accuracy": error, "limits": how}
     return replace(
-        fold, parameter=found.parameter, bracket=(found.parameter - found.accuracy, found.parameter + found.accuracy),
-        accuracy=found.accuracy,
+        fold, **extra, parameter=found.parameter,
+        bracket=(found.parameter - found.accuracy, found.parameter + found.accuracy), accuracy=found.accuracy,
         note=(
             f"located where the orbit returns tangentially to surface {best.surface!r} and enters "
             f"{best.mode_to!r} there (the branch ends bracket it: {lo:.12g} .. {hi:.12g}); joined to the infinitely "
             "unstable branch found by backward-time shooting"
         ),
     )
+
+
+def _stable_side_limit(corrector: Corrector, end: Solution, fold: float) -> tuple[np.ndarray, float, str] | None:
+    """The multipliers at the fold as the limit along the stable branch: ``(mu, error, how)``, or None.
+
+    As the slip arc's return to the stick band turns tangential, the entry into
+    the stick phase has a saltation matrix that is 0/0 at the fold.  Along the
+    branch, at distances ``d = 1e-6, 1e-5, 1e-4`` from the fold, the
+    non-trivial multipliers are fitted to ``|mu| ~ d^a``: a growing one
+    (``a < -1/4``) is unbounded in the limit and reported as ``inf``; the
+    others are extrapolated linearly in ``sqrt(d)`` from the two nearest
+    orbits, their error estimated by the third.
+    """
+    side = float(np.sign(end.lam - fold)) or -1.0
+    distances = np.array([1e-6, 1e-5, 1e-4])
+    mus = []
+    try:
+        for d in distances:
+            sol = corrector.solve_fixed(end.u, fold + side * d)
+            mu = np.asarray(sol.summary.multipliers, dtype=complex)
+            mus.append(mu[np.argsort(np.abs(mu))])
+    except SaltationError:
+        return None
+    if any(len(m) != len(mus[0]) or not np.all(np.isfinite(m)) for m in mus):
+        return None
+    mus = np.array(mus)  # (3 distances, n multipliers), each row by magnitude
+    root = np.sqrt(distances)
+    limit, error, notes = [], 0.0, []
+    for k in range(mus.shape[1]):
+        mags = np.abs(mus[:, k])
+        exponent = np.polyfit(np.log(distances), np.log(np.maximum(mags, 1e-300)), 1)[0] if np.all(mags > 0) else 0.0
+        if exponent < -0.25:
+            limit.append(complex(np.inf, 0.0))
+            notes.append(f"|mu| ~ d^{exponent:.2f}")
+            continue
+        # mu(d) = mu_0 + C sqrt(d): from the two nearest orbits, checked against the third
+        c = (mus[1, k] - mus[0, k]) / (root[1] - root[0])
+        mu0 = mus[0, k] - c * root[0]
+        c2 = (mus[2, k] - mus[1, k]) / (root[2] - root[1])
+        error = max(error, abs(mu0 - (mus[1, k] - c2 * root[1])))
+        limit.append(complex(mu0))
+    how = "extrapolated" + (f" (unbounded: {', '.join(notes)})" if notes else "")
+    return np.array(limit), float(error), how
 
 
 def _point_of(cont: Continuation, sol: Solution):
