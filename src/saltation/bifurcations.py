@@ -377,7 +377,8 @@ def crossing_sliding_point(problem, lo: Solution, hi: Solution, index: int) -> S
     """
     flow = getattr(problem, "flow", None)
     sides = _sides(lo, hi)
-    if flow is None or sides is None or problem.system.is_autonomous or problem.backward:
+    if flow is None or sides is None or problem.system.is_autonomous or problem.backward \
+            or getattr(problem, "periods", 1) != 1:
         return None
     lo_fewer, without, with_, traj_wo, traj_w = sides
     change = crossing_sliding_change(traj_wo, traj_w)
@@ -443,8 +444,8 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     """
     flow = getattr(problem, "flow", None)
     sides = _sides(lo, hi)
-    if flow is None or sides is None or problem.backward:
-        return None
+    if flow is None or sides is None or problem.backward or getattr(problem, "periods", 1) != 1:
+        return None  # (the defining systems close orbits after one forcing period)
     lo_fewer, without, with_, traj_wo, traj_w = sides
     span = abs(traj_wo.t1 - traj_wo.t0)
     groups = zero_length_segments(traj_wo.events, traj_w.events, time_tol=1e-3 * span)

@@ -332,7 +332,7 @@ class Continuation:
         from .grazing import grazing_candidates, locate_grazing
 
         prob = self.problem
-        if not isinstance(prob, ShootingProblem) or prob.autonomous or prob.backward:
+        if not isinstance(prob, ShootingProblem) or prob.autonomous or prob.backward or prob.periods != 1:
             return None
         flow, p = prob.flow, prob.parameters_at(prev.lam)
         T = prob.period_of(prev.u, prev.lam)

@@ -308,8 +308,8 @@ def follow_locus(
     ModelError
         For an autonomous or backward-time problem, or a kind without a defining system here.
     """
-    if problem.autonomous or problem.backward:
-        raise ModelError("two-parameter curves are implemented for forced models in forward time")
+    if problem.autonomous or problem.backward or problem.periods != 1:
+        raise ModelError("two-parameter curves are implemented for forced models in forward time, over one forcing period")
     p = problem.parameters_at(point.parameter)
     if point.kind.is_nonsmooth:
         (transition, t_g), *others = grazed_transitions(problem.flow, point.state, p, t0=problem.t0,
