@@ -94,6 +94,24 @@ def no_crossing() -> SpecialPoint:
     )
 
 
+def adding_sliding() -> SpecialPoint:
+    return SpecialPoint(
+        kind=SpecialPointKind.ADDING_SLIDING,
+        parameter=0.9000743388806751,
+        bracket=(0.9000743388806701, 0.9000743388806801),
+        accuracy=5e-15,
+        index=6,
+        state=np.array([0.1, 0.2]),
+        period=7.853981633974483,
+        amplitude=0.5,
+        multipliers_minus=np.array([0.6 + 0j, 0j]),
+        multipliers_plus=np.array([0.62 + 0j, 0j]),
+        touch_surface="v_rel",
+        touch_mode="slip_plus",
+        touch_time=7.538131315032597,
+    )
+
+
 def synthetic_branch() -> Branch:
     points = []
     for k in range(8):
@@ -112,7 +130,7 @@ def synthetic_branch() -> Branch:
         kind=BranchKind.PERIODIC,
         backward=True,
         points=points,
-        special_points=[smooth_fold(), discontinuous_fold(), no_crossing()],
+        special_points=[smooth_fold(), discontinuous_fold(), no_crossing(), adding_sliding()],
         stop_reason=StopReason.MIN_STEP,
         stop_reasons=[StopReason.PARAMETER_BOUND, None],
         fixed_parameters={"m": 1.0, "k": 1.0, "c": 0.0, "F_slip": 1.0, "F_stick": 2.0, "eta": 1e-4},
@@ -315,6 +333,14 @@ def test_record_of_nonsmooth_point():
     rec = special_point_record(no_crossing(), "trilinear", "omega")
     assert set(rec) == COMMON | {"multipliers_minus", "multipliers_plus", "crossing_q"}
     assert rec["crossing_q"] is None and rec["crossing_point"] is None
+
+
+def test_record_of_sliding_bifurcation_says_where_it_touches():
+    rec = special_point_record(adding_sliding(), "friction_oscillator", "F")
+    assert set(rec) == COMMON | {"multipliers_minus", "multipliers_plus", "crossing_q", "touch_surface",
+                                 "touch_mode", "touch_time"}
+    assert (rec["kind"], rec["touch_surface"], rec["touch_mode"]) == ("adding_sliding", "v_rel", "slip_plus")
+    assert rec["touch_time"] == 7.538131315032597
 
 
 def test_special_points_json(tmp_path):

@@ -11,6 +11,7 @@ from matplotlib.figure import Figure
 
 from saltation.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind
 from saltation.plotting import (
+    SPECIAL_POINT_MARKERS,
     CurveStyle,
     PhaseCurve,
     plot_multipliers,
@@ -245,3 +246,8 @@ def test_no_pyplot_figures_leak():
     plot_phase_plane([PhaseCurve(_circle(1.0))])
     assert plt.get_fignums() == before
     assert matplotlib.get_backend()
+
+
+def test_every_kind_of_special_point_has_a_marker():
+    assert set(SPECIAL_POINT_MARKERS) == set(SpecialPointKind)
+    assert len({marker for marker, _ in SPECIAL_POINT_MARKERS.values()}) == len(SPECIAL_POINT_MARKERS)

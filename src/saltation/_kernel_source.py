@@ -45,6 +45,7 @@ EVENT_SLIDING_END = 2
 
 EPS = 2.220446049250313e-16
 CHATTER_WINDOW = 20
+SLIDING_EXIT_SAMPLES = 8  # samples of the sliding-exit functions inside a sliding step (see the event search)
 
 # event kinds (0: an indicator; 1, 2: a sliding motion's exit on side a, b) and "none", as typed
 # integers: a literal int argument would make numba compile the callee once more for it
@@ -550,11 +551,11 @@ def _bracket_root(kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp, gtmp, 
 
 
 @njit(cache=True)
-def _dip_search(kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp):
-    """Golden-section search for the minimum of ``sgn * event`` on the step; returns (s, value)."""
+def _dip_search(kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, lo, hi):
+    """Golden-section search for the minimum of ``sgn * event`` on ``[lo, hi]`` of the step; returns (s, value)."""
     invphi = 0.6180339887498949
-    a = 0.0
-    b = 1.0
+    a = lo
+    b = hi
     c = b - invphi * (b - a)
     d = a + invphi * (b - a)
     fc = _dense_event(kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp)
@@ -856,6 +857,11 @@ def integrate_kernel(
     need_signs = True
     pending = NONE  # a transition to fire at once, without a step (see below)
     last_kind = EVENT_TRANSITION  # kind of the last event (the start counts as a transition)
+    at_start = True
+    samples = np.zeros(SLIDING_EXIT_SAMPLES + 1)
+    # a sliding motion steps at most an eighth of the forcing period: its field can be so simple that
+    # the error control allows any step, while its exit functions vary with the forcing
+    sliding_step_cap = forcing_period(p) / 8.0  # noqa: F821
     chatter_ring = np.zeros(CHATTER_WINDOW)
     h_mode = np.zeros(n_modes)  # the step proposed last in each mode (0: none yet), to re-enter it with
 
@@ -876,6 +882,11 @@ def integrate_kernel(
                     v = indicator(s, t, y[:n], p)  # noqa: F821
                     surf_old[s] = v
                     sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, hx, hp, gtmp, gptmp)
+                    if fixed_sign[s] and last_kind == EVENT_SLIDING_END:
+                        # a sliding motion has just ended on this surface, where the new field is tangent
+                        # to it: the slope is zero (its computed value is rounding, and a dip test on it
+                        # would find the surface again at once when the motion slid a rounding off it)
+                        sl = 0.0
                     slope_old[s] = sl
                     if fixed_sign[s]:
                         continue
@@ -885,16 +896,32 @@ def integrate_kernel(
                         surf_sign[s] = 1.0 if sl > 0 else -1.0
                     else:
                         surf_sign[s] = 1.0 if v >= 0 else -1.0
+            dt_nudge = direction * 1e-10 * max(1.0, abs(t))
+            for i in range(n):
+                xtmp[i] = y[i] + dt_nudge * K[0, i]
+            if at_start:
+                # A start on a surface (|h| <= 1e-12) with this mode's field crossing it in the direction
+                # of one of its transitions: the transition fires at once, as if the motion had just
+                # arrived (it may start a sliding motion), instead of moving on in this mode beyond its
+                # surface. Its guard is taken a hair along the motion.
+                at_start = False
+                if slide[0] == 0:
+                    for k in range(n_tr):
+                        if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
+                            continue
+                        s = tr_table[k, 1]
+                        if abs(surf_old[s]) > 1e-12 or slope_old[s] * tr_table[k, 2] <= 0.0:
+                            continue
+                        if guard(k, t + dt_nudge, xtmp, p):  # noqa: F821
+                            pending = k
+                            break
             # A state outside the domain of its mode (a transition has led there at a corner of
             # switching surfaces): the exit that holds already (the state lies beyond its surface, in
             # the transition's direction, and its guard holds; the surface just crossed excepted) fires
             # at once. Domain and guards are taken a hair along the motion, so that a condition that is
             # zero here (on the surface just crossed) counts on the side the motion goes to.
-            dt_nudge = direction * 1e-10 * max(1.0, abs(t))
-            for i in range(n):
-                xtmp[i] = y[i] + dt_nudge * K[0, i]
             # (after a transition, or at the start; a sliding motion ends on its surface by construction)
-            if slide[0] == 0 and last_kind == EVENT_TRANSITION and not in_domain(mode, t + dt_nudge, xtmp, p):  # noqa: F821
+            if pending < 0 and slide[0] == 0 and last_kind == EVENT_TRANSITION and not in_domain(mode, t + dt_nudge, xtmp, p):  # noqa: F821
                 for k in range(n_tr):
                     if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
                         continue
@@ -930,6 +957,8 @@ def integrate_kernel(
                 break
             remaining = abs(t_end - t)
             habs = min(habs, max_step)
+            if slide[0] == 1 and sliding_step_cap > 0.0:
+                habs = min(habs, sliding_step_cap)
             if habs >= remaining or remaining - habs < 1e-12 * remaining:
                 habs = remaining
             exact = exact_affine and slide[0] == 0 and AFFINE_MODES[mode]  # noqa: F821
@@ -995,7 +1024,7 @@ def integrate_kernel(
                         if not have_dense:
                             _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                             have_dense = True
-                        smin, vmin = _dip_search(KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp)
+                        smin, vmin = _dip_search(KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0)
                         if vmin <= 0.0:
                             sb = smin
                     if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
@@ -1028,11 +1057,39 @@ def integrate_kernel(
             else:
                 for kind in (np.int64(1), np.int64(2)):
                     v1 = _event_value(kind, NONE, slide, t_new, ynew[:n], p, gtmp, gptmp)
+                    # A sliding field is often so simple that the step control allows steps over
+                    # much of a forcing period, while an exit function with explicit time dependence
+                    # may dip below zero and recover (or turn negative more than once) within the
+                    # step: it is sampled inside, a local minimum of the samples is searched for a
+                    # dip below zero (golden section between its neighbours), and the first sign
+                    # change is the one located.
+                    if not have_dense:
+                        _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                        have_dense = True
+                    sb = 1.0
+                    samples[0] = _event_value(kind, NONE, slide, t, y[:n], p, gtmp, gptmp)
+                    samples[SLIDING_EXIT_SAMPLES] = v1
+                    for j in range(1, SLIDING_EXIT_SAMPLES):
+                        samples[j] = _dense_event(kind, NONE, slide, 1.0, t, h, F, y, j / SLIDING_EXIT_SAMPLES, p,
+                                                  xtmp, gtmp, gptmp)
+                    for j in range(1, SLIDING_EXIT_SAMPLES + 1):
+                        sj = j / SLIDING_EXIT_SAMPLES
+                        if samples[j] <= 0.0:
+                            sb = sj
+                            v1 = samples[j]
+                            break
+                        if j < SLIDING_EXIT_SAMPLES and samples[j] <= samples[j - 1] and samples[j] <= samples[j + 1]:
+                            smin, vmin = _dip_search(kind, NONE, slide, 1.0, t, h, F, y, p, xtmp, gtmp, gptmp,
+                                                     (j - 1) / SLIDING_EXIT_SAMPLES, (j + 1) / SLIDING_EXIT_SAMPLES)
+                            if vmin <= 0.0:
+                                sb = smin
+                                v1 = vmin
+                                break
                     if v1 <= 0.0:
                         if not have_dense:
                             _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                             have_dense = True
-                        sr = _bracket_root(kind, NONE, slide, 1.0, t, h, F, y, 0.0, 1.0, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
+                        sr = _bracket_root(kind, NONE, slide, 1.0, t, h, F, y, 0.0, sb, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
                         if sr < best_s:
                             best_s = sr
                             best_kind = kind

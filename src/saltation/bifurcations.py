@@ -31,7 +31,7 @@ from .errors import SaltationError
 from .floquet import multipliers_from_monodromy, set_valued_multipliers
 from .grazing import locate_grazing
 from .integrate import EventKind
-from .sliding import crossing_sliding_change, locate_crossing_sliding
+from .sliding import locate_adding_sliding, locate_tangent_arrival, sliding_change
 
 
 @dataclass(frozen=True)
@@ -273,7 +273,7 @@ class SpecialPointDetector:
             )
         limits = self._limits(lo, hi, far)
         if limits is None:
-            for locate in (grazing_point, crossing_sliding_point):
+            for locate in (grazing_point, sliding_bifurcation_point):
                 found = locate(self.problem, lo, hi, index)
                 if found is not None:
                     return found
@@ -365,15 +365,13 @@ def special_point_between(
     )
 
 
-def crossing_sliding_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoint | None:
-    """The record of a crossing-sliding between two branch points, located by its defining system.
+def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoint | None:
+    """The record of a crossing-, switching- or adding-sliding between two branch points, located by
+    its defining system (:mod:`saltation.sliding`).
 
-    One side starts sliding as it reaches the surface; the other first crosses
-    into the far mode ``B`` and comes back to slide.  The point is where the
-    orbit reaches the surface exactly where ``f_B`` is tangent to it
-    (:func:`saltation.sliding.locate_crossing_sliding`).  Its one-sided
-    multipliers are those of the two bracketing orbits (the segment in ``B``
-    shrinks linearly), and their difference is the stated accuracy bound.
+    Its one-sided multipliers are those of the two bracketing orbits (the
+    extra segment shrinks linearly or like a square root), and their
+    difference is the stated accuracy bound.
     """
     flow = getattr(problem, "flow", None)
     sides = _sides(lo, hi)
@@ -381,23 +379,35 @@ def crossing_sliding_point(problem, lo: Solution, hi: Solution, index: int) -> S
             or getattr(problem, "periods", 1) != 1:
         return None
     lo_fewer, without, with_, traj_wo, traj_w = sides
-    change = crossing_sliding_change(traj_wo, traj_w)
+    change = sliding_change(flow, traj_wo, traj_w, problem.parameters_at(with_.lam), problem.parameters_at(without.lam))
     if change is None:
         return None
-    i, crossing = change
+    n = problem.system.n
+    options = {"parameters": problem.parameters_at(without.lam), "t0": problem.t0, "tolerances": problem.tolerances}
     try:
-        found = locate_crossing_sliding(
-            flow, without.u[: problem.system.n], without.lam, problem.lam_name, i, crossing.mode_to,
-            parameters=problem.parameters_at(without.lam), t0=problem.t0, tolerances=problem.tolerances,
-        )
+        if change.kind is SpecialPointKind.ADDING_SLIDING:
+            found = locate_adding_sliding(flow, without.u[:n], without.lam, problem.lam_name, change.t_guess,
+                                          change.mode, change.surface, change.side, **options)
+        else:
+            found = locate_tangent_arrival(flow, without.u[:n], without.lam, problem.lam_name, change.index,
+                                           change.mode, change.side, **options)
     except SaltationError:
         return None
     width = abs(hi.lam - lo.lam)
-    if abs(found.parameter - 0.5 * (lo.lam + hi.lam)) > width + 1e-9 * (1.0 + abs(found.parameter)):
+    if found.kind is not change.kind \
+            or abs(found.parameter - 0.5 * (lo.lam + hi.lam)) > width + 1e-9 * (1.0 + abs(found.parameter)):
         return None
     traj = found.trajectory
+    where = {
+        SpecialPointKind.CROSSING_SLIDING: "arrives at the surface where the field of {m!r} is tangent to it, "
+                                           "visible from that side (the orbit of that field leaves the surface)",
+        SpecialPointKind.SWITCHING_SLIDING: "arrives at the surface where the field of {m!r} is tangent to it, "
+                                            "invisible from that side (the orbit of that field returns to it)",
+        SpecialPointKind.ADDING_SLIDING: "slides through a point where the field of {m!r} has a cubic tangency "
+                                         "with the surface (the sliding motion touches the boundary of its region)",
+    }[found.kind].format(m=found.mode)
     return SpecialPoint(
-        kind=SpecialPointKind.CROSSING_SLIDING,
+        kind=found.kind,
         parameter=found.parameter,
         bracket=(found.parameter - found.accuracy, found.parameter + found.accuracy),
         accuracy=found.accuracy,
@@ -411,10 +421,13 @@ def crossing_sliding_point(problem, lo: Solution, hi: Solution, index: int) -> S
         monodromy_plus=hi.summary.monodromy,
         events_minus=lo.summary.events,
         events_plus=hi.summary.events,
-        note=(f"the orbit reaches surface {crossing.surface!r} at t = {found.t_hit:.10g} exactly where the field of "
-              f"{crossing.mode_to!r} is tangent to it: the boundary of the sliding region"),
+        note=(f"the orbit {where} (surface {change.surface!r}, t = {found.t_touch:.10g}, d2h/dt2 there "
+              f"{found.curvature:.3g}); the side with the extra events is {'plus' if lo_fewer else 'minus'}"),
         multipliers_accuracy=float(np.linalg.norm(hi.summary.monodromy - lo.summary.monodromy)),
         limits="nearest_orbits",
+        touch_surface=change.surface,
+        touch_mode=found.mode,
+        touch_time=found.t_touch,
     )
 
 
@@ -521,6 +534,9 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
             else orbit.accuracy * float(np.linalg.norm(m_without)) + 1e-13
         ),
         limits="nearest_saltation" if sliding else "grazing",
+        touch_surface=surface,
+        touch_mode=problem.system.transitions[orbit.transition].source,
+        touch_time=orbit.t_graze,
     )
 
 

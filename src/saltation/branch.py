@@ -24,6 +24,8 @@ class SpecialPointKind(enum.Enum):
     GRAZING = "grazing"
     GRAZING_SLIDING = "grazing_sliding"
     CROSSING_SLIDING = "crossing_sliding"
+    SWITCHING_SLIDING = "switching_sliding"
+    ADDING_SLIDING = "adding_sliding"
 
     @property
     def is_nonsmooth(self) -> bool:
@@ -39,6 +41,8 @@ NONSMOOTH_KINDS = frozenset(
         SpecialPointKind.GRAZING,
         SpecialPointKind.GRAZING_SLIDING,
         SpecialPointKind.CROSSING_SLIDING,
+        SpecialPointKind.SWITCHING_SLIDING,
+        SpecialPointKind.ADDING_SLIDING,
     }
 )
 
@@ -138,6 +142,12 @@ class SpecialPoint:
         (the limit along the branch, its square-root behaviour extrapolated),
         ``"grazing"``, or ``""``.
     note : str
+    touch_surface, touch_mode : str
+        Where the orbit meets a switching surface at a grazing or a sliding
+        bifurcation: the surface, and the mode whose field is tangent to it
+        there (empty otherwise).
+    touch_time : float
+        The instant of that touch (``nan`` otherwise).
     """
 
     kind: SpecialPointKind
@@ -160,6 +170,9 @@ class SpecialPoint:
     note: str = ""
     multipliers_accuracy: float = float("nan")
     limits: str = ""
+    touch_surface: str = ""
+    touch_mode: str = ""
+    touch_time: float = float("nan")
 
 
 @dataclass

@@ -189,6 +189,9 @@ def _special_point_to_dict(sp: SpecialPoint) -> dict[str, Any]:
         "note": sp.note,
         "multipliers_accuracy": _enc_float(sp.multipliers_accuracy),
         "limits": sp.limits,
+        "touch_surface": sp.touch_surface,
+        "touch_mode": sp.touch_mode,
+        "touch_time": _enc_float(sp.touch_time),
     }
 
 
@@ -215,6 +218,9 @@ def _special_point_from_dict(d: dict[str, Any]) -> SpecialPoint:
         note=d.get("note", ""),
         multipliers_accuracy=_dec_float(d.get("multipliers_accuracy", "nan")),
         limits=d.get("limits", ""),
+        touch_surface=d.get("touch_surface", ""),
+        touch_mode=d.get("touch_mode", ""),
+        touch_time=_dec_float(d.get("touch_time", "nan")),
     )
 
 
@@ -548,8 +554,10 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
         ``multipliers_plus`` and ``crossing_q`` for a non-smooth one; then ``bracket``,
         ``accuracy``, ``crossing_point``, ``note``, ``multipliers_accuracy`` (an estimate of the
         multipliers' error) and ``limits`` (how the one-sided multipliers were obtained:
-        ``"exact"``, ``"nearest_saltation"``, ``"nearest_orbits"``). Multipliers are ``[re, im]`` pairs,
-        an infinite one the string ``"inf"``; absent values are ``null``.
+        ``"exact"``, ``"nearest_saltation"``, ``"nearest_orbits"``); for a grazing or a sliding
+        bifurcation also ``touch_surface``, ``touch_mode`` and ``touch_time`` (where the orbit meets
+        the surface, and whose field is tangent there). Multipliers are ``[re, im]`` pairs, an
+        infinite one the string ``"inf"``; absent values are ``null``.
     """
     rec: dict[str, Any] = {
         "model": model,
@@ -570,6 +578,10 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
     rec["note"] = sp.note
     rec["multipliers_accuracy"] = _enc_float(sp.multipliers_accuracy)
     rec["limits"] = sp.limits
+    if sp.touch_surface:
+        rec["touch_surface"] = sp.touch_surface
+        rec["touch_mode"] = sp.touch_mode
+        rec["touch_time"] = _enc_float(sp.touch_time)
     return rec
 
 

@@ -10,6 +10,8 @@ first parameter as one more unknown:
   the paper's trilinear kind is a grazing of the contact's entry surface at
   the point where the contact force vanishes, so it is continued by the same
   system;
+* crossing-, switching- and adding-sliding (:class:`SlidingCurve`):
+  periodicity plus the tangency conditions of :mod:`saltation.sliding`;
 * smooth folds and period doublings (:class:`MultiplierCurve`): periodicity
   plus a bordered test function ``g`` that vanishes where ``M - mu I`` is
   singular (``mu = +1`` or ``-1``), the minimally augmented system of Govaerts
@@ -36,8 +38,14 @@ from .continuation import Continuation, ContinuationSettings
 from .errors import IntegrationError, ModelError, SaltationError
 from .floquet import is_stable, multipliers_from_monodromy
 from .grazing import grazing_candidates, grazing_system, tangency_time
-from .integrate import Flow
+from .integrate import EventKind, Flow
 from .shooting import Evaluation, ShootingProblem, SolutionSummary
+from .sliding import exit_rate, rate_along
+
+#: Special points continued by the defining systems of :mod:`saltation.sliding`.
+SLIDING_KINDS = frozenset(
+    {SpecialPointKind.CROSSING_SLIDING, SpecialPointKind.SWITCHING_SLIDING, SpecialPointKind.ADDING_SLIDING}
+)
 
 
 @dataclass
@@ -311,7 +319,12 @@ def follow_locus(
     if problem.autonomous or problem.backward or problem.periods != 1:
         raise ModelError("two-parameter curves are implemented for forced models in forward time, over one forcing period")
     p = problem.parameters_at(point.parameter)
-    if point.kind.is_nonsmooth:
+    u0 = np.append(np.asarray(point.state, dtype=float), point.parameter)
+    if point.kind in SLIDING_KINDS:
+        curve = SlidingCurve(problem, p, second, point)
+        u0 = curve.start(np.asarray(point.state, dtype=float), point.parameter)
+        classify = False
+    elif point.kind.is_nonsmooth:
         (transition, t_g), *others = grazed_transitions(problem.flow, point.state, p, t0=problem.t0,
                                                         tolerances=problem.tolerances)
         curve = GrazingCurve(problem.flow, p, problem.lam_name, second, transition, t_g, t0=problem.t0,
@@ -325,7 +338,6 @@ def follow_locus(
     settings = settings or ContinuationSettings(bounds=bounds)
     # the curve's own turning points and the multipliers of its orbits are not special points of the curve
     settings = replace(settings, bounds=bounds, detect=False)
-    u0 = np.append(np.asarray(point.state, dtype=float), point.parameter)
     lam0 = float(p[curve.lam_index])
     runs, reasons, kinds_by_run = [], [], []
     start = curve.snapshot()
@@ -340,7 +352,7 @@ def follow_locus(
         reasons.append(f"{'increasing' if direction > 0 else 'decreasing'} {second}: {cont.branch.stop_reason.value}")
     zs = list(reversed(runs[1]))[:-1] + runs[0]
     n = problem.system.n
-    points = np.array([[z[n], z[n + 1]] for z in zs])
+    points = np.array([[z[n], z[-1]] for z in zs])
     locus = Locus(kind=point.kind, param=problem.lam_name, param2=second, points=points,
                   states=np.array([z[:n] for z in zs]), stop_reason="; ".join(reasons))
     if classify:
@@ -353,6 +365,109 @@ def follow_locus(
                     accuracy=float(np.linalg.norm(points[a + 1] - points[a])),
                 ))
     return locus
+
+
+class SlidingCurve(_CurveProblem):
+    """Crossing-, switching- or adding-sliding bifurcations of a forced orbit in two parameters.
+
+    Periodicity plus the conditions of :mod:`saltation.sliding`: the far
+    field's tangency where the orbit arrives at the surface (crossing- and
+    switching-sliding; unknowns ``(x0, lam1)``), or the exit field's cubic
+    tangency at an instant ``tau`` of a sliding motion (adding-sliding;
+    unknowns ``(x0, lam1, tau)``).  The conditions' derivatives are taken by
+    central differences.  The arrival followed is the one on the surface
+    nearest in time to the last accepted touch.
+    """
+
+    def __init__(self, problem: ShootingProblem, parameters: np.ndarray, second: str, point: SpecialPoint,
+                 *, h: float = 1e-7):
+        super().__init__(problem.flow, parameters, problem.lam_name, second)
+        if not point.touch_surface:
+            raise ModelError(f"the {point.kind.value} point does not say where the orbit touches the surface")
+        self.shooting = problem
+        self.adding = point.kind is SpecialPointKind.ADDING_SLIDING
+        self.surface, self.mode, self.t_touch = point.touch_surface, point.touch_mode, float(point.touch_time)
+        self.h = float(h)
+        self._last = None
+
+    @property
+    def dimension(self) -> int:
+        return self.system.n + (2 if self.adding else 1)
+
+    def parameters_at(self, u: np.ndarray, lam: float) -> np.ndarray:
+        p = self.p.copy()
+        p[self.j1] = u[self.system.n]
+        p[self.lam_index] = lam
+        return p
+
+    def start(self, state: np.ndarray, lam1: float) -> np.ndarray:
+        """The unknowns at the special point."""
+        return np.concatenate([state, [lam1], [self.t_touch] if self.adding else []])
+
+    def _conditions(self, u: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
+        n = self.system.n
+        p = self.parameters_at(u, lam)
+        t0, tol = self.shooting.t0, self.shooting.tolerances
+        if self.adding:
+            tau = float(u[n + 1])
+            x = self.flow.run(u[:n], t0, tau, p, tolerances=tol).x1
+
+            def g(s, y):
+                return exit_rate(self.flow, self.mode, self.surface, s, y, p)
+
+            return np.array([g(tau, x), rate_along(self.flow, self.mode, g, tau, x, p)]), tau
+        traj = self.flow.run(u[:n], t0, t0 + self.system.forcing_period(p), p, tolerances=tol)
+        arrivals = [e for e in traj.events if e.surface == self.surface
+                    and e.kind in (EventKind.TRANSITION, EventKind.SLIDING_START)]
+        if not arrivals:
+            raise SaltationError(f"the orbit no longer arrives at surface {self.surface!r}")
+        period = self.system.forcing_period(p)
+
+        def distance(a):  # in time, modulo the period (the arrival may pass the section t = t0)
+            d = (a.t - self.t_touch) % period
+            return min(d, period - d)
+
+        e = min(arrivals, key=distance)
+        return np.array([exit_rate(self.flow, self.mode, e.surface, e.t, e.x_minus, p)]), e.t
+
+    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
+        n, m = self.system.n, self.dimension
+        lam = self.lam0() if lam is None else lam
+        p = self.parameters_at(u, lam)
+        T = self.system.forcing_period(p)
+        t0, tol = self.shooting.t0, self.shooting.tolerances
+        traj1 = self.flow.run(u[:n], t0, t0 + T, p, variational=True, parameter=self.j1, tolerances=tol)
+        traj2 = self.flow.run(u[:n], t0, t0 + T, p, variational=True, parameter=self.lam_index, tolerances=tol)
+        c, t_touch = self._conditions(u, lam)
+        residual = np.concatenate([traj1.x1 - u[:n], c])
+        jac_u = np.zeros((m, m))
+        jac_u[:n, :n] = traj1.monodromy - np.eye(n)
+        jac_u[:n, n] = traj1.parameter_sensitivity + self.system.period_derivative(p, self.j1) * traj1.velocity_end
+        jac_lam = np.zeros(m)
+        jac_lam[:n] = traj2.parameter_sensitivity + self.system.period_derivative(p, self.lam_index) * traj2.velocity_end
+        for i in range(m + 1):  # the conditions' derivatives, by central differences
+            z = np.append(u, lam)
+            step = self.h * max(1.0, abs(z[i]))
+            e = np.zeros(m + 1)
+            e[i] = step
+            d = (self._conditions((z + e)[:m], (z + e)[m])[0] - self._conditions((z - e)[:m], (z - e)[m])[0]) / (2 * step)
+            if i < m:
+                jac_u[n:, i] = d
+            else:
+                jac_lam[n:] = d
+        self._last = (traj1.monodromy, T, traj1, t_touch)
+        return Evaluation(residual=residual, jac_u=jac_u, jac_lam=jac_lam, trajectory=traj1)
+
+    def accept(self, u: np.ndarray, lam: float) -> None:
+        if self._last is not None:
+            self.t_touch = self._last[3]
+
+    def snapshot(self) -> dict:
+        return {"t_touch": self.t_touch, "_last": None}
+
+    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+        M, T, traj, _ = self._last
+        return self._summary(u[: self.system.n + 1], M, T, traj)
 
 
 class MultiplierCurve(_CurveProblem):
@@ -435,4 +550,7 @@ class MultiplierCurve(_CurveProblem):
         return self._summary(u, M, T, traj)
 
 
-__all__ = ["Codim2Point", "GrazingCurve", "Locus", "MultiplierCurve", "follow_locus", "grazed_transitions"]
+__all__ = [
+    "SLIDING_KINDS", "Codim2Point", "GrazingCurve", "Locus", "MultiplierCurve", "SlidingCurve", "follow_locus",
+    "grazed_transitions",
+]

@@ -49,6 +49,10 @@ SPECIAL_POINT_MARKERS: dict[SpecialPointKind, tuple[str, str]] = {
     SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER: ("X", "discontinuous Neimark-Sacker"),
     SpecialPointKind.NONSMOOTH_NO_CROSSING: ("v", "non-smooth point, no crossing"),
     SpecialPointKind.GRAZING: ("h", "grazing"),
+    SpecialPointKind.GRAZING_SLIDING: ("H", "grazing-sliding"),
+    SpecialPointKind.CROSSING_SLIDING: ("<", "crossing-sliding"),
+    SpecialPointKind.SWITCHING_SLIDING: (">", "switching-sliding"),
+    SpecialPointKind.ADDING_SLIDING: ("d", "adding-sliding"),
 }
 
 #: Axis label per amplitude measure; ``{x}`` is the name of the first state.

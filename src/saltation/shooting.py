@@ -49,10 +49,20 @@ class SolutionSummary:
 
 
 def event_labels(traj: Trajectory) -> tuple[str, ...]:
-    """Readable labels of a trajectory's events: the transition, or the sliding motion started or ended."""
+    """Readable labels of a trajectory's events: the transition, or the sliding motion started or ended.
+
+    An orbit that is sliding at ``t0`` starts its sliding motion there (an
+    event at ``t0``) and ends the period on it: that is one sliding motion cut
+    by the section ``t = t0``, labelled once (by its arrival at the end), so
+    that the sequence of an orbit does not change as its events pass ``t0``.
+    """
     sys_ = traj.system
     labels = []
-    for e in traj.events:
+    events = traj.events
+    if (events and events[0].kind == EventKind.SLIDING_START and events[0].t == traj.t0 and traj.sliding_at_end
+            and any(e.kind == EventKind.SLIDING_START and e.surface == events[0].surface for e in events[1:])):
+        events = events[1:]
+    for e in events:
         if e.kind == EventKind.TRANSITION:
             labels.append(sys_.transitions[e.transition].label)
         elif e.kind == EventKind.SLIDING_START:

@@ -3,94 +3,278 @@
 Where a periodic orbit's sequence of events changes by a sliding segment, the
 change is one of the four codimension-one sliding bifurcations (di Bernardo,
 Kowalczyk and Nordmark, Physica D 170, 2002; Kuznetsov, Rinaldi and
-Gragnani, Int. J. Bif. Chaos 13, 2003):
+Gragnani, Int. J. Bif. Chaos 13, 2003).  Each happens where the orbit meets
+the boundary of a sliding region, a point where the field ``f_B`` of one side
+is tangent to the switching surface (``h_x f_B + h_t = 0``):
 
-* grazing-sliding: the orbit grazes the switching surface at the boundary of
-  the sliding region (one side misses the surface, the other slides for a
-  moment).  Located by the grazing defining system of
-  :mod:`saltation.grazing` with the transition into sliding disabled;
-* crossing-sliding: the orbit reaches the surface exactly at the boundary of
-  the sliding region where the far side's field ``f_B`` is tangent to it.  On
-  one side it starts sliding at once; on the other it first crosses into
-  ``B`` and comes back to slide.  Located here by periodicity plus
-  ``h_x f_B = 0`` at the point where the sliding starts;
-* switching-sliding and adding-sliding (a sliding motion that ends at a
-  tangency where the orbit then grazes or crosses the surface again) are not
-  recognised yet.
+* grazing-sliding: the orbit grazes the surface there.  One side misses the
+  surface, the other slides for a moment.  Located by the grazing defining
+  system of :mod:`saltation.grazing` with the transition into sliding
+  disabled;
+* crossing-sliding: the orbit arrives at the surface there, and the
+  tangency is *visible* from ``B`` (the orbit of ``f_B`` through the point
+  leaves the surface).  One side crosses into ``B``; the other slides first,
+  for a time that shrinks to zero, and then leaves into ``B``.  Event
+  sequences: ``crossing into B`` and ``sliding start, sliding end into B``;
+* switching-sliding: the same arrival, with the tangency *invisible* from
+  ``B`` (the orbit of ``f_B`` returns to the surface).  One side starts
+  sliding at once; the other first crosses into ``B`` and comes back to
+  slide.  Event sequences: ``sliding start`` and ``crossing into B, sliding
+  start``.  Both arrival cases are located by periodicity plus
+  ``h_x f_B + h_t = 0`` at the arrival (:func:`locate_tangent_arrival`);
+* adding-sliding: a sliding motion touches the boundary of its sliding region
+  from inside, where the exit side's field ``f_A`` has a cubic tangency with
+  the surface (``h_x f_A + h_t = 0`` and its derivative along ``f_A`` zero).
+  One side keeps sliding; on the other the motion leaves into ``A`` and
+  returns to slide again: a sliding segment is added.  Event sequences:
+  ``..., sliding end`` and ``..., sliding end into A, sliding start, sliding
+  end``.  Located by periodicity plus both conditions at the touch
+  (:func:`locate_adding_sliding`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
+from .branch import SpecialPointKind
 from .errors import ConvergenceError, ModelError
 from .grazing import location_tolerances
 from .integrate import EventKind, Flow, SwitchingEvent, Trajectory
 
+_ARRIVALS = (EventKind.TRANSITION, EventKind.SLIDING_START)
+
 
 @dataclass(frozen=True)
-class CrossingSliding:
-    """A located crossing-sliding orbit.
+class SlidingChange:
+    """How two orbits on either side of a sliding bifurcation differ.
 
     Attributes
     ----------
+    kind : SpecialPointKind
+        ``crossing_sliding``, ``switching_sliding`` or ``adding_sliding``.
+    index : int
+        In the events of the side without the extra events: the arrival at
+        the surface (crossing- and switching-sliding), or the end of the
+        sliding motion that touches the boundary (adding-sliding).
+    mode : str
+        The mode whose field is tangent to the surface at the bifurcation.
+    surface : str
+    t_guess : float
+        Where the side with the extra events has them (the touch lies between).
+    side : float
+        The side of the surface (the sign of ``h``) where ``mode`` lies.
+    """
+
+    kind: SpecialPointKind
+    index: int
+    mode: str
+    surface: str
+    t_guess: float
+    side: float
+
+
+def _same(a: list[SwitchingEvent], b: list[SwitchingEvent]) -> bool:
+    return len(a) == len(b) and all(x.kind == y.kind and x.surface == y.surface for x, y in zip(a, b))
+
+
+def _arrival_side(flow: Flow, e: SwitchingEvent, p: np.ndarray) -> float:
+    """The side of the surface an arrival moves to (the sign of ``dh/dt`` along the arriving field)."""
+    return 1.0 if exit_rate(flow, e.mode_from, e.surface, e.t, e.x_minus, p) > 0 else -1.0
+
+
+def _cyclic(traj: Trajectory) -> list[SwitchingEvent]:
+    """The orbit's events as a cycle: a sliding start at ``t0`` that continues the sliding motion the
+    period ends on is the section cutting that motion, not an event of its own."""
+    ev = traj.events
+    if ev and ev[0].kind == EventKind.SLIDING_START and ev[0].t == traj.t0 and traj.sliding_at_end \
+            and any(e.kind == EventKind.SLIDING_START and e.surface == ev[0].surface for e in ev[1:]):
+        return ev[1:]
+    return ev
+
+
+def _rotation_matching(rest: list[SwitchingEvent], cycle: list[SwitchingEvent], first_kind: EventKind,
+                       surface: str) -> SwitchingEvent | None:
+    """The event of ``cycle`` where a rotation of it starts that matches ``[that event] + rest`` in kinds
+    and surfaces (the event itself of kind ``first_kind`` on ``surface``), or None."""
+    m = len(cycle)
+    for r in range(m):
+        first = cycle[r]
+        if first.kind != first_kind or first.surface != surface:
+            continue
+        if _same(rest, [cycle[(r + 1 + k) % m] for k in range(m - 1)]):
+            return first
+    return None
+
+
+def sliding_change(flow: Flow, without: Trajectory, with_: Trajectory, p_with: np.ndarray,
+                   p_without: np.ndarray) -> SlidingChange | None:
+    """Recognise a crossing-, switching- or adding-sliding change between two orbits.
+
+    ``with_`` has the extra events: one more (crossing- and switching-sliding)
+    or two more (adding-sliding).  ``p_with`` and ``p_without`` are their
+    parameter values.  The event sequences are compared as cycles (events may
+    pass the section ``t = t0`` between the two orbits).  Returns None for any
+    other change.
+    """
+    w, wo = _cyclic(with_), _cyclic(without)
+    m = len(w)
+    extra = m - len(wo)
+    if extra not in (1, 2) or not wo:
+        return None
+    for i in range(m):
+        e, nxt = w[i], w[(i + 1) % m]
+        if nxt.surface != e.surface:
+            continue
+        if extra == 1 and e.kind == EventKind.TRANSITION and nxt.kind == EventKind.SLIDING_START:
+            # switching-sliding: [crossing into B, sliding start] where the other side starts sliding
+            rest = [w[(i + 2 + k) % m] for k in range(m - 2)]
+            arrival = _rotation_matching(rest, wo, EventKind.SLIDING_START, e.surface)
+            if arrival is not None:
+                return SlidingChange(SpecialPointKind.SWITCHING_SLIDING, without.events.index(arrival), e.mode_to,
+                                     e.surface, e.t, _arrival_side(flow, e, p_with))
+        if extra == 1 and e.kind == EventKind.SLIDING_START and nxt.kind == EventKind.SLIDING_END:
+            # crossing-sliding: [sliding start, sliding end into B] where the other side crosses into B
+            rest = [w[(i + 2 + k) % m] for k in range(m - 2)]
+            crossing = _rotation_matching(rest, wo, EventKind.TRANSITION, e.surface)
+            if crossing is not None and crossing.mode_to == nxt.mode_to:
+                return SlidingChange(SpecialPointKind.CROSSING_SLIDING, without.events.index(crossing), nxt.mode_to,
+                                     e.surface, e.t, _arrival_side(flow, crossing, p_without))
+        if extra == 2 and e.kind == EventKind.SLIDING_END and nxt.kind == EventKind.SLIDING_START:
+            # adding-sliding: [sliding end into A, sliding start] inside a sliding motion of the other side
+            rest = [w[(i + 3 + k) % m] for k in range(m - 3)]
+            late = w[(i + 2) % m]
+            exit_ = _rotation_matching(rest, wo, EventKind.SLIDING_END, e.surface)
+            if exit_ is not None and late.kind == EventKind.SLIDING_END and late.mode_to == exit_.mode_to:
+                return SlidingChange(SpecialPointKind.ADDING_SLIDING, without.events.index(exit_), e.mode_to,
+                                     e.surface, 0.5 * (e.t + nxt.t), -_arrival_side(flow, nxt, p_with))
+    return None
+
+
+@dataclass(frozen=True)
+class SlidingBifurcationOrbit:
+    """A located orbit at a crossing-, switching- or adding-sliding bifurcation.
+
+    Attributes
+    ----------
+    kind : SpecialPointKind
     parameter : float
     state0 : ndarray
-        The orbit's state at ``t0`` (it starts sliding at ``t_hit``, exactly where ``f_B`` is tangent).
-    t_hit : float
-    x_hit : ndarray
-    far_mode : str
-        The mode ``B`` whose field is tangent to the surface there.
+        The orbit's state at ``t0``.
+    t_touch : float
+        Where the orbit meets the boundary of the sliding region.
+    x_touch : ndarray
+    mode : str
+        The mode whose field is tangent to the surface there.
+    curvature : float
+        ``d2h/dt2`` along that field at the touch, signed so that positive
+        means the field's orbit leaves the surface to the mode's side (a
+        visible tangency); zero to rounding at an adding-sliding, where the
+        third derivative decides.
     accuracy : float
         The Newton correction of the parameter that would follow, plus the
         integration error carried to the parameter (an error estimate).
     residuals : list of float
     trajectory : Trajectory
+        The period from ``state0``, with its monodromy.
     """
 
+    kind: SpecialPointKind
     parameter: float
     state0: np.ndarray
-    t_hit: float
-    x_hit: np.ndarray
-    far_mode: str
+    t_touch: float
+    x_touch: np.ndarray
+    mode: str
+    curvature: float
     accuracy: float
     residuals: list[float]
     trajectory: Trajectory
 
 
-def crossing_sliding_change(without: Trajectory, with_: Trajectory) -> tuple[int, SwitchingEvent] | None:
-    """Recognise a crossing-sliding change between two orbits.
-
-    ``with_`` has one event more: a crossing of a surface into a mode ``B``,
-    right before the start of a sliding motion on the same surface, where
-    ``without`` starts sliding at once.  Returns ``(index of the sliding start
-    in without's events, the crossing in with_)`` or None.
-    """
-    ev_wo, ev_w = without.events, with_.events
-    if len(ev_w) != len(ev_wo) + 1:
-        return None
-    for i, e in enumerate(ev_w[:-1]):
-        nxt = ev_w[i + 1]
-        if e.kind == EventKind.TRANSITION and nxt.kind == EventKind.SLIDING_START and nxt.surface == e.surface:
-            rest = ev_w[:i] + ev_w[i + 1:]
-            same = all(a.kind == b.kind and a.surface == b.surface for a, b in zip(rest, ev_wo))
-            if same and ev_wo[i].kind == EventKind.SLIDING_START:
-                return i, e
-    return None
+def exit_rate(flow: Flow, mode: str, surface: str, t: float, x: np.ndarray, p: np.ndarray) -> float:
+    """``h_x f + h_t``: the rate of the indicator along a mode's field (zero where the field is tangent)."""
+    hx, ht, _ = flow.indicator_gradient(surface, t, x, p)
+    return float(hx @ flow.vector_field(mode, t, x, p) + ht)
 
 
-def locate_crossing_sliding(
-    flow: Flow, x0: np.ndarray, lam: float, lam_name: str, index: int, far_mode: str, *, parameters=None,
+def rate_along(flow: Flow, mode: str, fn: Callable[[float, np.ndarray], float], t: float, x: np.ndarray,
+               p: np.ndarray, delta: float = 1e-3) -> float:
+    """The derivative of ``fn(t, x)`` along the field of ``mode``: a fourth-order central difference
+    along the straight line ``(t + s, x + s f(t, x))`` (exact to ``O(delta^4)``, rounding
+    ``O(eps / delta)``)."""
+    f = flow.vector_field(mode, t, x, p)
+    d = delta * max(1.0, abs(t)) / max(1.0, float(np.linalg.norm(f)))
+    v = [fn(t + k * d, x + k * d * f) for k in (-2, -1, 1, 2)]
+    return (v[0] - 8.0 * v[1] + 8.0 * v[2] - v[3]) / (12.0 * d)
+
+
+def _curvature(flow: Flow, mode: str, surface: str, side: float, t: float, x: np.ndarray, p: np.ndarray) -> float:
+    """``d2h/dt2`` along a mode's field, signed positive when its orbit leaves the surface into the mode
+    (on ``side``)."""
+    return side * rate_along(flow, mode, lambda s, y: exit_rate(flow, mode, surface, s, y, p), t, x, p)
+
+
+def _newton(flow: Flow, z0: np.ndarray, lam_name: str, extra: Callable, n_extra: int, history: list[float], *,
+            parameters, t0: float, tol: float, max_iter: int, fd_step: float, tolerances, what: str):
+    """Newton's method on periodicity plus ``n_extra`` conditions ``extra(z, q) -> (values, info)`` of
+    ``z = (x0, lam, extra unknowns)``; the periodicity rows are exact (variational equations), the
+    conditions' rows central differences.  Appends the residual norms to ``history``; returns
+    ``(z, info, full trajectory, accuracy)``."""
+    system = flow.system
+    j = system.parameter_index(lam_name)
+    p = flow.parameters(parameters).copy()
+    n = system.n
+    m = len(z0)
+
+    def params(z):
+        q = p.copy()
+        q[j] = z[n]
+        return q
+
+    z = np.asarray(z0, dtype=float).copy()
+    for it in range(max_iter + 1):
+        q = params(z)
+        T = system.forcing_period(q)
+        full = flow.run(z[:n], t0, t0 + T, q, variational=True, parameter=j, tolerances=tolerances)
+        c, info = extra(z, q)
+        residual = np.concatenate([full.x1 - z[:n], c])
+        rn = float(np.linalg.norm(residual))
+        history.append(rn)
+        J = np.zeros((n + n_extra, m))
+        J[:n, :n] = full.monodromy - np.eye(n)
+        J[:n, n] = full.parameter_sensitivity + system.period_derivative(q, j) * full.velocity_end
+        for i in range(m):
+            step = fd_step * max(1.0, abs(z[i]))
+            e = np.zeros(m)
+            e[i] = step
+            J[n:, i] = (extra(z + e, params(z + e))[0] - extra(z - e, params(z - e))[0]) / (2 * step)
+        dz = np.linalg.lstsq(J, -residual, rcond=None)[0] if J.shape[0] != J.shape[1] else np.linalg.solve(J, -residual)
+        if rn <= tol * (1.0 + float(np.linalg.norm(z[: n + 1]))):
+            carried = float(np.abs(np.linalg.pinv(J)[n]).sum()) * flow.integration_error(full, tolerances)
+            accuracy = abs(float(dz[n])) + carried + 4e-16 * max(1.0, abs(float(z[n])))
+            return z, info, full, accuracy
+        if it == max_iter:
+            break
+        z = z + dz
+    raise ConvergenceError(f"{what} did not converge", history)
+
+
+def locate_tangent_arrival(
+    flow: Flow, x0: np.ndarray, lam: float, lam_name: str, index: int, far_mode: str, side: float, *, parameters=None,
     t0: float = 0.0, tol: float = 1e-12, max_iter: int = 20, fd_step: float = 1e-7, tolerances=None,
-) -> CrossingSliding:
-    """Newton's method on periodicity plus ``h_x f_B + h_t = 0`` where the orbit starts sliding.
+) -> SlidingBifurcationOrbit:
+    """Locate a crossing- or switching-sliding: periodicity plus ``h_x f_B + h_t = 0`` where the orbit
+    arrives at the surface.
 
-    ``index`` is the position of that sliding start among the orbit's events
-    (on the other side of the bifurcation, the crossing into ``B`` takes its
-    place: the same arrival at the surface); the derivatives of the tangency
-    condition are taken by central differences.
+    ``index`` is the position of that arrival among the orbit's events: a
+    crossing into ``B`` or a sliding start, the same point on either side of
+    the bifurcation (continuous across it), so the condition's derivatives by
+    central differences are well defined there.  ``side`` is the sign of
+    ``h`` on ``B``'s side.  The kind follows from the tangency's curvature:
+    visible from ``B`` (its orbit leaves the surface) is a crossing-sliding,
+    invisible a switching-sliding.
 
     Raises
     ------
@@ -102,55 +286,89 @@ def locate_crossing_sliding(
     system = flow.system
     tolerances = location_tolerances(flow, tolerances)
     if system.is_autonomous:
-        raise ModelError(f"locating a crossing-sliding is implemented for forced models; {system.name!r} is autonomous")
-    j = system.parameter_index(lam_name)
-    p = flow.parameters(parameters).copy()
+        raise ModelError(f"locating a sliding bifurcation is implemented for forced models; {system.name!r} is autonomous")
     n = system.n
     history: list[float] = []
 
-    def tangency(z: np.ndarray) -> tuple[float, Trajectory]:
-        q = p.copy()
-        q[j] = z[-1]
+    def tangency(z: np.ndarray, q: np.ndarray):
         traj = flow.run(z[:n], t0, t0 + system.forcing_period(q), q, tolerances=tolerances)
-        # the orbit's arrival at the surface: the start of sliding on one side of the bifurcation, the
-        # crossing into B on the other (the same point, continuous across it)
-        if len(traj.events) <= index or traj.events[index].kind == EventKind.SLIDING_END:
-            raise ConvergenceError("crossing-sliding: the orbit's events changed during the iteration", history)
+        if len(traj.events) <= index or traj.events[index].kind not in _ARRIVALS:
+            raise ConvergenceError("sliding bifurcation: the orbit's events changed during the iteration", history)
         e = traj.events[index]
-        hx, ht, _ = flow.indicator_gradient(e.surface, e.t, e.x_minus, q)
-        return float(hx @ flow.vector_field(far_mode, e.t, e.x_minus, q) + ht), traj
+        return np.array([exit_rate(flow, far_mode, e.surface, e.t, e.x_minus, q)]), e
 
-    z = np.append(np.asarray(x0, dtype=float), float(lam))
-    for it in range(max_iter + 1):
-        q = p.copy()
-        q[j] = z[-1]
-        T = system.forcing_period(q)
-        full = flow.run(z[:n], t0, t0 + T, q, variational=True, parameter=j, tolerances=tolerances)
-        c, traj = tangency(z)
-        residual = np.append(full.x1 - z[:n], c)
-        rn = float(np.linalg.norm(residual))
-        history.append(rn)
-        J = np.zeros((n + 1, n + 1))
-        J[:n, :n] = full.monodromy - np.eye(n)
-        J[:n, n] = full.parameter_sensitivity + system.period_derivative(q, j) * full.velocity_end
-        for i in range(n + 1):
-            step = fd_step * max(1.0, abs(z[i]))
-            e = np.zeros(n + 1)
-            e[i] = step
-            J[n, i] = (tangency(z + e)[0] - tangency(z - e)[0]) / (2 * step)
-        dz = np.linalg.solve(J, -residual)
-        if rn <= tol * (1.0 + float(np.linalg.norm(z))):
-            hit = traj.events[index]
-            carried = float(np.abs(np.linalg.inv(J)[-1]).sum()) * flow.integration_error(full, tolerances)
-            return CrossingSliding(
-                parameter=float(z[-1]), state0=z[:n].copy(), t_hit=hit.t, x_hit=hit.x_minus.copy(), far_mode=far_mode,
-                accuracy=abs(float(dz[-1])) + carried + 4e-16 * max(1.0, abs(float(z[-1]))), residuals=history,
-                trajectory=full,
-            )
-        if it == max_iter:
-            break
-        z = z + dz
-    raise ConvergenceError("crossing-sliding did not converge", history)
+    z, hit, full, accuracy = _newton(
+        flow, np.append(np.asarray(x0, dtype=float), float(lam)), lam_name, tangency, 1, history, parameters=parameters,
+        t0=t0, tol=tol, max_iter=max_iter, fd_step=fd_step, tolerances=tolerances, what="sliding bifurcation",
+    )
+    q = flow.parameters(parameters).copy()
+    q[system.parameter_index(lam_name)] = z[n]
+    curvature = _curvature(flow, far_mode, hit.surface, side, hit.t, hit.x_minus, q)
+    kind = SpecialPointKind.CROSSING_SLIDING if curvature > 0 else SpecialPointKind.SWITCHING_SLIDING
+    return SlidingBifurcationOrbit(
+        kind=kind, parameter=float(z[n]), state0=z[:n].copy(), t_touch=hit.t, x_touch=hit.x_minus.copy(),
+        mode=far_mode, curvature=curvature, accuracy=accuracy, residuals=history, trajectory=full,
+    )
 
 
-__all__ = ["CrossingSliding", "crossing_sliding_change", "locate_crossing_sliding"]
+def locate_adding_sliding(
+    flow: Flow, x0: np.ndarray, lam: float, lam_name: str, t_guess: float, exit_mode: str, surface: str, side: float, *,
+    parameters=None, t0: float = 0.0, tol: float = 1e-12, max_iter: int = 20, fd_step: float = 1e-6,
+    tolerances=None,
+) -> SlidingBifurcationOrbit:
+    """Locate an adding-sliding: periodicity plus, at an unknown instant ``tau`` of a sliding motion,
+    ``g = h_x f_A + h_t = 0`` and ``dg/dt = 0`` along ``f_A`` (the exit side's cubic tangency).
+
+    The unknowns are ``(x0, lam, tau)``; ``t_guess`` starts ``tau`` (for
+    example between the extra exit and re-entry of the orbit that has them);
+    ``side`` is the sign of ``h`` on ``A``'s side.
+    ``g`` and its rate are taken at the state reached at ``tau`` (on the
+    surface while the orbit slides; on the side that leaves, a state a little
+    off it, where both are continuous).
+
+    Raises
+    ------
+    ConvergenceError
+        If Newton does not converge, or the touch does not lie on a sliding motion.
+    ModelError
+        For an autonomous model.
+    """
+    system = flow.system
+    tolerances = location_tolerances(flow, tolerances)
+    if system.is_autonomous:
+        raise ModelError(f"locating a sliding bifurcation is implemented for forced models; {system.name!r} is autonomous")
+    n = system.n
+    history: list[float] = []
+
+    def touch(z: np.ndarray, q: np.ndarray):
+        tau = float(z[n + 1])
+        traj = flow.run(z[:n], t0, tau, q, tolerances=tolerances)
+        x = traj.x1
+
+        def g(s, y):
+            return exit_rate(flow, exit_mode, surface, s, y, q)
+
+        return np.array([g(tau, x), rate_along(flow, exit_mode, g, tau, x, q)]), traj
+
+    z0 = np.concatenate([np.asarray(x0, dtype=float), [float(lam), float(t_guess)]])
+    z, traj, full, accuracy = _newton(
+        flow, z0, lam_name, touch, 2, history, parameters=parameters, t0=t0, tol=tol, max_iter=max_iter,
+        fd_step=fd_step, tolerances=tolerances, what="adding-sliding",
+    )
+    q = flow.parameters(parameters).copy()
+    q[system.parameter_index(lam_name)] = z[n]
+    # at the touch the orbit slides (or, exactly at the bifurcation, leaves and returns at once)
+    if abs(flow.indicator(surface, float(z[n + 1]), traj.x1, q)) > 1e-9 * (1.0 + float(np.linalg.norm(traj.x1))):
+        raise ConvergenceError("adding-sliding: the located touch does not lie on the switching surface", history)
+    curvature = _curvature(flow, exit_mode, surface, side, float(z[n + 1]), traj.x1, q)
+    return SlidingBifurcationOrbit(
+        kind=SpecialPointKind.ADDING_SLIDING, parameter=float(z[n]), state0=z[:n].copy(), t_touch=float(z[n + 1]),
+        x_touch=traj.x1.copy(), mode=exit_mode, curvature=curvature, accuracy=accuracy, residuals=history,
+        trajectory=full,
+    )
+
+
+__all__ = [
+    "SlidingBifurcationOrbit", "SlidingChange", "exit_rate", "locate_adding_sliding", "locate_tangent_arrival",
+    "rate_along", "sliding_change",
+]
