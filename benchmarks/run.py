@@ -350,6 +350,45 @@ def bench_loci(quick: bool) -> dict:
     t_graze = median_time(lambda: locate_grazing(impact, guess, 2.9, "s", 0, 0.3, parameters={"s": 2.9}), 5 if quick else 30)
     out["grazing_location_ms"] = t_graze * 1e3
     out["grazing_location_in_period_maps"] = t_graze / t_map
+    out.update(_sliding_locations(quick))
+    return out
+
+
+def _sliding_locations(quick: bool) -> dict:
+    """The friction oscillator's crossing- and adding-sliding, located from a nearby orbit, in period maps of
+    that model (with monodromy and a parameter sensitivity)."""
+    from saltation.models import friction_oscillator
+    from saltation.sliding import locate_adding_sliding, locate_tangent_arrival, sliding_change
+
+    out = {}
+    for name, param, value, near, other in (("crossing_sliding", "v_b", 0.9, 0.91, {"F": 0.5}),
+                                            ("adding_sliding", "F", 0.2, 0.905, {"v_b": 0.2})):
+        flow = Flow(friction_oscillator(**other))
+        T = 2 * math.pi / 0.8
+        far = 0.9 if name == "crossing_sliding" else 0.895
+
+        def orbit(v):
+            q = flow.parameters({param: v})
+            x = np.array([0.0, q[flow.system.parameter_index("v_b")]])
+            for _ in range(100):
+                x = flow.run(x, 0.0, T, q).x1
+            return find_periodic_orbit(flow, x, parameters={param: v}).state0, q
+
+        x_near, p_near = orbit(near)
+        x_far, p_far = orbit(far)
+        t_map = median_time(lambda: flow.run(x_near, 0.0, T, p_near, variational=True, parameter=0), 20 if quick else 200)
+        a, b = flow.run(x_near, 0.0, T, p_near), flow.run(x_far, 0.0, T, p_far)
+        without, with_, p_wo, p_w = (a, b, p_near, p_far) if len(a.events) < len(b.events) else (b, a, p_far, p_near)
+        change = sliding_change(flow, without, with_, p_w, p_wo)
+        if change.kind.value == "adding_sliding":
+            locate = lambda: locate_adding_sliding(flow, x_near, near, param, change.t_guess, change.mode,  # noqa: E731
+                                                   change.surface, change.side, parameters=p_near)
+        else:
+            locate = lambda: locate_tangent_arrival(flow, x_near, near, param, change.index, change.mode,  # noqa: E731
+                                                    change.side, parameters=p_near)
+        t = median_time(locate, 3 if quick else 10)
+        out[f"{name}_location_ms"] = t * 1e3
+        out[f"{name}_location_in_period_maps"] = t / t_map
     return out
 
 
@@ -432,10 +471,12 @@ def table(results: dict) -> str:
         ("sweep, one worker (s)", "sweep_1_worker_s", None, None),
         ("one period map with monodromy (ms)", "period_map_ms", None, None),
         ("grazing located (in period maps)", "grazing_location_in_period_maps", None, None),
+        ("crossing-sliding located (in period maps)", "crossing_sliding_location_in_period_maps", None, None),
+        ("adding-sliding located (in period maps)", "adding_sliding_location_in_period_maps", None, None),
         ("corner curve, 200 points (s)", "corner_curve_s_per_200_points", None, None),
         ("fold curve, 200 points (s)", "fold_curve_s_per_200_points", None, None),
     ]
-    lines = [f"{'benchmark':38s} {'saltation':>11s} {'scipy':>11s} {'ratio':>8s}  target"]
+    lines = [f"{'benchmark':42s} {'saltation':>11s} {'scipy':>11s} {'ratio':>8s}  target"]
     for label, k, kb, kr in rows:
         if k not in results:
             continue
@@ -445,7 +486,7 @@ def table(results: dict) -> str:
         target = met(k, results[k])
         if kr and kr in results and kr in TARGETS:
             target += ("; " if target else "") + met(kr, results[kr])
-        lines.append(f"{label:38s} {fmt(results[k]):>11s} {b:>11s} {r:>8s}  {target}")
+        lines.append(f"{label:42s} {fmt(results[k]):>11s} {b:>11s} {r:>8s}  {target}")
     if "chain" in results:
         lines.append("")
         lines.append(f"{'chain n':>8s} {'orbit ms':>10s} {'period map ms':>14s} {'Newton':>7s} {'events':>7s}")

@@ -81,6 +81,14 @@ def test_the_fold_curve_is_born_at_a_corner(trilinear_loci):
     nearest = min(births, key=lambda c: np.hypot(*(np.array(c.values) - end)))
     step = np.max(np.linalg.norm(np.diff(fold.points, axis=0), axis=1))
     assert np.hypot(*(np.array(nearest.values) - end)) <= nearest.accuracy + step
+    # and on the fold curve itself: its end is labelled where it meets the corner curve (the corner located
+    # at the f0 of its nearest point), within the stated accuracy of that point and of the birth
+    (label,) = fold.special_points
+    assert label.kinds[0] == "fold" and label.kinds[1] in ("nonsmooth_no_crossing", "discontinuous_fold")
+    assert np.hypot(*(np.array(label.values) - end)) <= label.accuracy * (1 + 1e-9)
+    assert label.values[1] == pytest.approx(XC * np.sqrt((K - M * label.values[0] ** 2) ** 2 + (C * label.values[0]) ** 2),
+                                            abs=1e-9)  # on the corner curve
+    assert np.hypot(*(np.array(nearest.values) - np.array(label.values))) <= nearest.accuracy + label.accuracy
 
 
 def test_grazing_curve_of_the_impact_oscillator_against_closed_form():

@@ -22,6 +22,10 @@ Along a grazing or corner curve the kind of the non-smooth point (its
 set-valued multipliers, classified as on a branch) is followed; where it
 changes the curve carries a codimension-two point, labelled with both kinds
 and located between two curve points (its ``accuracy`` is their distance).
+Along a fold or period-doubling curve the orbit's event sequence is
+followed; where it changes, the curve meets a corner or grazing there (a
+fold born at a corner, a grazing that ends a fold curve), labelled with the
+curve's kind and the non-smooth point's.
 """
 
 from __future__ import annotations
@@ -33,13 +37,13 @@ import numpy as np
 
 from .bifurcations import classify_nonsmooth
 from .boundary import saltation_at_corner
-from .branch import SpecialPoint, SpecialPointKind
-from .continuation import Continuation, ContinuationSettings
+from .branch import SpecialPoint, SpecialPointKind, StopReason
+from .continuation import Continuation, ContinuationSettings, canonical_events
 from .errors import IntegrationError, ModelError, SaltationError
 from .floquet import is_stable, multipliers_from_monodromy
-from .grazing import grazing_candidates, grazing_system, tangency_time
+from .grazing import grazing_candidates, grazing_system, locate_grazing, tangency_time
 from .integrate import EventKind, Flow
-from .shooting import Evaluation, ShootingProblem, SolutionSummary
+from .shooting import Evaluation, ShootingProblem, SolutionSummary, event_labels
 from .sliding import exit_rate, rate_along
 
 #: Special points continued by the defining systems of :mod:`saltation.sliding`.
@@ -144,7 +148,7 @@ class _CurveProblem:
 
     def restore(self, state: dict) -> None:
         for key, value in state.items():
-            setattr(self, key, value)
+            setattr(self, key, list(value) if isinstance(value, list) else value)  # each run its own lists
 
     def _summary(self, u: np.ndarray, monodromy: np.ndarray, period: float, traj) -> SolutionSummary:
         mu = multipliers_from_monodromy(monodromy)
@@ -339,7 +343,7 @@ def follow_locus(
     # the curve's own turning points and the multipliers of its orbits are not special points of the curve
     settings = replace(settings, bounds=bounds, detect=False)
     lam0 = float(p[curve.lam_index])
-    runs, reasons, kinds_by_run = [], [], []
+    runs, reasons, kinds_by_run, events_by_run, ends = [], [], [], [], []
     start = curve.snapshot()
     for direction in (1, -1):
         curve.restore(start)  # each direction starts from the special point's own guesses
@@ -350,6 +354,11 @@ def follow_locus(
         runs.append([sol.z.copy() for sol in cont.solutions])
         kinds_by_run.append(list(getattr(curve, "kinds", [])))
         reasons.append(f"{'increasing' if direction > 0 else 'decreasing'} {second}: {cont.branch.stop_reason.value}")
+        events_by_run.append(list(getattr(curve, "events", [])))
+        if not classify and cont.branch.stop_reason is not StopReason.PARAMETER_BOUND:
+            end = _end_at_a_corner(problem, curve, point.kind, runs[-1])
+            if end is not None:
+                ends.append(end)
     zs = list(reversed(runs[1]))[:-1] + runs[0]
     n = problem.system.n
     points = np.array([[z[n], z[-1]] for z in zs])
@@ -364,7 +373,69 @@ def follow_locus(
                     kinds=(locus.kinds[a], locus.kinds[a + 1]), values=(float(mid[0]), float(mid[1])),
                     accuracy=float(np.linalg.norm(points[a + 1] - points[a])),
                 ))
+    events = list(reversed(events_by_run[1]))[:-1] + events_by_run[0]
+    if not classify and len(events) == len(zs):  # (curves that follow their orbits' event sequences)
+        for a in range(len(zs) - 1):
+            if events[a] != events[a + 1]:
+                touch = _touch_kind(problem, curve, zs[a] if len(events[a]) <= len(events[a + 1]) else zs[a + 1])
+                mid = 0.5 * (points[a] + points[a + 1])
+                locus.special_points.append(Codim2Point(
+                    kinds=(point.kind.value, touch), values=(float(mid[0]), float(mid[1])),
+                    accuracy=float(np.linalg.norm(points[a + 1] - points[a])),
+                ))
+    locus.special_points.extend(ends)
     return locus
+
+
+def _end_at_a_corner(problem: ShootingProblem, curve: _CurveProblem, kind: SpecialPointKind,
+                     zs: list[np.ndarray], *, gap: float = 1e-3, last: int = 12) -> Codim2Point | None:
+    """Where a fold or period-doubling curve stops short of its bounds because its orbit comes to touch a
+    switching surface (a segment of the orbit shrinks to nothing: a smooth fold born at a corner), the
+    curve ends on the corner curve.  Of its last points, the one whose orbit comes nearest to a surface
+    (within ``gap`` of the state's size) is taken; the corner at its value of the second parameter is
+    located by the grazing defining system in the first.  That corner is the label's position, and the
+    distance from the curve point to it the label's accuracy."""
+    n = problem.system.n
+    best = None
+    for z in zs[-last:]:
+        p = curve.parameters_at(z[:-1], z[-1])
+        try:
+            (transition, t_g), *_ = grazed_transitions(problem.flow, z[:n], p, t0=problem.t0,
+                                                       tolerances=problem.tolerances)
+            surface = problem.system.transitions[transition].surface
+            x = problem.flow.run(z[:n], problem.t0, t_g, p, tolerances=problem.tolerances).x1
+        except SaltationError:
+            continue
+        g = abs(problem.flow.indicator(surface, t_g, x, p)) / (1.0 + float(np.linalg.norm(x)))
+        if g <= gap and (best is None or g < best[0]):
+            best = (g, z, p, transition, t_g)
+    if best is None:
+        return None
+    _, z, p, transition, t_g = best
+    try:
+        corner = locate_grazing(problem.flow, z[:n], float(z[n]), problem.lam_name, transition, t_g, parameters=p,
+                                t0=problem.t0, tolerances=problem.tolerances)
+    except SaltationError:
+        return None
+    at = np.concatenate([corner.state0, [corner.parameter, z[-1]]])
+    return Codim2Point(kinds=(kind.value, _touch_kind(problem, curve, at)), values=(corner.parameter, float(z[-1])),
+                       accuracy=abs(corner.parameter - float(z[n])))
+
+
+def _touch_kind(problem: ShootingProblem, curve: _CurveProblem, z: np.ndarray) -> str:
+    """The kind of the non-smooth point a curve's orbit meets where its event sequence changes (a smooth
+    fold born at a corner, a fold curve ended by a grazing): classified at the curve point on the side
+    without the extra events, as on a corner curve; ``"nonsmooth"`` when that fails."""
+    n = problem.system.n
+    p = curve.parameters_at(z[:-1], z[-1])
+    try:
+        (transition, t_g), *others = grazed_transitions(problem.flow, z[:n], p, t0=problem.t0,
+                                                        tolerances=problem.tolerances)
+        corner = GrazingCurve(problem.flow, p, problem.lam_name, curve.lam_name, transition, t_g, t0=problem.t0,
+                              tolerances=problem.tolerances, others=others)
+        return corner.corner_kind(z[: n + 1], z[-1], t_g)
+    except SaltationError:
+        return "nonsmooth"
 
 
 class SlidingCurve(_CurveProblem):
@@ -486,6 +557,8 @@ class MultiplierCurve(_CurveProblem):
         self.mu = float(mu)
         self.h = float(h)
         self._border: tuple[np.ndarray, np.ndarray] | None = None  # b, c: fixed at the first evaluation
+        self._last = None
+        self.events: list[tuple[str, ...]] = []  # the orbit's event sequence at every accepted point
 
     @property
     def dimension(self) -> int:
@@ -539,6 +612,13 @@ class MultiplierCurve(_CurveProblem):
                 jac_lam[n] = d
         self._last = (M, T, traj1)
         return Evaluation(residual=residual, jac_u=jac_u, jac_lam=jac_lam, trajectory=traj1)
+
+    def accept(self, u: np.ndarray, lam: float) -> None:
+        if self._last is not None:
+            self.events.append(canonical_events(event_labels(self._last[2])))
+
+    def snapshot(self) -> dict:
+        return {"_last": None, "events": []}
 
     def _monodromy(self, z: np.ndarray) -> np.ndarray:
         n = self.system.n

@@ -148,8 +148,10 @@ def sliding_change(flow: Flow, without: Trajectory, with_: Trajectory, p_with: n
             late = w[(i + 2) % m]
             exit_ = _rotation_matching(rest, wo, EventKind.SLIDING_END, e.surface)
             if exit_ is not None and late.kind == EventKind.SLIDING_END and late.mode_to == exit_.mode_to:
+                span = with_.t1 - with_.t0  # the touch lies between the extra exit and re-entry, modulo the period
+                t_guess = with_.t0 + (e.t - with_.t0 + 0.5 * ((nxt.t - e.t) % span)) % span
                 return SlidingChange(SpecialPointKind.ADDING_SLIDING, without.events.index(exit_), e.mode_to,
-                                     e.surface, 0.5 * (e.t + nxt.t), -_arrival_side(flow, nxt, p_with))
+                                     e.surface, t_guess, -_arrival_side(flow, nxt, p_with))
     return None
 
 
