@@ -30,16 +30,18 @@ def oscillator_system() -> PiecewiseSystem:
     * ``root``: field ``[v, -sqrt(x)]``, which is NaN for ``x < 0``.
 
     ``ball`` and ``root`` are reached only by passing ``mode0``; the domains of
-    ``below`` and ``above`` leave the wall ``x = a`` itself uncovered.
+    ``below`` and ``above`` leave the wall ``x = a`` itself uncovered.  With
+    ``gap > 0`` the domain of ``above`` starts beyond the wall: the model's
+    domains and transitions disagree.
     """
     field = ["v", "-w**2*x - g"]
     return PiecewiseSystem(
         name="test_oscillator",
         states=["x", "v"],
-        parameters={"w": 1.0, "a": 0.5, "g": 0.0, "e": 0.5},
+        parameters={"w": 1.0, "a": 0.5, "g": 0.0, "e": 0.5, "gap": 0.0},
         modes=[
             Mode("below", field, domain=["x - a < 0"]),
-            Mode("above", field, domain=["x - a > 0"]),
+            Mode("above", field, domain=["x - a - gap > 0"]),
             Mode("ball", field, domain=["x - a < 0"]),
             Mode("root", ["v", "-sqrt(x)"], domain=["x - a < 0"]),
         ],
@@ -81,7 +83,7 @@ def filippov_system() -> PiecewiseSystem:
 def _models_compiled_in_parallel() -> None:
     """On an empty kernel cache, compile the models most tests share at once, one process each, instead
     of one after another as the tests first use them (models already cached are skipped)."""
-    from saltation.codegen import compile_in_parallel
+    from saltation.precompile import compile_in_parallel
     from saltation.models import bouncing_ball, chain, friction_oscillator, impact_oscillator
     from saltation.paper import smoothed_block_on_belt
 

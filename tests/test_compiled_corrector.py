@@ -1,4 +1,4 @@
-"""The continuation corrector iterates Newton in the compiled kernel (Flow.correct_periodic).
+"""The continuation corrector iterates Newton in the compiled kernel (ShootingProblem.correct, Flow.compiled_newton).
 
 References: finite differences of the shooting residual in the unknowns and
 the parameter (independent shots at tight tolerances), the same bordered
@@ -155,19 +155,19 @@ def test_pivoted_solve_against_lapack(trilinear_flow):
 
 def test_singular_bordered_matrix_is_left_to_the_python_iteration(trilinear_flow, contact_orbit):
     """A zero pseudo-arclength normal makes the bordered matrix singular: the kernel's solve reports it
-    (no step is taken) and Flow.correct_periodic returns None, so the Python iteration explains it."""
+    (no step is taken), and the shooting problem's compiled corrector declines (returns None), so the
+    Python iteration explains it."""
+    from saltation._contract import SHOOT_SINGULAR
+
     p = trilinear_flow.parameters({"omega": 1.0})
     lam = trilinear_flow.system.parameter_index("omega")
     z = np.append(contact_orbit.state0 + 1e-3, 1.0)  # off the orbit: Newton must solve
-    kwargs = dict(t0=0.0, sign=1.0, lam_index=lam, phase=None, tol=1e-10, max_newton=5, max_correction=1.0)
-    assert trilinear_flow.correct_periodic(z, np.zeros(3), p, **kwargs) is None
-    k, flow = trilinear_flow._kernels, trilinear_flow
-    steps, limits, flags = flow.tolerances.kernel_arguments
-    code, it, *_ = k.correct_periodic(
-        z, np.zeros(3), 0.0, 1.0, False, lam, 0.0, p, flow._zeros, flow._zeros, 1e-10, 5, 1.0, False, *steps,
-        *limits, flow._table, flow._n_surfaces, flow._identity, flow._zeros, *flags,
-    )
-    assert code == k.SHOOT_SINGULAR and it == 0
+    kwargs = dict(t0=0.0, sign=1.0, lam_index=lam, span=0.0, phase=None, tol=1e-10, max_iter=5, max_correction=1.0,
+                  damped=False)
+    singular = trilinear_flow.compiled_newton(z, np.zeros(3), p, **kwargs)
+    assert singular.code == SHOOT_SINGULAR and singular.unsupported and singular.iterations == 0
+    problem = ShootingProblem(trilinear_flow, {"omega": 1.0}, continuation_parameter="omega")
+    assert problem.correct(z, np.zeros(3), tol=1e-10, max_newton=5, max_correction=1.0) is None
     normal = np.array([0.0, 0.0, 1.0])  # the same point with a proper normal converges
-    it, z_new, *_ = trilinear_flow.correct_periodic(z, normal, p, **kwargs)
-    assert it >= 1 and abs(z_new[-1] - 1.0) < 1e-12
+    found = trilinear_flow.compiled_newton(z, normal, p, **kwargs)
+    assert found.converged and found.iterations >= 1 and abs(found.z[-1] - 1.0) < 1e-12

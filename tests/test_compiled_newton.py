@@ -1,4 +1,4 @@
-"""Shooting for forced systems iterates Newton in the compiled kernel (Flow.newton_period_map).
+"""Shooting for forced systems iterates Newton in the compiled kernel (Flow.compiled_newton).
 
 Reference: the same damped Newton iteration in Python (saltation.shooting.newton),
 which the solver falls back to whenever the compiled iteration fails.
@@ -18,7 +18,7 @@ def python_newton(trilinear_flow, monkeypatch):
     """Make the compiled iteration decline, so that shooting runs the Python one."""
 
     def solve_in_python(flow):
-        monkeypatch.setattr(flow, "newton_period_map", lambda *args, **kwargs: None)
+        monkeypatch.setattr(flow, "compiled_newton", lambda *args, **kwargs: None)
 
     return solve_in_python
 
@@ -63,7 +63,8 @@ def test_compiled_iteration_declines_a_singular_jacobian(filippov_flow):
     an error from Python."""
     problem = ShootingProblem(filippov_flow, {"q": 0.0, "omega": 1.0})
     p = problem.parameters_at(None)
-    found = filippov_flow.newton_period_map([0.0, -0.5], 0.0, 2 * np.pi, p, tol=1e-10, max_iter=5)
-    assert found is None
+    found = filippov_flow.compiled_newton([0.0, -0.5], None, p, t0=0.0, sign=1.0, lam_index=-1, span=2 * np.pi,
+                                          phase=None, tol=1e-10, max_iter=5, max_correction=0.0, damped=True)
+    assert not found.converged
     with pytest.raises(ConvergenceError):
         problem.solve(np.array([0.0, -0.5]), max_iter=5)

@@ -126,6 +126,17 @@ def test_nan_on_the_way_names_the_mode(oscillator_flow):
         oscillator_flow.run([1.0, -1.0], 0.0, 5.0, oscillator_flow.parameters(), mode0="root")
 
 
+def test_a_transition_into_a_mode_whose_domain_excludes_the_state(oscillator_flow):
+    """'above' begins at x = a + gap but the transition into it fires at the wall x = a, and no transition
+    leaves it there: the run stops and names the mode and the transition, instead of going on."""
+    p = oscillator_flow.parameters({"gap": 0.3})
+    with pytest.raises(ModelError, match=r"after 'below' -> 'above' on surface 'wall' lies outside the domain of mode 'above'"):
+        oscillator_flow.run([0.0, 1.0], 0.0, 2.0, p)
+    # consistent domains (gap = 0): the same run crosses the wall
+    traj = oscillator_flow.run([0.0, 1.0], 0.0, 2.0, oscillator_flow.parameters())
+    assert [(e.mode_from, e.mode_to) for e in traj.events][:1] == [("below", "above")]
+
+
 def test_zeno_bouncing_ball_is_chattering(oscillator_flow):
     """Restitution e = 1/2: the impact times accumulate at t = sqrt(2) (1 + 2e / (1 - e)) = 3 sqrt(2)."""
     p = oscillator_flow.parameters({"w": 0.0, "g": 1.0, "e": 0.5})

@@ -181,3 +181,35 @@ def test_indicator_rates_against_central_differences():
         for s in range(2):
             fd = (indicator(s, t + eps, x + eps * f, p) - indicator(s, t - eps, x - eps * f, p)) / (2 * eps)
             assert rate(s, t, x, f, p, np.zeros(2), np.zeros(3)) == pytest.approx(fd, rel=1e-8, abs=1e-8)
+
+
+def test_transitions_that_differ_only_in_their_guard_have_their_own_identity():
+    """A ball falling on a floor, with a harder restitution for fast impacts: two transitions with the same
+    source, surface, direction and target (the same label) but other guards and resets. Detectors compare
+    event sequences by identity, so an orbit that switches from one to the other is seen to change."""
+    from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition
+    from saltation.corrector import canonical_events
+    from saltation.shooting import event_ids, event_labels
+
+    system = PiecewiseSystem(
+        name="two_restitutions",
+        states=["x", "v"],
+        parameters={"g": 1.0, "v_c": 1.0},
+        modes=[Mode("flight", ["v", "-g"], domain=["x > 0"])],
+        surfaces={"floor": "x"},
+        transitions=[
+            Transition("flight", "floor", Crossing.FALLING, "flight", reset=["x", "-0.5*v"], guard=["-v - v_c > 0"]),
+            Transition("flight", "floor", Crossing.FALLING, "flight", reset=["x", "-0.9*v"], guard=["-v - v_c < 0"]),
+        ],
+    )
+    flow = Flow(system)
+    p = flow.parameters()
+    # dropped from heights 2 and 0.2: impact speeds 2 and 0.63 (v^2 = 2 g h), one bounce before t = 2.1 / 0.7
+    fast = flow.run([2.0, 0.0], 0.0, 2.1, p)
+    slow = flow.run([0.2, 0.0], 0.0, 0.7, p)
+    assert event_labels(fast) == event_labels(slow) == ("flight -[floor-]-> flight",)
+    assert [e.transition for e in fast.events] == [0] and [e.transition for e in slow.events] == [1]
+    assert canonical_events(event_ids(fast)) != canonical_events(event_ids(slow))
+    # the resets applied are the guarded ones: v+ = -0.5 v- and -0.9 v-
+    assert fast.events[0].x_plus[1] == pytest.approx(-0.5 * fast.events[0].x_minus[1], rel=1e-14)
+    assert slow.events[0].x_plus[1] == pytest.approx(-0.9 * slow.events[0].x_minus[1], rel=1e-14)

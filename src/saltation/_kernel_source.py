@@ -29,23 +29,48 @@ import math
 import numpy as np
 from numba import njit
 
-# Status codes (mirrored in saltation.integrate.Status).
-STATUS_OK = 0
-STATUS_MAX_EVENTS = 1
-STATUS_CHATTERING = 2
-STATUS_STEP_TOO_SMALL = 3
-STATUS_NON_FINITE = 4
-STATUS_SLIDING_UNDEFINED = 5
-STATUS_MAX_STEPS = 6
-STATUS_TANGENTIAL = 7
-
-EVENT_TRANSITION = 0
-EVENT_SLIDING_START = 1
-EVENT_SLIDING_END = 2
+# The status codes (STATUS_*), event kinds (EVENT_*), Newton outcomes (SHOOT_*) and the layout of the
+# packed results (INFO_*, result_offsets) come from saltation/_contract.py, whose text the generated
+# module starts with; the offsets are compiled here for the kernel's own use.
+if False:  # never runs: these names come from saltation/_contract.py, which the generated module starts with
+    from saltation._contract import (  # noqa: F401
+        EVENT_LOG_INTS,
+        EVENT_SLIDING_END,
+        EVENT_SLIDING_START,
+        EVENT_TRANSITION,
+        INFO_EVENTS,
+        INFO_EVENT_LOG,
+        INFO_FAILED_MODE,
+        INFO_FAILED_SURFACE,
+        INFO_FINAL_MODE,
+        INFO_INITIAL_MODE,
+        INFO_REJECTED,
+        INFO_SLIDE,
+        INFO_STATUS,
+        INFO_STEPS,
+        SHOOT_BAD_PERIOD,
+        SHOOT_CONVERGED,
+        SHOOT_FAILED,
+        SHOOT_MAX_ITER,
+        SHOOT_SINGULAR,
+        SLIDE_WIDTH,
+        STATUS_CHATTERING,
+        STATUS_MAX_EVENTS,
+        STATUS_MAX_STEPS,
+        STATUS_NON_FINITE,
+        STATUS_OK,
+        STATUS_OUTSIDE_DOMAIN,
+        STATUS_SLIDING_UNDEFINED,
+        STATUS_STEP_TOO_SMALL,
+        STATUS_TANGENTIAL,
+        result_offsets,
+    )
+result_offsets_c = njit(cache=True, inline="always")(result_offsets)
 
 EPS = 2.220446049250313e-16
 CHATTER_WINDOW = 20
 SLIDING_EXIT_SAMPLES = 8  # samples of the sliding-exit functions inside a sliding step (see the event search)
+DOMAIN_TOLERANCE = 1e-8  # relative: a state beyond its mode's domain by more is an error of the model
 
 # event kinds (0: an indicator; 1, 2: a sliding motion's exit on side a, b) and "none", as typed
 # integers: a literal int argument would make numba compile the callee once more for it
@@ -931,9 +956,17 @@ def integrate_kernel(
                     if guard(k, t + dt_nudge, xtmp, p):  # noqa: F821
                         pending = k
                         break
-                # no exit holds: the domain fails by rounding only (a condition on the surface just
-                # crossed, with the motion nearly tangent to it), or the model's domains and
-                # transitions disagree; the kernel cannot tell the two apart and goes on
+                # no exit holds: the domain fails by rounding (a condition on the surface just crossed,
+                # with the motion nearly tangent to it), and the run goes on; or by more, and the model's
+                # domains and transitions disagree: the run stops (STATUS_OUTSIDE_DOMAIN)
+                if pending < 0 and n_ev > 0:  # (a mode given for the start is the caller's choice)
+                    scale = 1.0
+                    for i in range(n):
+                        scale = max(scale, abs(y[i]))
+                    if domain_margin(mode, t + dt_nudge, xtmp, p) < -DOMAIN_TOLERANCE * scale:  # noqa: F821
+                        status = STATUS_OUTSIDE_DOMAIN
+                        info_mode = mode
+                        break
             for s in range(n_surfaces):
                 fixed_sign[s] = False
             need_signs = False
@@ -1369,22 +1402,22 @@ def integrate_kernel(
             habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
         need_signs = True
 
-    # packed results, two arrays (each returned array costs a conversion): see saltation.integrate.Flow._unpack.
+    # packed results, two arrays (each returned array costs a conversion), laid out as _contract.py says:
     # floats: t, x, Phi, psi, x_min, x_max, f at the end; the event log's rows (t, x-, x+, S); the steps'
     # rows (start, size, end fraction, start state); their dense-output coefficients
-    n_out = 1 + 5 * n + n * n
+    o_x, o_phi, _, o_min, o_max, o_vel, n_out = result_offsets_c(n)
     w_ev = ev.shape[1]
     w_rec = rec.shape[1]
     out = np.zeros(n_out + n_ev * w_ev + n_rec * (w_rec + 7 * n))
     out[0] = t
     for i in range(n):
-        out[1 + i] = y[i]
-        out[1 + n + n * n + n + i] = xmin[i]
-        out[1 + n + n * n + 2 * n + i] = xmax[i]
-        out[1 + n + n * n + 3 * n + i] = K[0, i]  # the field (or sliding field) at the end
+        out[o_x + i] = y[i]
+        out[o_min + i] = xmin[i]
+        out[o_max + i] = xmax[i]
+        out[o_vel + i] = K[0, i]  # the field (or sliding field) at the end
     if var:
-        for i in range(n * n + n):
-            out[1 + n + i] = y[n + i]
+        for i in range(n * n + n):  # Phi, then psi
+            out[o_phi + i] = y[n + i]
     at = n_out
     for r in range(n_ev):
         for j in range(w_ev):
@@ -1401,20 +1434,20 @@ def integrate_kernel(
                 at += 1
     # integers: status, mode and surface of a failure, events, steps, rejected steps, final mode,
     # sliding state (5), initial mode; the event log's rows (kind, transition, surface, mode from, mode to)
-    info = np.zeros(13 + 5 * n_ev, dtype=np.int64)
-    info[0] = status
-    info[1] = info_mode
-    info[2] = info_surface
-    info[3] = n_ev
-    info[4] = n_steps
-    info[5] = n_rejected
-    info[6] = mode
-    for i in range(5):
-        info[7 + i] = slide[i]
-    info[12] = mode0
+    info = np.zeros(INFO_EVENT_LOG + EVENT_LOG_INTS * n_ev, dtype=np.int64)
+    info[INFO_STATUS] = status
+    info[INFO_FAILED_MODE] = info_mode
+    info[INFO_FAILED_SURFACE] = info_surface
+    info[INFO_EVENTS] = n_ev
+    info[INFO_STEPS] = n_steps
+    info[INFO_REJECTED] = n_rejected
+    info[INFO_FINAL_MODE] = mode
+    for i in range(SLIDE_WIDTH):
+        info[INFO_SLIDE + i] = slide[i]
+    info[INFO_INITIAL_MODE] = mode0
     for r in range(n_ev):
-        for j in range(5):
-            info[13 + 5 * r + j] = ev_int[r, j]
+        for j in range(EVENT_LOG_INTS):
+            info[INFO_EVENT_LOG + EVENT_LOG_INTS * r + j] = ev_int[r, j]
     return info, out
 
 
@@ -1427,11 +1460,6 @@ def _needs_extrema(K):
     return False
 
 
-SHOOT_CONVERGED = 0
-SHOOT_FAILED = 1  # an integration failed, the residual is not finite, or no step reduces it
-SHOOT_MAX_ITER = 2
-SHOOT_BAD_PERIOD = 3  # a period that is not positive (the caller's own iteration explains it)
-SHOOT_SINGULAR = 4  # a Newton matrix with a zero (or not finite) pivot (the caller's own iteration explains it)
 
 
 @njit(cache=True, inline="always")  # inlined: each library level links and re-optimizes the integrator
@@ -1446,7 +1474,7 @@ def _shot(x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_ta
         max_steps, tr_table, n_surfaces, OFF, phi0, psi0, control_variational, exact_affine,
     )
     if failed:
-        res[0][0] = STATUS_NON_FINITE
+        res[0][INFO_STATUS] = STATUS_NON_FINITE
     return res
 
 
@@ -1478,8 +1506,9 @@ def _periodic_residual(out, z, autonomous, x_ref, f_ref, r):
     autonomous, the phase condition ``f_ref . (x0 - x_ref)``; returns its norm."""
     n = N_STATE  # noqa: F821
     rn = 0.0
+    o_x = result_offsets_c(n)[0]
     for i in range(n):
-        r[i] = out[1 + i] - z[i]
+        r[i] = out[o_x + i] - z[i]
         rn += r[i] * r[i]
     if autonomous:
         acc = 0.0
@@ -1579,7 +1608,7 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
     Jb = np.zeros((m_z, m_z))
     rhs = np.zeros(m_z)
     r = np.zeros(m_u)
-    velocity = 1 + 4 * n + n * n
+    _, o_phi, o_psi, _, _, velocity, _ = result_offsets_c(n)
     dz = np.zeros(m_z)
     rn = np.inf
     it = 0
@@ -1594,7 +1623,8 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
                                    max_events, max_steps, tr_table, n_surfaces, phi0, psi0, control_variational,
                                    exact_affine)
         if trial > 0:
-            if ok and res_c[0][0] == STATUS_OK and _periodic_residual(res_c[1], zt, autonomous, x_ref, f_ref, r) < rn:
+            if ok and res_c[0][INFO_STATUS] == STATUS_OK and _periodic_residual(
+                    res_c[1], zt, autonomous, x_ref, f_ref, r) < rn:
                 for j in range(m_z):
                     z[j] = zt[j]
                 trial = 0
@@ -1612,7 +1642,7 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
         if not ok:
             code, n_history = SHOOT_BAD_PERIOD, it
             break
-        if res[0][0] != STATUS_OK:
+        if res[0][INFO_STATUS] != STATUS_OK:
             code, n_history = SHOOT_FAILED, it
             break
         out = res[1]
@@ -1626,8 +1656,8 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
             jac[i, 0] = r[i]
         for i in range(n):
             for j in range(n):
-                jac[i, 1 + j] = out[1 + n + i * n + j] - (1.0 if i == j else 0.0)
-            jac[i, 1 + m_u] = out[1 + n + n * n + i] if lam_index >= 0 else 0.0
+                jac[i, 1 + j] = out[o_phi + i * n + j] - (1.0 if i == j else 0.0)
+            jac[i, 1 + m_u] = out[o_psi + i] if lam_index >= 0 else 0.0
         if autonomous:
             for i in range(n):
                 jac[i, 1 + n] = sign * out[velocity + i]

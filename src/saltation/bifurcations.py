@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
-from .continuation import Corrector, Solution, canonical_events
+from .corrector import Corrector, Solution, canonical_events
 from .boundary import one_sided_limits, saltation_at_corner, zero_length_segments
 from .errors import SaltationError
 from .floquet import multipliers_from_monodromy, set_valued_multipliers
@@ -155,7 +155,7 @@ class SpecialPointDetector:
 
     # -- detection ------------------------------------------------------------------------
     def check(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
-        if canonical_events(a.summary.events) != canonical_events(b.summary.events):
+        if canonical_events(a.summary.event_ids) != canonical_events(b.summary.event_ids):
             return [self.locate_nonsmooth(a, b, index)]
         found = []
         secant = _unit(b.z - a.z)
@@ -234,7 +234,7 @@ class SpecialPointDetector:
 
     def locate_nonsmooth(self, a: Solution, b: Solution, index: int) -> SpecialPoint:
         """Bisection along the secant on the event sequence, then set-valued multipliers."""
-        seq_a = canonical_events(a.summary.events)
+        seq_a = canonical_events(a.summary.event_ids)
         lo, hi = a, b
         sa, sb = 0.0, 1.0
         for _ in range(80):
@@ -245,7 +245,7 @@ class SpecialPointDetector:
                 mid = self.on_secant(a, b, sm)
             except SaltationError:
                 break
-            if canonical_events(mid.summary.events) == seq_a:
+            if canonical_events(mid.summary.event_ids) == seq_a:
                 sa, lo = sm, mid
             else:
                 sb, hi = sm, mid

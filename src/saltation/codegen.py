@@ -31,6 +31,7 @@ from .affine import affine_form
 from .model import TIME, PiecewiseSystem
 
 _TEMPLATE = Path(__file__).with_name("_kernel_source.py")
+_CONTRACT = Path(__file__).with_name("_contract.py")
 _LOADED: dict[str, ModuleType] = {}
 
 
@@ -227,6 +228,7 @@ def generate_source(system: PiecewiseSystem) -> str:
     # guards of transitions, domains of modes (the initial-mode rule)
     src += _dispatch("guard", "k, t, x, p", "k", _condition_cases(em, system.guards, ind), "True")
     src += _dispatch("in_domain", "mode, t, x, p", "mode", _condition_cases(em, system.domains, ind), "True")
+    src += _dispatch("domain_margin", "mode, t, x, p", "mode", _margin_cases(em, system.domains, ind), "math.inf")
     src += [
         "@njit(cache=True)",
         "def initial_mode(t, x, p):",
@@ -293,6 +295,19 @@ def _condition_cases(em: _Emitter, condition_lists, ind: str) -> list[tuple[int,
     return cases
 
 
+def _margin_cases(em: _Emitter, condition_lists, ind: str) -> list[tuple[int, list[str]]]:
+    """Dispatch cases returning the smallest ``expr`` of a mode's conditions ``expr > 0`` (negative:
+    how far the state lies outside the domain)."""
+    cases = []
+    for k, conds in enumerate(condition_lists):
+        if conds:
+            body = [f"{ind}m = math.inf"]
+            for c in conds:
+                body += [f"{ind}v = {em.printer.doprint(c.expr)}", f"{ind}if v < m:", f"{ind}    m = v"]
+            cases.append((k, body + [f"{ind}return m"]))
+    return cases
+
+
 def transition_table(system: PiecewiseSystem) -> np.ndarray:
     """Integer table of transitions: source, surface, direction, target, has_reset."""
     rows = [
@@ -309,7 +324,8 @@ def transition_table(system: PiecewiseSystem) -> np.ndarray:
 
 
 def _kernel_text() -> str:
-    return _TEMPLATE.read_text()
+    """The kernel's contract with Python (``_contract.py``), then the integrator template."""
+    return _CONTRACT.read_text() + "\n\n" + _TEMPLATE.read_text()
 
 
 def module_source(system: PiecewiseSystem) -> str:
@@ -333,59 +349,6 @@ def is_compiled(system: PiecewiseSystem) -> bool:
     """Whether numba's on-disk cache already holds the integrator of this model."""
     path, _ = _module_path(system)
     return any((path.parent / "__pycache__").glob(f"{path.stem}.integrate_kernel-*.nbi"))
-
-
-def _compile_in_worker(system: PiecewiseSystem) -> str:
-    from .integrate import Flow
-
-    flow = Flow(system)
-    n, p = system.n, flow.parameters()
-    try:
-        flow.run(np.zeros(n), 0.0, 1e-3, p, variational=True, parameter=0 if system.n_params else -1)
-    except Exception:  # noqa: BLE001 - compiling is what matters here, not these tiny runs
-        pass
-    if system.n_params:  # the corrector of continuation
-        m = n + (1 if system.is_autonomous else 0)
-        normal = np.zeros(m + 1)
-        normal[-1] = 1.0
-        phase = (np.zeros(n), np.zeros(n)) if system.is_autonomous else None
-        try:
-            flow.correct_periodic(
-                np.zeros(m + 1), normal, p, t0=0.0, sign=1.0, lam_index=0, phase=phase, tol=1e-10, max_newton=0,
-                max_correction=1.0,
-            )
-        except Exception:  # noqa: BLE001
-            pass
-    return system.name
-
-
-def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = None) -> list[str]:
-    """Compile the kernels of several models at once, one process per model (a cold cache only).
-
-    Models whose kernels are cached already are skipped; each model is compiled
-    in a fresh interpreter (so this is safe from any script), at most ``workers``
-    (default: the number of cores) at a time, and the calling process then loads
-    the kernels from the cache.  Returns the names compiled.
-    """
-    import pickle
-    import subprocess
-    from concurrent.futures import ThreadPoolExecutor
-
-    todo = [s for s in systems if not is_compiled(s)]
-    workers = min(len(todo), workers or os.cpu_count() or 1)
-    if len(todo) <= 1 or workers <= 1:
-        return []
-    code = "import pickle, sys; from saltation.codegen import _compile_in_worker; _compile_in_worker(pickle.load(open(sys.argv[1], 'rb')))"
-    with tempfile.TemporaryDirectory() as tmp:
-
-        def compile_one(k: int) -> None:
-            path = Path(tmp) / f"model{k}.pickle"
-            path.write_bytes(pickle.dumps(todo[k]))
-            subprocess.run([sys.executable, "-c", code, str(path)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-
-        with ThreadPoolExecutor(workers) as pool:
-            list(pool.map(compile_one, range(len(todo))))
-    return [s.name for s in todo]
 
 
 def load_kernels(system: PiecewiseSystem) -> ModuleType:

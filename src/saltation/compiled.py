@@ -93,6 +93,10 @@ def in_domain(mode, t, x, p):
     return mode == 0
 
 @njit
+def domain_margin(mode, t, x, p):
+    return math.inf  # unknown for callables: no check beyond in_domain
+
+@njit
 def lie_derivative(mode, surface, t, x, p, gx, gp):
     gx[:] = math.nan
     gp[:] = math.nan

@@ -27,9 +27,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .bifurcations import SpecialPointDetector, grazing_point
 from .branch import Branch, BranchKind, BranchPoint, StopReason
-from .errors import ConvergenceError, SaltationError
-from .shooting import Evaluation, EquilibriumProblem, ShootingProblem, SolutionSummary
+from .corrector import Corrector, Solution, canonical_events
+from .errors import SaltationError
+from .shooting import EquilibriumProblem, ShootingProblem
 
 
 @dataclass(frozen=True)
@@ -80,114 +82,6 @@ class ContinuationSettings:
             raise ValueError(f"parameter bounds must satisfy lower < upper, got {self.bounds}")
 
 
-@dataclass
-class Solution:
-    """A corrected point ``z = (u, lam)`` with its evaluation and summary."""
-
-    z: np.ndarray
-    evaluation: Evaluation
-    summary: SolutionSummary
-    tangent: np.ndarray | None = None
-    iterations: int = 0
-    step: float = 0.0
-    tests: dict[str, float] = field(default_factory=dict, repr=False)  # test-function values, by the detector
-
-    @property
-    def u(self) -> np.ndarray:
-        return self.z[:-1]
-
-    @property
-    def lam(self) -> float:
-        return float(self.z[-1])
-
-
-def canonical_events(events: tuple[str, ...]) -> tuple[str, ...]:
-    """The event sequence up to cyclic rotation (where an orbit starts is not a change)."""
-    if not events:
-        return events
-    rotations = [events[k:] + events[:k] for k in range(len(events))]
-    return min(rotations)
-
-
-def bordered(jac_u: np.ndarray, jac_lam: np.ndarray, row: np.ndarray) -> np.ndarray:
-    """The bordered matrix ``[[J_u, J_lam], [row]]`` of the pseudo-arclength system."""
-    m = jac_u.shape[0]
-    J = np.empty((m + 1, m + 1))
-    J[:m, :m] = jac_u
-    J[:m, m] = jac_lam
-    J[m] = row
-    return J
-
-
-@dataclass
-class Corrector:
-    """Newton solvers on the branch of one problem (shared by continuation and location)."""
-
-    problem: object
-    settings: ContinuationSettings
-
-    def solve_bordered(self, z_pred: np.ndarray, normal: np.ndarray) -> Solution:
-        """Solve ``r(z) = 0``, ``normal . (z - z_pred) = 0`` by Newton from ``z_pred``.
-
-        Raises
-        ------
-        ConvergenceError
-            If Newton does not converge in ``max_newton`` iterations.
-        """
-        prob = self.problem
-        s = self.settings
-        found = None
-        compiled = getattr(prob, "correct", None)  # shooting problems iterate in the compiled kernel
-        if compiled is not None:
-            found = compiled(z_pred, normal, tol=s.tol, max_newton=s.max_newton, max_correction=s.max_correction)
-        if found is not None:
-            z, ev, it = found
-            return Solution(z=z, evaluation=ev, summary=prob.describe(z[:-1], float(z[-1]), ev), iterations=it)
-        z = z_pred.copy()
-        history = []
-        for it in range(s.max_newton + 1):
-            ev = prob.evaluate(z[:-1], float(z[-1]))
-            rn = float(np.linalg.norm(ev.residual))
-            history.append(rn)
-            if not np.isfinite(rn):
-                break
-            if rn <= s.tol * (1.0 + float(np.linalg.norm(z[:-1]))):
-                return Solution(z=z, evaluation=ev, summary=prob.describe(z[:-1], float(z[-1]), ev), iterations=it)
-            if it == s.max_newton:
-                break
-            J = bordered(ev.jac_u, ev.jac_lam, normal)
-            rhs = np.append(ev.residual, normal @ (z - z_pred))
-            try:
-                dz = np.linalg.solve(J, rhs)
-            except np.linalg.LinAlgError:
-                break
-            if np.linalg.norm(dz) > s.max_correction * (1.0 + np.linalg.norm(z)):
-                break  # diverging: let the step control shorten the step
-            z = z - dz
-        raise ConvergenceError("corrector did not converge", history)
-
-    def solve_fixed(self, u0: np.ndarray, lam: float) -> Solution:
-        """Solve ``r(u, lam) = 0`` at fixed ``lam`` (natural parameter)."""
-        e = np.zeros(len(u0) + 1)
-        e[-1] = 1.0
-        return self.solve_bordered(np.append(u0, lam), e)
-
-    def tangent(self, sol: Solution, previous: np.ndarray) -> np.ndarray:
-        """Unit tangent at ``sol`` oriented along ``previous``."""
-        ev = sol.evaluation
-        J = bordered(ev.jac_u, ev.jac_lam, previous)
-        rhs = np.zeros(J.shape[0])
-        rhs[-1] = 1.0
-        try:
-            t = np.linalg.solve(J, rhs)
-        except np.linalg.LinAlgError:
-            t = previous.copy()
-        t /= np.linalg.norm(t)
-        if t @ previous < 0:
-            t = -t
-        return t
-
-
 class Continuation:
     """Pseudo-arclength continuation of one branch in one direction.
 
@@ -227,7 +121,6 @@ class Continuation:
     # ---------------------------------------------------------------------------------
     def run(self, u0: np.ndarray, lam0: float, *, direction: int = 1) -> Iterator[BranchPoint]:
         """Yield branch points, starting with the corrected start point."""
-        from .bifurcations import SpecialPointDetector
 
         s = self.settings
         lo, hi = s.bounds
@@ -276,7 +169,7 @@ class Continuation:
                 cand.tangent = self.corrector.tangent(cand, prev.tangent)
                 cand.step = ds
                 angle = math.acos(max(-1.0, min(1.0, float(cand.tangent @ prev.tangent))))
-                corner = canonical_events(cand.summary.events) != canonical_events(prev.summary.events)
+                corner = canonical_events(cand.summary.event_ids) != canonical_events(prev.summary.event_ids)
                 if angle > s.max_angle and not corner and ds > 2 * s.ds_min:
                     ds *= 0.5
                     continue
@@ -328,7 +221,6 @@ class Continuation:
         restarted just beyond it, at growing distances, from the grazing
         orbit's state.
         """
-        from .bifurcations import grazing_point
         from .grazing import grazing_candidates, locate_grazing
 
         prob = self.problem
@@ -386,7 +278,7 @@ class Continuation:
         z = prev.z + ds * prev.tangent
         if len(self.solutions) >= 2 and prev.step > 0.0:
             before = self.solutions[-2]
-            if canonical_events(before.summary.events) == canonical_events(prev.summary.events):
+            if canonical_events(before.summary.event_ids) == canonical_events(prev.summary.event_ids):
                 z = z + (0.5 * ds * ds / prev.step) * (prev.tangent - before.tangent)
         return z
 

@@ -46,7 +46,7 @@ def locate_branch_end(corrector: Corrector, last: Solution, lam_fail: float, *, 
     Returns the last solution found (with the branch's event sequence) and
     the smallest parameter value known to fail.
     """
-    seq = canonical_events(last.summary.events)
+    seq = canonical_events(last.summary.event_ids)
     good, bad = last, float(lam_fail)
     for _ in range(80):
         if abs(bad - good.lam) <= tol:
@@ -54,7 +54,7 @@ def locate_branch_end(corrector: Corrector, last: Solution, lam_fail: float, *, 
         lam = 0.5 * (good.lam + bad)
         try:
             sol = corrector.solve_fixed(good.u, lam)
-            ok = canonical_events(sol.summary.events) == seq
+            ok = canonical_events(sol.summary.event_ids) == seq
         except SaltationError:
             ok = False
         if ok:

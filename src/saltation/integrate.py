@@ -15,10 +15,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from . import _contract as kc
 from .codegen import load_kernels, transition_table
 from .errors import (
     ChatteringError,
-    ConvergenceError,
     IntegrationError,
     ModelError,
     NonFiniteError,
@@ -29,31 +29,65 @@ from .model import PiecewiseSystem
 
 
 class Status(enum.IntEnum):
-    """Outcome of an integration (mirrors the kernel's status codes)."""
+    """Outcome of an integration (the kernel's status codes, :mod:`saltation._contract`)."""
 
-    OK = 0
-    MAX_EVENTS = 1
-    CHATTERING = 2
-    STEP_TOO_SMALL = 3
-    NON_FINITE = 4
-    SLIDING_UNDEFINED = 5
-    MAX_STEPS = 6
-    TANGENTIAL = 7
+    OK = kc.STATUS_OK
+    MAX_EVENTS = kc.STATUS_MAX_EVENTS
+    CHATTERING = kc.STATUS_CHATTERING
+    STEP_TOO_SMALL = kc.STATUS_STEP_TOO_SMALL
+    NON_FINITE = kc.STATUS_NON_FINITE
+    SLIDING_UNDEFINED = kc.STATUS_SLIDING_UNDEFINED
+    MAX_STEPS = kc.STATUS_MAX_STEPS
+    TANGENTIAL = kc.STATUS_TANGENTIAL
+    OUTSIDE_DOMAIN = kc.STATUS_OUTSIDE_DOMAIN
 
 
-# outcomes of the kernel's Newton iterations (``correct_periodic``)
-_SHOOT_CONVERGED = 0
-_STATUS_OK = 0  # Status.OK as a plain int: an enum member costs a class attribute lookup per integration
-_SHOOT_BAD_PERIOD = 3
-_SHOOT_SINGULAR = 4
+# Status.OK as a plain int (an enum member costs a class attribute lookup per integration)
+_STATUS_OK = kc.STATUS_OK
+
+
+@dataclass(frozen=True)
+class CompiledNewton:
+    """The outcome of the kernel's Newton loop (:meth:`Flow.compiled_newton`).
+
+    Attributes
+    ----------
+    code : int
+        ``SHOOT_*`` of :mod:`saltation._contract` (``converged``, ``bad_period``...).
+    iterations : int
+    z : ndarray
+        The last iterate.
+    history : list of float
+        Residual norms.
+    jacobian : ndarray
+        ``[r | J_u | J_lam]`` at ``z`` (rows of the periodicity and phase conditions).
+    shot : tuple
+        The kernel's packed result of the shot from ``z`` (read by :meth:`Flow.shot_trajectory`).
+    """
+
+    code: int
+    iterations: int
+    z: np.ndarray
+    history: list[float]
+    jacobian: np.ndarray
+    shot: tuple = field(repr=False)
+
+    @property
+    def converged(self) -> bool:
+        return self.code == kc.SHOOT_CONVERGED
+
+    @property
+    def unsupported(self) -> bool:
+        """A period that is not positive, or a singular Newton matrix: iterate in Python for the reason."""
+        return self.code in (kc.SHOOT_BAD_PERIOD, kc.SHOOT_SINGULAR)
 
 
 class EventKind(enum.IntEnum):
-    """What happened at a switching event."""
+    """What happened at a switching event (the kernel's event kinds, :mod:`saltation._contract`)."""
 
-    TRANSITION = 0
-    SLIDING_START = 1
-    SLIDING_END = 2
+    TRANSITION = kc.EVENT_TRANSITION
+    SLIDING_START = kc.EVENT_SLIDING_START
+    SLIDING_END = kc.EVENT_SLIDING_END
 
 
 class SwitchingEvent(NamedTuple):
@@ -309,6 +343,7 @@ class Flow:
         self._table = transition_table(system)
         self._n_surfaces = len(system.surface_names)
         self._identity = np.eye(system.n)  # read-only inputs of the kernel
+        self._offsets = kc.result_offsets(system.n)
         self._zeros = np.zeros(system.n)
 
     def parameters(self, overrides: Mapping[str, float] | np.ndarray | None = None) -> np.ndarray:
@@ -358,6 +393,18 @@ class Flow:
         f = np.zeros(self.system.n)
         self._kernels.vector_field(self.system.mode_index(mode), float(t), np.ascontiguousarray(x, dtype=float), p, f)
         return f
+
+    def vector_field_jacobian(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
+        """``f_x`` of a mode."""
+        J = np.zeros((self.system.n, self.system.n))
+        self._kernels.vector_field_jac(self.system.mode_index(mode), float(t), np.ascontiguousarray(x, dtype=float), p, J)
+        return J
+
+    def vector_field_parameters(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
+        """``f_p`` of a mode, shape ``(n, n_params)``."""
+        fp = np.zeros((self.system.n, max(self.system.n_params, 1)))
+        self._kernels.vector_field_dp(self.system.mode_index(mode), float(t), np.ascontiguousarray(x, dtype=float), p, fp)
+        return fp[:, : self.system.n_params]
 
     def indicator_gradient(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
         """``(h_x, h_t, h_p)`` of a switching surface at ``(t, x)``."""
@@ -439,102 +486,63 @@ class Flow:
         )
         return self._unpack(out, x0, float(t0), m0, variational, parameter, dense)
 
-    def newton_period_map(
-        self, x0: Sequence[float], t0: float, t1: float, p: np.ndarray, *, tol: float, max_iter: int,
-        tolerances: Tolerances | None = None,
-    ) -> tuple[np.ndarray, list[float], Trajectory] | None:
-        """Damped Newton on ``x(t1; x0) = x0`` with the fixed span ``t1 - t0``, iterated in the kernel.
+    def compiled_newton(
+        self, z0: np.ndarray, normal: np.ndarray | None, p: np.ndarray, *, t0: float, sign: float, lam_index: int,
+        span: float, phase: tuple[np.ndarray, np.ndarray] | None, tol: float, max_iter: int, max_correction: float,
+        damped: bool, tolerances: Tolerances | None = None,
+    ) -> CompiledNewton | None:
+        """Run the kernel's Newton loop on periodic orbits (no return to Python per shot).
 
-        The iteration of :func:`saltation.shooting.newton` (``damped=True``)
-        without a return to Python per shot: for forced systems, whose period
-        is fixed.  Returns the solution, the residual history and the
-        trajectory from the solution (with its monodromy), or None when the
-        iteration fails (repeat it in Python for the error that explains it).
+        The loop is compiled with the integrator it calls; what it solves is
+        the shooting layer's business (:mod:`saltation.shooting`): the period
+        map at a fixed span (``normal`` None, ``damped``), or the bordered
+        pseudo-arclength system of ``z = (x0[, T], lam)`` (``span`` 0: the
+        forcing period follows ``lam``; ``phase = (x_ref, f_ref)`` for
+        autonomous orbits).  Returns None when the kernel cannot run the
+        problem (a forcing period given as a Python callable).
         """
-        steps, limits, flags = (tolerances or self.tolerances).kernel_arguments
-        x0 = np.array(x0, dtype=float).reshape(-1)
-        p = np.ascontiguousarray(p, dtype=float)
-        t0, span = float(t0), float(t1) - float(t0)
-        if not span:
-            return None
-        code, _, packed, *out = self._kernels.correct_periodic(
-            x0, self._zeros, t0, math.copysign(1.0, span), False, -1, abs(span), p, self._zeros, self._zeros,
-            float(tol), int(max_iter), 0.0, True, *steps, *limits, self._table, self._n_surfaces, self._identity,
-            self._zeros, *flags,
-        )
-        if code != _SHOOT_CONVERGED:  # also a singular Jacobian
-            return None
-        x, history, _ = _newton_unpack(packed, x0.size, x0.size)
-        return x, history.tolist(), self._unpack(out, x, t0, int(out[0][12]), True, -1, False)
-
-    def correct_periodic(
-        self, z_pred: np.ndarray, normal: np.ndarray, p: np.ndarray, *, t0: float, sign: float, lam_index: int,
-        phase: tuple[np.ndarray, np.ndarray] | None, tol: float, max_newton: int, max_correction: float,
-        tolerances: Tolerances | None = None,
-    ) -> tuple[int, np.ndarray, list[float], np.ndarray, np.ndarray, np.ndarray, Trajectory] | None:
-        """Newton on the pseudo-arclength system of a shooting problem, iterated in the kernel.
-
-        ``z = (x0, lam)`` for forced systems (the forcing period follows
-        ``lam``), ``z = (x0, T, lam)`` for autonomous ones with the phase
-        condition ``f_ref . (x0 - x_ref) = 0`` (``phase = (x_ref, f_ref)``).
-        Returns ``(iterations, z, residual history, residual, J_u, J_lam,
-        trajectory at z)``, or None when the kernel cannot run this problem (a
-        forcing period given as a Python callable, a period that is not
-        positive, a singular bordered matrix): then iterate in Python.
-
-        Raises
-        ------
-        ConvergenceError
-            If Newton does not converge (with the residual history).
-        InitialModeError, IntegrationError
-            If a shot fails (the error of :meth:`run`).
-        """
-        sys_ = self.system
-        if phase is None and not isinstance(sys_, PiecewiseSystem):
+        if span == 0.0 and phase is None and not isinstance(self.system, PiecewiseSystem):
             return None  # the forcing period is a Python callable
         steps, limits, flags = (tolerances or self.tolerances).kernel_arguments
         x_ref, f_ref = phase if phase is not None else (self._zeros, self._zeros)
-        p = np.ascontiguousarray(p, dtype=float)
+        z0 = np.ascontiguousarray(z0, dtype=float)
         code, it, packed, *out = self._kernels.correct_periodic(
-            np.ascontiguousarray(z_pred, dtype=float), np.ascontiguousarray(normal, dtype=float), float(t0),
-            float(sign), bool(phase is not None), int(lam_index), 0.0, p, x_ref, f_ref, float(tol),
-            int(max_newton), float(max_correction), False, *steps, *limits, self._table, self._n_surfaces,
-            self._identity, self._zeros, *flags,
+            z0, self._zeros if normal is None else np.ascontiguousarray(normal, dtype=float), float(t0), float(sign),
+            bool(phase is not None), int(lam_index), float(span), np.ascontiguousarray(p, dtype=float), x_ref, f_ref,
+            float(tol), int(max_iter), float(max_correction), bool(damped), *steps, *limits, self._table,
+            self._n_surfaces, self._identity, self._zeros, *flags,
         )
-        if code == _SHOOT_BAD_PERIOD or code == _SHOOT_SINGULAR:  # (a singular bordered matrix)
-            return None
-        n = sys_.n
-        z, history, jac = _newton_unpack(packed, len(z_pred), len(z_pred) - 1)
-        x0 = z[:n].copy()
-        p_end = p.copy()
-        p_end[lam_index] = z[-1]
-        ok = int(out[0][0]) == _STATUS_OK
-        if code != _SHOOT_CONVERGED and ok:
-            raise ConvergenceError("corrector did not converge", history.tolist())
+        m_u = len(z0) - (0 if normal is None else 1)
+        z, history, jac = _newton_unpack(packed, len(z0), m_u)
+        return CompiledNewton(code=int(code), iterations=int(it), z=z, history=history.tolist(), jacobian=jac,
+                              shot=out)
+
+    def shot_trajectory(self, result: CompiledNewton, x0: np.ndarray, t0: float, p: np.ndarray, parameter: int) -> Trajectory:
+        """The trajectory of the last shot of :meth:`compiled_newton` (raises that shot's error if it failed)."""
+        ok = int(result.shot[0][kc.INFO_STATUS]) == _STATUS_OK
         # the shot's initial mode; after a failure the rule itself, which raises for a state in no mode
-        m0 = int(out[0][12]) if ok else self.initial_mode(x0, p_end, t0)
-        traj = self._unpack(out, x0, float(t0), m0, True, lam_index, False)  # raises a failed shot's error
-        m = len(z) - 1
-        return it, z, history.tolist(), jac[:, 0].copy(), jac[:, 1 : 1 + m].copy(), jac[:, 1 + m].copy(), traj
+        m0 = int(result.shot[0][kc.INFO_INITIAL_MODE]) if ok else self.initial_mode(x0, p, t0)
+        return self._unpack(result.shot, x0, float(t0), m0, True, parameter, False)
 
     def _unpack(self, out, x0, t0, m0, variational, parameter, dense) -> Trajectory:
         sys_ = self.system
         n = sys_.n
-        info, res = out  # the kernel's two packed arrays (see the end of ``integrate_kernel``)
-        n_ev, n_out, w_ev = int(info[3]), 1 + 5 * n + n * n, 1 + 2 * n + n * n
-        ev_int = info[13:].reshape(n_ev, 5)
+        info, res = out  # the kernel's two packed arrays, laid out as saltation._contract says
+        o_x, o_phi, o_psi, o_min, o_max, o_vel, n_out = self._offsets
+        n_ev, w_ev = int(info[kc.INFO_EVENTS]), 1 + 2 * n + n * n
+        ev_int = info[kc.INFO_EVENT_LOG :].reshape(n_ev, kc.EVENT_LOG_INTS)
         ev = res[n_out : n_out + n_ev * w_ev].reshape(n_ev, w_ev)
         t = res[0]
-        x = res[1 : 1 + n]
-        Phi = res[1 + n : 1 + n + n * n].reshape(n, n)
-        psi = res[1 + n + n * n : 1 + 2 * n + n * n]
-        xmin = res[1 + 2 * n + n * n : 1 + 3 * n + n * n]
-        xmax = res[1 + 3 * n + n * n : 1 + 4 * n + n * n]
-        velocity = res[1 + 4 * n + n * n : n_out]
+        x = res[o_x : o_x + n]
+        Phi = res[o_phi : o_phi + n * n].reshape(n, n)
+        psi = res[o_psi : o_psi + n]
+        xmin = res[o_min : o_min + n]
+        xmax = res[o_max : o_max + n]
+        velocity = res[o_vel : o_vel + n]
         event_log = (ev[:, 0], ev_int, ev[:, 1 : 1 + n], ev[:, 1 + n : 1 + 2 * n], ev[:, 1 + 2 * n :].reshape(-1, n, n))
         names = sys_.mode_names
-        if info[0] != _STATUS_OK:
-            raise _error(Status(int(info[0])), sys_, info, float(t), x, _switching_events(sys_, event_log))
+        if info[kc.INFO_STATUS] != _STATUS_OK:
+            raise _error(Status(int(info[kc.INFO_STATUS])), sys_, info, float(t), x, _switching_events(sys_, event_log))
         return Trajectory(
             system=sys_,
             t0=t0,
@@ -542,16 +550,16 @@ class Flow:
             x0=x0,
             x1=x,
             mode0=names[m0],
-            mode1=names[int(info[6])],
+            mode1=names[int(info[kc.INFO_FINAL_MODE])],
             event_log=event_log,
             monodromy=Phi if variational else None,
             parameter_sensitivity=psi if (variational and parameter >= 0) else None,
             x_min=xmin,
             x_max=xmax,
-            sliding_at_end=bool(info[7]),
+            sliding_at_end=bool(info[kc.INFO_SLIDE]),
             velocity_end=velocity,
-            n_steps=int(info[4]),
-            n_rejected=int(info[5]),
+            n_steps=int(info[kc.INFO_STEPS]),
+            n_rejected=int(info[kc.INFO_REJECTED]),
             _steps=_steps(res[n_out + n_ev * w_ev :], n) if dense else None,
         )
 
@@ -591,8 +599,9 @@ def _switching_events(system: PiecewiseSystem, event_log: tuple[np.ndarray, ...]
 
 
 def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, x: np.ndarray, events) -> IntegrationError:
-    mode = system.mode_names[int(info[1])] if info[1] >= 0 else "?"
-    surface = system.surface_names[int(info[2])] if info[2] >= 0 else "?"
+    m, k = int(info[kc.INFO_FAILED_MODE]), int(info[kc.INFO_FAILED_SURFACE])
+    mode = system.mode_names[m] if m >= 0 else "?"
+    surface = system.surface_names[k] if k >= 0 else "?"
     where = f"at t = {t:.12g}, x = {np.array2string(np.asarray(x), precision=6)}, in mode {mode!r}"
     if status == Status.CHATTERING:
         recent = ", ".join(f"{e.surface}@{e.t:.6g}" for e in events[-5:])
@@ -615,6 +624,13 @@ def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, 
         return IntegrationError(f"switching event exactly tangent to surface {surface!r} {where}: the saltation matrix is undefined")
     if status == Status.MAX_STEPS:
         return IntegrationError(f"more steps than max_steps {where}")
+    if status == Status.OUTSIDE_DOMAIN:
+        last = events[-1] if events else None
+        after = f"after {last.mode_from!r} -> {last.mode_to!r} on surface {last.surface!r} " if last else ""
+        return ModelError(
+            f"the state {after}lies outside the domain of mode {mode!r} {where}, by more than rounding, and no "
+            "transition out of that mode holds there: the model's domains and transitions disagree"
+        )
     return IntegrationError(f"integration failed with status {status.name} {where}")
 
 

@@ -43,7 +43,7 @@ from .errors import IntegrationError, ModelError, SaltationError
 from .floquet import is_stable, multipliers_from_monodromy
 from .grazing import grazing_candidates, grazing_system, locate_grazing, tangency_time
 from .integrate import EventKind, Flow
-from .shooting import Evaluation, ShootingProblem, SolutionSummary, event_labels
+from .shooting import Evaluation, ShootingProblem, SolutionSummary, event_ids
 from .sliding import exit_rate, rate_along
 
 #: Special points continued by the defining systems of :mod:`saltation.sliding`.
@@ -615,7 +615,7 @@ class MultiplierCurve(_CurveProblem):
 
     def accept(self, u: np.ndarray, lam: float) -> None:
         if self._last is not None:
-            self.events.append(canonical_events(event_labels(self._last[2])))
+            self.events.append(canonical_events(event_ids(self._last[2])))
 
     def snapshot(self) -> dict:
         return {"_last": None, "events": []}

@@ -27,7 +27,7 @@ import numpy as np
 
 from . import io, plotting
 from .branch import Branch
-from .codegen import compile_in_parallel
+from .precompile import compile_in_parallel
 from .continuation import Continuation, ContinuationSettings, continue_branch
 from .diagram import BifurcationDiagram, follow_through_discontinuous_fold
 from .errors import SaltationError

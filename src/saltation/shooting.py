@@ -46,23 +46,42 @@ class SolutionSummary:
     stable: bool
     events: tuple[str, ...]
     monodromy: np.ndarray | None = None
+    #: the event sequence by identity (see :func:`event_ids`): what detectors compare
+    event_ids: tuple[tuple[int, int, int], ...] = ()
 
 
-def event_labels(traj: Trajectory) -> tuple[str, ...]:
-    """Readable labels of a trajectory's events: the transition, or the sliding motion started or ended.
+def orbit_events(traj: Trajectory) -> list:
+    """The events of a periodic orbit's trajectory, as the orbit's cycle of events.
 
     An orbit that is sliding at ``t0`` starts its sliding motion there (an
     event at ``t0``) and ends the period on it: that is one sliding motion cut
-    by the section ``t = t0``, labelled once (by its arrival at the end), so
+    by the section ``t = t0``, counted once (by its arrival at the end), so
     that the sequence of an orbit does not change as its events pass ``t0``.
     """
-    sys_ = traj.system
-    labels = []
     events = traj.events
     if (events and events[0].kind == EventKind.SLIDING_START and events[0].t == traj.t0 and traj.sliding_at_end
             and any(e.kind == EventKind.SLIDING_START and e.surface == events[0].surface for e in events[1:])):
-        events = events[1:]
-    for e in events:
+        return events[1:]
+    return events
+
+
+def event_ids(traj: Trajectory) -> tuple[tuple[int, int, int], ...]:
+    """The orbit's events by identity: ``(kind, transition index, mode entered)`` each.
+
+    Two transitions that differ only in their guard (or reset) have the same
+    label but not the same index; a sliding motion's end is told by the mode
+    it leaves into.  Detectors of non-smooth points compare these.
+    """
+    names = traj.system.mode_names
+    return tuple((int(e.kind), int(e.transition), names.index(e.mode_to)) for e in orbit_events(traj))
+
+
+def event_labels(traj: Trajectory) -> tuple[str, ...]:
+    """Readable labels of a trajectory's events (see :func:`orbit_events`): the transition, or the sliding
+    motion started or ended."""
+    sys_ = traj.system
+    labels = []
+    for e in orbit_events(traj):
         if e.kind == EventKind.TRANSITION:
             labels.append(sys_.transitions[e.transition].label)
         elif e.kind == EventKind.SLIDING_START:
@@ -275,9 +294,7 @@ class ShootingProblem:
         """Anchor the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` at ``u``."""
         x = u[: self.system.n]
         p = self.parameters_at(lam)
-        mode = self.flow.initial_mode(x, p, self.t0)
-        f = np.zeros(self.system.n)
-        self.flow._kernels.vector_field(mode, self.t0, np.ascontiguousarray(x), p, f)
+        f = self.flow.vector_field(self.flow.initial_mode(x, p, self.t0), self.t0, x, p)
         norm = np.linalg.norm(f)
         if norm == 0:
             raise ModelError(f"phase condition undefined: the vector field vanishes at {x.tolist()}")
@@ -348,14 +365,22 @@ class ShootingProblem:
             if self.x_ref is None:
                 self.set_phase_reference(z_pred[:-1], float(z_pred[-1]))
             phase = (self.x_ref, self.f_ref)
-        found = self.flow.correct_periodic(
-            z_pred, normal, self.p, t0=self.t0, sign=self.sign, lam_index=self.lam_index, phase=phase, tol=tol,
-            max_newton=max_newton, max_correction=max_correction, tolerances=self.tolerances,
+        found = self.flow.compiled_newton(
+            z_pred, normal, self.p, t0=self.t0, sign=self.sign, lam_index=self.lam_index, span=0.0, phase=phase,
+            tol=tol, max_iter=max_newton, max_correction=max_correction, damped=False, tolerances=self.tolerances,
         )
-        if found is None:
-            return None
-        iterations, z, _, residual, jac_u, jac_lam, traj = found
-        return z, Evaluation(residual=residual, jac_u=jac_u, jac_lam=jac_lam, trajectory=traj), iterations
+        if found is None or found.unsupported:
+            return None  # iterate in Python
+        n, z = self.system.n, found.z
+        p_end = self.p.copy()
+        p_end[self.lam_index] = z[-1]
+        traj = self.flow.shot_trajectory(found, z[:n].copy(), self.t0, p_end, self.lam_index)  # a failed shot raises
+        if not found.converged:
+            raise ConvergenceError("corrector did not converge", found.history)
+        m, jac = len(z) - 1, found.jacobian
+        ev = Evaluation(residual=jac[:, 0].copy(), jac_u=jac[:, 1 : 1 + m].copy(), jac_lam=jac[:, 1 + m].copy(),
+                        trajectory=traj)
+        return z, ev, found.iterations
 
     def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
         """Summary of a solved point for a branch (multipliers, amplitude, events)."""
@@ -370,6 +395,7 @@ class ShootingProblem:
             stable=is_stable(mu, autonomous=self.autonomous),
             events=event_labels(traj),
             monodromy=traj.monodromy,
+            event_ids=event_ids(traj),
         )
 
     def accept(self, u: np.ndarray, lam: float | None) -> None:
@@ -393,12 +419,14 @@ class ShootingProblem:
             # the period is fixed: the whole iteration runs in the compiled kernel
             p = self.parameters_at(lam)
             T = self.period_of(u0, lam)
-            found = self.flow.newton_period_map(
-                u0, self.t0, self.t0 + self.sign * T, p, tol=tol, max_iter=max_iter, tolerances=self.tolerances,
-            )
-            if found is not None:
-                x, history, traj = found
-                return self.orbit(x, lam, traj, history, period=T, parameters=p)
+            found = self.flow.compiled_newton(
+                u0, None, p, t0=self.t0, sign=self.sign, lam_index=-1, span=T, phase=None, tol=tol, max_iter=max_iter,
+                max_correction=0.0, damped=True, tolerances=self.tolerances,
+            ) if T > 0 else None
+            if found is not None and found.converged:  # otherwise the Python iteration explains the failure
+                x = found.z.copy()
+                traj = self.flow.shot_trajectory(found, x, self.t0, p, -1)
+                return self.orbit(x, lam, traj, found.history, period=T, parameters=p)
 
         def fun(u):
             ev = self.evaluate(u, lam, need_lam=False)
@@ -516,19 +544,13 @@ class EquilibriumProblem:
         return float(self.p[self.lam_index])
 
     def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
-        n = self.system.n
         p = self.parameters_at(lam)
-        k = self.flow._kernels
-        x = np.ascontiguousarray(u, dtype=float)
-        f = np.zeros(n)
-        J = np.zeros((n, n))
-        k.vector_field(self.mode, 0.0, x, p, f)
-        k.vector_field_jac(self.mode, 0.0, x, p, J)
+        x = np.asarray(u, dtype=float)
+        f = self.flow.vector_field(self.mode, 0.0, x, p)
+        J = self.flow.vector_field_jacobian(self.mode, 0.0, x, p)
         jl = None
         if need_lam and lam is not None:
-            fp = np.zeros((n, max(self.system.n_params, 1)))
-            k.vector_field_dp(self.mode, 0.0, x, p, fp)
-            jl = fp[:, self.lam_index].copy()
+            jl = self.flow.vector_field_parameters(self.mode, 0.0, x, p)[:, self.lam_index].copy()
         return Evaluation(residual=f, jac_u=J, jac_lam=jl)
 
     def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
