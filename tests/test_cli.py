@@ -172,6 +172,11 @@ def test_table_output(capsys, compiled):
         (["orbit", "trilinear", "--period", "5"], "forced"),
         (["orbit", "block_on_belt", "--period", "-1"], "positive"),
         (["orbit", "trilinear", "--frobnicate"], "unrecognized arguments"),
+        (["continue", "trilinear", "--param", "omgea", "--from", "0.6", "--to", "0.7"], "unknown parameter 'omgea' in --param"),
+        (["sweep", "trilinear", "--param", "omgea", "--from", "0.6", "--to", "0.7", "--num", "2"],
+         "unknown parameter 'omgea' in --param"),
+        (["sweep", "bouncing_ball", "--param", "A", "--from", "0.3", "--to", "0.4", "--num", "2", "--param2", "eps",
+          "--from2", "0.4", "--to2", "0.5", "--num2", "2"], "unknown parameter 'eps' in --param2"),
         (["orbit"], "MODEL"),
         ([], "subcommand"),
     ],
@@ -337,6 +342,34 @@ def test_sweep_end_to_end(tmp_path, capsys):
         assert np.allclose(result.at(k)[:, 0], -0.2 * 0.05 * w / det, atol=1e-6)
     assert (tmp_path / "trilinear_omega_sweep.png").stat().st_size > 0
     assert "Poincare" in capsys.readouterr().out
+
+
+def test_sweep_map_on_a_dask_scheduler_equals_the_local_map(tmp_path, capsys):
+    """--param2 ... gives the period map; --scheduler runs it on a Dask cluster, with the same cells."""
+    import distributed
+
+    from saltation.sweep import PeriodMap
+
+    args = ["sweep", "bouncing_ball", "--param", "A", "--from", "0.33", "--to", "0.39", "--num", "3",
+            "--param2", "e", "--from2", "0.45", "--to2", "0.55", "--num2", "2", "--max-period", "4",
+            "--transient", "150", "--x0", "0.62,-3.94", "--workers", "2"]
+    assert cli.main([*args, "--out", str(tmp_path / "local")]) == 0
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
+        assert cli.main([*args, "--out", str(tmp_path / "dask"), "--scheduler", cluster.scheduler_address]) == 0
+    local = PeriodMap.from_dict(json.loads((tmp_path / "local" / "bouncing_ball_A_e_map.json").read_text()))
+    remote = PeriodMap.from_dict(json.loads((tmp_path / "dask" / "bouncing_ball_A_e_map.json").read_text()))
+    np.testing.assert_array_equal(remote.periods, local.periods)
+    assert local.periods.shape == (2, 3) and (local.periods == 1).any()  # period 1 below the doubling
+    assert (tmp_path / "dask" / "bouncing_ball_A_e_map.png").stat().st_size > 0
+    assert "6 cells (3 x 2)" in capsys.readouterr().out
+
+
+def test_sweep_map_usage_errors(tmp_path, capsys):
+    base = ["sweep", "bouncing_ball", "--param", "A", "--from", "0.33", "--to", "0.39", "--num", "3"]
+    assert cli.main([*base, "--param2", "e", "--out", str(tmp_path)]) == 2
+    assert "needs all of --param2, --from2, --to2 and --num2" in capsys.readouterr().err
+    assert cli.main([*base, "--scheduler", "nowhere://cluster", "--out", str(tmp_path)]) == 2
+    assert "cannot reach the Dask scheduler" in capsys.readouterr().err
 
 
 # --- model files: MODEL as PATH.py:NAME -------------------------------------------------------

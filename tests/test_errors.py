@@ -163,3 +163,15 @@ def test_shooting_that_does_not_converge(belt_flow):
     assert all(np.isfinite(err.residuals))
     assert min(err.residuals) > 1e-10 * (1 + np.linalg.norm(guess))  # never converged
     assert "block_on_belt" in str(err)
+
+
+def test_impacts_accumulating_on_a_moving_table_are_chattering():
+    """A ball thrown up from a vibrating table (A = 0.36, e = 0.5) comes to rest on it: its impacts
+    accumulate (their intervals shrink like e^k) below the resolution of the state. The run stops with
+    ChatteringError, naming the surface; it used to go on and let the ball fall through the table."""
+    from saltation import Flow
+    from saltation.models import bouncing_ball
+
+    flow = Flow(bouncing_ball())
+    with pytest.raises(ChatteringError, match="'table'"):
+        flow.run([0.0, 3.0], 0.0, 3.0, flow.parameters({"A": 0.36}))

@@ -251,3 +251,32 @@ def test_no_pyplot_figures_leak():
 def test_every_kind_of_special_point_has_a_marker():
     assert set(SPECIAL_POINT_MARKERS) == set(SpecialPointKind)
     assert len({marker for marker, _ in SPECIAL_POINT_MARKERS.values()}) == len(SPECIAL_POINT_MARKERS)
+
+
+def test_nearby_special_points_are_moved_apart():
+    """Two special points at almost the same place (the paper's Fig. 7 at its fold): both markers are
+    drawn where neither hides the other, the second tied to its point by a leader line."""
+    from dataclasses import replace
+
+    branch = trilinear_like()
+    near = replace(branch.special_points[1], kind=SpecialPointKind.NONSMOOTH_NO_CROSSING, parameter=1.4501)
+    branch.special_points.append(near)
+    fig = plot_response(branch)
+    fig.canvas.draw()
+    (fold,) = _lines(fig, "fold")
+    (other,) = _lines(fig, "nonsmooth_no_crossing")
+    a = fold.get_transform().transform(np.column_stack([fold.get_xdata(), fold.get_ydata()]))[0]
+    b = other.get_transform().transform(np.column_stack([other.get_xdata(), other.get_ydata()]))[0]
+    size = fold.get_markersize() * fig.dpi / 72  # marker size in pixels
+    assert np.hypot(*(a - b)) > size  # apart by more than a marker
+    assert any(t.arrow_patch is not None for t in fig.axes[0].texts)  # the leader line
+
+
+def test_phase_plane_legend_below_hides_nothing():
+    curves = [PhaseCurve(_circle(2.0), "stable limit cycle", CurveStyle.STABLE)]
+    fig = plot_phase_plane(curves, equilibrium=(0.0, 0.0), legend_below=True, labels=[("I", (2.0, 0.0))])
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    legend_box = ax.get_legend().get_window_extent()
+    assert legend_box.y1 <= ax.get_window_extent().y0  # entirely below the axes
+    assert [t.get_text() for t in ax.texts] == ["I"]

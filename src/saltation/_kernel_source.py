@@ -733,6 +733,175 @@ def _track_extrema(F, y, s_end, xmin, xmax, f0, f1, xtmp, direction):
                 xmin[i] = v
 
 
+@njit(cache=True, inline="always")  # once per event; a call costs more than it saves here
+def _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, w, Phi_tmp, psi_tmp):
+    """The saltation matrix of eq. (9), with a reset ``g`` (the identity without one), and the jumps of
+    the fundamental solution matrix and the parameter sensitivity: the one place where they happen.
+
+    ``S = g_x + w h_x / den`` with ``w = f+ - g_x f- - g_t`` and ``den = h_x f- + h_t`` (the event
+    function's rate along the old field ``f-``: an indicator's, or a sliding exit's), into ``S``;
+    ``Phi <- S Phi`` and ``psi <- S psi + g_p[:, k] + w h_p[k] / den`` for parameter ``k = pidx``, in
+    ``y = [x, Phi, psi]`` when ``var``.
+    """
+    n = N_STATE  # noqa: F821
+    for i in range(n):
+        acc = fplus[i] - gt[i]
+        for j in range(n):
+            acc -= gx[i, j] * fa[j]
+        w[i] = acc
+    for i in range(n):
+        for j in range(n):
+            S[i, j] = gx[i, j] + w[i] * hx[j] / den
+    if var:
+        for i in range(n):
+            for j in range(n):
+                acc = 0.0
+                for k2 in range(n):
+                    acc += S[i, k2] * y[n + k2 * n + j]
+                Phi_tmp[i, j] = acc
+        off = n + n * n
+        for i in range(n):
+            acc = 0.0
+            for k2 in range(n):
+                acc += S[i, k2] * y[off + k2]
+            if pidx >= 0:
+                acc += gp[i, pidx] + w[i] * hp[pidx] / den
+            psi_tmp[i] = acc
+        for i in range(n):
+            for j in range(n):
+                y[n + i * n + j] = Phi_tmp[i, j]
+            y[off + i] = psi_tmp[i]
+
+
+@njit(cache=True, inline="always")  # once per event; a call costs more than it saves here
+def _log_event(ev, ev_int, n_ev, t_e, kind, transition, surface, mode_from, mode_to, x_minus, x_plus, S):
+    """Append an event to the log (rows ``(t, x-, x+, S)`` and ``(kind, transition, surface, mode from,
+    mode to)``, as ``_contract.py`` lays them out), doubling it when full; returns the log."""
+    n = N_STATE  # noqa: F821
+    if n_ev == ev.shape[0]:
+        ev = _resized_rows(ev, 2 * n_ev)
+        ev_int = _resized_rows(ev_int, 2 * n_ev)
+    ev[n_ev, 0] = t_e
+    ev_int[n_ev, 0] = kind
+    ev_int[n_ev, 1] = transition
+    ev_int[n_ev, 2] = surface
+    ev_int[n_ev, 3] = mode_from
+    ev_int[n_ev, 4] = mode_to
+    for i in range(n):
+        ev[n_ev, 1 + i] = x_minus[i]
+        ev[n_ev, 1 + n + i] = x_plus[i]
+        for j in range(n):
+            ev[n_ev, 1 + 2 * n + i * n + j] = S[i, j]
+    return ev, ev_int
+
+
+@njit(cache=True, inline="always")  # its arrays are the kernel's own: inlined, nothing is passed
+def _pack_result(t, y, var, xmin, xmax, K, ev, ev_int, n_ev, rec, rec_F, n_rec, status, info_mode, info_surface,
+                 n_steps, n_rejected, mode, slide, mode0):
+    """The result of an integration as two packed arrays (each returned array costs a conversion), laid
+    out as ``_contract.py`` says and read by ``saltation.integrate.Flow._unpack``."""
+    n = N_STATE  # noqa: F821
+    # floats: t, x, Phi, psi, x_min, x_max, f at the end; the event log's rows (t, x-, x+, S); the steps'
+    # rows (start, size, end fraction, start state); their dense-output coefficients
+    o_x, o_phi, _, o_min, o_max, o_vel, n_out = result_offsets_c(n)
+    w_ev = ev.shape[1]
+    w_rec = rec.shape[1]
+    out = np.zeros(n_out + n_ev * w_ev + n_rec * (w_rec + 7 * n))
+    out[0] = t
+    for i in range(n):
+        out[o_x + i] = y[i]
+        out[o_min + i] = xmin[i]
+        out[o_max + i] = xmax[i]
+        out[o_vel + i] = K[0, i]  # the field (or sliding field) at the end
+    if var:
+        for i in range(n * n + n):  # Phi, then psi
+            out[o_phi + i] = y[n + i]
+    at = n_out
+    for r in range(n_ev):
+        for j in range(w_ev):
+            out[at] = ev[r, j]
+            at += 1
+    for r in range(n_rec):
+        for j in range(w_rec):
+            out[at] = rec[r, j]
+            at += 1
+    for r in range(n_rec):
+        for q in range(7):
+            for j in range(n):
+                out[at] = rec_F[r, q, j]
+                at += 1
+    # integers: status, mode and surface of a failure, events, steps, rejected steps, final mode,
+    # sliding state (5), initial mode; the event log's rows (kind, transition, surface, mode from, mode to)
+    info = np.zeros(INFO_EVENT_LOG + EVENT_LOG_INTS * n_ev, dtype=np.int64)
+    info[INFO_STATUS] = status
+    info[INFO_FAILED_MODE] = info_mode
+    info[INFO_FAILED_SURFACE] = info_surface
+    info[INFO_EVENTS] = n_ev
+    info[INFO_STEPS] = n_steps
+    info[INFO_REJECTED] = n_rejected
+    info[INFO_FINAL_MODE] = mode
+    for i in range(SLIDE_WIDTH):
+        info[INFO_SLIDE + i] = slide[i]
+    info[INFO_INITIAL_MODE] = mode0
+    for r in range(n_ev):
+        for j in range(EVENT_LOG_INTS):
+            info[INFO_EVENT_LOG + EVENT_LOG_INTS * r + j] = ev_int[r, j]
+    return info, out
+
+
+@njit(cache=True, inline="always")  # once per sliding step
+def _sliding_exit_event(exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp):
+    """The first exit of the sliding motion within the accepted step from ``(t, y)`` to ``(t_new, ynew)``,
+    where the field of side a (kind 1) or b (kind 2) turns tangent: ``(fraction of the step, kind,
+    surface, whether the dense output was built)``, the kind -1 when there is none.
+    """
+    n = N_STATE  # noqa: F821
+    have_dense = False
+    best_s = 2.0
+    best_kind = NONE
+    best_idx = NONE
+    for kind in (np.int64(1), np.int64(2)):
+        v1 = _event_value(kind, NONE, slide, t_new, ynew[:n], p, gtmp, gptmp)
+        # A sliding field is often so simple that the step control allows steps over
+        # much of a forcing period, while an exit function with explicit time dependence
+        # may dip below zero and recover (or turn negative more than once) within the
+        # step: it is sampled inside, a local minimum of the samples is searched for a
+        # dip below zero (golden section between its neighbours), and the first sign
+        # change is the one located.
+        if not have_dense:
+            _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+            have_dense = True
+        sb = 1.0
+        samples[0] = _event_value(kind, NONE, slide, t, y[:n], p, gtmp, gptmp)
+        samples[SLIDING_EXIT_SAMPLES] = v1
+        for j in range(1, SLIDING_EXIT_SAMPLES):
+            samples[j] = _dense_event(kind, NONE, slide, 1.0, t, h, F, y, j / SLIDING_EXIT_SAMPLES, p,
+                                      xtmp, gtmp, gptmp)
+        for j in range(1, SLIDING_EXIT_SAMPLES + 1):
+            sj = j / SLIDING_EXIT_SAMPLES
+            if samples[j] <= 0.0:
+                sb = sj
+                v1 = samples[j]
+                break
+            if j < SLIDING_EXIT_SAMPLES and samples[j] <= samples[j - 1] and samples[j] <= samples[j + 1]:
+                smin, vmin = _dip_search(kind, NONE, slide, 1.0, t, h, F, y, p, xtmp, gtmp, gptmp,
+                                         (j - 1) / SLIDING_EXIT_SAMPLES, (j + 1) / SLIDING_EXIT_SAMPLES)
+                if vmin <= 0.0:
+                    sb = smin
+                    v1 = vmin
+                    break
+        if v1 <= 0.0:
+            if not have_dense:
+                _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                have_dense = True
+            sr = _bracket_root(kind, NONE, slide, 1.0, t, h, F, y, 0.0, sb, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
+            if sr < best_s:
+                best_s = sr
+                best_kind = kind
+                best_idx = slide[3]
+    return best_s, best_kind, best_idx, have_dense
+
+
 @njit(cache=True)
 def integrate_kernel(
     t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step, max_events, max_steps,
@@ -1088,46 +1257,8 @@ def integrate_kernel(
                                 best_tr = k
                                 break
             else:
-                for kind in (np.int64(1), np.int64(2)):
-                    v1 = _event_value(kind, NONE, slide, t_new, ynew[:n], p, gtmp, gptmp)
-                    # A sliding field is often so simple that the step control allows steps over
-                    # much of a forcing period, while an exit function with explicit time dependence
-                    # may dip below zero and recover (or turn negative more than once) within the
-                    # step: it is sampled inside, a local minimum of the samples is searched for a
-                    # dip below zero (golden section between its neighbours), and the first sign
-                    # change is the one located.
-                    if not have_dense:
-                        _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                        have_dense = True
-                    sb = 1.0
-                    samples[0] = _event_value(kind, NONE, slide, t, y[:n], p, gtmp, gptmp)
-                    samples[SLIDING_EXIT_SAMPLES] = v1
-                    for j in range(1, SLIDING_EXIT_SAMPLES):
-                        samples[j] = _dense_event(kind, NONE, slide, 1.0, t, h, F, y, j / SLIDING_EXIT_SAMPLES, p,
-                                                  xtmp, gtmp, gptmp)
-                    for j in range(1, SLIDING_EXIT_SAMPLES + 1):
-                        sj = j / SLIDING_EXIT_SAMPLES
-                        if samples[j] <= 0.0:
-                            sb = sj
-                            v1 = samples[j]
-                            break
-                        if j < SLIDING_EXIT_SAMPLES and samples[j] <= samples[j - 1] and samples[j] <= samples[j + 1]:
-                            smin, vmin = _dip_search(kind, NONE, slide, 1.0, t, h, F, y, p, xtmp, gtmp, gptmp,
-                                                     (j - 1) / SLIDING_EXIT_SAMPLES, (j + 1) / SLIDING_EXIT_SAMPLES)
-                            if vmin <= 0.0:
-                                sb = smin
-                                v1 = vmin
-                                break
-                    if v1 <= 0.0:
-                        if not have_dense:
-                            _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                            have_dense = True
-                        sr = _bracket_root(kind, NONE, slide, 1.0, t, h, F, y, 0.0, sb, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
-                        if sr < best_s:
-                            best_s = sr
-                            best_kind = kind
-                            best_idx = slide[3]
-                            best_tr = NONE
+                best_s, best_kind, best_idx, have_dense = _sliding_exit_event(
+                    exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp)
 
             if best_kind < 0:
                 # ----------------------------------------------------------- accept whole step
@@ -1265,6 +1396,21 @@ def integrate_kernel(
                 info_mode = mode
                 info_surface = best_idx
                 break
+            if not at_once and tr_table[k, 2] != 0 and direction * den * tr_table[k, 2] <= 0.0 and n_ev >= 8:
+                # a "crossing" that moves against its transition's direction, after at least 8 events within
+                # 1e-6 (relative) of it: events accumulate below the resolution of the state (impacts of a
+                # ball coming to rest on a moving table, say), and going on would pass through the surface
+                # (a corner's few events at one instant are no accumulation)
+                crowd = 0
+                for j in range(min(n_ev, CHATTER_WINDOW)):
+                    if abs(t_e - chatter_ring[j]) <= 1e-6 * max(1.0, abs(t_e)):
+                        crowd += 1
+                if crowd >= 8:
+                    status = STATUS_CHATTERING
+                    info_mode = mode
+                    info_surface = best_idx
+                    t = t_e
+                    break
             if tr_table[k, 4] == 0 and direction * sig_b * cross < 0.0:
                 # no jump, and the new field pushes back: Filippov sliding along the surface
                 if den == sig_b:
@@ -1323,49 +1469,10 @@ def integrate_kernel(
             kind_logged = EVENT_SLIDING_END
             if den == 0.0:
                 den = 1e-300
-        # saltation matrix and jumps
-        for i in range(n):
-            acc = fplus[i] - gt[i]
-            for j in range(n):
-                acc -= gx[i, j] * fa[j]
-            wvec[i] = acc
-        for i in range(n):
-            for j in range(n):
-                S[i, j] = gx[i, j] + wvec[i] * hx[j] / den
-        if var:
-            for i in range(n):
-                for j in range(n):
-                    acc = 0.0
-                    for k2 in range(n):
-                        acc += S[i, k2] * y[n + k2 * n + j]
-                    Phi_tmp[i, j] = acc
-            off = n + n * n
-            for i in range(n):
-                acc = 0.0
-                for k2 in range(n):
-                    acc += S[i, k2] * y[off + k2]
-                if pidx >= 0:
-                    acc += gp[i, pidx] + wvec[i] * hp[pidx] / den
-                psi_tmp[i] = acc
-            for i in range(n):
-                for j in range(n):
-                    y[n + i * n + j] = Phi_tmp[i, j]
-                y[off + i] = psi_tmp[i]
+        # the saltation matrix, eq. (9), and the jumps of Phi and psi
+        _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, wvec, Phi_tmp, psi_tmp)
         # log
-        if n_ev == ev.shape[0]:
-            ev = _resized_rows(ev, 2 * n_ev)
-            ev_int = _resized_rows(ev_int, 2 * n_ev)
-        ev[n_ev, 0] = t_e
-        ev_int[n_ev, 0] = kind_logged
-        ev_int[n_ev, 1] = best_tr
-        ev_int[n_ev, 2] = best_idx
-        ev_int[n_ev, 3] = mode_from
-        ev_int[n_ev, 4] = mode_to
-        for i in range(n):
-            ev[n_ev, 1 + i] = x_e[i]
-            ev[n_ev, 1 + n + i] = xplus[i]
-            for j in range(n):
-                ev[n_ev, 1 + 2 * n + i * n + j] = S[i, j]
+        ev, ev_int = _log_event(ev, ev_int, n_ev, t_e, kind_logged, best_tr, best_idx, mode_from, mode_to, x_e, xplus, S)
         chatter_ring[n_ev % CHATTER_WINDOW] = t_e
         last_kind = kind_logged
         n_ev += 1
@@ -1402,53 +1509,8 @@ def integrate_kernel(
             habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
         need_signs = True
 
-    # packed results, two arrays (each returned array costs a conversion), laid out as _contract.py says:
-    # floats: t, x, Phi, psi, x_min, x_max, f at the end; the event log's rows (t, x-, x+, S); the steps'
-    # rows (start, size, end fraction, start state); their dense-output coefficients
-    o_x, o_phi, _, o_min, o_max, o_vel, n_out = result_offsets_c(n)
-    w_ev = ev.shape[1]
-    w_rec = rec.shape[1]
-    out = np.zeros(n_out + n_ev * w_ev + n_rec * (w_rec + 7 * n))
-    out[0] = t
-    for i in range(n):
-        out[o_x + i] = y[i]
-        out[o_min + i] = xmin[i]
-        out[o_max + i] = xmax[i]
-        out[o_vel + i] = K[0, i]  # the field (or sliding field) at the end
-    if var:
-        for i in range(n * n + n):  # Phi, then psi
-            out[o_phi + i] = y[n + i]
-    at = n_out
-    for r in range(n_ev):
-        for j in range(w_ev):
-            out[at] = ev[r, j]
-            at += 1
-    for r in range(n_rec):
-        for j in range(w_rec):
-            out[at] = rec[r, j]
-            at += 1
-    for r in range(n_rec):
-        for q in range(7):
-            for j in range(n):
-                out[at] = rec_F[r, q, j]
-                at += 1
-    # integers: status, mode and surface of a failure, events, steps, rejected steps, final mode,
-    # sliding state (5), initial mode; the event log's rows (kind, transition, surface, mode from, mode to)
-    info = np.zeros(INFO_EVENT_LOG + EVENT_LOG_INTS * n_ev, dtype=np.int64)
-    info[INFO_STATUS] = status
-    info[INFO_FAILED_MODE] = info_mode
-    info[INFO_FAILED_SURFACE] = info_surface
-    info[INFO_EVENTS] = n_ev
-    info[INFO_STEPS] = n_steps
-    info[INFO_REJECTED] = n_rejected
-    info[INFO_FINAL_MODE] = mode
-    for i in range(SLIDE_WIDTH):
-        info[INFO_SLIDE + i] = slide[i]
-    info[INFO_INITIAL_MODE] = mode0
-    for r in range(n_ev):
-        for j in range(EVENT_LOG_INTS):
-            info[INFO_EVENT_LOG + EVENT_LOG_INTS * r + j] = ev_int[r, j]
-    return info, out
+    return _pack_result(t, y, var, xmin, xmax, K, ev, ev_int, n_ev, rec, rec_F, n_rec, status, info_mode, info_surface,
+                        n_steps, n_rejected, mode, slide, mode0)
 
 
 @njit(cache=True)

@@ -375,8 +375,7 @@ def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -
     """
     flow = getattr(problem, "flow", None)
     sides = _sides(lo, hi)
-    if flow is None or sides is None or problem.system.is_autonomous or problem.backward \
-            or getattr(problem, "periods", 1) != 1:
+    if flow is None or sides is None or problem.backward or getattr(problem, "periods", 1) != 1:
         return None
     lo_fewer, without, with_, traj_wo, traj_w = sides
     change = sliding_change(flow, traj_wo, traj_w, problem.parameters_at(with_.lam), problem.parameters_at(without.lam))
@@ -389,8 +388,9 @@ def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -
             found = locate_adding_sliding(flow, without.u[:n], without.lam, problem.lam_name, change.t_guess,
                                           change.mode, change.surface, change.side, **options)
         else:
+            period = problem.period_of(without.u, without.lam) if problem.system.is_autonomous else None
             found = locate_tangent_arrival(flow, without.u[:n], without.lam, problem.lam_name, change.index,
-                                           change.mode, change.side, **options)
+                                           change.mode, change.side, period=period, **options)
     except SaltationError:
         return None
     width = abs(hi.lam - lo.lam)
@@ -413,7 +413,7 @@ def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -
         accuracy=found.accuracy,
         index=index,
         state=found.state0,
-        period=problem.period_of(found.state0, found.parameter),
+        period=found.trajectory.t1 - found.trajectory.t0,
         amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
         multipliers_minus=lo.summary.multipliers,
         multipliers_plus=hi.summary.multipliers,
@@ -422,7 +422,8 @@ def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -
         events_minus=lo.summary.events,
         events_plus=hi.summary.events,
         note=(f"the orbit {where} (surface {change.surface!r}, t = {found.t_touch:.10g}, d2h/dt2 there "
-              f"{found.curvature:.3g}); the side with the extra events is {'plus' if lo_fewer else 'minus'}"),
+              f"{found.curvature:.3g}){'' if change.count == 1 else f', at {change.count} points of the orbit at once'}; "
+              f"the side with the extra events is {'plus' if lo_fewer else 'minus'}"),
         multipliers_accuracy=float(np.linalg.norm(hi.summary.monodromy - lo.summary.monodromy)),
         limits="nearest_orbits",
         touch_surface=change.surface,

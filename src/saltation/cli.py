@@ -25,7 +25,15 @@ import numpy as np
 
 from .errors import SaltationError
 from .model import PiecewiseSystem
-from .models import block_on_belt, bouncing_ball, friction_oscillator, impact_oscillator, trilinear
+from .models import (
+    block_on_belt,
+    bouncing_ball,
+    buck_converter,
+    friction_oscillator,
+    impact_oscillator,
+    relay_feedback,
+    trilinear,
+)
 
 PROG = "saltation"
 
@@ -37,6 +45,8 @@ MODELS: dict[str, Callable[..., PiecewiseSystem]] = {
     "impact_oscillator": impact_oscillator,
     "bouncing_ball": bouncing_ball,
     "friction_oscillator": friction_oscillator,
+    "relay_feedback": relay_feedback,
+    "buck_converter": buck_converter,
 }
 
 #: One-line summaries of the shipped models (for --help).
@@ -46,6 +56,8 @@ MODEL_SUMMARIES: dict[str, str] = {
     "friction_oscillator": "forced oscillator with Coulomb friction F on a belt moving at v_b (a Filippov system: sticking is sliding)",
     "bouncing_ball": "a ball bouncing on a table that vibrates as A sin(omega t) (gravity g, restitution e)",
     "impact_oscillator": "forced damped oscillator x'' + 2 zeta x' + x = cos(omega t) against a rigid stop at x = s (restitution r)",
+    "relay_feedback": "third-order linear plant under an ideal relay u = -sgn(x1) (autonomous; sliding on x1 = 0)",
+    "buck_converter": "DC-DC buck converter under ramp (PWM) control, time in ramp periods (autonomous, phase state tau)",
 }
 
 #: Number of forcing periods of the transient of a forced model (when --x0 is not given).
@@ -66,6 +78,7 @@ def _block_on_belt_start(p: Mapping[str, float], backward: bool) -> list[float]:
 #: Start of the transient, per model: ``(parameter values, backward) -> state`` (zeros otherwise).
 TRANSIENT_START: dict[str, Callable[[Mapping[str, float], bool], list[float]]] = {
     "block_on_belt": _block_on_belt_start,
+    "relay_feedback": lambda p, backward: [0.1, 0.0, 0.0],  # off the surface (the origin slides)
 }
 
 #: Length of the transient of an autonomous model, per model: ``parameter values -> time``
@@ -215,6 +228,22 @@ def make_flow(system: PiecewiseSystem):
     finally:
         if timer is not None:
             timer.cancel()
+
+
+def check_parameter(system: PiecewiseSystem, name: str, flag: str) -> str:
+    """A parameter named on the command line (``--param`` and the like) must be the model's.
+
+    Raises
+    ------
+    UsageError
+        For an unknown name (bad usage: exit status 2).
+    """
+    if name not in system.parameter_names:
+        raise UsageError(
+            f"unknown parameter {name!r} in {flag} for model {system.name!r}; "
+            f"parameters are {', '.join(system.parameter_names)}"
+        )
+    return name
 
 
 def parse_sets(items: Sequence[str] | None, system: PiecewiseSystem) -> dict[str, float]:
@@ -646,7 +675,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
     from .shooting import EquilibriumProblem
 
     system = build_model(args.model)
-    system.parameter_index(args.param)
+    check_parameter(system, args.param, "--param")
     overrides = parse_sets(args.set, system)
     start, stop = float(args.start), float(args.stop)
     if start == stop:
@@ -769,8 +798,8 @@ def cmd_locus(args: argparse.Namespace) -> int:
     except ValueError:
         raise UsageError(f"unknown kind {args.kind!r}; kinds are {', '.join(k.value for k in SpecialPointKind)}") from None
     system = build_model(args.model)
-    for name in (args.param, args.param2):
-        system.parameter_index(name)
+    for name, flag in ((args.param, "--param"), (args.param2, "--param2")):
+        check_parameter(system, name, flag)
     if args.param == args.param2:
         raise UsageError("--param and --param2 must differ")
     (start, stop), (lo2, hi2) = args.range, args.range2
@@ -910,7 +939,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from .sweep import sweep
 
     system = build_model(args.model)
-    system.parameter_index(args.param)
+    check_parameter(system, args.param, "--param")
     overrides = parse_sets(args.set, system)
     if args.num < 1:
         raise UsageError(f"--num must be at least 1, got {args.num}")
@@ -921,12 +950,28 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         start = TRANSIENT_START.get(args.model)
         values = dict(system.defaults) | overrides
         x0 = np.array(start(values, False)) if start else None
+    two = [args.param2, args.start2, args.stop2, args.num2]
+    if any(v is not None for v in two) and not all(v is not None for v in two):
+        raise UsageError("a two-parameter map needs all of --param2, --from2, --to2 and --num2")
+    if args.param2 is not None:
+        check_parameter(system, args.param2, "--param2")
+        if args.num2 < 1:
+            raise UsageError(f"--num2 must be at least 1, got {args.num2}")
+        if args.max_period < 1:
+            raise UsageError(f"--max-period must be at least 1, got {args.max_period}")
     make_flow(system)  # compile (or load) here, with the notice, before the workers load it from the cache
     values = np.linspace(args.start, args.stop, args.num)
-    result = sweep(
-        system, args.param, values, periods=args.periods, transient=args.transient, x0=x0,
-        parameters=overrides, workers=args.workers,
-    )
+    client = _dask_client(args.scheduler)
+    try:
+        if args.param2 is not None:
+            return _period_map_command(args, system, values, x0, overrides, client)
+        result = sweep(
+            system, args.param, values, periods=args.periods, transient=args.transient, x0=x0,
+            parameters=overrides, workers=args.workers, client=client,
+        )
+    finally:
+        if client is not None:
+            client.close()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = out / f"{system.name}_{args.param}_sweep"
@@ -938,6 +983,42 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def _dask_client(address: str | None):
+    """A client of the Dask cluster at ``address`` (``--scheduler``), or None."""
+    if address is None:
+        return None
+    try:
+        from distributed import Client
+    except ImportError:
+        raise UsageError("--scheduler needs Dask: pip install 'saltation[distributed]'") from None
+    try:
+        return Client(address, timeout=30)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise UsageError(f"cannot reach the Dask scheduler at {address!r}: {exc}") from None
+
+
+def _period_map_command(args, system, values, x0, overrides, client) -> int:
+    """``saltation sweep ... --param2``: the attractor's period on a grid of two parameters."""
+    from . import plotting
+    from .sweep import period_map
+
+    values2 = np.linspace(args.start2, args.stop2, args.num2)
+    grid = period_map(
+        system, args.param, values, args.param2, values2, max_period=args.max_period, transient=args.transient,
+        x0=x0, parameters=overrides, workers=args.workers, client=client,
+    )
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = out / f"{system.name}_{args.param}_{args.param2}_map"
+    grid.save(stem.with_suffix(".json"))
+    plotting.save_figure(grid.plot(), stem)
+    found = int((grid.periods > 0).sum())
+    print(f"{grid.periods.size} cells ({args.num} x {args.num2}): a period up to {args.max_period} found in {found}, "
+          f"none in {int((grid.periods == 0).sum())}, failed in {int((grid.periods < 0).sum())}; "
+          f"written to {stem}.json/.png/.pdf")
+    return 0
+
+
 def _add_sweep_parser(sub) -> None:
     p = sub.add_parser(
         "sweep",
@@ -945,8 +1026,11 @@ def _add_sweep_parser(sub) -> None:
         description=_paragraph(
             """Simulate a shipped model at --num parameter values between --from and --to, discard a
             transient, and sample the attractor: the Poincare section x(t0 + k T) for forced models,
-            the maxima of x_1 for autonomous ones. Uses every local core. Writes
-            MODEL_PARAM_sweep.json and a plot (PNG, PDF) into --out."""
+            the maxima of x_1 for autonomous ones. Uses every local core, or a Dask cluster
+            (--scheduler). Writes MODEL_PARAM_sweep.json and a plot (PNG, PDF) into --out. With
+            --param2 NAME --from2 V --to2 V --num2 N, a grid of two parameters whose cells record the
+            period of the attractor in forcing periods (or none found: chaos or a period longer
+            than --max-period), drawn as a map: MODEL_PARAM_PARAM2_map.json and its plot."""
         ),
     )
     p.add_argument("model", metavar="MODEL", help=MODEL_HELP.format(names=model_names()))
@@ -958,7 +1042,18 @@ def _add_sweep_parser(sub) -> None:
     p.add_argument("--transient", metavar="Q", type=int, default=100, help="periods discarded first (default 100)")
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="override another parameter")
     p.add_argument("--x0", metavar="V1,V2,...", help="initial state (default: zeros, or the model's usual start)")
-    p.add_argument("--workers", metavar="N", type=int, default=None, help="worker processes (default: every core)")
+    p.add_argument("--workers", metavar="N", type=int, default=None,
+                   help="worker processes, or chunks on a Dask cluster (default: every core, every cluster thread)")
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="run the values as tasks on the Dask cluster at this scheduler address (pip install "
+                        "'saltation[distributed]'); the results equal a local run with the same --workers")
+    p.add_argument("--param2", metavar="NAME", default=None,
+                   help="a second parameter: a two-parameter map of the attractor's period (forced models)")
+    p.add_argument("--from2", dest="start2", metavar="V", type=_finite, default=None, help="first value of --param2")
+    p.add_argument("--to2", dest="stop2", metavar="V", type=_finite, default=None, help="last value of --param2")
+    p.add_argument("--num2", metavar="N", type=int, default=None, help="number of values of --param2")
+    p.add_argument("--max-period", dest="max_period", metavar="K", type=int, default=16,
+                   help="the longest period (in forcing periods) a map looks for (default 16)")
     p.add_argument("--out", metavar="DIR", default=".", help="output directory (default: the current one)")
     p.set_defaults(handler=cmd_sweep)
 

@@ -207,9 +207,21 @@ def phase_plane(v_dr: float = 1.0) -> dict[str, np.ndarray]:
     unstable = find_periodic_orbit(flow, back.x1, parameters={"v_dr": v_dr}, period=stable.period, backward=True)
     ts, xs = flow.run(stable.state0, 0.0, stable.period, p, dense=True).sample(16)
     tu, xu = flow.run(unstable.state0, 0.0, -unstable.period, p, dense=True).sample(16)
+    # the paper's flows: I from outside the stable cycle, II between the cycles (both reach the stick band
+    # D and join the stable cycle), III inside the unstable cycle (to the equilibrium)
+    right_s, right_u = xs[:, 0].max(), xu[:, 0].max()
+    starts = {"flow_I": [right_s + 0.35, 0.0], "flow_II": [0.5 * (right_s + right_u), 0.0],
+              "flow_III": [x_eq[0] + 0.85 * (right_u - x_eq[0]), 0.0]}
+    flows = {}
+    for name, x in starts.items():  # each until it sticks (then it is on the stable cycle), or 1.6 periods
+        t_end = 1.6 * stable.period
+        first = flow.run(x, 0.0, t_end, p)
+        sticks = [e.t for e in first.events if e.mode_to == "stick"]
+        flows[name] = flow.run(x, 0.0, min([t_end] + [t + 0.4 for t in sticks]), p, dense=True).sample(40)[1]
     return {
         "stable": xs,
         "unstable": xu,
+        **flows,
         "equilibrium": x_eq,
         "stable_multipliers": stable.multipliers,
         "unstable_multipliers": unstable.multipliers,
@@ -304,9 +316,12 @@ def write(results: PaperResults, out: Path) -> list[Path]:
     curves = [
         plotting.PhaseCurve(pp["stable"], label="stable limit cycle", style=plotting.CurveStyle.STABLE),
         plotting.PhaseCurve(pp["unstable"], label="unstable limit cycle (backward time)", style=plotting.CurveStyle.UNSTABLE),
+        *(plotting.PhaseCurve(pp[f"flow_{k}"], label="flows I, II, III" if k == "I" else "",
+                              style=plotting.CurveStyle.TRAJECTORY) for k in ("I", "II", "III")),
     ]
     fig6 = plotting.plot_phase_plane(
-        curves, equilibrium=pp["equilibrium"], stick_band=(float(pp["v_dr"]), 0.05), band_label="stick band D (eta enlarged)"
+        curves, equilibrium=pp["equilibrium"], stick_band=(float(pp["v_dr"]), 0.05), band_label="stick band D (eta enlarged)",
+        legend_below=True, labels=[(k, pp[f"flow_{k}"][0]) for k in ("I", "II", "III")], figsize=(6.0, 5.2),
     )
     written += plotting.save_figure(fig6, out / "fig6_block_on_belt_phase_plane", dpi=150)
     written += plotting.save_figure(plotting.plot_response(results.block_on_belt.branches), out / "fig7_block_on_belt_diagram", dpi=150)

@@ -9,6 +9,8 @@ figure. :func:`save_figure` writes a PNG and a PDF.
 
 from __future__ import annotations
 
+import math
+
 import enum
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
@@ -18,6 +20,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.transforms import offset_copy
 from matplotlib.lines import Line2D
 
 from .branch import Branch, SpecialPoint, SpecialPointKind
@@ -198,6 +201,9 @@ def plot_response(
     fig, ax = _new_axes(ax, figsize)
     handles: list[Line2D] = []
     kinds_seen: list[SpecialPointKind] = []
+    marks_at: list[tuple[SpecialPointKind, float, float]] = []
+    all_x: list[float] = []
+    all_y: list[float] = []
     for b, branch in enumerate(branches):
         color = colors[b % len(colors)] if colors else "k"
         y = _measure_values(branch, measure)
@@ -211,13 +217,12 @@ def plot_response(
             handles.append(Line2D([], [], color=color, label=branch.label))
         if special_points:
             for sp in branch.special_points:
-                marker, _ = SPECIAL_POINT_MARKERS[sp.kind]
-                ax.plot(
-                    [sp.parameter], [_special_point_y(branch, sp, y, measure)], linestyle="none", marker=marker,
-                    markersize=9, markerfacecolor="white", markeredgecolor="k", zorder=5, gid=sp.kind.value,
-                )
+                marks_at.append((sp.kind, float(sp.parameter), float(_special_point_y(branch, sp, y, measure))))
                 if sp.kind not in kinds_seen:
                     kinds_seen.append(sp.kind)
+        all_x.extend(branch.parameter)
+        all_y.extend(np.asarray(y, dtype=float)[np.isfinite(y)])
+    _mark_special_points(fig, ax, marks_at, all_x, all_y)
     runs_styles = [Line2D([], [], color="k", linestyle=STABLE_STYLE, label="stable"),
                    Line2D([], [], color="k", linestyle=UNSTABLE_STYLE, label="unstable")]
     marks = [
@@ -232,6 +237,32 @@ def plot_response(
     if legend:
         ax.legend(handles=runs_styles + handles + marks, loc="best", fontsize="small")
     return fig
+
+
+def _mark_special_points(fig: Figure, ax: Axes, marks: list[tuple[SpecialPointKind, float, float]],
+                         all_x: Sequence[float], all_y: Sequence[float], *, near: float = 0.03) -> None:
+    """Draw special-point markers; of markers closer than ``near`` (a fraction of the data's extent)
+    the first stays at its point and the others move aside along a diagonal, each tied to its point by
+    a thin leader line, so that every marker stays visible."""
+    if not marks:
+        return
+    xs, ys = np.asarray(all_x, dtype=float), np.asarray(all_y, dtype=float)
+    width = float(np.ptp(xs)) if xs.size and np.ptp(xs) > 0 else 1.0
+    height = float(np.ptp(ys)) if ys.size and np.ptp(ys) > 0 else 1.0
+    placed: list[tuple[float, float]] = []
+    for kind, x, y in marks:
+        crowd = sum(1 for (px, py) in placed if math.hypot((x - px) / width, (y - py) / height) < near)
+        placed.append((x, y))
+        marker, _ = SPECIAL_POINT_MARKERS[kind]
+        style = {"linestyle": "none", "marker": marker, "markersize": 9, "markerfacecolor": "white",
+                 "markeredgecolor": "k", "zorder": 5, "gid": kind.value}
+        if crowd == 0:
+            ax.plot([x], [y], **style)
+            continue
+        shift = 16.0 * crowd  # points, down and to the right of the crowded spot
+        ax.plot([x], [y], transform=offset_copy(ax.transData, fig=fig, x=shift, y=-shift, units="points"), **style)
+        ax.annotate("", xy=(x, y), xytext=(shift, -shift), textcoords="offset points",
+                    arrowprops={"arrowstyle": "-", "color": "0.4", "linewidth": 0.6, "shrinkA": 5, "shrinkB": 0})
 
 
 # ---------------------------------------------------------------------------
@@ -418,6 +449,8 @@ def plot_phase_plane(
     xlabel: str = "x",
     ylabel: str = "x'",
     legend: bool = True,
+    legend_below: bool = False,
+    labels: Sequence[tuple[str, Sequence[float]]] = (),
     figsize: tuple[float, float] = (6.0, 4.5),
 ) -> Figure:
     """Phase plane with limit cycles, an equilibrium and the stick band (Fig. 6).
@@ -437,6 +470,10 @@ def plot_phase_plane(
         Legend text of the band; by default it names the inequality.
     xlabel, ylabel : str
     legend : bool
+    legend_below : bool
+        Put the legend below the axes, where it hides nothing.
+    labels : sequence of (str, (float, float))
+        Text written at points of the plane (the names of flows, say).
     figsize : (float, float)
 
     Returns
@@ -468,10 +505,15 @@ def plot_phase_plane(
     if equilibrium is not None:
         ax.plot([equilibrium[0]], [equilibrium[1]], linestyle="none", marker="o", markersize=7, color="k",
                 label=equilibrium_label, gid="equilibrium", zorder=5)
+    for text, (x, y) in labels:
+        ax.annotate(text, xy=(x, y), xytext=(4, 4), textcoords="offset points", fontsize="medium", gid="label")
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     if legend and ax.get_legend_handles_labels()[0]:
-        ax.legend(loc="best", fontsize="small")
+        if legend_below:
+            ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize="small", frameon=False)
+        else:
+            ax.legend(loc="best", fontsize="small")
     return fig
 
 

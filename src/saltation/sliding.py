@@ -35,7 +35,7 @@ is tangent to the switching surface (``h_x f_B + h_t = 0``):
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -66,6 +66,9 @@ class SlidingChange:
         Where the side with the extra events has them (the touch lies between).
     side : float
         The side of the surface (the sign of ``h``) where ``mode`` lies.
+    count : int
+        At how many points of the orbit the change happens at once (2 for the two switchings of a
+        symmetric orbit); the defining system holds at the first, symmetry gives the others.
     """
 
     kind: SpecialPointKind
@@ -74,10 +77,7 @@ class SlidingChange:
     surface: str
     t_guess: float
     side: float
-
-
-def _same(a: list[SwitchingEvent], b: list[SwitchingEvent]) -> bool:
-    return len(a) == len(b) and all(x.kind == y.kind and x.surface == y.surface for x, y in zip(a, b))
+    count: int = 1
 
 
 def _arrival_side(flow: Flow, e: SwitchingEvent, p: np.ndarray) -> float:
@@ -95,18 +95,48 @@ def _cyclic(traj: Trajectory) -> list[SwitchingEvent]:
     return ev
 
 
-def _rotation_matching(rest: list[SwitchingEvent], cycle: list[SwitchingEvent], first_kind: EventKind,
-                       surface: str) -> SwitchingEvent | None:
-    """The event of ``cycle`` where a rotation of it starts that matches ``[that event] + rest`` in kinds
-    and surfaces (the event itself of kind ``first_kind`` on ``surface``), or None."""
-    m = len(cycle)
-    for r in range(m):
-        first = cycle[r]
-        if first.kind != first_kind or first.surface != surface:
-            continue
-        if _same(rest, [cycle[(r + 1 + k) % m] for k in range(m - 1)]):
-            return first
+def _signature(e: SwitchingEvent) -> tuple:
+    """What identifies an event in a change of sequence: its kind and surface, and the mode it enters
+    (not for a sliding start, whose arrival side is what changes at a switching-sliding)."""
+    return (int(e.kind), e.surface, "" if e.kind == EventKind.SLIDING_START else e.mode_to)
+
+
+def _reduce(sigs: list, i: int, kind: SpecialPointKind) -> list | None:
+    """The cycle of signatures with the extra events of a ``kind`` change at position ``i`` turned into
+    the other side's form (rotated to start there), or None when there is no such change at ``i``."""
+    m = len(sigs)
+    if m < 2:
+        return None
+    rot = [sigs[(i + k) % m] for k in range(m)]
+    (k0, s0, _), (k1, s1, m1) = rot[0], rot[1]
+    if s0 != s1:
+        return None
+    tr, ss, se = int(EventKind.TRANSITION), int(EventKind.SLIDING_START), int(EventKind.SLIDING_END)
+    if kind is SpecialPointKind.SWITCHING_SLIDING and (k0, k1) == (tr, ss):
+        return rot[1:]  # [crossing into B, sliding start] -> [sliding start]
+    if kind is SpecialPointKind.CROSSING_SLIDING and (k0, k1) == (ss, se):
+        return [(tr, s0, m1)] + rot[2:]  # [sliding start, sliding end into B] -> [crossing into B]
+    if kind is SpecialPointKind.ADDING_SLIDING and (k0, k1) == (se, ss) and m > 2 and rot[2][:2] == (se, s0):
+        return rot[2:]  # [sliding end into A, sliding start, sliding end] -> [sliding end]
     return None
+
+
+def _same_cycle(a: list, b: list) -> bool:
+    n = len(a)
+    return n == len(b) and any(all(a[k] == b[(k + r) % n] for k in range(n)) for r in range(max(n, 1)))
+
+
+def _nearest(events: list[SwitchingEvent], kind: EventKind, surface: str, t: float, span: float,
+             mode_to: str | None = None) -> SwitchingEvent | None:
+    """Of the events of a kind on a surface (entering ``mode_to``, if given), the nearest in time to ``t``,
+    modulo the period ``span``."""
+
+    def distance(e):
+        d = (e.t - t) % span
+        return min(d, span - d)
+
+    found = [e for e in events if e.kind == kind and e.surface == surface and (mode_to is None or e.mode_to == mode_to)]
+    return min(found, key=distance) if found else None
 
 
 def sliding_change(flow: Flow, without: Trajectory, with_: Trajectory, p_with: np.ndarray,
@@ -114,45 +144,59 @@ def sliding_change(flow: Flow, without: Trajectory, with_: Trajectory, p_with: n
     """Recognise a crossing-, switching- or adding-sliding change between two orbits.
 
     ``with_`` has the extra events: one more (crossing- and switching-sliding)
-    or two more (adding-sliding).  ``p_with`` and ``p_without`` are their
-    parameter values.  The event sequences are compared as cycles (events may
-    pass the section ``t = t0`` between the two orbits).  Returns None for any
-    other change.
+    or two more (adding-sliding), or twice that where the change happens at
+    two points of the orbit at once (the two switchings of a symmetric orbit).
+    ``p_with`` and ``p_without`` are their parameter values.  The event
+    sequences are compared as cycles (events may pass the section ``t = t0``
+    between the two orbits).  Returns None for any other change.
     """
     w, wo = _cyclic(with_), _cyclic(without)
-    m = len(w)
-    extra = m - len(wo)
-    if extra not in (1, 2) or not wo:
+    if not wo:
         return None
-    for i in range(m):
-        e, nxt = w[i], w[(i + 1) % m]
-        if nxt.surface != e.surface:
-            continue
-        if extra == 1 and e.kind == EventKind.TRANSITION and nxt.kind == EventKind.SLIDING_START:
-            # switching-sliding: [crossing into B, sliding start] where the other side starts sliding
-            rest = [w[(i + 2 + k) % m] for k in range(m - 2)]
-            arrival = _rotation_matching(rest, wo, EventKind.SLIDING_START, e.surface)
-            if arrival is not None:
-                return SlidingChange(SpecialPointKind.SWITCHING_SLIDING, without.events.index(arrival), e.mode_to,
-                                     e.surface, e.t, _arrival_side(flow, e, p_with))
-        if extra == 1 and e.kind == EventKind.SLIDING_START and nxt.kind == EventKind.SLIDING_END:
-            # crossing-sliding: [sliding start, sliding end into B] where the other side crosses into B
-            rest = [w[(i + 2 + k) % m] for k in range(m - 2)]
-            crossing = _rotation_matching(rest, wo, EventKind.TRANSITION, e.surface)
-            if crossing is not None and crossing.mode_to == nxt.mode_to:
-                return SlidingChange(SpecialPointKind.CROSSING_SLIDING, without.events.index(crossing), nxt.mode_to,
-                                     e.surface, e.t, _arrival_side(flow, crossing, p_without))
-        if extra == 2 and e.kind == EventKind.SLIDING_END and nxt.kind == EventKind.SLIDING_START:
-            # adding-sliding: [sliding end into A, sliding start] inside a sliding motion of the other side
-            rest = [w[(i + 3 + k) % m] for k in range(m - 3)]
-            late = w[(i + 2) % m]
-            exit_ = _rotation_matching(rest, wo, EventKind.SLIDING_END, e.surface)
-            if exit_ is not None and late.kind == EventKind.SLIDING_END and late.mode_to == exit_.mode_to:
-                span = with_.t1 - with_.t0  # the touch lies between the extra exit and re-entry, modulo the period
-                t_guess = with_.t0 + (e.t - with_.t0 + 0.5 * ((nxt.t - e.t) % span)) % span
-                return SlidingChange(SpecialPointKind.ADDING_SLIDING, without.events.index(exit_), e.mode_to,
-                                     e.surface, t_guess, -_arrival_side(flow, nxt, p_with))
+    sw, swo = [_signature(e) for e in w], [_signature(e) for e in wo]
+    span = with_.t1 - with_.t0
+    for kind, per in ((SpecialPointKind.SWITCHING_SLIDING, 1), (SpecialPointKind.CROSSING_SLIDING, 1),
+                      (SpecialPointKind.ADDING_SLIDING, 2)):
+        for count in (1, 2):
+            if len(w) - len(wo) != per * count:
+                continue
+            for i in range(len(w)):
+                reduced = _reduce(sw, i, kind)
+                if reduced is None:
+                    continue
+                if count == 2:
+                    seconds = (_reduce(reduced, j, kind) for j in range(1, len(reduced)))
+                    if not any(r is not None and _same_cycle(r, swo) for r in seconds):
+                        continue
+                elif not _same_cycle(reduced, swo):
+                    continue
+                change = _change(flow, kind, w, i, without, span, p_with, p_without)
+                if change is not None:
+                    return replace(change, count=count)
     return None
+
+
+def _change(flow: Flow, kind: SpecialPointKind, w: list[SwitchingEvent], i: int, without: Trajectory, span: float,
+            p_with: np.ndarray, p_without: np.ndarray) -> SlidingChange | None:
+    """The change of ``kind`` whose extra events start at ``w[i]``, tied to the other side's event."""
+    m = len(w)
+    e, nxt = w[i], w[(i + 1) % m]
+    if kind is SpecialPointKind.SWITCHING_SLIDING:  # the arrival: a sliding start on the other side
+        arrival = _nearest(without.events, EventKind.SLIDING_START, e.surface, nxt.t, span)
+        return None if arrival is None else SlidingChange(
+            kind, without.events.index(arrival), e.mode_to, e.surface, e.t, _arrival_side(flow, e, p_with))
+    if kind is SpecialPointKind.CROSSING_SLIDING:  # the arrival: a crossing into B on the other side
+        crossing = _nearest(without.events, EventKind.TRANSITION, e.surface, e.t, span, nxt.mode_to)
+        return None if crossing is None else SlidingChange(
+            kind, without.events.index(crossing), nxt.mode_to, e.surface, e.t,
+            _arrival_side(flow, crossing, p_without))
+    late = w[(i + 2) % m]  # adding-sliding: the touch lies between the extra exit and re-entry
+    exit_ = _nearest(without.events, EventKind.SLIDING_END, e.surface, late.t, span, late.mode_to)
+    if exit_ is None:
+        return None
+    t_guess = without.t0 + (e.t - without.t0 + 0.5 * ((nxt.t - e.t) % span)) % span
+    return SlidingChange(kind, without.events.index(exit_), e.mode_to, e.surface, t_guess,
+                         -_arrival_side(flow, nxt, p_with))
 
 
 @dataclass(frozen=True)
@@ -219,16 +263,19 @@ def _curvature(flow: Flow, mode: str, surface: str, side: float, t: float, x: np
 
 
 def _newton(flow: Flow, z0: np.ndarray, lam_name: str, extra: Callable, n_extra: int, history: list[float], *,
-            parameters, t0: float, tol: float, max_iter: int, fd_step: float, tolerances, what: str):
+            parameters, t0: float, tol: float, max_iter: int, fd_step: float, tolerances, what: str,
+            autonomous: bool = False):
     """Newton's method on periodicity plus ``n_extra`` conditions ``extra(z, q) -> (values, info)`` of
-    ``z = (x0, lam, extra unknowns)``; the periodicity rows are exact (variational equations), the
-    conditions' rows central differences.  Appends the residual norms to ``history``; returns
-    ``(z, info, full trajectory, accuracy)``."""
+    ``z = (x0, lam, extra unknowns)``, and for an autonomous orbit its period as the last unknown with
+    the phase condition ``f_ref . (x0 - x_ref) = 0`` (anchored at the start); the periodicity rows are
+    exact (variational equations), the conditions' rows central differences.  Appends the residual
+    norms to ``history``; returns ``(z, info, full trajectory, accuracy)``."""
     system = flow.system
     j = system.parameter_index(lam_name)
     p = flow.parameters(parameters).copy()
     n = system.n
     m = len(z0)
+    rows = n + (1 if autonomous else 0)
 
     def params(z):
         q = p.copy()
@@ -236,22 +283,32 @@ def _newton(flow: Flow, z0: np.ndarray, lam_name: str, extra: Callable, n_extra:
         return q
 
     z = np.asarray(z0, dtype=float).copy()
+    if autonomous:  # the phase condition, anchored at the start
+        x_ref = z[:n].copy()
+        f_ref = flow.vector_field(flow.initial_mode(x_ref, params(z), t0), t0, x_ref, params(z))
+        f_ref = f_ref / np.linalg.norm(f_ref)
     for it in range(max_iter + 1):
         q = params(z)
-        T = system.forcing_period(q)
+        T = z[-1] if autonomous else system.forcing_period(q)
         full = flow.run(z[:n], t0, t0 + T, q, variational=True, parameter=j, tolerances=tolerances)
         c, info = extra(z, q)
-        residual = np.concatenate([full.x1 - z[:n], c])
+        phase = [f_ref @ (z[:n] - x_ref)] if autonomous else []
+        residual = np.concatenate([full.x1 - z[:n], phase, c])
         rn = float(np.linalg.norm(residual))
         history.append(rn)
-        J = np.zeros((n + n_extra, m))
+        J = np.zeros((rows + n_extra, m))
         J[:n, :n] = full.monodromy - np.eye(n)
-        J[:n, n] = full.parameter_sensitivity + system.period_derivative(q, j) * full.velocity_end
+        J[:n, n] = full.parameter_sensitivity
+        if autonomous:
+            J[:n, m - 1] = full.velocity_end
+            J[n, :n] = f_ref
+        else:
+            J[:n, n] += system.period_derivative(q, j) * full.velocity_end
         for i in range(m):
             step = fd_step * max(1.0, abs(z[i]))
             e = np.zeros(m)
             e[i] = step
-            J[n:, i] = (extra(z + e, params(z + e))[0] - extra(z - e, params(z - e))[0]) / (2 * step)
+            J[rows:, i] = (extra(z + e, params(z + e))[0] - extra(z - e, params(z - e))[0]) / (2 * step)
         dz = np.linalg.lstsq(J, -residual, rcond=None)[0] if J.shape[0] != J.shape[1] else np.linalg.solve(J, -residual)
         if rn <= tol * (1.0 + float(np.linalg.norm(z[: n + 1]))):
             carried = float(np.abs(np.linalg.pinv(J)[n]).sum()) * flow.integration_error(full, tolerances)
@@ -266,6 +323,7 @@ def _newton(flow: Flow, z0: np.ndarray, lam_name: str, extra: Callable, n_extra:
 def locate_tangent_arrival(
     flow: Flow, x0: np.ndarray, lam: float, lam_name: str, index: int, far_mode: str, side: float, *, parameters=None,
     t0: float = 0.0, tol: float = 1e-12, max_iter: int = 20, fd_step: float = 1e-7, tolerances=None,
+    period: float | None = None,
 ) -> SlidingBifurcationOrbit:
     """Locate a crossing- or switching-sliding: periodicity plus ``h_x f_B + h_t = 0`` where the orbit
     arrives at the surface.
@@ -283,25 +341,27 @@ def locate_tangent_arrival(
     ConvergenceError
         If Newton does not converge, or the orbit's events change along the way.
     ModelError
-        For an autonomous model.
+        For an autonomous model without a ``period`` guess.
     """
     system = flow.system
     tolerances = location_tolerances(flow, tolerances)
-    if system.is_autonomous:
-        raise ModelError(f"locating a sliding bifurcation is implemented for forced models; {system.name!r} is autonomous")
+    autonomous = system.is_autonomous
+    if autonomous and period is None:
+        raise ModelError(f"{system.name!r} is autonomous: locating its sliding bifurcation needs a period guess")
     n = system.n
     history: list[float] = []
 
     def tangency(z: np.ndarray, q: np.ndarray):
-        traj = flow.run(z[:n], t0, t0 + system.forcing_period(q), q, tolerances=tolerances)
+        traj = flow.run(z[:n], t0, t0 + (z[-1] if autonomous else system.forcing_period(q)), q, tolerances=tolerances)
         if len(traj.events) <= index or traj.events[index].kind not in _ARRIVALS:
             raise ConvergenceError("sliding bifurcation: the orbit's events changed during the iteration", history)
         e = traj.events[index]
         return np.array([exit_rate(flow, far_mode, e.surface, e.t, e.x_minus, q)]), e
 
+    z0 = np.concatenate([np.asarray(x0, dtype=float)[:n], [float(lam)], [float(period)] if autonomous else []])
     z, hit, full, accuracy = _newton(
-        flow, np.append(np.asarray(x0, dtype=float), float(lam)), lam_name, tangency, 1, history, parameters=parameters,
-        t0=t0, tol=tol, max_iter=max_iter, fd_step=fd_step, tolerances=tolerances, what="sliding bifurcation",
+        flow, z0, lam_name, tangency, 1, history, parameters=parameters, t0=t0, tol=tol, max_iter=max_iter,
+        fd_step=fd_step, tolerances=tolerances, what="sliding bifurcation", autonomous=autonomous,
     )
     q = flow.parameters(parameters).copy()
     q[system.parameter_index(lam_name)] = z[n]

@@ -47,7 +47,7 @@ from .errors import ModelError, SaltationError
 from .integrate import Flow, Tolerances, Trajectory, dense_evaluate
 from .model import PiecewiseSystem
 
-__all__ = ["SweepResult", "sweep"]
+__all__ = ["PeriodMap", "SweepResult", "attractor_period", "period_map", "sweep"]
 
 _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 #: Dense-output evaluations per integration step when looking for maxima.
@@ -227,9 +227,16 @@ def _init_worker(system: PiecewiseSystem) -> None:
     _WORKER_FLOW = Flow(system)  # in a forked worker the kernels are already loaded; otherwise from the disk cache
 
 
-def _run_job_in_worker(job: _Job):
+def _run_job_in_worker(job):
     assert _WORKER_FLOW is not None
-    return _run_chunk(_WORKER_FLOW, job)
+    return _run_any(_WORKER_FLOW, job)
+
+
+def _run_any(flow: Flow, job):
+    """A chunk of a sweep, or the rows of a period map (a list of chunks)."""
+    if isinstance(job, _RowsJob):
+        return [_run_chunk(flow, j) for j in job.rows]
+    return _run_chunk(flow, job)
 
 
 def sweep(
@@ -246,6 +253,7 @@ def sweep(
     parameters: dict[str, float] | None = None,
     period: float | None = None,
     t0: float = 0.0,
+    client=None,
 ) -> SweepResult:
     """Brute-force diagram: simulate at each parameter value and sample the attractor.
 
@@ -279,6 +287,10 @@ def sweep(
         ``transient`` (default ``2 pi``).  Ignored for forced systems.
     t0 : float
         Initial time (forced systems: the phase of the section).
+    client : dask.distributed.Client, optional
+        Run the chunks as tasks on this Dask cluster instead of local
+        processes (``workers`` chunks; default: one per thread of the
+        cluster).  The same chunks give the same results as a local run.
 
     Returns
     -------
@@ -305,22 +317,14 @@ def sweep(
         period = None
     use_poincare = bool(poincare) and not autonomous
 
-    n_workers = _available_cores() if workers is None else int(workers)
-    if n_workers < 1:
-        raise ValueError(f"workers must be at least 1, got {workers}")
+    n_workers = _workers(workers, client)
     n_workers = min(n_workers, values.size)
     chunks = np.array_split(values, n_workers)
     jobs = [
         _Job(c, x0, p_index, base, int(periods), int(transient), use_poincare, period, float(t0), tolerances)
         for c in chunks
     ]
-    if n_workers == 1:
-        results = [_run_chunk(Flow(system), jobs[0])]
-    else:
-        Flow(system)  # load (or compile) the kernels once here, so that forked workers inherit them
-        pool = ProcessPoolExecutor(max_workers=n_workers, mp_context=_context(), initializer=_init_worker, initargs=(system,))
-        with pool as ex:
-            results = list(ex.map(_run_job_in_worker, jobs))
+    results = _run_jobs(system, jobs, client)
 
     counts, samples, failures = [], [], []
     for chunk_counts, chunk_samples, chunk_failures in results:
@@ -344,6 +348,242 @@ def sweep(
         failures=tuple(failures),
         settings=settings,
     )
+
+
+# -- two-parameter maps -------------------------------------------------------------------------
+@dataclass(frozen=True)
+class PeriodMap:
+    """A two-parameter brute-force map: the period of the attractor in each cell of a grid.
+
+    Attributes
+    ----------
+    model : str
+    parameter, parameter2 : str
+        The parameters of the columns and of the rows.
+    values, values2 : ndarray
+        Their values.
+    periods : ndarray of int, shape (len(values2), len(values))
+        The attractor's period in forcing periods; 0 where none up to
+        ``max_period`` was found (chaos, a longer period, or not settled),
+        -1 where the simulation failed.
+    max_period : int
+    failures : tuple of (float, float, str)
+        ``(value, value2, message)`` of each failed cell.
+    settings : dict
+        ``periods``, ``transient``, ``tolerance``.
+    """
+
+    model: str
+    parameter: str
+    parameter2: str
+    values: np.ndarray
+    values2: np.ndarray
+    periods: np.ndarray
+    max_period: int
+    failures: tuple[tuple[float, float, str], ...] = ()
+    settings: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """A JSON-ready dictionary."""
+        return {
+            "format": "saltation.period_map/1",
+            "model": self.model,
+            "parameter": self.parameter,
+            "parameter2": self.parameter2,
+            "values": [float(v) for v in self.values],
+            "values2": [float(v) for v in self.values2],
+            "periods": [[int(c) for c in row] for row in self.periods],
+            "max_period": int(self.max_period),
+            "failures": [[float(a), float(b), m] for a, b, m in self.failures],
+            "settings": dict(self.settings),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> PeriodMap:
+        if d.get("format") != "saltation.period_map/1":
+            raise ValueError(f"not a saltation period map (format {d.get('format')!r})")
+        return cls(
+            model=d["model"], parameter=d["parameter"], parameter2=d["parameter2"],
+            values=np.array(d["values"], dtype=float), values2=np.array(d["values2"], dtype=float),
+            periods=np.array(d["periods"], dtype=int), max_period=int(d["max_period"]),
+            failures=tuple((float(a), float(b), str(m)) for a, b, m in d["failures"]), settings=dict(d["settings"]),
+        )
+
+    def save(self, path: str | PathLike[str]) -> Path:
+        """Write the map as JSON."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(self.to_dict(), indent=1) + "\n")
+        return path
+
+    def plot(self, ax: Axes | None = None) -> Figure:
+        """The map: one colour per period (1 ... max_period), grey for none found, white for failures."""
+        from matplotlib.colors import BoundaryNorm, ListedColormap
+
+        if ax is None:
+            fig = Figure(figsize=(6.4, 4.8), layout="constrained")
+            ax = fig.add_subplot()
+        else:
+            fig = ax.get_figure()
+        import matplotlib
+
+        base = matplotlib.colormaps["tab20"]
+        colours = ["white", "0.6"] + [base(k % 20) for k in range(self.max_period)]
+        cmap = ListedColormap(colours)
+        norm = BoundaryNorm(np.arange(-1.5, self.max_period + 1.5), cmap.N)
+        mesh = ax.pcolormesh(_edges(self.values), _edges(self.values2), self.periods, cmap=cmap, norm=norm)
+        bar = fig.colorbar(mesh, ax=ax, ticks=np.arange(-1, self.max_period + 1))
+        bar.ax.set_yticklabels(["failed", "none"] + [str(k) for k in range(1, self.max_period + 1)])
+        bar.set_label("period of the attractor (forcing periods)")
+        ax.set_xlabel(self.parameter)
+        ax.set_ylabel(self.parameter2)
+        ax.set_title(f"{self.model}: period of the attractor")
+        return fig
+
+
+def _edges(v: np.ndarray) -> np.ndarray:
+    """Cell edges around grid values (midpoints; a single value gets a unit cell)."""
+    if v.size == 1:
+        return np.array([v[0] - 0.5, v[0] + 0.5])
+    mid = 0.5 * (v[1:] + v[:-1])
+    return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
+
+
+def attractor_period(samples: np.ndarray, max_period: int, tolerance: float = 1e-6) -> int:
+    """The smallest ``k <= max_period`` with ``x_{j+k} = x_j`` for every stroboscopic sample (to
+    ``tolerance`` relative to the samples' size), or 0 when there is none."""
+    samples = np.asarray(samples, dtype=float)
+    scale = tolerance * (1.0 + float(np.abs(samples).max(initial=0.0)))
+    for k in range(1, max_period + 1):
+        if samples.shape[0] > k and float(np.abs(samples[k:] - samples[:-k]).max()) <= scale:
+            return k
+    return 0
+
+
+def period_map(
+    system: PiecewiseSystem,
+    parameter: str,
+    values: Sequence[float],
+    parameter2: str,
+    values2: Sequence[float],
+    *,
+    max_period: int = 16,
+    periods: int | None = None,
+    transient: int = 200,
+    tolerance: float = 1e-6,
+    x0: Sequence[float] | None = None,
+    parameters: dict[str, float] | None = None,
+    workers: int | None = None,
+    client=None,
+    tolerances: Tolerances | None = None,
+    t0: float = 0.0,
+) -> PeriodMap:
+    """Two-parameter brute-force map of a forced system: the attractor's period in each grid cell.
+
+    Each row (a value of ``parameter2``) is simulated like :func:`sweep` over
+    ``values`` (each cell from the previous cell's final state), and the
+    period is read off the stroboscopic samples (:func:`attractor_period`).
+    Rows run in local worker processes, or as Dask tasks on ``client``.
+
+    Parameters
+    ----------
+    max_period : int
+        Longest period looked for; ``periods`` samples (default ``4 max_period``) are taken after
+        ``transient`` forcing periods.
+    tolerance : float
+        Relative tolerance of the periodicity test.
+
+    Raises
+    ------
+    ModelError
+        For an autonomous model (its period is not a number of forcing periods).
+    """
+    if system.is_autonomous:
+        raise ModelError(f"a period map counts forcing periods; {system.name!r} is autonomous")
+    p1, p2 = system.parameter_index(parameter), system.parameter_index(parameter2)
+    if p1 == p2:
+        raise ModelError(f"the two parameters of a map must differ, got {parameter!r} twice")
+    values = np.asarray(values, dtype=float).reshape(-1)
+    values2 = np.asarray(values2, dtype=float).reshape(-1)
+    if values.size == 0 or values2.size == 0 or not (np.all(np.isfinite(values)) and np.all(np.isfinite(values2))):
+        raise ValueError("a period map needs finite values of both parameters")
+    if int(max_period) != max_period or max_period < 1:
+        raise ValueError(f"max_period must be a positive integer, got {max_period}")
+    periods = 4 * int(max_period) if periods is None else int(periods)
+    if periods <= max_period or transient < 0:
+        raise ValueError(f"periods must exceed max_period and transient be non-negative, got {periods}, {transient}")
+    base = system.parameter_vector(parameters)
+    x0 = np.zeros(system.n) if x0 is None else np.asarray(x0, dtype=float).reshape(-1)
+    if x0.shape != (system.n,):
+        raise ModelError(f"x0 must have {system.n} components {list(system.state_names)}, got {x0.size}")
+    jobs = []
+    for v2 in values2:
+        row = base.copy()
+        row[p2] = v2
+        jobs.append(_Job(values, x0, p1, row, periods, int(transient), True, None, float(t0), tolerances))
+    n_workers = min(_workers(workers, client), len(jobs))
+    grouped = [_RowsJob(jobs[k::n_workers]) for k in range(n_workers)]  # rows dealt round-robin to the workers
+    results: list = [None] * len(jobs)
+    for k, out in enumerate(_run_jobs(system, grouped, client)):
+        for r, res in enumerate(out):
+            results[k + r * n_workers] = res
+    grid = np.zeros((values2.size, values.size), dtype=int)
+    failures = []
+    for i, (counts, samples, fails) in enumerate(results):
+        failed = {v for v, _ in fails}
+        it = iter(samples)
+        for j, (value, c) in enumerate(zip(values, counts)):
+            if c == 0 or float(value) in failed:
+                grid[i, j] = -1
+                continue
+            grid[i, j] = attractor_period(next(it), int(max_period), tolerance)
+        failures += [(float(v), float(values2[i]), m) for v, m in fails]
+    return PeriodMap(
+        model=system.name, parameter=parameter, parameter2=parameter2, values=values, values2=values2, periods=grid,
+        max_period=int(max_period), failures=tuple(failures),
+        settings={"periods": periods, "transient": int(transient), "tolerance": float(tolerance), "t0": float(t0)},
+    )
+
+
+@dataclass(frozen=True)
+class _RowsJob:
+    """Several rows of a period map for one worker."""
+
+    rows: list
+
+
+def _workers(workers: int | None, client) -> int:
+    """The number of chunks: ``workers``, or every local core, or every thread of a Dask cluster."""
+    if workers is None:
+        return max(1, sum(client.nthreads().values())) if client is not None else _available_cores()
+    if int(workers) < 1:
+        raise ValueError(f"workers must be at least 1, got {workers}")
+    return int(workers)
+
+
+def _run_jobs(system: PiecewiseSystem, jobs: list[_Job], client) -> list:
+    """Run the jobs: in this process (one job), in local worker processes, or as Dask tasks."""
+    if client is not None:
+        futures = client.map(_run_job_as_task, [system] * len(jobs), jobs, pure=False)
+        return client.gather(futures)
+    if len(jobs) == 1:
+        return [_run_any(Flow(system), jobs[0])]
+    Flow(system)  # load (or compile) the kernels once here, so that forked workers inherit them
+    pool = ProcessPoolExecutor(max_workers=len(jobs), mp_context=_context(), initializer=_init_worker, initargs=(system,))
+    with pool as ex:
+        return list(ex.map(_run_job_in_worker, jobs))
+
+
+_TASK_FLOWS: dict[str, Flow] = {}
+
+
+def _run_job_as_task(system: PiecewiseSystem, job: _Job):
+    """A Dask task: one chunk, with the model's flow kept per worker process (its kernels compiled or
+    loaded from that machine's cache once)."""
+    flow = _TASK_FLOWS.get(system.fingerprint)
+    if flow is None:
+        flow = _TASK_FLOWS[system.fingerprint] = Flow(system)
+    return _run_any(flow, job)
 
 
 def _available_cores() -> int:
