@@ -25,7 +25,8 @@ G, E, A0, W = (DEFAULTS[k] for k in ("g", "e", "A", "omega"))
 T = 2 * np.pi / W
 
 
-def impact_map(A, u):
+def impact_map(A, u, e=E):
+    """(impact time, velocity after it) -> the next impact, of the ball with restitution e."""
     t_i, v_plus = u
     y_i = A * np.sin(W * t_i)
     gap = lambda tau: y_i + v_plus * tau - G * tau**2 / 2 - A * np.sin(W * (t_i + tau))  # noqa: E731
@@ -35,7 +36,7 @@ def impact_map(A, u):
     tau = brentq(gap, taus[k], taus[k + 1], xtol=1e-15, rtol=4 * np.finfo(float).eps)
     t_next = t_i + tau
     v_minus = v_plus - G * tau
-    return np.array([t_next, (1 + E) * A * W * np.cos(W * t_next) - E * v_minus])
+    return np.array([t_next, (1 + e) * A * W * np.cos(W * t_next) - e * v_minus])
 
 
 def period_1(A):

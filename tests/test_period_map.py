@@ -2,7 +2,7 @@
 
 Reference: the ball on a vibrating table, iterated as its closed-form impact map (free flight
 y = y_i + v t - g t^2 / 2 until it meets s(t) = A sin(w t), found by brentq; Newton's restitution law),
-written here with numpy and scipy only. Its period-1 orbits lose stability at
+written with numpy and scipy only (tests/test_branch_switching.py). Its period-1 orbits lose stability at
 A w^2 / g = sqrt((pi (1 - e) / (1 + e))^2 + (2 (1 + e^2) / (1 + e)^2)^2) (Holmes 1982).
 """
 
@@ -10,30 +10,18 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 from saltation import ModelError
 from saltation.models import bouncing_ball, friction_oscillator
 from saltation.models.bouncing_ball import DEFAULTS
 from saltation.sweep import PeriodMap, attractor_period, period_map, sweep
 
+from test_branch_switching import impact_map  # the closed-form impact map (restitution e an argument)
+
 G, W = DEFAULTS["g"], DEFAULTS["omega"]
 T = 2 * np.pi / W
 A_VALUES = [0.32, 0.34, 0.36, 0.385, 0.395, 0.40]
 E_VALUES = [0.45, 0.5, 0.55]
-
-
-def impact_map(A, e, u):
-    """(impact time, velocity after it) -> the next impact."""
-    t_i, v_plus = u
-    y_i = A * np.sin(W * t_i)
-    gap = lambda tau: y_i + v_plus * tau - G * tau**2 / 2 - A * np.sin(W * (t_i + tau))  # noqa: E731
-    taus = np.linspace(1e-9, 3 * T, 3001)
-    g = gap(taus)
-    k = np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0][0]
-    tau = brentq(gap, taus[k], taus[k + 1], xtol=1e-15, rtol=4 * np.finfo(float).eps)
-    t = t_i + tau
-    return np.array([t, (1 + e) * A * W * np.cos(W * t) - e * (v_plus - G * tau)])
 
 
 def reference_period(A, e, max_period=8):
@@ -42,10 +30,10 @@ def reference_period(A, e, max_period=8):
     phi = np.arccos((1 - e) * np.pi * G / ((1 + e) * A * W**2))
     u = np.array([phi / W + 1e-3, G * T / 2])
     for _ in range(400):
-        u = impact_map(A, e, u)
+        u = impact_map(A, u, e)
     seq = []
     for _ in range(4 * max_period):
-        u = impact_map(A, e, u)
+        u = impact_map(A, u, e)
         seq.append([u[0] % T, u[1]])
     return attractor_period(np.array(seq), max_period)
 
