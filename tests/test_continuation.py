@@ -389,3 +389,36 @@ def test_stick_slip_fold_stable_side_limit(belt_diagram, belt_flow):
         np.testing.assert_allclose(np.sort(np.abs(orbit.multipliers)), np.sort(np.abs(mu)), rtol=0, atol=1e-5)
     # d^(-1/2): a tenfold smaller distance, a sqrt(10) larger multiplier (to 10 %: the O(1) term)
     assert mags[1] / mags[0] == pytest.approx(np.sqrt(10.0), rel=0.1)
+
+
+def test_continue_orbit_is_the_explicit_path(trilinear_flow):
+    """continue_orbit(orbit, name, bounds=...) follows the same branch as a ShootingProblem with
+    continue_branch from the same start (the orbit keeps its flow, parameters and section)."""
+    from dataclasses import replace
+
+    from saltation import ContinuationSettings, continue_orbit, find_periodic_orbit
+    from saltation.continuation import continue_branch
+    from saltation.paper import linear_response_state
+    from saltation.models.trilinear import DEFAULTS
+
+    x0 = linear_response_state(dict(DEFAULTS, omega=0.6))
+    orbit = find_periodic_orbit(trilinear_flow, x0, parameters={"omega": 0.6})
+    settings = ContinuationSettings(ds=0.02, ds_max=0.05)
+    branch = continue_orbit(orbit, "omega", bounds=(0.6, 1.0), directions=(1,), settings=settings)
+    problem = ShootingProblem(trilinear_flow, {"omega": 0.6}, continuation_parameter="omega")
+    reference = continue_branch(problem, orbit.state0, 0.6, settings=replace(settings, bounds=(0.6, 1.0)),
+                                directions=(1,))
+    np.testing.assert_array_equal(branch.parameter, reference.parameter)
+    assert [sp.kind for sp in branch.special_points] == [sp.kind for sp in reference.special_points]
+    assert branch.special_points  # the corner at w_A lies in (0.6, 1.0)
+    with pytest.raises(TypeError):
+        ContinuationSettings(0.02)  # keyword-only: a positional value is an error, not a silent ds
+
+
+def test_everyday_names_are_exported():
+    import saltation
+
+    for name in ("PiecewiseSystem", "Flow", "find_periodic_orbit", "continue_orbit", "ShootingProblem",
+                 "continue_branch", "ContinuationSettings", "Branch", "SpecialPoint", "SpecialPointKind", "sweep",
+                 "period_map"):
+        assert name in saltation.__all__ and hasattr(saltation, name)

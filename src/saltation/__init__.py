@@ -1,5 +1,16 @@
-"""saltation: bifurcation analysis of periodic solutions of discontinuous systems."""
+"""saltation: bifurcation analysis of periodic solutions of discontinuous systems.
 
+The everyday names are here: define a model (:class:`PiecewiseSystem`,
+:class:`Mode`, :class:`Transition`, :class:`Crossing`), integrate it
+(:class:`Flow`, :func:`simulate`), find a periodic orbit
+(:func:`find_periodic_orbit`), follow its branch (:func:`continue_orbit`, or
+:class:`ShootingProblem` with :func:`continue_branch`) and read its special
+points (:class:`Branch`, :class:`SpecialPoint`, :class:`SpecialPointKind`);
+brute-force diagrams with :func:`sweep` and :func:`period_map`.
+"""
+
+from .branch import Branch, SpecialPoint, SpecialPointKind
+from .continuation import ContinuationSettings, continue_branch, continue_orbit
 from .errors import (
     ChatteringError,
     ConvergenceError,
@@ -13,12 +24,15 @@ from .errors import (
 )
 from .integrate import EventKind, Flow, Status, SwitchingEvent, Tolerances, Trajectory, simulate
 from .model import Crossing, Mode, PiecewiseSystem, Transition
+from .shooting import PeriodicOrbit, ShootingProblem, find_periodic_orbit
+from .sweep import period_map, sweep
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "ChatteringError", "ConvergenceError", "Crossing", "EventKind", "Flow", "InitialModeError",
-    "IntegrationError", "Mode", "ModelError", "NonFiniteError", "PiecewiseSystem", "SaltationError",
-    "SlidingError", "Status", "StepSizeError", "SwitchingEvent", "Tolerances", "Trajectory",
-    "Transition", "simulate",
+    "Branch", "ChatteringError", "ContinuationSettings", "ConvergenceError", "Crossing", "EventKind", "Flow",
+    "InitialModeError", "IntegrationError", "Mode", "ModelError", "NonFiniteError", "PeriodicOrbit",
+    "PiecewiseSystem", "SaltationError", "ShootingProblem", "SlidingError", "SpecialPoint", "SpecialPointKind",
+    "Status", "StepSizeError", "SwitchingEvent", "Tolerances", "Trajectory", "Transition", "continue_branch",
+    "continue_orbit", "find_periodic_orbit", "period_map", "simulate", "sweep",
 ]

@@ -30,11 +30,11 @@ import numpy as np
 from .bifurcations import SpecialPointDetector, grazing_point
 from .branch import Branch, BranchKind, BranchPoint, StopReason
 from .corrector import Corrector, Solution, canonical_events
-from .errors import SaltationError
-from .shooting import EquilibriumProblem, ShootingProblem
+from .errors import ModelError, SaltationError
+from .shooting import EquilibriumProblem, PeriodicOrbit, ShootingProblem
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ContinuationSettings:
     """Options of a continuation run (keyword-only, so a typo is an error).
 
@@ -368,4 +368,52 @@ def continue_branch(
     return branch
 
 
-__all__ = ["Continuation", "ContinuationSettings", "Corrector", "Solution", "canonical_events", "continue_branch"]
+def continue_orbit(
+    orbit: PeriodicOrbit,
+    parameter: str,
+    *,
+    bounds: tuple[float, float],
+    directions: tuple[int, ...] = (1, -1),
+    settings: ContinuationSettings | None = None,
+) -> Branch:
+    """Follow the branch of a periodic orbit in one parameter, with its special points.
+
+    The direct path from :func:`saltation.shooting.find_periodic_orbit` to a
+    branch: the orbit's own flow, parameter values, time direction, section
+    and tolerances are kept.
+
+    Parameters
+    ----------
+    orbit : PeriodicOrbit
+        A periodic orbit found by shooting.
+    parameter : str
+        The continuation parameter.
+    bounds : (float, float)
+        Its interval.
+    directions : tuple of int
+        ``(1, -1)``: both ways from the orbit; ``(1,)`` or ``(-1,)``: one.
+    settings : ContinuationSettings, optional
+        Step sizes and tolerances (``bounds`` overrides theirs).
+
+    Raises
+    ------
+    ModelError
+        For an unknown parameter, or an orbit that does not know its problem.
+    """
+    base = orbit.problem
+    if base is None:
+        raise ModelError("this orbit does not know the problem that found it: build a ShootingProblem instead")
+    system = base.system
+    system.parameter_index(parameter)  # names the parameter in its error
+    values = dict(zip(system.parameter_names, map(float, orbit.parameters)))
+    problem = ShootingProblem(base.flow, values, continuation_parameter=parameter, backward=orbit.backward,
+                              t0=orbit.t0, tolerances=base.tolerances, periods=base.periods)
+    settings = replace(settings or ContinuationSettings(), bounds=tuple(bounds))
+    u0 = problem.pack(orbit.state0, orbit.period if orbit.autonomous else None)
+    return continue_branch(problem, u0, values[parameter], settings=settings, directions=directions)
+
+
+__all__ = [
+    "Continuation", "ContinuationSettings", "Corrector", "Solution", "canonical_events", "continue_branch",
+    "continue_orbit",
+]

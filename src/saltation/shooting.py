@@ -132,6 +132,9 @@ class PeriodicOrbit:
     iterations: int
     residual_norm: float
     residuals: list[float] = field(default_factory=list)
+    #: the shooting problem that found it (its flow, tolerances and section): what
+    #: :func:`saltation.continuation.continue_orbit` follows
+    problem: ShootingProblem | None = field(default=None, repr=False, compare=False)
 
     @property
     def amplitude(self) -> float:
@@ -462,6 +465,7 @@ class ShootingProblem:
             iterations=max(len(history) - 1, 0),
             residual_norm=float(history[-1]),
             residuals=list(history),
+            problem=self,
         )
 
 

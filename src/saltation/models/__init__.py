@@ -8,8 +8,9 @@ from .friction_oscillator import friction_oscillator
 from .impact_oscillator import impact_oscillator
 from .relay_feedback import relay_feedback
 from .trilinear import trilinear
+from .two_mass_stops import two_mass_stops
 
 __all__ = [
     "WRegion", "block_on_belt", "bouncing_ball", "buck_converter", "chain", "friction_oscillator",
-    "impact_oscillator", "relay_feedback", "trilinear",
+    "impact_oscillator", "relay_feedback", "trilinear", "two_mass_stops",
 ]
