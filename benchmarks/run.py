@@ -58,7 +58,7 @@ from saltation import Flow, Tolerances  # noqa: E402
 from saltation.models import block_on_belt, chain, trilinear  # noqa: E402
 from saltation.paper import PaperSettings, block_on_belt_diagram, trilinear_diagram  # noqa: E402
 from saltation.shooting import find_periodic_orbit  # noqa: E402
-from saltation.sweep import sweep  # noqa: E402
+from saltation.sweeps import sweep  # noqa: E402
 
 TARGETS = {
     "orbit_ms": 0.3,

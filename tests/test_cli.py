@@ -328,7 +328,7 @@ def test_paper_end_to_end(tmp_path, capsys):
 
 
 def test_sweep_end_to_end(tmp_path, capsys):
-    from saltation.sweep import SweepResult
+    from saltation.sweeps import SweepResult
 
     status = cli.main([
         "sweep", "trilinear", "--param", "omega", "--from", "0.6", "--to", "0.7", "--num", "3",
@@ -348,7 +348,7 @@ def test_sweep_map_on_a_dask_scheduler_equals_the_local_map(tmp_path, capsys):
     """--param2 ... gives the period map; --scheduler runs it on a Dask cluster, with the same cells."""
     import distributed
 
-    from saltation.sweep import PeriodMap
+    from saltation.sweeps import PeriodMap
 
     args = ["sweep", "bouncing_ball", "--param", "A", "--from", "0.33", "--to", "0.39", "--num", "3",
             "--param2", "e", "--from2", "0.45", "--to2", "0.55", "--num2", "2", "--max-period", "4",

@@ -42,3 +42,15 @@ def test_layers_depend_only_on_layers_below():
     assert "shooting" not in deps["integrate"] and "continuation" not in deps["integrate"]
     assert "continuation" not in deps["corrector"] and "continuation" not in deps["bifurcations"]
     assert deps["_contract"] == set()  # copied verbatim into every generated module
+
+
+def test_no_top_level_name_hides_a_module():
+    """``import saltation.X as m`` must give the module X, not a function exported under the same name."""
+    import importlib
+
+    modules = {f.stem for f in ROOT.glob("*.py") if not f.stem.startswith("_")}
+    hidden = sorted(name for name in saltation.__all__ if name in modules)
+    assert hidden == []
+    for name in modules:
+        importlib.import_module(f"saltation.{name}")
+        assert type(getattr(saltation, name)).__name__ == "module", name

@@ -25,7 +25,7 @@ from .errors import (
 from .integrate import EventKind, Flow, Status, SwitchingEvent, Tolerances, Trajectory, simulate
 from .model import Crossing, Mode, PiecewiseSystem, Transition
 from .shooting import PeriodicOrbit, ShootingProblem, find_periodic_orbit
-from .sweep import period_map, sweep
+from .sweeps import period_map, sweep
 
 __version__ = "0.1.0"
 

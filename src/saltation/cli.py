@@ -936,7 +936,7 @@ def _add_paper_parser(sub) -> None:
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``saltation sweep``: a brute-force diagram of a shipped model."""
     from . import plotting
-    from .sweep import sweep
+    from .sweeps import sweep
 
     system = build_model(args.model)
     check_parameter(system, args.param, "--param")
@@ -1000,7 +1000,7 @@ def _dask_client(address: str | None):
 def _period_map_command(args, system, values, x0, overrides, client) -> int:
     """``saltation sweep ... --param2``: the attractor's period on a grid of two parameters."""
     from . import plotting
-    from .sweep import period_map
+    from .sweeps import period_map
 
     values2 = np.linspace(args.start2, args.stop2, args.num2)
     grid = period_map(
