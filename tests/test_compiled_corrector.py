@@ -137,7 +137,7 @@ def test_end_velocity_of_a_mode_and_of_a_sliding_motion(filippov_flow, trilinear
 def test_pivoted_solve_against_lapack(trilinear_flow):
     """The kernel's Newton solve (Gaussian elimination with partial pivoting) against numpy.linalg.solve
     (LAPACK dgesv), on random matrices, one that needs row exchanges, and singular ones."""
-    solve = trilinear_flow._kernels._solve_pivoted
+    solve = trilinear_flow._engine._solve_pivoted
     rng = np.random.default_rng(7)
     matrices = [rng.standard_normal((m, m)) for m in (1, 2, 3, 4, 6)]
     matrices.append(np.array([[0.0, 2.0, 1.0], [1.0, 0.0, 0.0], [3.0, 1.0, 4.0]]))  # zero leading pivot

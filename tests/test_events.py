@@ -156,7 +156,7 @@ def test_indicator_rates_against_central_differences():
     every step: against central differences of ``h`` along ``(1, f)`` in ``(t, x)``, for a moving
     surface (``h_t != 0``) and a state-only one. The model functions run as plain Python here."""
     from saltation import Crossing, Mode, PiecewiseSystem, Transition
-    from saltation.codegen import generate_source
+    from saltation.codegen import model_source
 
     system = PiecewiseSystem(
         name="test_moving_wall",
@@ -170,7 +170,7 @@ def test_indicator_rates_against_central_differences():
         ],
     )
     namespace = {"njit": lambda *args, **kwargs: (lambda f: f)}
-    source = generate_source(system).replace("from numba import njit\n", "")
+    source = model_source(system).replace("from numba import njit\n", "")
     exec(compile(source, "<generated>", "exec"), namespace)  # noqa: S102
     indicator, rate = namespace["indicator"], namespace["indicator_rate"]
     p = system.parameter_vector()

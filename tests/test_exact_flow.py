@@ -13,6 +13,7 @@ import pytest
 import scipy.linalg
 import sympy as sp
 
+from saltation._contract import AFFINE_PARTS, AFFINE_PARTS_DP
 from saltation import Tolerances
 from saltation.affine import affine_form
 from saltation.model import TIME
@@ -96,15 +97,15 @@ def test_dense_output_of_exact_steps(trilinear_flow):
     assert traj.x_max[0] == pytest.approx(np.max(exact[:, 0]), abs=1e-10)
 
 
-def _exact_step_workspace(kernels, flow, p, pidx):
+def _exact_step_workspace(flow, p, pidx):
     """The affine parts of every mode (and their derivatives by parameter ``pidx``), as the kernel sets them up."""
     n, n_modes, n_par = flow.system.n, len(flow.system.mode_names), len(p)
     A, B, W = np.zeros((n_modes, n, n)), np.zeros((n_modes, n, 3)), np.zeros((n_modes, 4))
     Ap, Bp = np.zeros((n_modes, n, n)), np.zeros((n_modes, n, 3))
     Ap_all, Bp_all, wp_all = np.zeros((n_par, n, n)), np.zeros((n_par, n, 3)), np.zeros((n_par, 2))
     for m in range(n_modes):
-        kernels.affine_parts(m, p, A[m], B[m], W[m, :2])
-        kernels.affine_parts_dp(m, p, Ap_all, Bp_all, wp_all)
+        flow._model[AFFINE_PARTS](m, p, A[m], B[m], W[m, :2])
+        flow._model[AFFINE_PARTS_DP](m, p, Ap_all, Bp_all, wp_all)
         Ap[m], Bp[m], W[m, 2:] = Ap_all[pidx], Bp_all[pidx], wp_all[pidx]
     return A, B, W, Ap, Bp
 
@@ -114,12 +115,12 @@ def test_a_fraction_of_an_exact_step_is_the_exact_step_to_that_point(trilinear_f
     """A rejected step, the step to an event and the steps of its refinement re-use the series of the
     step attempted first, summed at a fraction of it: [x, Phi, psi], the field at the end, the dense
     output and its error bound must be those of a new series for the shorter step."""
-    k = trilinear_flow._kernels
+    k = trilinear_flow._engine
     system = trilinear_flow.system
     n, N, rows = system.n, 2 * system.n + system.n**2, k.MAX_TAYLOR + 4
     p = trilinear_flow.parameters({"omega": 1.0})
     pidx = system.parameter_index("omega")  # the forcing's terms of the sensitivity count too
-    aff = _exact_step_workspace(k, trilinear_flow, p, pidx)
+    aff = _exact_step_workspace(trilinear_flow, p, pidx)
     mode = system.mode_index("contact_1")
     t, h = 0.7, 0.3
     y = np.concatenate([[1.1, 0.4], [1.2, -0.3, 0.5, 0.9], [0.2, -0.7]])  # x, Phi (row-major), psi

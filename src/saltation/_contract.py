@@ -1,11 +1,22 @@
-"""The contract between the compiled integrator and Python, defined once.
+"""The contract between the compiled engine, the model functions and Python, defined once.
 
-Every generated kernel module starts with this file's text (numba folds its
-names into constants), and :mod:`saltation.integrate` imports it to read the
-kernel's results: the status codes, the kinds of events, the outcomes of the
-kernel's Newton iterations, and the layout of the two packed result arrays.
-Keep it free of imports: it is copied verbatim.
+Every generated module (the engine of a state dimension, the functions of a
+model) starts with this file's text (numba folds its names into constants),
+and :mod:`saltation.integrate` imports it to read the engine's results: the
+status codes, the kinds of events, the outcomes of the engine's Newton
+iterations, the layout of the two packed result arrays, and the model
+functions the engine calls, with their signatures.  Keep it free of package
+imports: it is copied verbatim.
 """
+
+import warnings as _warnings
+
+from numba import types as _t
+from numba.core.errors import NumbaExperimentalFeatureWarning as _Experimental
+
+# numba calls first-class function types experimental; the engine is built on them (the model tuple
+# below), and tests/test_engine.py holds the engine to the results of the per-model kernels it replaced
+_warnings.filterwarnings("ignore", message=".*First-class function type", category=_Experimental)
 
 # Status codes of an integration (saltation.integrate.Status).
 STATUS_OK = 0
@@ -59,3 +70,36 @@ def result_offsets(n):
     velocity = x_max + n
     events = velocity + n
     return x, phi, psi, x_min, x_max, velocity, events
+
+
+# The model functions the engine calls, in the order of the model tuple the engine takes (its first
+# argument): each compiled with the signature below, so the engine is typed with function types, not
+# with the functions, and is compiled once for all models. The tuple ends with AFFINE_MODES, whether
+# each mode's field is affine in the state (an array of booleans).
+_F1, _F2, _F3 = _t.float64[::1], _t.float64[:, ::1], _t.float64[:, :, ::1]
+_I, _R = _t.int64, _t.float64
+MODEL_SIGNATURES = {
+    "vector_field": _t.void(_I, _R, _F1, _F1, _F1),  # (mode, t, x, p, f)
+    "vector_field_jac": _t.void(_I, _R, _F1, _F1, _F2),  # (mode, t, x, p, f_x)
+    "vector_field_dp": _t.void(_I, _R, _F1, _F1, _F2),  # (mode, t, x, p, f_p)
+    "indicator": _R(_I, _R, _F1, _F1),  # (surface, t, x, p) -> h
+    "indicator_grad": _R(_I, _R, _F1, _F1, _F1, _F1),  # (surface, t, x, p, h_x, h_p) -> h_t
+    "indicator_rate": _R(_I, _R, _F1, _F1, _F1, _F1, _F1),  # (surface, t, x, f, p, work, work) -> h_t + h_x f
+    "lie_derivative": _R(_I, _I, _R, _F1, _F1, _F1, _F1),  # (mode, surface, t, x, p, g_x, g_p) -> h_x f + h_t
+    "lie_derivative_dt": _R(_I, _I, _R, _F1, _F1),  # (mode, surface, t, x, p) -> its partial in t
+    "reset_map": _t.void(_I, _R, _F1, _F1, _F1),  # (transition, t, x, p, g)
+    "reset_jac": _t.void(_I, _R, _F1, _F1, _F2, _F1, _F2),  # (transition, t, x, p, g_x, g_t, g_p)
+    "affine_parts": _t.void(_I, _F1, _F2, _F2, _F1),  # (mode, p, A, B, (omega, phase))
+    "affine_parts_dp": _t.void(_I, _F1, _F3, _F3, _F2),  # (mode, p, dA/dp, dB/dp, d(omega, phase)/dp)
+    "guard": _t.boolean(_I, _R, _F1, _F1),  # (transition, t, x, p)
+    "in_domain": _t.boolean(_I, _R, _F1, _F1),  # (mode, t, x, p)
+    "domain_margin": _R(_I, _R, _F1, _F1),  # (mode, t, x, p) -> smallest condition value
+    "initial_mode": _I(_R, _F1, _F1),  # (t, x, p) -> first mode whose domain holds, or -1
+    "forcing_period": _R(_F1),  # (p) -> T (0: autonomous)
+    "forcing_period_dp": _R(_F1, _I),  # (p, k) -> dT/dp_k
+}
+MODEL_FUNCTIONS = tuple(MODEL_SIGNATURES)
+(VECTOR_FIELD, VECTOR_FIELD_JAC, VECTOR_FIELD_DP, INDICATOR, INDICATOR_GRAD, INDICATOR_RATE, LIE_DERIVATIVE,
+ LIE_DERIVATIVE_DT, RESET_MAP, RESET_JAC, AFFINE_PARTS, AFFINE_PARTS_DP, GUARD, IN_DOMAIN, DOMAIN_MARGIN,
+ INITIAL_MODE, FORCING_PERIOD, FORCING_PERIOD_DP, AFFINE_MODES) = range(len(MODEL_FUNCTIONS) + 1)
+MODEL_TYPE = _t.Tuple(tuple(_t.FunctionType(sig) for sig in MODEL_SIGNATURES.values()) + (_t.boolean[::1],))

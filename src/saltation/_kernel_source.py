@@ -1,45 +1,67 @@
-"""Compiled event-driven integrator (source template).
+"""The compiled event-driven integrator: the engine (source template).
 
-This file is not imported as a module.  :mod:`saltation.codegen` copies its
-text into a generated module after the model's own compiled functions
-(``vector_field``, ``vector_field_jac``, ``vector_field_dp``, ``indicator``,
-``indicator_grad``, ``lie_derivative``, ``reset_map``, ``reset_jac``,
-``guard``) and the Dormand-Prince 8(5,3) tableau (``RK_A``, ``RK_B``,
-``RK_C``, ``RK_E3``, ``RK_E5``, ``RK_D``), so that numba compiles one
-self-contained module per model and caches it on disk.
+This file is not imported as a module.  :mod:`saltation.codegen` writes it
+into the kernel cache after the contract (``_contract.py``), the state
+dimension ``N_STATE`` and the Dormand-Prince 8(5,3) tableau (``RK_A``,
+``RK_B``, ``RK_C``, ``RK_E3``, ``RK_E5``, ``RK_D``), and numba compiles it
+once per machine and caches it on disk.  Nothing in it belongs to a model:
+the model's compiled functions arrive as the first argument of every
+function that calls them, a tuple typed by the signatures of the contract
+(``MODEL_TYPE``: first-class functions), so a new model compiles only its own
+small functions.  ``N_STATE`` is a compile-time constant in the engines of
+small state dimensions (``n = N_STATE or x.shape[0]`` folds to a constant and
+loops over the state have a known length) and 0 in the engine of any
+dimension, where ``n`` comes from the arrays.
 
 The integrator (see ``docs/algorithms.md``):
 
 * takes DOP853 steps of the augmented system ``x' = f``, ``Phi' = f_x Phi``,
-  ``psi' = f_x psi + f_p[:, k]`` with the error controlled on ``x``;
+  ``psi' = f_x psi + f_p[:, k]`` with the error controlled on ``x``
+  (``_rk_step``), or exact steps of affine modes (``_exact_step``);
 * watches the indicators of the surfaces of the current mode's transitions,
   including indicators that dip through zero and back within one step
   (a golden-section search on the dense output when the indicator's slope
-  reverses), locates each crossing by bracketing on the dense output and
-  refines it by re-stepping from the step start to near machine precision;
+  reverses, ``_dip_search``), locates each crossing by bracketing on the dense
+  output (``_bracket_root``) and refines it by re-stepping from the step start
+  to near machine precision;
 * applies the transition (reset, new mode) and jumps ``Phi`` by the saltation
   matrix ``S = g_x + (f+ - g_x f- - g_t) h_x / (h_x f- + h_t)`` (eq. 9 with
-  resets), ``psi`` by the parameter column of the same formula;
+  resets), ``psi`` by the parameter column of the same formula, in one place:
+  ``_saltation_jump``;
 * slides (Filippov) when the new field pushes back into the surface, and
-  leaves the sliding motion where either field turns tangent.
+  leaves the sliding motion where either field turns tangent
+  (``_sliding_exit_event``).
 """
 
 import math
 
 import numpy as np
 from numba import njit
+from numba import types as nt
 
-# The status codes (STATUS_*), event kinds (EVENT_*), Newton outcomes (SHOOT_*) and the layout of the
-# packed results (INFO_*, result_offsets) come from saltation/_contract.py, whose text the generated
-# module starts with; the offsets are compiled here for the kernel's own use.
+# The status codes (STATUS_*), event kinds (EVENT_*), Newton outcomes (SHOOT_*), the layout of the
+# packed results (INFO_*, result_offsets) and of the model tuple (VECTOR_FIELD, ..., MODEL_TYPE) come
+# from saltation/_contract.py, whose text the engine's module starts with; the offsets are compiled
+# here for the engine's own use.
 if False:  # never runs: these names come from saltation/_contract.py, which the generated module starts with
-    from saltation._contract import (  # noqa: F401
+    from saltation._contract import (
+        AFFINE_MODES,
+        AFFINE_PARTS,
+        AFFINE_PARTS_DP,
+        DOMAIN_MARGIN,
         EVENT_LOG_INTS,
         EVENT_SLIDING_END,
         EVENT_SLIDING_START,
         EVENT_TRANSITION,
-        INFO_EVENTS,
+        FORCING_PERIOD,
+        FORCING_PERIOD_DP,
+        GUARD,
+        IN_DOMAIN,
+        INDICATOR,
+        INDICATOR_GRAD,
+        INDICATOR_RATE,
         INFO_EVENT_LOG,
+        INFO_EVENTS,
         INFO_FAILED_MODE,
         INFO_FAILED_SURFACE,
         INFO_FINAL_MODE,
@@ -48,6 +70,12 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         INFO_SLIDE,
         INFO_STATUS,
         INFO_STEPS,
+        INITIAL_MODE,
+        LIE_DERIVATIVE,
+        LIE_DERIVATIVE_DT,
+        MODEL_TYPE,
+        RESET_JAC,
+        RESET_MAP,
         SHOOT_BAD_PERIOD,
         SHOOT_CONVERGED,
         SHOOT_FAILED,
@@ -63,9 +91,21 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         STATUS_SLIDING_UNDEFINED,
         STATUS_STEP_TOO_SMALL,
         STATUS_TANGENTIAL,
+        VECTOR_FIELD,
+        VECTOR_FIELD_DP,
+        VECTOR_FIELD_JAC,
         result_offsets,
     )
+    N_STATE = 0  # the state dimension, or 0 (see above): from the engine's header
 result_offsets_c = njit(cache=True, inline="always")(result_offsets)
+
+# The signatures of the engine's two entry points, compiled when the engine is imported: the model tuple,
+# then the arguments as :mod:`saltation.integrate` passes them (C-contiguous float arrays, int64, bool).
+_R, _I, _B = nt.float64, nt.int64, nt.boolean
+_V, _M, _T = nt.float64[::1], nt.float64[:, ::1], nt.int64[:, ::1]
+INTEGRATE_SIGNATURE = (MODEL_TYPE, _R, _R, _V, _I, _V, _B, _I, _R, _R, _R, _R, _I, _I, _T, _I, _B, _M, _V, _B, _B)
+CORRECT_SIGNATURE = (MODEL_TYPE, _V, _V, _R, _R, _B, _I, _R, _V, _V, _V, _R, _I, _R, _B, _R, _R, _R, _I, _I, _T, _I, _M, _V,
+                     _B, _B)
 
 EPS = 2.220446049250313e-16
 CHATTER_WINDOW = 20
@@ -82,37 +122,37 @@ OFF = np.bool_(False)
 
 
 @njit(cache=True, inline="always")  # inlined: array arguments cost more than the work
-def _field(mode, slide, t, x, p, var, pidx, f, J, fpc, ws1, ws2, ws3, wsJ1, wsJ2, wsP, gA, gB, gpA, gpB):
+def _field(model, mode, slide, t, x, p, var, pidx, f, J, fpc, ws1, ws2, ws3, wsJ1, wsJ2, wsP, gA, gB, gpA, gpB):
     """Vector field (and Jacobian and parameter column) of a mode or a sliding motion.
 
     ``slide = (active, mode_a, mode_b, surface, crossing, time direction)``; the sliding field
     is Filippov's ``f_a + alpha (f_b - f_a)`` with ``alpha = s_a / (s_a - s_b)``,
     ``s_m = h_x f_m + h_t``.
     """
-    n = N_STATE  # noqa: F821
+    n = N_STATE or x.shape[0]
     if slide[0] == 0:
-        vector_field(mode, t, x, p, f)  # noqa: F821
+        model[VECTOR_FIELD](mode, t, x, p, f)
         if var:
-            vector_field_jac(mode, t, x, p, J)  # noqa: F821
+            model[VECTOR_FIELD_JAC](mode, t, x, p, J)
             if pidx >= 0:
-                vector_field_dp(mode, t, x, p, wsP)  # noqa: F821
+                model[VECTOR_FIELD_DP](mode, t, x, p, wsP)
                 for i in range(n):
                     fpc[i] = wsP[i, pidx]
         return
     ma = slide[1]
     mb = slide[2]
     surf = slide[3]
-    vector_field(ma, t, x, p, ws1)  # noqa: F821
-    vector_field(mb, t, x, p, ws2)  # noqa: F821
-    sa = lie_derivative(ma, surf, t, x, p, gA, gpA)  # noqa: F821
-    sb = lie_derivative(mb, surf, t, x, p, gB, gpB)  # noqa: F821
+    model[VECTOR_FIELD](ma, t, x, p, ws1)
+    model[VECTOR_FIELD](mb, t, x, p, ws2)
+    sa = model[LIE_DERIVATIVE](ma, surf, t, x, p, gA, gpA)
+    sb = model[LIE_DERIVATIVE](mb, surf, t, x, p, gB, gpB)
     d = sa - sb
     alpha = sa / d
     for i in range(n):
         f[i] = ws1[i] + alpha * (ws2[i] - ws1[i])
     if var:
-        vector_field_jac(ma, t, x, p, wsJ1)  # noqa: F821
-        vector_field_jac(mb, t, x, p, wsJ2)  # noqa: F821
+        model[VECTOR_FIELD_JAC](ma, t, x, p, wsJ1)
+        model[VECTOR_FIELD_JAC](mb, t, x, p, wsJ2)
         d2 = d * d
         for j in range(n):
             ws3[j] = (sa * gB[j] - sb * gA[j]) / d2
@@ -122,23 +162,23 @@ def _field(mode, slide, t, x, p, var, pidx, f, J, fpc, ws1, ws2, ws3, wsJ1, wsJ2
                 J[i, j] = wsJ1[i, j] + alpha * (wsJ2[i, j] - wsJ1[i, j]) + df * ws3[j]
         if pidx >= 0:
             dalpha = (sa * gpB[pidx] - sb * gpA[pidx]) / d2
-            vector_field_dp(ma, t, x, p, wsP)  # noqa: F821
+            model[VECTOR_FIELD_DP](ma, t, x, p, wsP)
             for i in range(n):
                 fpc[i] = wsP[i, pidx] * (1.0 - alpha)
-            vector_field_dp(mb, t, x, p, wsP)  # noqa: F821
+            model[VECTOR_FIELD_DP](mb, t, x, p, wsP)
             for i in range(n):
                 fpc[i] += alpha * wsP[i, pidx] + (ws2[i] - ws1[i]) * dalpha
 
 
 @njit(cache=True, inline="always")  # inlined: array arguments cost more than the work
-def _aug_rhs(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
+def _aug_rhs(model, mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
     """Right-hand side of the augmented system ``[x, Phi (row-major), psi]``."""
-    n = N_STATE  # noqa: F821
+    n = N_STATE or wv.shape[1]
     x = y[:n]
     f = wv[0]
     fpc = wv[1]
     J = WJ[0]
-    _field(mode, slide, t, x, p, var, pidx, f, J, fpc, wv[2], wv[3], wv[4], WJ[1], WJ[2], WP, wv[5], wv[6], W[0], W[1])
+    _field(model, mode, slide, t, x, p, var, pidx, f, J, fpc, wv[2], wv[3], wv[4], WJ[1], WJ[2], WP, wv[5], wv[6], W[0], W[1])
     for i in range(n):
         dy[i] = f[i]
     if var:
@@ -160,19 +200,19 @@ def _aug_rhs(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
 
 
 @njit(cache=True)
-def _aug_rhs_called(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
+def _aug_rhs_called(model, mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
     """:func:`_aug_rhs` as a call, for the places outside the stepper (inlining there only costs compile time)."""
-    _aug_rhs(mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv)
+    _aug_rhs(model, mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv)
 
 
 @njit(cache=True)
-def _field_called(mode, slide, t, x, p, f, WJ, WP, wv, W):
+def _field_called(model, mode, slide, t, x, p, f, WJ, WP, wv, W):
     """The field (no derivatives) of a mode or sliding motion, as a call."""
-    _field(mode, slide, t, x, p, False, -1, f, WJ[0], wv[1], wv[2], wv[3], wv[4], WJ[1], WJ[2], WP, wv[5], wv[6], W[0], W[1])
+    _field(model, mode, slide, t, x, p, False, -1, f, WJ[0], wv[1], wv[2], wv[3], wv[4], WJ[1], WJ[2], WP, wv[5], wv[6], W[0], W[1])
 
 
 @njit(cache=True)
-def _rk_step(mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err):
+def _rk_step(model, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err):
     """One DOP853 step from ``(t, y)`` with ``K[0] = f(t, y)`` given; returns the error norm.
 
     The error is measured on the first ``n_err`` components (the state, or the
@@ -189,7 +229,7 @@ def _rk_step(mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, W
                     acc += a * K[j, i]
             yst[i] = y[i] + h * acc
         # one call site: the field is inlined here, once
-        _aug_rhs(mode, slide, t + RK_C[s] * h if s < 12 else t + h, yst, p, var, pidx, K[s], W, WJ, WP, wv)  # noqa: F821
+        _aug_rhs(model, mode, slide, t + RK_C[s] * h if s < 12 else t + h, yst, p, var, pidx, K[s], W, WJ, WP, wv)  # noqa: F821
     e5 = 0.0
     e3 = 0.0
     for i in range(n_err):
@@ -207,9 +247,9 @@ def _rk_step(mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, W
 
 
 @njit(cache=True)
-def _dense_coefficients(mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv):
+def _dense_coefficients(model, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv):
     """Coefficients of the 7th-order continuous extension of the state ``x`` only."""
-    n = N_STATE  # noqa: F821
+    n = N_STATE or F.shape[1]
     for s in range(13, 16):
         for i in range(n):
             acc = 0.0
@@ -218,7 +258,7 @@ def _dense_coefficients(mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv
                 if a != 0.0:
                     acc += a * K[j, i]
             xtmp[i] = y[i] + h * acc
-        _aug_rhs_called(mode, slide, t + RK_C[s] * h, xtmp, p, False, -1, K[s], W, WJ, WP, wv)  # noqa: F821
+        _aug_rhs_called(model, mode, slide, t + RK_C[s] * h, xtmp, p, False, -1, K[s], W, WJ, WP, wv)  # noqa: F821
     for i in range(n):
         dyi = ynew[i] - y[i]
         F[0, i] = dyi
@@ -263,10 +303,11 @@ LOBATTO_NODES, LOBATTO_TO_DENSE, LOBATTO_BOUND = _lobatto_interpolation()
 @njit(cache=True)
 def _affine_norm(A, B, om):
     """Row-sum norm of the augmented matrix ``[[A, B], [0, omega J]]`` of an affine mode."""
+    n = N_STATE or A.shape[0]
     mnorm = abs(om)
-    for i in range(N_STATE):  # noqa: F821
+    for i in range(n):
         row = 0.0
-        for j in range(N_STATE):  # noqa: F821
+        for j in range(n):
             row += abs(A[i, j])
         for j in range(3):
             row += abs(B[i, j])
@@ -278,7 +319,7 @@ def _affine_norm(A, B, om):
 def _exact_end(mode, t_end, x, y, tail, rtol, atol, AFF_A, AFF_B, AFF_W, K):
     """End of an exact step at ``t_end`` in state ``x`` (from ``y``): ``K[12] = f(t_end, x)``; returns the
     error norm of the step's dense output, whose bound per component is ``tail``."""
-    n = N_STATE  # noqa: F821
+    n = N_STATE or AFF_A.shape[1]
     A = AFF_A[mode]
     B = AFF_B[mode]
     theta = AFF_W[mode, 0] * t_end + AFF_W[mode, 1]
@@ -312,7 +353,7 @@ def _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_A
     series) against the tolerances, and rejects steps long enough for the series
     to lose digits.
     """
-    n = N_STATE  # noqa: F821
+    n = N_STATE or AFF_A.shape[1]
     A = AFF_A[mode]
     B = AFF_B[mode]
     om = AFF_W[mode, 0]
@@ -447,7 +488,7 @@ def _exact_fraction(mode, t, y, h, theta, var, rtol, atol, AFF_A, AFF_B, AFF_W, 
     same series summed at ``theta``: no new series.  Returns the error norm of
     the shorter step's dense output, as :func:`_exact_step`.
     """
-    n = N_STATE  # noqa: F821
+    n = N_STATE or AFF_A.shape[1]
     n_terms = int(TC[MAX_TAYLOR + 1, 0])
     N = n + n * n + n if var else n
     for c in range(N):
@@ -470,7 +511,7 @@ def _exact_fraction(mode, t, y, h, theta, var, rtol, atol, AFF_A, AFF_B, AFF_W, 
 def _exact_dense(y, ynew, TC, F):
     """Dense output of an exact step: its Taylor series interpolated at the Chebyshev-Lobatto points
     (of the fraction of the series' step that was taken, see :func:`_exact_fraction`)."""
-    n = N_STATE  # noqa: F821
+    n = N_STATE or F.shape[1]
     n_terms = int(TC[MAX_TAYLOR + 1, 0])
     theta = TC[MAX_TAYLOR + 2, 0]
     for i in range(n):
@@ -486,7 +527,7 @@ def _exact_dense(y, ynew, TC, F):
 
 
 @njit(cache=True, inline="always")  # inlined: a call passing this many arrays costs more than a short step's work
-def _step(exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+def _step(model, exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
           AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC):
     """A step of the exact flow (affine mode, not sliding) or of DOP853; returns the error norm.
 
@@ -502,21 +543,21 @@ def _step(exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, 
         err = _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TP, TC)
         TC[MAX_TAYLOR + 3, 0] = h if TC[MAX_TAYLOR + 1, 0] > 0.0 else 0.0
         return err
-    return _rk_step(mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
+    return _rk_step(model, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
 
 
 @njit(cache=True)
-def _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC):
+def _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC):
     """Dense-output coefficients of the step just taken (by :func:`_step`)."""
     if exact:
         _exact_dense(y, ynew, TC, F)
     else:
-        _dense_coefficients(mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv)
+        _dense_coefficients(model, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv)
 
 
 @njit(cache=True)
 def _dense_eval(F, y, s, out):
-    n = N_STATE  # noqa: F821
+    n = N_STATE or F.shape[1]
     for i in range(n):
         v = 0.0
         for k in range(7):
@@ -529,25 +570,25 @@ def _dense_eval(F, y, s, out):
 
 
 @njit(cache=True)
-def _event_value(kind, idx, slide, t, x, p, gtmp, gptmp):
+def _event_value(model, kind, idx, slide, t, x, p, gtmp, gptmp):
     """Event function: an indicator (kind 0) or a sliding-exit function (kind 1: side a, 2: side b)."""
     if kind == 0:
-        return indicator(idx, t, x, p)  # noqa: F821
+        return model[INDICATOR](idx, t, x, p)
     if kind == 1:
-        return slide[4] * slide[5] * lie_derivative(slide[1], slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
-    return -slide[4] * slide[5] * lie_derivative(slide[2], slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
+        return slide[4] * slide[5] * model[LIE_DERIVATIVE](slide[1], slide[3], t, x, p, gtmp, gptmp)
+    return -slide[4] * slide[5] * model[LIE_DERIVATIVE](slide[2], slide[3], t, x, p, gtmp, gptmp)
 
 
 @njit(cache=True)
-def _dense_event(kind, idx, slide, sgn, t, h, F, y, s, p, xtmp, gtmp, gptmp):
+def _dense_event(model, kind, idx, slide, sgn, t, h, F, y, s, p, xtmp, gtmp, gptmp):
     _dense_eval(F, y, s, xtmp)
-    return sgn * _event_value(kind, idx, slide, t + s * h, xtmp, p, gtmp, gptmp)
+    return sgn * _event_value(model, kind, idx, slide, t + s * h, xtmp, p, gtmp, gptmp)
 
 
 @njit(cache=True)
-def _bracket_root(kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp, gtmp, gptmp):
+def _bracket_root(model, kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp, gtmp, gptmp):
     """Illinois root finding of ``sgn * event`` on the dense output in ``[sa, sb]`` (value > 0 at sa, <= 0 at sb)."""
-    ga = _dense_event(kind, idx, slide, sgn, t, h, F, y, sa, p, xtmp, gtmp, gptmp)
+    ga = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, sa, p, xtmp, gtmp, gptmp)
     if ga <= 0.0:
         ga = 1e-300
     side = 0
@@ -557,7 +598,7 @@ def _bracket_root(kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp, gtmp, 
         sc = sb - gb * (sb - sa) / (gb - ga)
         if not (sa < sc < sb):
             sc = 0.5 * (sa + sb)
-        gc = _dense_event(kind, idx, slide, sgn, t, h, F, y, sc, p, xtmp, gtmp, gptmp)
+        gc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, sc, p, xtmp, gtmp, gptmp)
         if gc > 0.0:
             sa = sc
             ga = gc
@@ -576,15 +617,15 @@ def _bracket_root(kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp, gtmp, 
 
 
 @njit(cache=True)
-def _dip_search(kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, lo, hi):
+def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, lo, hi):
     """Golden-section search for the minimum of ``sgn * event`` on ``[lo, hi]`` of the step; returns (s, value)."""
     invphi = 0.6180339887498949
     a = lo
     b = hi
     c = b - invphi * (b - a)
     d = a + invphi * (b - a)
-    fc = _dense_event(kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp)
-    fd = _dense_event(kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp)
+    fc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp)
+    fd = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp)
     for _ in range(60):
         if fc <= 0.0:
             return c, fc
@@ -597,28 +638,28 @@ def _dip_search(kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, lo, hi)
             d = c
             fd = fc
             c = b - invphi * (b - a)
-            fc = _dense_event(kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp)
+            fc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp)
         else:
             a = c
             c = d
             fc = fd
             d = a + invphi * (b - a)
-            fd = _dense_event(kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp)
+            fd = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp)
     if fc < fd:
         return c, fc
     return d, fd
 
 
 @njit(cache=True)
-def _slope(mode, slide, kind, idx, t, x, f, p, hx, hp, gtmp, gptmp):
+def _slope(model, mode, slide, kind, idx, t, x, f, p, hx, hp, gtmp, gptmp):
     """Time derivative of an event function along ``f`` (indicators: ``h_x f + h_t``; sliding exits:
     the Lie derivative's ``s_x f + s_t``)."""
-    n = N_STATE  # noqa: F821
+    n = N_STATE or x.shape[0]
     if kind == 0:
-        return indicator_rate(idx, t, x, f, p, hx, hp)  # noqa: F821
+        return model[INDICATOR_RATE](idx, t, x, f, p, hx, hp)
     m = slide[1] if kind == 1 else slide[2]
-    lie_derivative(m, slide[3], t, x, p, gtmp, gptmp)  # noqa: F821
-    acc = lie_derivative_dt(m, slide[3], t, x, p)  # noqa: F821
+    model[LIE_DERIVATIVE](m, slide[3], t, x, p, gtmp, gptmp)
+    acc = model[LIE_DERIVATIVE_DT](m, slide[3], t, x, p)
     for i in range(n):
         acc += gtmp[i] * f[i]
     return (slide[4] if kind == 1 else -slide[4]) * slide[5] * acc
@@ -688,7 +729,7 @@ def _track_extrema(F, y, s_end, xmin, xmax, f0, f1, xtmp, direction):
     Golden-section search to a bracket of 1e-5, then one parabolic step: the
     extreme value is then exact to far below the integration tolerance.
     """
-    n = N_STATE  # noqa: F821
+    n = N_STATE or xmin.shape[0]
     invphi = 0.6180339887498949
     for i in range(n):
         if f0[i] * f1[i] > 0.0:
@@ -743,7 +784,7 @@ def _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, w, Phi_
     ``Phi <- S Phi`` and ``psi <- S psi + g_p[:, k] + w h_p[k] / den`` for parameter ``k = pidx``, in
     ``y = [x, Phi, psi]`` when ``var``.
     """
-    n = N_STATE  # noqa: F821
+    n = N_STATE or fa.shape[0]
     for i in range(n):
         acc = fplus[i] - gt[i]
         for j in range(n):
@@ -777,7 +818,7 @@ def _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, w, Phi_
 def _log_event(ev, ev_int, n_ev, t_e, kind, transition, surface, mode_from, mode_to, x_minus, x_plus, S):
     """Append an event to the log (rows ``(t, x-, x+, S)`` and ``(kind, transition, surface, mode from,
     mode to)``, as ``_contract.py`` lays them out), doubling it when full; returns the log."""
-    n = N_STATE  # noqa: F821
+    n = N_STATE or x_minus.shape[0]
     if n_ev == ev.shape[0]:
         ev = _resized_rows(ev, 2 * n_ev)
         ev_int = _resized_rows(ev_int, 2 * n_ev)
@@ -800,7 +841,7 @@ def _pack_result(t, y, var, xmin, xmax, K, ev, ev_int, n_ev, rec, rec_F, n_rec, 
                  n_steps, n_rejected, mode, slide, mode0):
     """The result of an integration as two packed arrays (each returned array costs a conversion), laid
     out as ``_contract.py`` says and read by ``saltation.integrate.Flow._unpack``."""
-    n = N_STATE  # noqa: F821
+    n = N_STATE or xmin.shape[0]
     # floats: t, x, Phi, psi, x_min, x_max, f at the end; the event log's rows (t, x-, x+, S); the steps'
     # rows (start, size, end fraction, start state); their dense-output coefficients
     o_x, o_phi, _, o_min, o_max, o_vel, n_out = result_offsets_c(n)
@@ -850,18 +891,18 @@ def _pack_result(t, y, var, xmin, xmax, K, ev, ev_int, n_ev, rec, rec_F, n_rec, 
 
 
 @njit(cache=True, inline="always")  # once per sliding step
-def _sliding_exit_event(exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp):
+def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp):
     """The first exit of the sliding motion within the accepted step from ``(t, y)`` to ``(t_new, ynew)``,
     where the field of side a (kind 1) or b (kind 2) turns tangent: ``(fraction of the step, kind,
     surface, whether the dense output was built)``, the kind -1 when there is none.
     """
-    n = N_STATE  # noqa: F821
+    n = N_STATE or F.shape[1]
     have_dense = False
     best_s = 2.0
     best_kind = NONE
     best_idx = NONE
     for kind in (np.int64(1), np.int64(2)):
-        v1 = _event_value(kind, NONE, slide, t_new, ynew[:n], p, gtmp, gptmp)
+        v1 = _event_value(model, kind, NONE, slide, t_new, ynew[:n], p, gtmp, gptmp)
         # A sliding field is often so simple that the step control allows steps over
         # much of a forcing period, while an exit function with explicit time dependence
         # may dip below zero and recover (or turn negative more than once) within the
@@ -869,13 +910,13 @@ def _sliding_exit_event(exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W,
         # dip below zero (golden section between its neighbours), and the first sign
         # change is the one located.
         if not have_dense:
-            _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
             have_dense = True
         sb = 1.0
-        samples[0] = _event_value(kind, NONE, slide, t, y[:n], p, gtmp, gptmp)
+        samples[0] = _event_value(model, kind, NONE, slide, t, y[:n], p, gtmp, gptmp)
         samples[SLIDING_EXIT_SAMPLES] = v1
         for j in range(1, SLIDING_EXIT_SAMPLES):
-            samples[j] = _dense_event(kind, NONE, slide, 1.0, t, h, F, y, j / SLIDING_EXIT_SAMPLES, p,
+            samples[j] = _dense_event(model, kind, NONE, slide, 1.0, t, h, F, y, j / SLIDING_EXIT_SAMPLES, p,
                                       xtmp, gtmp, gptmp)
         for j in range(1, SLIDING_EXIT_SAMPLES + 1):
             sj = j / SLIDING_EXIT_SAMPLES
@@ -884,7 +925,7 @@ def _sliding_exit_event(exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W,
                 v1 = samples[j]
                 break
             if j < SLIDING_EXIT_SAMPLES and samples[j] <= samples[j - 1] and samples[j] <= samples[j + 1]:
-                smin, vmin = _dip_search(kind, NONE, slide, 1.0, t, h, F, y, p, xtmp, gtmp, gptmp,
+                smin, vmin = _dip_search(model, kind, NONE, slide, 1.0, t, h, F, y, p, xtmp, gtmp, gptmp,
                                          (j - 1) / SLIDING_EXIT_SAMPLES, (j + 1) / SLIDING_EXIT_SAMPLES)
                 if vmin <= 0.0:
                     sb = smin
@@ -892,9 +933,9 @@ def _sliding_exit_event(exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W,
                     break
         if v1 <= 0.0:
             if not have_dense:
-                _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                 have_dense = True
-            sr = _bracket_root(kind, NONE, slide, 1.0, t, h, F, y, 0.0, sb, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
+            sr = _bracket_root(model, kind, NONE, slide, 1.0, t, h, F, y, 0.0, sb, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
             if sr < best_s:
                 best_s = sr
                 best_kind = kind
@@ -903,15 +944,24 @@ def _sliding_exit_event(exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W,
 
 
 @njit(cache=True)
+def _needs_extrema(K, xmin):
+    n = N_STATE or xmin.shape[0]
+    for i in range(n):
+        if K[0, i] * K[12, i] <= 0.0:
+            return True
+    return False
+
+
+@njit(INTEGRATE_SIGNATURE, cache=True)
 def integrate_kernel(
-    t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step, max_events, max_steps,
+    model, t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step, max_events, max_steps,
     tr_table, n_surfaces, record, phi0, psi0, control_variational, exact_affine,
 ):
     """Integrate from ``t0`` to ``t_end`` (either direction), event by event.
 
     Returns ``(ints, floats)``, two packed arrays (see ``saltation.integrate.Flow._unpack``).
     """
-    n = N_STATE  # noqa: F821
+    n = N_STATE or x0.shape[0]
     npar = p.shape[0]
     N = n + n * n + n if var else n
     n_err = N if (var and control_variational) else n
@@ -947,7 +997,7 @@ def integrate_kernel(
     psi_tmp = np.zeros(n)
 
     # exact flows of affine modes: A, B, (omega, phase, d omega/dp, d phase/dp), dA/dp, dB/dp
-    n_modes = AFFINE_MODES.shape[0]  # noqa: F821
+    n_modes = model[AFFINE_MODES].shape[0]
     AFF_A = np.zeros((n_modes, n, n))
     AFF_B = np.zeros((n_modes, n, 3))
     AFF_W = np.zeros((n_modes, 4))
@@ -963,10 +1013,10 @@ def integrate_kernel(
         Bp_all = np.zeros((max(npar, 1), n, 3))
         wp_all = np.zeros((max(npar, 1), 2))
         for m in range(n_modes):
-            if AFFINE_MODES[m]:  # noqa: F821
-                affine_parts(m, p, AFF_A[m], AFF_B[m], AFF_W[m, :2])  # noqa: F821
+            if model[AFFINE_MODES][m]:
+                model[AFFINE_PARTS](m, p, AFF_A[m], AFF_B[m], AFF_W[m, :2])
                 if var and pidx >= 0:
-                    affine_parts_dp(m, p, Ap_all, Bp_all, wp_all)  # noqa: F821
+                    model[AFFINE_PARTS_DP](m, p, Ap_all, Bp_all, wp_all)
                     for i in range(n):
                         for j in range(n):
                             AFF_AP[m, i, j] = Ap_all[pidx, i, j]
@@ -1020,7 +1070,7 @@ def integrate_kernel(
     surf_new = np.zeros(n_surfaces)
     slope_new = np.zeros(n_surfaces)
 
-    _aug_rhs_called(mode, slide, t, y, p, var, pidx, K[0], W, WJ, WP, wv)
+    _aug_rhs_called(model, mode, slide, t, y, p, var, pidx, K[0], W, WJ, WP, wv)
     for i in range(n):
         if not math.isfinite(K[0, i]) or not math.isfinite(y[i]):
             status = STATUS_NON_FINITE
@@ -1040,7 +1090,7 @@ def integrate_kernel(
         d1 = math.sqrt(d1 / n)
         habs = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
         habs = min(habs, tspan if tspan > 0 else 1.0)
-        if exact_affine and AFFINE_MODES[mode]:  # noqa: F821
+        if exact_affine and model[AFFINE_MODES][mode]:
             # an exact step is good for h |M| of order one (``_exact_step``): start there, not from
             # the estimate of a method of order 8 at these tolerances
             habs = max(habs, 0.5 / max(_affine_norm(AFF_A[mode], AFF_B[mode], AFF_W[mode, 0]), 1e-300))
@@ -1055,7 +1105,7 @@ def integrate_kernel(
     samples = np.zeros(SLIDING_EXIT_SAMPLES + 1)
     # a sliding motion steps at most an eighth of the forcing period: its field can be so simple that
     # the error control allows any step, while its exit functions vary with the forcing
-    sliding_step_cap = forcing_period(p) / 8.0  # noqa: F821
+    sliding_step_cap = model[FORCING_PERIOD](p) / 8.0
     chatter_ring = np.zeros(CHATTER_WINDOW)
     h_mode = np.zeros(n_modes)  # the step proposed last in each mode (0: none yet), to re-enter it with
 
@@ -1073,9 +1123,9 @@ def integrate_kernel(
                         fires[tr_table[k, 1]] |= 3 if dk == 0 else (1 if dk < 0 else 2)
             for s in range(n_surfaces):
                 if watched[s]:
-                    v = indicator(s, t, y[:n], p)  # noqa: F821
+                    v = model[INDICATOR](s, t, y[:n], p)
                     surf_old[s] = v
-                    sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, hx, hp, gtmp, gptmp)
+                    sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, hx, hp, gtmp, gptmp)
                     if fixed_sign[s] and last_kind == EVENT_SLIDING_END:
                         # a sliding motion has just ended on this surface, where the new field is tangent
                         # to it: the slope is zero (its computed value is rounding, and a dip test on it
@@ -1106,7 +1156,7 @@ def integrate_kernel(
                         s = tr_table[k, 1]
                         if abs(surf_old[s]) > 1e-12 or slope_old[s] * tr_table[k, 2] <= 0.0:
                             continue
-                        if guard(k, t + dt_nudge, xtmp, p):  # noqa: F821
+                        if model[GUARD](k, t + dt_nudge, xtmp, p):
                             pending = k
                             break
             # A state outside the domain of its mode (a transition has led there at a corner of
@@ -1115,14 +1165,14 @@ def integrate_kernel(
             # at once. Domain and guards are taken a hair along the motion, so that a condition that is
             # zero here (on the surface just crossed) counts on the side the motion goes to.
             # (after a transition, or at the start; a sliding motion ends on its surface by construction)
-            if pending < 0 and slide[0] == 0 and last_kind == EVENT_TRANSITION and not in_domain(mode, t + dt_nudge, xtmp, p):  # noqa: F821
+            if pending < 0 and slide[0] == 0 and last_kind == EVENT_TRANSITION and not model[IN_DOMAIN](mode, t + dt_nudge, xtmp, p):
                 for k in range(n_tr):
                     if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
                         continue
                     s = tr_table[k, 1]
                     if fixed_sign[s] or surf_sign[s] != tr_table[k, 2]:
                         continue
-                    if guard(k, t + dt_nudge, xtmp, p):  # noqa: F821
+                    if model[GUARD](k, t + dt_nudge, xtmp, p):
                         pending = k
                         break
                 # no exit holds: the domain fails by rounding (a condition on the surface just crossed,
@@ -1132,7 +1182,7 @@ def integrate_kernel(
                     scale = 1.0
                     for i in range(n):
                         scale = max(scale, abs(y[i]))
-                    if domain_margin(mode, t + dt_nudge, xtmp, p) < -DOMAIN_TOLERANCE * scale:  # noqa: F821
+                    if model[DOMAIN_MARGIN](mode, t + dt_nudge, xtmp, p) < -DOMAIN_TOLERANCE * scale:
                         status = STATUS_OUTSIDE_DOMAIN
                         info_mode = mode
                         break
@@ -1163,12 +1213,12 @@ def integrate_kernel(
                 habs = min(habs, sliding_step_cap)
             if habs >= remaining or remaining - habs < 1e-12 * remaining:
                 habs = remaining
-            exact = exact_affine and slide[0] == 0 and AFFINE_MODES[mode]  # noqa: F821
+            exact = exact_affine and slide[0] == 0 and model[AFFINE_MODES][mode]
             # attempt a step
             rejected = False
             while True:
                 h = direction * habs
-                err = _step(exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+                err = _step(model, exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
                             AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
                 finite = math.isfinite(err)
                 if finite and err <= 1.0:
@@ -1214,9 +1264,9 @@ def integrate_kernel(
                 for s in range(n_surfaces):
                     if not watched[s]:
                         continue
-                    v = indicator(s, t_new, ynew[:n], p)  # noqa: F821
+                    v = model[INDICATOR](s, t_new, ynew[:n], p)
                     surf_new[s] = v
-                    sl = direction * _slope(mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
+                    sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
                     slope_new[s] = sl
                     sg = surf_sign[s]
                     sb = 2.0
@@ -1224,21 +1274,21 @@ def integrate_kernel(
                         sb = 1.0
                     elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
                         if not have_dense:
-                            _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                             have_dense = True
-                        smin, vmin = _dip_search(KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0)
+                        smin, vmin = _dip_search(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0)
                         if vmin <= 0.0:
                             sb = smin
                     if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
                         sb = 2.0  # no transition of this mode crosses this way: nothing to locate
                     if sb <= 1.0:
                         if not have_dense:
-                            _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                             have_dense = True
-                        gb = _dense_event(KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
+                        gb = _dense_event(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
                         if gb > 0.0:
                             gb = -1e-300
-                        sr = _bracket_root(KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
+                        sr = _bracket_root(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
                         if sr < best_s:
                             # find a transition that fires at this crossing
                             _dense_eval(F, y, sr, xtmp)
@@ -1249,7 +1299,7 @@ def integrate_kernel(
                                 dk = tr_table[k, 2]
                                 if dk != 0 and dk != cross:
                                     continue
-                                if not guard(k, t + sr * h, xtmp, p):  # noqa: F821
+                                if not model[GUARD](k, t + sr * h, xtmp, p):
                                     continue
                                 best_s = sr
                                 best_kind = KIND_INDICATOR
@@ -1258,13 +1308,13 @@ def integrate_kernel(
                                 break
             else:
                 best_s, best_kind, best_idx, have_dense = _sliding_exit_event(
-                    exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp)
+                    model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp)
 
             if best_kind < 0:
                 # ----------------------------------------------------------- accept whole step
-                if record or _needs_extrema(K):
+                if record or _needs_extrema(K, xmin):
                     if not have_dense:
-                        _dense(exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                         have_dense = True
                     _track_extrema(F, y, 1.0, xmin, xmax, K[0], K[12], xtmp, direction)
                 for i in range(n):
@@ -1297,7 +1347,7 @@ def integrate_kernel(
             # --------------------------------------------------------------- an event
             # the shortened step that ends at the event must pass the error test too: a step can
             # straddle a thin layer (e.g. where a sliding motion ends) that its own estimate missed
-            err_e = _step(exact, mode, slide, t, y, best_s * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+            err_e = _step(model, exact, mode, slide, t, y, best_s * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
                           AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
             if err_e > 1.0 and best_s * habs > 100.0 * EPS * max(1.0, abs(t)):
                 n_rejected += 1
@@ -1316,12 +1366,12 @@ def integrate_kernel(
             sgn_ev = surf_sign[best_idx] if best_kind == 0 else 1.0
             s_tiny = 2.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300))
             s_e = best_s
-            g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+            g_e = sgn_ev * _event_value(model, best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
             for it in range(8):
                 if g_e == 0.0:
                     break
-                _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
-                dg = sgn_ev * h * _slope(mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, hx, hp, gtmp, gptmp)
+                _aug_rhs_called(model, mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
+                dg = sgn_ev * h * _slope(model, mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, hx, hp, gtmp, gptmp)
                 if dg == 0.0 or not math.isfinite(dg):
                     break
                 s_new = min(max(s_e - g_e / dg, 0.0), 1.0)
@@ -1335,25 +1385,25 @@ def integrate_kernel(
                     for i in range(N):
                         K[0, i] = Ksave[0, i]
                     if s_new > 0.0:
-                        _step(exact, mode, slide, t, ysave, s_new * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
+                        _step(model, exact, mode, slide, t, ysave, s_new * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
                               n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
                     else:
                         for i in range(N):
                             ynew[i] = ysave[i]
                 s_e = s_new
-                g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+                g_e = sgn_ev * _event_value(model, best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
             # make sure the event state lies on (or just past) the switching set, never before it
             bump = 2.0 * s_tiny
             for it in range(40):
                 if g_e <= 0.0 or s_e >= 1.0:
                     break
-                _aug_rhs_called(mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
+                _aug_rhs_called(model, mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
                 ds = min(bump, 1.0 - s_e)
                 for i in range(N):
                     ynew[i] += ds * h * Ksave[1, i]
                 s_e += ds
                 bump *= 2.0
-                g_e = sgn_ev * _event_value(best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+                g_e = sgn_ev * _event_value(model, best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
         t_e = t + s_e * h
         # state at the event (before it)
         for i in range(N):
@@ -1373,18 +1423,18 @@ def integrate_kernel(
         if best_kind == 0:
             k = best_tr
             mode_to = tr_table[k, 3]
-            ht = indicator_grad(best_idx, t_e, x_e, p, hx, hp)  # noqa: F821
-            vector_field(mode, t_e, x_e, p, fa)  # noqa: F821
+            ht = model[INDICATOR_GRAD](best_idx, t_e, x_e, p, hx, hp)
+            model[VECTOR_FIELD](mode, t_e, x_e, p, fa)
             den = ht
             for i in range(n):
                 den += hx[i] * fa[i]
             if tr_table[k, 4] != 0:
-                reset_map(k, t_e, x_e, p, xplus)  # noqa: F821
-                reset_jac(k, t_e, x_e, p, gx, gt, gp)  # noqa: F821
+                model[RESET_MAP](k, t_e, x_e, p, xplus)
+                model[RESET_JAC](k, t_e, x_e, p, gx, gt, gp)
             else:
                 for i in range(n):
                     xplus[i] = x_e[i]
-            vector_field(mode_to, t_e, xplus, p, fb)  # noqa: F821
+            model[VECTOR_FIELD](mode_to, t_e, xplus, p, fb)
             sig_b = ht
             for i in range(n):
                 sig_b += hx[i] * fb[i]
@@ -1431,7 +1481,7 @@ def integrate_kernel(
                 for i in range(n):
                     fplus[i] = fb[i]
             # the side of the surface the motion continues on (after a reset it may be the old one)
-            h_after = indicator(best_idx, t_e, xplus, p)  # noqa: F821
+            h_after = model[INDICATOR](best_idx, t_e, xplus, p)
             if slide[0] == 1 or tr_table[k, 4] == 0:
                 surf_sign[best_idx] = cross
             elif abs(h_after) > 1e-12:
@@ -1445,20 +1495,20 @@ def integrate_kernel(
         else:
             # leaving a sliding motion where side a (kind 1) or side b (kind 2) turns tangent
             exit_mode = slide[1] if best_kind == 1 else slide[2]
-            _field_called(mode, slide, t_e, x_e, p, fa, WJ, WP, wv, W)
+            _field_called(model, mode, slide, t_e, x_e, p, fa, WJ, WP, wv, W)
             sgl = 1.0 if best_kind == 1 else -1.0
             sgl = sgl * slide[4]
-            lie_derivative(exit_mode, slide[3], t_e, x_e, p, hx, hp)  # noqa: F821
+            model[LIE_DERIVATIVE](exit_mode, slide[3], t_e, x_e, p, hx, hp)
             for i in range(n):
                 hx[i] *= sgl
             for j in range(hp.shape[0]):
                 hp[j] *= sgl
-            den = sgl * lie_derivative_dt(exit_mode, slide[3], t_e, x_e, p)  # noqa: F821
+            den = sgl * model[LIE_DERIVATIVE_DT](exit_mode, slide[3], t_e, x_e, p)
             for i in range(n):
                 den += hx[i] * fa[i]
             for i in range(n):
                 xplus[i] = x_e[i]
-            vector_field(exit_mode, t_e, xplus, p, fplus)  # noqa: F821
+            model[VECTOR_FIELD](exit_mode, t_e, xplus, p, fplus)
             crossing_sign = slide[4]
             surf_sign[slide[3]] = -crossing_sign if best_kind == 1 else crossing_sign
             fixed_sign[slide[3]] = True
@@ -1498,7 +1548,7 @@ def integrate_kernel(
         TC[MAX_TAYLOR + 3, 0] = 0.0
         if abs(t_end - t) <= 4.0 * EPS * max(1.0, abs(t)):
             t = t_end
-        _aug_rhs_called(mode, slide, t, y, p, var, pidx, K[0], W, WJ, WP, wv)
+        _aug_rhs_called(model, mode, slide, t, y, p, var, pidx, K[0], W, WJ, WP, wv)
         for i in range(n):
             if not math.isfinite(K[0, i]):
                 status = STATUS_NON_FINITE
@@ -1513,26 +1563,15 @@ def integrate_kernel(
                         n_steps, n_rejected, mode, slide, mode0)
 
 
-@njit(cache=True)
-def _needs_extrema(K):
-    n = N_STATE  # noqa: F821
-    for i in range(n):
-        if K[0, i] * K[12, i] <= 0.0:
-            return True
-    return False
-
-
-
-
 @njit(cache=True, inline="always")  # inlined: each library level links and re-optimizes the integrator
-def _shot(x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
+def _shot(model, x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
           control_variational, exact_affine):
     """One shot ``x -> x(t1)`` with the fundamental solution matrix (and ``psi`` of parameter ``pidx``);
     status != 0 on failure (also for a state in no mode)."""
-    mode = initial_mode(t0, x, p)  # noqa: F821
+    mode = model[INITIAL_MODE](t0, x, p)
     failed = mode < 0  # in no mode: not integrated, the caller sees the failure in info[0]
     res = integrate_kernel(
-        t0, t0 if failed else t1, x, max(mode, NONE + 1), p, ON, pidx, rtol, atol, 0.0, max_step, max_events,
+        model, t0, t0 if failed else t1, x, max(mode, NONE + 1), p, ON, pidx, rtol, atol, 0.0, max_step, max_events,
         max_steps, tr_table, n_surfaces, OFF, phi0, psi0, control_variational, exact_affine,
     )
     if failed:
@@ -1541,23 +1580,23 @@ def _shot(x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_ta
 
 
 @njit(cache=True, inline="always")  # inlined: see _shot
-def _periodic_shot(z, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step, max_events, max_steps,
+def _periodic_shot(model, z, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step, max_events, max_steps,
                    tr_table, n_surfaces, phi0, psi0, control_variational, exact_affine):
     """The shot of one Newton iterate ``z = (x0[, T][, lam])`` over its period (forced: ``span``, or the
     forcing period at ``lam`` when ``span`` is 0); returns ``(ok, result)``, ``ok`` False for a period
     that is not positive (``p``, ``x``: work arrays)."""
-    n = N_STATE  # noqa: F821
+    n = N_STATE or x.shape[0]
     m_u = n + 1 if autonomous else n
     if lam_index >= 0 and z.shape[0] > m_u:
         p[lam_index] = z[m_u]
     if autonomous:
         period = z[n]
     else:
-        period = span if span > 0.0 else forcing_period(p)  # noqa: F821
+        period = span if span > 0.0 else model[FORCING_PERIOD](p)
     for i in range(n):
         x[i] = z[i]
     span = period if period > 0.0 else 0.0  # (also for nan)
-    res = _shot(x, t0, t0 + sign * span, p, lam_index, rtol, atol, max_step, max_events, max_steps,
+    res = _shot(model, x, t0, t0 + sign * span, p, lam_index, rtol, atol, max_step, max_events, max_steps,
                 tr_table, n_surfaces, phi0, psi0, control_variational, exact_affine)
     return period > 0.0, res
 
@@ -1566,7 +1605,7 @@ def _periodic_shot(z, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, m
 def _periodic_residual(out, z, autonomous, x_ref, f_ref, r):
     """Residual of the periodic-orbit equations at ``z`` into ``r``: ``x(t0 + sign T) - x0`` and,
     autonomous, the phase condition ``f_ref . (x0 - x_ref)``; returns its norm."""
-    n = N_STATE  # noqa: F821
+    n = N_STATE or x_ref.shape[0]
     rn = 0.0
     o_x = result_offsets_c(n)[0]
     for i in range(n):
@@ -1635,8 +1674,8 @@ def _newton_result(code, it, z, history, n_history, jac, res):
     return code, it, packed, res[0], res[1]
 
 
-@njit(cache=True)
-def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref, tol, max_newton,
+@njit(CORRECT_SIGNATURE, cache=True)
+def correct_periodic(model, z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref, tol, max_newton,
                      max_correction, damped, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
                      phi0, psi0, control_variational, exact_affine):
     """Newton on the periodic-orbit equations of a shooting problem, compiled.
@@ -1658,7 +1697,7 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
     residual history | r, J_u, J_lam by rows], ints, floats)``, the last two the
     kernel result at z (see :func:`_newton_result`).
     """
-    n = N_STATE  # noqa: F821
+    n = N_STATE or phi0.shape[0]
     m_u = n_u = n + (1 if autonomous else 0)  # unknowns u (and rows of r)
     m_z = z_pred.shape[0]  # m_u, or m_u + 1 with lam
     z = z_pred.copy()
@@ -1681,7 +1720,7 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
     # one call site of the shot: the integrator is compiled into this function once
     while True:
         cand = zt if trial > 0 else z
-        ok, res_c = _periodic_shot(cand, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step,
+        ok, res_c = _periodic_shot(model, cand, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step,
                                    max_events, max_steps, tr_table, n_surfaces, phi0, psi0, control_variational,
                                    exact_affine)
         if trial > 0:
@@ -1725,7 +1764,7 @@ def correct_periodic(z_pred, normal, t0, sign, autonomous, lam_index, span, p0, 
                 jac[i, 1 + n] = sign * out[velocity + i]
                 jac[n, 1 + i] = f_ref[i]
         elif lam_index >= 0 and span == 0.0:
-            dperiod = forcing_period_dp(p, lam_index)  # noqa: F821
+            dperiod = model[FORCING_PERIOD_DP](p, lam_index)
             for i in range(n):
                 jac[i, 1 + m_u] += sign * dperiod * out[velocity + i]
         n_history = it + 1

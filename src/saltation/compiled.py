@@ -25,18 +25,19 @@ every state in the first mode, sliding unavailable)::
     lie_derivative(mode, surface, t, x, p, gx, gp) -> float   # h_x f + h_t and its gradients (sliding)
     lie_derivative_dt(mode, surface, t, x, p) -> float
 
-The kernels are compiled once per process (numba cannot cache functions
-handed over at run time).
+Each function is compiled once per process with its signature from the
+contract (``saltation._contract.MODEL_SIGNATURES``); the engine is the one
+every model shares, compiled once per machine.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from types import ModuleType
 
 import numpy as np
 
+from ._contract import MODEL_SIGNATURES
 from .errors import InitialModeError, ModelError
 from .model import Crossing, NamedParts, Transition
 
@@ -215,16 +216,12 @@ class CompiledSystem(NamedParts):
         return f"CompiledSystem({self.name!r}, states={list(self.state_names)}, modes={list(self.mode_names)})"
 
 
-def build_module(system: CompiledSystem, kernel_text: str, tableau: dict[str, np.ndarray]) -> ModuleType:
-    """Compile the integrator template against the system's callables (in memory, not cached)."""
+def build_model_functions(system: CompiledSystem) -> tuple:
+    """The model tuple the engine takes (see ``saltation._contract``): the system's callables and the
+    defaults, each compiled with its signature from the contract (in memory, once per process)."""
     import numba
 
-    module = ModuleType(f"_saltation_compiled_{system.name}")
-    namespace = module.__dict__
-    namespace.update({"np": np, "math": math, "njit": numba.njit})
-    namespace.update({f"RK_{k}": v for k, v in tableau.items()})
-    namespace["N_STATE"] = system.n  # a compile-time constant: loops over the state have a known length
-    namespace["AFFINE_MODES"] = np.zeros(len(system.mode_names), dtype=np.bool_)  # no exact flows: fields are opaque
+    namespace: dict[str, object] = {"np": np, "math": math, "njit": numba.njit}
     exec(compile(_DEFAULTS, f"<saltation defaults for {system.name}>", "exec"), namespace)  # noqa: S102
     namespace.update(system.functions)
     initial = (
@@ -236,6 +233,15 @@ def build_module(system: CompiledSystem, kernel_text: str, tableau: dict[str, np
         "    return -1\n"
     )
     exec(compile(initial, f"<saltation initial mode for {system.name}>", "exec"), namespace)  # noqa: S102
-    text = kernel_text.replace("cache=True", "cache=False")
-    exec(compile(text, f"<saltation kernel for {system.name}>", "exec"), namespace)  # noqa: S102
-    return module
+    functions = []
+    for name, signature in MODEL_SIGNATURES.items():
+        f = namespace[name]
+        try:
+            functions.append(numba.njit(signature)(getattr(f, "py_func", f)))
+        except Exception as exc:  # numba's typing errors are long: name the function and the signature first
+            raise ModelError(
+                f"compiled system {system.name!r}: {name} does not compile with the signature {signature} "
+                f"(arrays float64 and C-contiguous, indices int64): {exc}"
+            ) from exc
+    affine = np.zeros(len(system.mode_names), dtype=np.bool_)  # no exact flows: the fields are opaque
+    return (*functions, affine)

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import _contract as kc
-from .codegen import load_kernels, transition_table
+from .codegen import load_engine, load_model_functions, transition_table
 from .errors import (
     ChatteringError,
     IntegrationError,
@@ -339,7 +339,8 @@ class Flow:
     def __init__(self, system: PiecewiseSystem, tolerances: Tolerances | None = None):
         self.system = system
         self.tolerances = tolerances or Tolerances()
-        self._kernels = load_kernels(system)
+        self._model = load_model_functions(system)  # the engine's first argument (see saltation._contract)
+        self._engine = load_engine(system.n)
         self._table = transition_table(system)
         self._n_surfaces = len(system.surface_names)
         self._identity = np.eye(system.n)  # read-only inputs of the kernel
@@ -362,7 +363,7 @@ class Flow:
         InitialModeError
             If the state lies in no mode's domain.
         """
-        m = int(self._kernels.initial_mode(float(t0), np.ascontiguousarray(x0, dtype=float), p))
+        m = int(self._model[kc.INITIAL_MODE](float(t0), _c_array(x0), _c_array(p)))
         if m < 0:
             return self.system.initial_mode(x0, p, t0)  # raises with the full explanation
         return m
@@ -370,7 +371,7 @@ class Flow:
     def indicator(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> float:
         """The indicator ``h(t, x, p)`` of a switching surface (by index or name)."""
         s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
-        return float(self._kernels.indicator(int(s), float(t), np.ascontiguousarray(x, dtype=float), p))
+        return float(self._model[kc.INDICATOR](int(s), float(t), _c_array(x), _c_array(p)))
 
     def integration_error(self, traj: Trajectory, tolerances: Tolerances | None = None) -> float:
         """An estimate of the global error of a trajectory's end state.
@@ -381,7 +382,7 @@ class Flow:
         DOP853 per stretch between events, at the requested tolerance).
         """
         tol = tolerances or self.tolerances
-        affine = self._kernels.AFFINE_MODES
+        affine = self._model[kc.AFFINE_MODES]
         visited = {traj.mode0, traj.mode1, *(e.mode_to for e in traj.events), *(e.mode_from for e in traj.events)}
         sliding = any(e.kind != EventKind.TRANSITION for e in traj.events) or traj.sliding_at_end
         if tol.exact_affine and not sliding and all(affine[self.system.mode_index(m)] for m in visited):
@@ -391,19 +392,19 @@ class Flow:
     def vector_field(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
         """The vector field ``f(t, x, p)`` of a mode."""
         f = np.zeros(self.system.n)
-        self._kernels.vector_field(self.system.mode_index(mode), float(t), np.ascontiguousarray(x, dtype=float), p, f)
+        self._model[kc.VECTOR_FIELD](self.system.mode_index(mode), float(t), _c_array(x), _c_array(p), f)
         return f
 
     def vector_field_jacobian(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
         """``f_x`` of a mode."""
         J = np.zeros((self.system.n, self.system.n))
-        self._kernels.vector_field_jac(self.system.mode_index(mode), float(t), np.ascontiguousarray(x, dtype=float), p, J)
+        self._model[kc.VECTOR_FIELD_JAC](self.system.mode_index(mode), float(t), _c_array(x), _c_array(p), J)
         return J
 
     def vector_field_parameters(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
         """``f_p`` of a mode, shape ``(n, n_params)``."""
         fp = np.zeros((self.system.n, max(self.system.n_params, 1)))
-        self._kernels.vector_field_dp(self.system.mode_index(mode), float(t), np.ascontiguousarray(x, dtype=float), p, fp)
+        self._model[kc.VECTOR_FIELD_DP](self.system.mode_index(mode), float(t), _c_array(x), _c_array(p), fp)
         return fp[:, : self.system.n_params]
 
     def indicator_gradient(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
@@ -411,7 +412,7 @@ class Flow:
         s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
         hx = np.zeros(self.system.n)
         hp = np.zeros(max(self.system.n_params, 1))
-        ht = self._kernels.indicator_grad(int(s), float(t), np.ascontiguousarray(x, dtype=float), p, hx, hp)
+        ht = self._model[kc.INDICATOR_GRAD](int(s), float(t), _c_array(x), _c_array(p), hx, hp)
         return hx, float(ht), hp[: self.system.n_params]
 
     def run(
@@ -464,14 +465,14 @@ class Flow:
             raise ModelError(f"initial state must have {sys_.n} components {list(sys_.state_names)}, got {x0.size}")
         if not math.isfinite(x0.sum()):
             raise ModelError(f"initial state {x0.tolist()} is not finite")
-        p = np.ascontiguousarray(p, dtype=float)
+        p = _c_array(p)
         t0, t1 = float(t0), float(t1)
         if not (math.isfinite(t0) and math.isfinite(t1)):
             raise ValueError(f"integration times must be finite, got t0={t0}, t1={t1}")
         m0 = self.initial_mode(x0, p, t0) if mode0 is None else sys_.mode_index(mode0)
         if not -1 <= parameter < sys_.n_params:
             raise ModelError(f"parameter index {parameter} out of range")
-        phi = self._identity if phi0 is None else np.ascontiguousarray(phi0, dtype=float)
+        phi = self._identity if phi0 is None else _c_array(phi0)
         if phi.shape != (sys_.n, sys_.n):
             raise ModelError(f"initial fundamental matrix must have shape ({sys_.n}, {sys_.n}), got {phi.shape}")
         steps, limits, flags = tol.kernel_arguments
@@ -480,8 +481,8 @@ class Flow:
             table = table.copy()
             for k in disabled:
                 table[int(k), 0] = -1  # a source mode that is never current
-        out = self._kernels.integrate_kernel(
-            t0, t1, x0, int(m0), p, bool(variational), int(parameter), *steps, 0.0, *limits,
+        out = self._engine.integrate_kernel(
+            self._model, t0, t1, x0, int(m0), p, bool(variational), int(parameter), *steps, 0.0, *limits,
             table, self._n_surfaces, bool(dense), phi, self._zeros, *flags,
         )
         return self._unpack(out, x0, float(t0), m0, variational, parameter, dense)
@@ -504,11 +505,11 @@ class Flow:
         if span == 0.0 and phase is None and not isinstance(self.system, PiecewiseSystem):
             return None  # the forcing period is a Python callable
         steps, limits, flags = (tolerances or self.tolerances).kernel_arguments
-        x_ref, f_ref = phase if phase is not None else (self._zeros, self._zeros)
-        z0 = np.ascontiguousarray(z0, dtype=float)
-        code, it, packed, *out = self._kernels.correct_periodic(
-            z0, self._zeros if normal is None else np.ascontiguousarray(normal, dtype=float), float(t0), float(sign),
-            bool(phase is not None), int(lam_index), float(span), np.ascontiguousarray(p, dtype=float), x_ref, f_ref,
+        x_ref, f_ref = (_c_array(a) for a in phase) if phase is not None else (self._zeros, self._zeros)
+        z0 = _c_array(z0)
+        code, it, packed, *out = self._engine.correct_periodic(
+            self._model, z0, self._zeros if normal is None else _c_array(normal), float(t0), float(sign),
+            bool(phase is not None), int(lam_index), float(span), _c_array(p), x_ref, f_ref,
             float(tol), int(max_iter), float(max_correction), bool(damped), *steps, *limits, self._table,
             self._n_surfaces, self._identity, self._zeros, *flags,
         )
@@ -562,6 +563,12 @@ class Flow:
             n_rejected=int(info[kc.INFO_REJECTED]),
             _steps=_steps(res[n_out + n_ev * w_ev :], n) if dense else None,
         )
+
+
+def _c_array(a) -> np.ndarray:
+    """``a`` as the engine and the model functions take arrays (their signatures are fixed): float64,
+    C-contiguous and writeable, copied only when it is not already."""
+    return np.require(a, dtype=np.float64, requirements=("C", "W"))
 
 
 def _newton_unpack(packed: np.ndarray, m_z: int, m_u: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

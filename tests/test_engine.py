@@ -1,0 +1,94 @@
+"""The engine is compiled once and shared by every model; its results are those of the per-model kernels
+it replaced."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from saltation import Crossing, Flow, Mode, PiecewiseSystem, Tolerances, Transition
+from saltation.codegen import SPECIALIZED_DIMENSIONS, engine_dimension, engine_source, model_source
+from saltation.models import block_on_belt, trilinear
+from saltation.paper import block_on_belt_diagram, trilinear_diagram
+
+REFERENCE = json.loads((Path(__file__).parent / "data" / "engine_reference.json").read_text())
+
+
+def _relay(name: str, gain: str) -> PiecewiseSystem:
+    return PiecewiseSystem(
+        name, states=["x", "v"], parameters={"c": 0.05, "omega": 1.3},
+        modes=[Mode("up", ["v", f"-x - 2*c*v + {gain} + 0.3*cos(omega*t)"], domain=["x < 0"]),
+               Mode("down", ["v", f"-x - 2*c*v - {gain} + 0.3*cos(omega*t)"], domain=["x >= 0"])],
+        surfaces={"s": "x"},
+        transitions=[Transition("up", "s", Crossing.RISING, "down"), Transition("down", "s", Crossing.FALLING, "up")],
+        period="2*pi/omega",
+    )
+
+
+def test_two_models_share_one_compiled_engine(trilinear_flow):
+    """A second model of the same dimension runs on the engine the first compiled: the same module, one
+    compiled signature of each entry point, and one of the step and of the event search inside it (a
+    compilation per model would add a signature: the model's functions would be part of the types)."""
+    first = Flow(_relay("test_engine_relay_a", "1"))
+    second = Flow(_relay("test_engine_relay_b", "0.5"))
+    for flow in (first, second, trilinear_flow):
+        flow.run([0.3, 0.0], 0.0, 20.0, flow.parameters(), variational=True, parameter=0)
+    engine = first._engine
+    assert second._engine is engine and trilinear_flow._engine is engine
+    assert first._model[0] is not second._model[0]  # two models, two sets of functions
+    for entry in (engine.integrate_kernel, engine.correct_periodic):
+        assert len(entry.signatures) == 1
+    for helper in (engine._rk_step, engine._bracket_root, engine._exact_step):
+        assert len(helper.overloads) <= 1
+
+
+def test_dimensions_share_engines_as_documented():
+    assert [engine_dimension(n) for n in (1, 2, 3, 4, 5, 64)] == [1, 2, 3, 4, 0, 0]
+    assert list(SPECIALIZED_DIMENSIONS) == [1, 2, 3, 4]
+    # nothing of a model in the engine's source, nothing of the engine in a model's
+    assert "vector_field(" not in engine_source(2).replace("model[VECTOR_FIELD](", "")
+    assert "def integrate_kernel" not in model_source(trilinear())
+
+
+def test_a_model_of_more_states_than_specialized_runs_on_the_shared_engine():
+    """Five states (the chain's engine with N_STATE = 0, the dimension read from the arrays): the
+    monodromy of a linear mode against expm(A T), which the exact flow does not use here (DOP853)."""
+    import scipy.linalg
+
+    A = np.array([[0, 1, 0, 0, 0], [-2, -0.1, 1, 0, 0], [0, 0, 0, 1, 0], [1, 0, -2, -0.1, 1], [0, 0, 0, 0, -0.5]], float)
+    fields = [" + ".join(f"({A[i, j]})*x{j}" for j in range(5) if A[i, j]) for i in range(5)]
+    system = PiecewiseSystem(
+        "test_engine_five_states", states=[f"x{i}" for i in range(5)], parameters={"a": 1.0},
+        modes=[Mode("only", [f"a*({f})" for f in fields])], surfaces={"never": "x0 - 100"}, transitions=[],
+    )
+    flow = Flow(system, Tolerances(exact_affine=False, rtol=1e-12, atol=1e-14))
+    assert engine_dimension(system.n) == 0
+    tr = flow.run([0.1, 0.2, -0.1, 0.0, 0.3], 0.0, 3.0, flow.parameters(), variational=True)
+    np.testing.assert_allclose(tr.monodromy, scipy.linalg.expm(A * 3.0), rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize("k", range(len(REFERENCE["trajectories"])))
+def test_trajectories_equal_those_of_the_per_model_kernels(k):
+    name, pars, x0, span, tol = REFERENCE["runs"][k]
+    ref = REFERENCE["trajectories"][k]
+    flow = Flow({"trilinear": trilinear, "block_on_belt": block_on_belt}[name]())
+    tr = flow.run(x0, 0.0, span, flow.parameters(pars), variational=True, parameter=0,
+                  tolerances=Tolerances(**tol) if tol else None)
+    assert [e.surface for e in tr.events] == ref["event_surfaces"]
+    np.testing.assert_allclose([e.t for e in tr.events], ref["event_times"], rtol=0, atol=1e-12)
+    for key, value in (("x1", tr.x1), ("monodromy", tr.monodromy), ("sensitivity", tr.parameter_sensitivity)):
+        np.testing.assert_allclose(value, ref[key], rtol=0, atol=1e-12, err_msg=key)
+
+
+@pytest.mark.parametrize("figure", ["fig3", "fig7"])
+def test_special_points_equal_those_of_the_per_model_kernels(figure):
+    points = trilinear_diagram().special_points if figure == "fig3" else block_on_belt_diagram().special_points
+    ref = REFERENCE["special_points"][figure]
+    assert [sp.kind.value for sp in points] == [r["kind"] for r in ref]
+    for sp, r in zip(points, ref):
+        assert sp.parameter == pytest.approx(r["parameter"], abs=1e-12)
+        got = [] if sp.multipliers is None else [[z.real, z.imag] for z in sp.multipliers]
+        np.testing.assert_allclose(got, r["multipliers"], rtol=0, atol=1e-12)
