@@ -34,9 +34,9 @@ import math, random
 from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition, find_periodic_orbit
 name = "relay_oscillator" + (f"_{{random.randrange(10**9)}}" if {fresh} else "")
 system = PiecewiseSystem(
-    name, states=["x", "v"], parameters={{"c": 0.05, "omega": 1.3}},
-    modes=[Mode("up", ["v", "-x - 2*c*v + 1 + 0.3*cos(omega*t)"], domain=["x < 0"]),
-           Mode("down", ["v", "-x - 2*c*v - 1 + 0.3*cos(omega*t)"], domain=["x >= 0"])],
+    name, states=["x", "v"], parameters={{"c": 0.2, "omega": 1.3}},
+    modes=[Mode("up", ["v", "-x - 2*c*v + 0.5 + 2*cos(omega*t)"], domain=["x < 0"]),
+           Mode("down", ["v", "-x - 2*c*v - 0.5 + 2*cos(omega*t)"], domain=["x >= 0"])],
     surfaces={{"s": "x"}},
     transitions=[Transition("up", "s", Crossing.RISING, "down"), Transition("down", "s", Crossing.FALLING, "up")],
     period="2*pi/omega")

@@ -774,6 +774,281 @@ def _track_extrema(F, y, s_end, xmin, xmax, f0, f1, xtmp, direction):
                 xmin[i] = v
 
 
+@njit(cache=True, inline="always")  # once per mode entered; its arrays are the integrator's own
+def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_table, watched, fires, surf_old, slope_old,
+                    surf_sign, fixed_sign, hx, hp, gtmp, gptmp):
+    """Entering a mode (or a sliding motion): which surfaces its transitions watch, which way each
+    fires (``fires``: 1 to the negative side, 2 to the positive, 3 both), and the sign memory of each
+    (value, slope along the motion and side, in the direction of travel), except the signs an event
+    has just fixed (``fixed_sign``)."""
+    n = N_STATE or hx.shape[0]  # (see the engine's header)
+    n_surfaces = watched.shape[0]
+    n_tr = tr_table.shape[0]
+    # sign memory of every surface watched in this mode, in the direction of travel
+    for s in range(n_surfaces):
+        watched[s] = False
+        fires[s] = 0
+    if slide[0] == 0:
+        for k in range(n_tr):
+            if tr_table[k, 0] == mode:
+                watched[tr_table[k, 1]] = True
+                dk = tr_table[k, 2]
+                fires[tr_table[k, 1]] |= 3 if dk == 0 else (1 if dk < 0 else 2)
+    for s in range(n_surfaces):
+        if watched[s]:
+            v = model[INDICATOR](s, t, y[:n], p)
+            surf_old[s] = v
+            sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, hx, hp, gtmp, gptmp)
+            if fixed_sign[s] and last_kind == EVENT_SLIDING_END:
+                # a sliding motion has just ended on this surface, where the new field is tangent
+                # to it: the slope is zero (its computed value is rounding, and a dip test on it
+                # would find the surface again at once when the motion slid a rounding off it)
+                sl = 0.0
+            slope_old[s] = sl
+            if fixed_sign[s]:
+                continue
+            if abs(v) > 1e-12:
+                surf_sign[s] = 1.0 if v > 0 else -1.0
+            elif sl != 0.0:
+                surf_sign[s] = 1.0 if sl > 0 else -1.0
+            else:
+                surf_sign[s] = 1.0 if v >= 0 else -1.0
+
+
+@njit(cache=True, inline="always")  # once per mode entered; its arrays are the integrator's own
+def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, last_kind, n_ev, tr_table, surf_old, slope_old,
+                  surf_sign, fixed_sign, xtmp):
+    """A transition out of the mode just entered that fires at once, without a step: at the start, on a
+    surface the field crosses in the transition's direction; after a transition at a corner of
+    switching surfaces, an exit that already holds.  Returns ``(transition or -1, status)``: the status
+    is STATUS_OUTSIDE_DOMAIN when the state lies outside the mode's domain by more than rounding and no
+    exit holds (the model's domains and transitions disagree)."""
+    n = N_STATE or xtmp.shape[0]  # (see the engine's header)
+    n_tr = tr_table.shape[0]
+    pending = NONE
+    dt_nudge = direction * 1e-10 * max(1.0, abs(t))
+    for i in range(n):
+        xtmp[i] = y[i] + dt_nudge * K[0, i]
+    if at_start and slide[0] == 0:
+        # A start on a surface (|h| <= 1e-12) with this mode's field crossing it in the direction
+        # of one of its transitions: the transition fires at once, as if the motion had just
+        # arrived (it may start a sliding motion), instead of moving on in this mode beyond its
+        # surface. Its guard is taken a hair along the motion.
+        for k in range(n_tr):
+            if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
+                continue
+            s = tr_table[k, 1]
+            if abs(surf_old[s]) > 1e-12 or slope_old[s] * tr_table[k, 2] <= 0.0:
+                continue
+            if model[GUARD](k, t + dt_nudge, xtmp, p):
+                pending = k
+                break
+    # A state outside the domain of its mode (a transition has led there at a corner of
+    # switching surfaces): the exit that holds already (the state lies beyond its surface, in
+    # the transition's direction, and its guard holds; the surface just crossed excepted) fires
+    # at once. Domain and guards are taken a hair along the motion, so that a condition that is
+    # zero here (on the surface just crossed) counts on the side the motion goes to.
+    # (after a transition, or at the start; a sliding motion ends on its surface by construction)
+    if pending < 0 and slide[0] == 0 and last_kind == EVENT_TRANSITION and not model[IN_DOMAIN](mode, t + dt_nudge, xtmp, p):
+        for k in range(n_tr):
+            if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
+                continue
+            s = tr_table[k, 1]
+            if fixed_sign[s] or surf_sign[s] != tr_table[k, 2]:
+                continue
+            if model[GUARD](k, t + dt_nudge, xtmp, p):
+                pending = k
+                break
+        # no exit holds: the domain fails by rounding (a condition on the surface just crossed,
+        # with the motion nearly tangent to it), and the run goes on; or by more, and the model's
+        # domains and transitions disagree: the run stops (STATUS_OUTSIDE_DOMAIN)
+        if pending < 0 and n_ev > 0:  # (a mode given for the start is the caller's choice)
+            scale = 1.0
+            for i in range(n):
+                scale = max(scale, abs(y[i]))
+            if model[DOMAIN_MARGIN](mode, t + dt_nudge, xtmp, p) < -DOMAIN_TOLERANCE * scale:
+                return NONE, STATUS_OUTSIDE_DOMAIN
+    return pending, STATUS_OK
+
+
+@njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
+def _refine_event(model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, s_e, kind, idx, sgn_ev, p, var, pidx,
+                  rtol, atol, ytmp, work, n_err, affine, taylor, gradients):
+    """Refine an event bracketed at the fraction ``s_e`` of the step ``h`` from ``(t, y)`` (``ynew``: the
+    state there); returns the event's fraction of the step, with ``ynew`` the state at it.
+
+    Newton on the event function ``g`` (``sgn_ev`` times an indicator, or a sliding motion's exit
+    function) of the stepped solution, with its exact slope along the augmented field: a correction
+    far below the step is a first-order Taylor step of ``[x, Phi, psi]`` (its second-order term is
+    below rounding), a larger one a re-step from ``y``.  Then the event state is pushed, by doubling
+    nudges along the field, onto or just past the switching set, never before it (``g <= 0``).
+    ``work``, ``affine``, ``taylor`` and ``gradients`` are the integrator's work arrays, in tuples (a
+    call of more than 30 arguments is one numba cannot inline).
+    """
+    W, WJ, WP, wv = work
+    AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP = affine
+    TW, TP, TC = taylor
+    hx, hp, gtmp, gptmp = gradients
+    n = N_STATE or hx.shape[0]  # (see the engine's header)
+    N = y.shape[0]
+    for i in range(N):
+        ysave[i] = y[i]
+    for i in range(N):
+        Ksave[0, i] = K[0, i]
+    s_tiny = 2.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300))
+    g_e = sgn_ev * _event_value(model, kind, idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+    for it in range(8):
+        if g_e == 0.0:
+            break
+        _aug_rhs_called(model, mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
+        dg = sgn_ev * h * _slope(model, mode, slide, kind, idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, hx, hp, gtmp, gptmp)
+        if dg == 0.0 or not math.isfinite(dg):
+            break
+        s_new = min(max(s_e - g_e / dg, 0.0), 1.0)
+        if abs(s_new - s_e) <= s_tiny:
+            break
+        if abs(s_new - s_e) <= 1e-9:
+            dt = (s_new - s_e) * h
+            for i in range(N):
+                ynew[i] += dt * Ksave[1, i]
+        else:
+            for i in range(N):
+                K[0, i] = Ksave[0, i]
+            if s_new > 0.0:
+                _step(model, exact, mode, slide, t, ysave, s_new * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
+                      n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
+            else:
+                for i in range(N):
+                    ynew[i] = ysave[i]
+        s_e = s_new
+        g_e = sgn_ev * _event_value(model, kind, idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+    # make sure the event state lies on (or just past) the switching set, never before it
+    bump = 2.0 * s_tiny
+    for it in range(40):
+        if g_e <= 0.0 or s_e >= 1.0:
+            break
+        _aug_rhs_called(model, mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
+        ds = min(bump, 1.0 - s_e)
+        for i in range(N):
+            ynew[i] += ds * h * Ksave[1, i]
+        s_e += ds
+        bump *= 2.0
+        g_e = sgn_ev * _event_value(model, kind, idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+    return s_e
+
+
+@njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
+def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_once, n_ev, chatter_ring, hx, hp, fa,
+                      fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign):
+    """Apply transition ``k`` (surface ``s``) at the event ``(t_e, x_e)`` in ``mode``: the reset
+    ``xplus = g(x_e)`` with ``g_x, g_t, g_p``, the surface's gradient ``h_x, h_p``, the fields ``f-``
+    (``fa``) and ``f+`` (``fplus``) and the denominator ``h_x f- + h_t`` of eq. (9), which
+    ``_saltation_jump`` turns into the saltation matrix.
+
+    Where no reset applies and the new field pushes back into the surface, a Filippov sliding motion
+    starts (``slide`` set, ``f+`` the sliding field).  Returns ``(status, mode_to, kind, den)``: a
+    status other than OK for a tangential crossing, a sliding motion that is not defined, or impacts
+    accumulating below the resolution of the state (chattering).
+    """
+    n = N_STATE or fa.shape[0]  # (see the engine's header)
+    kind_logged = EVENT_TRANSITION
+    mode_to = tr_table[k, 3]
+    ht = model[INDICATOR_GRAD](s, t_e, x_e, p, hx, hp)
+    model[VECTOR_FIELD](mode, t_e, x_e, p, fa)
+    den = ht
+    for i in range(n):
+        den += hx[i] * fa[i]
+    if tr_table[k, 4] != 0:
+        model[RESET_MAP](k, t_e, x_e, p, xplus)
+        model[RESET_JAC](k, t_e, x_e, p, gx, gt, gp)
+    else:
+        for i in range(n):
+            xplus[i] = x_e[i]
+    model[VECTOR_FIELD](mode_to, t_e, xplus, p, fb)
+    sig_b = ht
+    for i in range(n):
+        sig_b += hx[i] * fb[i]
+    cross = 1.0 if direction * den > 0 else -1.0
+    if at_once:
+        cross = 1.0 if tr_table[k, 2] > 0 else -1.0  # fired at once: the side it leads to is known
+    if den == 0.0 or not math.isfinite(den):
+        return STATUS_TANGENTIAL, mode_to, EVENT_TRANSITION, den
+    if not at_once and tr_table[k, 2] != 0 and direction * den * tr_table[k, 2] <= 0.0 and n_ev >= 8:
+        # a "crossing" that moves against its transition's direction, after at least 8 events within
+        # 1e-6 (relative) of it: events accumulate below the resolution of the state (impacts of a
+        # ball coming to rest on a moving table, say), and going on would pass through the surface
+        # (a corner's few events at one instant are no accumulation)
+        crowd = 0
+        for j in range(min(n_ev, CHATTER_WINDOW)):
+            if abs(t_e - chatter_ring[j]) <= 1e-6 * max(1.0, abs(t_e)):
+                crowd += 1
+        if crowd >= 8:
+            return STATUS_CHATTERING, mode_to, EVENT_TRANSITION, den
+    if tr_table[k, 4] == 0 and direction * sig_b * cross < 0.0:
+        # no jump, and the new field pushes back: Filippov sliding along the surface
+        if den == sig_b:
+            return STATUS_SLIDING_UNDEFINED, mode_to, EVENT_TRANSITION, den
+        alpha = den / (den - sig_b)
+        for i in range(n):
+            fplus[i] = fa[i] + alpha * (fb[i] - fa[i])
+        slide[0] = 1
+        slide[1] = mode
+        slide[2] = mode_to
+        slide[3] = s
+        slide[4] = 1 if cross > 0 else -1
+        kind_logged = EVENT_SLIDING_START
+    else:
+        for i in range(n):
+            fplus[i] = fb[i]
+    # the side of the surface the motion continues on (after a reset it may be the old one)
+    h_after = model[INDICATOR](s, t_e, xplus, p)
+    if slide[0] == 1 or tr_table[k, 4] == 0:
+        surf_sign[s] = cross
+    elif abs(h_after) > 1e-12:
+        surf_sign[s] = 1.0 if h_after > 0 else -1.0
+    elif direction * sig_b != 0.0:
+        surf_sign[s] = 1.0 if direction * sig_b > 0 else -1.0
+    else:
+        surf_sign[s] = cross
+    fixed_sign[s] = True
+    return STATUS_OK, mode_to, kind_logged, den
+
+
+@njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
+def _leave_sliding(model, kind, mode, slide, t_e, x_e, p, hx, hp, fa, fplus, xplus, WJ, WP, wv, W, surf_sign,
+                   fixed_sign):
+    """End a sliding motion where side a (``kind`` 1) or side b (``kind`` 2) turns tangent: the event
+    function's gradient (the exit side's Lie derivative ``h_x f + h_t``, signed) in ``hx, hp``, the
+    sliding field ``f-`` (``fa``) and the exit side's field ``f+`` (``fplus``), for eq. (9) without a
+    reset.  Returns ``(mode_from, mode_to, den)``.
+    """
+    n = N_STATE or fa.shape[0]  # (see the engine's header)
+    exit_mode = slide[1] if kind == 1 else slide[2]
+    _field_called(model, mode, slide, t_e, x_e, p, fa, WJ, WP, wv, W)
+    sgl = 1.0 if kind == 1 else -1.0
+    sgl = sgl * slide[4]
+    model[LIE_DERIVATIVE](exit_mode, slide[3], t_e, x_e, p, hx, hp)
+    for i in range(n):
+        hx[i] *= sgl
+    for j in range(hp.shape[0]):
+        hp[j] *= sgl
+    den = sgl * model[LIE_DERIVATIVE_DT](exit_mode, slide[3], t_e, x_e, p)
+    for i in range(n):
+        den += hx[i] * fa[i]
+    for i in range(n):
+        xplus[i] = x_e[i]
+    model[VECTOR_FIELD](exit_mode, t_e, xplus, p, fplus)
+    crossing_sign = slide[4]
+    surf_sign[slide[3]] = -crossing_sign if kind == 1 else crossing_sign
+    fixed_sign[slide[3]] = True
+    mode_from = slide[2] if kind == 1 else slide[1]
+    mode_to = exit_mode
+    slide[0] = 0
+    if den == 0.0:
+        den = 1e-300
+    return mode_from, mode_to, den
+
+
 @njit(cache=True, inline="always")  # once per event; a call costs more than it saves here
 def _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, w, Phi_tmp, psi_tmp):
     """The saltation matrix of eq. (9), with a reset ``g`` (the identity without one), and the jumps of
@@ -1111,81 +1386,14 @@ def integrate_kernel(
 
     while status == STATUS_OK and (t_end - t) * direction > 0.0:
         if need_signs:
-            # sign memory of every surface watched in this mode, in the direction of travel
-            for s in range(n_surfaces):
-                watched[s] = False
-                fires[s] = 0
-            if slide[0] == 0:
-                for k in range(n_tr):
-                    if tr_table[k, 0] == mode:
-                        watched[tr_table[k, 1]] = True
-                        dk = tr_table[k, 2]
-                        fires[tr_table[k, 1]] |= 3 if dk == 0 else (1 if dk < 0 else 2)
-            for s in range(n_surfaces):
-                if watched[s]:
-                    v = model[INDICATOR](s, t, y[:n], p)
-                    surf_old[s] = v
-                    sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, hx, hp, gtmp, gptmp)
-                    if fixed_sign[s] and last_kind == EVENT_SLIDING_END:
-                        # a sliding motion has just ended on this surface, where the new field is tangent
-                        # to it: the slope is zero (its computed value is rounding, and a dip test on it
-                        # would find the surface again at once when the motion slid a rounding off it)
-                        sl = 0.0
-                    slope_old[s] = sl
-                    if fixed_sign[s]:
-                        continue
-                    if abs(v) > 1e-12:
-                        surf_sign[s] = 1.0 if v > 0 else -1.0
-                    elif sl != 0.0:
-                        surf_sign[s] = 1.0 if sl > 0 else -1.0
-                    else:
-                        surf_sign[s] = 1.0 if v >= 0 else -1.0
-            dt_nudge = direction * 1e-10 * max(1.0, abs(t))
-            for i in range(n):
-                xtmp[i] = y[i] + dt_nudge * K[0, i]
-            if at_start:
-                # A start on a surface (|h| <= 1e-12) with this mode's field crossing it in the direction
-                # of one of its transitions: the transition fires at once, as if the motion had just
-                # arrived (it may start a sliding motion), instead of moving on in this mode beyond its
-                # surface. Its guard is taken a hair along the motion.
-                at_start = False
-                if slide[0] == 0:
-                    for k in range(n_tr):
-                        if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
-                            continue
-                        s = tr_table[k, 1]
-                        if abs(surf_old[s]) > 1e-12 or slope_old[s] * tr_table[k, 2] <= 0.0:
-                            continue
-                        if model[GUARD](k, t + dt_nudge, xtmp, p):
-                            pending = k
-                            break
-            # A state outside the domain of its mode (a transition has led there at a corner of
-            # switching surfaces): the exit that holds already (the state lies beyond its surface, in
-            # the transition's direction, and its guard holds; the surface just crossed excepted) fires
-            # at once. Domain and guards are taken a hair along the motion, so that a condition that is
-            # zero here (on the surface just crossed) counts on the side the motion goes to.
-            # (after a transition, or at the start; a sliding motion ends on its surface by construction)
-            if pending < 0 and slide[0] == 0 and last_kind == EVENT_TRANSITION and not model[IN_DOMAIN](mode, t + dt_nudge, xtmp, p):
-                for k in range(n_tr):
-                    if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
-                        continue
-                    s = tr_table[k, 1]
-                    if fixed_sign[s] or surf_sign[s] != tr_table[k, 2]:
-                        continue
-                    if model[GUARD](k, t + dt_nudge, xtmp, p):
-                        pending = k
-                        break
-                # no exit holds: the domain fails by rounding (a condition on the surface just crossed,
-                # with the motion nearly tangent to it), and the run goes on; or by more, and the model's
-                # domains and transitions disagree: the run stops (STATUS_OUTSIDE_DOMAIN)
-                if pending < 0 and n_ev > 0:  # (a mode given for the start is the caller's choice)
-                    scale = 1.0
-                    for i in range(n):
-                        scale = max(scale, abs(y[i]))
-                    if model[DOMAIN_MARGIN](mode, t + dt_nudge, xtmp, p) < -DOMAIN_TOLERANCE * scale:
-                        status = STATUS_OUTSIDE_DOMAIN
-                        info_mode = mode
-                        break
+            _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_table, watched, fires, surf_old,
+                            slope_old, surf_sign, fixed_sign, hx, hp, gtmp, gptmp)
+            pending, status = _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, last_kind, n_ev,
+                                            tr_table, surf_old, slope_old, surf_sign, fixed_sign, xtmp)
+            at_start = False
+            if status != STATUS_OK:
+                info_mode = mode
+                break
             for s in range(n_surfaces):
                 fixed_sign[s] = False
             need_signs = False
@@ -1356,54 +1564,11 @@ def integrate_kernel(
             _track_extrema(F, y, best_s, xmin, xmax, K[0], K[12], xtmp, direction)
             if record:
                 rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, best_s, y[:n], F)
-            # refine the event time: Newton on the event function of the stepped solution, with its exact
-            # slope along the augmented field; a correction far below the step is a first-order Taylor
-            # step of [x, Phi, psi] (its second-order term is below rounding), a larger one a re-step
-            for i in range(N):
-                ysave[i] = y[i]
-            for i in range(N):
-                Ksave[0, i] = K[0, i]
             sgn_ev = surf_sign[best_idx] if best_kind == 0 else 1.0
-            s_tiny = 2.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300))
-            s_e = best_s
-            g_e = sgn_ev * _event_value(model, best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
-            for it in range(8):
-                if g_e == 0.0:
-                    break
-                _aug_rhs_called(model, mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
-                dg = sgn_ev * h * _slope(model, mode, slide, best_kind, best_idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, hx, hp, gtmp, gptmp)
-                if dg == 0.0 or not math.isfinite(dg):
-                    break
-                s_new = min(max(s_e - g_e / dg, 0.0), 1.0)
-                if abs(s_new - s_e) <= s_tiny:
-                    break
-                if abs(s_new - s_e) <= 1e-9:
-                    dt = (s_new - s_e) * h
-                    for i in range(N):
-                        ynew[i] += dt * Ksave[1, i]
-                else:
-                    for i in range(N):
-                        K[0, i] = Ksave[0, i]
-                    if s_new > 0.0:
-                        _step(model, exact, mode, slide, t, ysave, s_new * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
-                              n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
-                    else:
-                        for i in range(N):
-                            ynew[i] = ysave[i]
-                s_e = s_new
-                g_e = sgn_ev * _event_value(model, best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
-            # make sure the event state lies on (or just past) the switching set, never before it
-            bump = 2.0 * s_tiny
-            for it in range(40):
-                if g_e <= 0.0 or s_e >= 1.0:
-                    break
-                _aug_rhs_called(model, mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
-                ds = min(bump, 1.0 - s_e)
-                for i in range(N):
-                    ynew[i] += ds * h * Ksave[1, i]
-                s_e += ds
-                bump *= 2.0
-                g_e = sgn_ev * _event_value(model, best_kind, best_idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+            s_e = _refine_event(
+                model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, best_s, best_kind, best_idx, sgn_ev, p, var,
+                pidx, rtol, atol, ytmp, (W, WJ, WP, wv), n_err, (AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP), (TW, TP, TC),
+                (hx, hp, gtmp, gptmp))
         t_e = t + s_e * h
         # state at the event (before it)
         for i in range(N):
@@ -1421,104 +1586,21 @@ def integrate_kernel(
             for j in range(gp.shape[1]):
                 gp[i, j] = 0.0
         if best_kind == 0:
-            k = best_tr
-            mode_to = tr_table[k, 3]
-            ht = model[INDICATOR_GRAD](best_idx, t_e, x_e, p, hx, hp)
-            model[VECTOR_FIELD](mode, t_e, x_e, p, fa)
-            den = ht
-            for i in range(n):
-                den += hx[i] * fa[i]
-            if tr_table[k, 4] != 0:
-                model[RESET_MAP](k, t_e, x_e, p, xplus)
-                model[RESET_JAC](k, t_e, x_e, p, gx, gt, gp)
-            else:
-                for i in range(n):
-                    xplus[i] = x_e[i]
-            model[VECTOR_FIELD](mode_to, t_e, xplus, p, fb)
-            sig_b = ht
-            for i in range(n):
-                sig_b += hx[i] * fb[i]
-            cross = 1.0 if direction * den > 0 else -1.0
-            if at_once:
-                cross = 1.0 if tr_table[k, 2] > 0 else -1.0  # fired at once: the side it leads to is known
-            if den == 0.0 or not math.isfinite(den):
-                status = STATUS_TANGENTIAL
+            status, mode_to, kind_logged, den = _apply_transition(
+                model, best_tr, best_idx, mode, t_e, x_e, p, tr_table, direction, at_once, n_ev, chatter_ring, hx, hp,
+                fa, fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign)
+            if status != STATUS_OK:
                 info_mode = mode
                 info_surface = best_idx
-                break
-            if not at_once and tr_table[k, 2] != 0 and direction * den * tr_table[k, 2] <= 0.0 and n_ev >= 8:
-                # a "crossing" that moves against its transition's direction, after at least 8 events within
-                # 1e-6 (relative) of it: events accumulate below the resolution of the state (impacts of a
-                # ball coming to rest on a moving table, say), and going on would pass through the surface
-                # (a corner's few events at one instant are no accumulation)
-                crowd = 0
-                for j in range(min(n_ev, CHATTER_WINDOW)):
-                    if abs(t_e - chatter_ring[j]) <= 1e-6 * max(1.0, abs(t_e)):
-                        crowd += 1
-                if crowd >= 8:
-                    status = STATUS_CHATTERING
-                    info_mode = mode
-                    info_surface = best_idx
+                if status == STATUS_CHATTERING:
                     t = t_e
-                    break
-            if tr_table[k, 4] == 0 and direction * sig_b * cross < 0.0:
-                # no jump, and the new field pushes back: Filippov sliding along the surface
-                if den == sig_b:
-                    status = STATUS_SLIDING_UNDEFINED
-                    info_mode = mode
-                    info_surface = best_idx
-                    break
-                alpha = den / (den - sig_b)
-                for i in range(n):
-                    fplus[i] = fa[i] + alpha * (fb[i] - fa[i])
-                slide[0] = 1
-                slide[1] = mode
-                slide[2] = mode_to
-                slide[3] = best_idx
-                slide[4] = 1 if cross > 0 else -1
-                kind_logged = EVENT_SLIDING_START
-            else:
-                for i in range(n):
-                    fplus[i] = fb[i]
-            # the side of the surface the motion continues on (after a reset it may be the old one)
-            h_after = model[INDICATOR](best_idx, t_e, xplus, p)
-            if slide[0] == 1 or tr_table[k, 4] == 0:
-                surf_sign[best_idx] = cross
-            elif abs(h_after) > 1e-12:
-                surf_sign[best_idx] = 1.0 if h_after > 0 else -1.0
-            elif direction * sig_b != 0.0:
-                surf_sign[best_idx] = 1.0 if direction * sig_b > 0 else -1.0
-            else:
-                surf_sign[best_idx] = cross
-            fixed_sign[best_idx] = True
-            mode = mode_to
+                break
         else:
-            # leaving a sliding motion where side a (kind 1) or side b (kind 2) turns tangent
-            exit_mode = slide[1] if best_kind == 1 else slide[2]
-            _field_called(model, mode, slide, t_e, x_e, p, fa, WJ, WP, wv, W)
-            sgl = 1.0 if best_kind == 1 else -1.0
-            sgl = sgl * slide[4]
-            model[LIE_DERIVATIVE](exit_mode, slide[3], t_e, x_e, p, hx, hp)
-            for i in range(n):
-                hx[i] *= sgl
-            for j in range(hp.shape[0]):
-                hp[j] *= sgl
-            den = sgl * model[LIE_DERIVATIVE_DT](exit_mode, slide[3], t_e, x_e, p)
-            for i in range(n):
-                den += hx[i] * fa[i]
-            for i in range(n):
-                xplus[i] = x_e[i]
-            model[VECTOR_FIELD](exit_mode, t_e, xplus, p, fplus)
-            crossing_sign = slide[4]
-            surf_sign[slide[3]] = -crossing_sign if best_kind == 1 else crossing_sign
-            fixed_sign[slide[3]] = True
-            mode_from = slide[2] if best_kind == 1 else slide[1]
-            mode_to = exit_mode
-            mode = exit_mode
-            slide[0] = 0
+            mode_from, mode_to, den = _leave_sliding(
+                model, best_kind, mode, slide, t_e, x_e, p, hx, hp, fa, fplus, xplus, WJ, WP, wv, W, surf_sign,
+                fixed_sign)
             kind_logged = EVENT_SLIDING_END
-            if den == 0.0:
-                den = 1e-300
+        mode = mode_to
         # the saltation matrix, eq. (9), and the jumps of Phi and psi
         _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, wvec, Phi_tmp, psi_tmp)
         # log

@@ -210,14 +210,15 @@ def load_model_file(path: Path, name: str) -> PiecewiseSystem:
 def make_flow(system: PiecewiseSystem):
     """The compiled flow of a model (compiles on first use, cached on disk afterwards).
 
-    On a terminal, says so on stderr when loading the kernels takes more than a few seconds.
+    On a terminal, says so on stderr when compiling the model's functions takes more than a few
+    seconds (the one-time build of the integrator says so itself).
     """
     from .integrate import Flow
 
     timer = None
     if sys.stderr.isatty():
         def notice() -> None:
-            print(f"{PROG}: compiling the kernels of model {system.name!r} (first use only, about a minute)...",
+            print(f"{PROG}: compiling the functions of model {system.name!r} (first use of these equations only)...",
                   file=sys.stderr, flush=True)
 
         timer = threading.Timer(3.0, notice)

@@ -21,8 +21,8 @@ The cache directory is ``$SALTATION_CACHE_DIR`` if set, otherwise
 from __future__ import annotations
 
 import hashlib
-import inspect
 import importlib.util
+import inspect
 import os
 import sys
 import tempfile
@@ -128,6 +128,31 @@ def _dispatch(name: str, args: str, index: str, cases: list[tuple[int, list[str]
     return lines
 
 
+def _mode_dispatch(
+    name: str, args: str, em: _Emitter, cases: list[tuple[int, list[_Assignment]]], zero: list[str]
+) -> list[str]:
+    """A function of ``mode`` that writes arrays: ``zero`` (lines that clear them) once, then the
+    assignments every mode of ``cases`` shares (the same target and expression) once, then each
+    mode's own.  Modes usually differ in a few entries (a contact force in one equation), so the
+    generated code grows with the model's distinct expressions, not with their number times the
+    number of modes."""
+    lines = [_decorator(name), f"def {name}({args}):"]
+    if not cases:
+        return lines + ["    return"]
+    per_mode = [{a.target: a.expr for a in assigns} for _, assigns in cases]
+    shared = [a for a in cases[0][1] if all(d.get(a.target) == a.expr for d in per_mode[1:])] if len(cases) > 1 else []
+    shared_targets = {a.target for a in shared}
+    lines += [f"    {z}" for z in zero] + em.block(shared, "    ")
+    for k, assigns in cases:
+        own = [a for a in assigns if a.target not in shared_targets]
+        if own:
+            lines.append(f"    if mode == {k}:")
+            lines += em.block(own, "        ")
+            lines.append("        return")
+    lines.append("    return")
+    return lines
+
+
 def _matrix_assignments(target: str, M: sp.Matrix, lead: str = "") -> list[_Assignment]:
     """``target[lead i, j] = M[i, j]`` for the nonzero entries (``lead`` indexes a stack of matrices)."""
     out = []
@@ -153,20 +178,19 @@ def generate_source(system: PiecewiseSystem) -> str:
 
     modes = range(len(system.modes))
     # f, f_x, f_p
-    src += _dispatch(
-        "vector_field", "mode, t, x, p, out", "mode",
-        [(m, em.block([_Assignment(f"out[{i}]", e) for i, e in enumerate(system.fields[m])], ind)) for m in modes],
-        "None",
+    src += _mode_dispatch(
+        "vector_field", "mode, t, x, p, out", em,
+        [(m, [_Assignment(f"out[{i}]", e) for i, e in enumerate(system.fields[m])]) for m in modes], [],
     )
     jac_cases = []
     dp_cases = []
     for m in modes:
         f = system.fields[m]
-        jac_cases.append((m, [f"{ind}out[:, :] = 0.0"] + em.block(_matrix_assignments("out", f.jacobian(x)), ind)))
+        jac_cases.append((m, _matrix_assignments("out", f.jacobian(x))))
         fp = f.jacobian(p) if system.n_params else sp.zeros(system.n, 0)
-        dp_cases.append((m, [f"{ind}out[:, :] = 0.0"] + em.block(_matrix_assignments("out", fp), ind)))
-    src += _dispatch("vector_field_jac", "mode, t, x, p, out", "mode", jac_cases, "None")
-    src += _dispatch("vector_field_dp", "mode, t, x, p, out", "mode", dp_cases, "None")
+        dp_cases.append((m, _matrix_assignments("out", fp)))
+    src += _mode_dispatch("vector_field_jac", "mode, t, x, p, out", em, jac_cases, ["out[:, :] = 0.0"])
+    src += _mode_dispatch("vector_field_dp", "mode, t, x, p, out", em, dp_cases, ["out[:, :] = 0.0"])
 
     # indicators
     surfaces = range(len(system.surface_names))
@@ -277,17 +301,18 @@ def _affine_source(system: PiecewiseSystem, em: _Emitter, ind: str) -> list[str]
             continue
         assigns = _matrix_assignments("A", form.A) + _matrix_assignments("B", form.B)
         assigns += [_Assignment(f"w[{i}]", e) for i, e in enumerate((form.omega, form.phase)) if e != 0]
-        cases.append((m, [f"{ind}A[:, :] = 0.0", f"{ind}B[:, :] = 0.0", f"{ind}w[:] = 0.0"] + em.block(assigns, ind)))
+        cases.append((m, assigns))
         dp_assigns = []
         for k, pk in enumerate(system.p):
             dp_assigns += _matrix_assignments("Ap", form.A.diff(pk), f"{k}, ") + _matrix_assignments("Bp", form.B.diff(pk), f"{k}, ")
             dp_assigns += [
                 _Assignment(f"wp[{k}, {i}]", sp.diff(e, pk)) for i, e in enumerate((form.omega, form.phase)) if sp.diff(e, pk) != 0
             ]
-        zero = [f"{ind}Ap[:, :, :] = 0.0", f"{ind}Bp[:, :, :] = 0.0", f"{ind}wp[:, :] = 0.0"]
-        dp_cases.append((m, zero + em.block(dp_assigns, ind)))
-    src += _dispatch("affine_parts", "mode, p, A, B, w", "mode", cases, "None")
-    src += _dispatch("affine_parts_dp", "mode, p, Ap, Bp, wp", "mode", dp_cases, "None")
+        dp_cases.append((m, dp_assigns))
+    src += _mode_dispatch("affine_parts", "mode, p, A, B, w", em, cases, ["A[:, :] = 0.0", "B[:, :] = 0.0", "w[:] = 0.0"])
+    src += _mode_dispatch(
+        "affine_parts_dp", "mode, p, Ap, Bp, wp", em, dp_cases, ["Ap[:, :, :] = 0.0", "Bp[:, :, :] = 0.0", "wp[:, :] = 0.0"]
+    )
     return src
 
 
