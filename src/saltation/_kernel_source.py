@@ -38,6 +38,8 @@ import math
 import numpy as np
 from numba import njit
 from numba import types as nt
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 # The status codes (STATUS_*), event kinds (EVENT_*), Newton outcomes (SHOOT_*), the layout of the
 # packed results (INFO_*, result_offsets) and of the model tuple (VECTOR_FIELD, ..., MODEL_TYPE) come
@@ -99,13 +101,36 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
     N_STATE = 0  # the state dimension, or 0 (see above): from the engine's header
 result_offsets_c = njit(cache=True, inline="always")(result_offsets)
 
-# The signatures of the engine's two entry points, compiled when the engine is imported: the model tuple,
-# then the arguments as :mod:`saltation.integrate` passes them (C-contiguous float arrays, int64, bool).
+# The signatures of the engine's two entry points, compiled when the engine is imported: the model (see
+# ``model_from_addresses``), then the arguments as :mod:`saltation.integrate` passes them (C-contiguous
+# float arrays, int64, bool).
 _R, _I, _B = nt.float64, nt.int64, nt.boolean
 _V, _M, _T = nt.float64[::1], nt.float64[:, ::1], nt.int64[:, ::1]
-INTEGRATE_SIGNATURE = (MODEL_TYPE, _R, _R, _V, _I, _V, _B, _I, _R, _R, _R, _R, _I, _I, _T, _I, _B, _M, _V, _B, _B)
-CORRECT_SIGNATURE = (MODEL_TYPE, _V, _V, _R, _R, _B, _I, _R, _V, _V, _V, _R, _I, _R, _B, _R, _R, _R, _I, _I, _T, _I, _M, _V,
-                     _B, _B)
+_A = (nt.int64[:, ::1], nt.boolean[::1])  # the model: addresses of its functions, affine-mode flags
+INTEGRATE_SIGNATURE = (*_A, _R, _R, _V, _I, _V, _B, _I, _R, _R, _R, _R, _I, _I, _T, _I, _B, _M, _V, _B, _B)
+CORRECT_SIGNATURE = (*_A, _V, _V, _R, _R, _B, _I, _R, _V, _V, _V, _R, _I, _R, _B, _R, _R, _R, _I, _I, _T, _I, _M, _V, _B,
+                     _B)
+
+
+
+@intrinsic
+def _function_at(typingctx, function_type, c_address, jit_address):
+    """A first-class function value of type ``function_type`` (a ``FunctionType``, given as a global)
+    from the addresses of a compiled function's C wrapper and numba entry point, as numba builds one
+    when it unboxes a dispatcher (``numba.experimental.function_type``): calls go to the numba entry
+    point, with numba's calling convention."""
+    fnty = function_type.instance_type
+
+    def codegen(context, builder, signature, args):
+        value = cgutils.create_struct_proxy(fnty)(context, builder)
+        pointer = context.get_value_type(nt.voidptr)
+        value.c_addr = builder.inttoptr(args[1], pointer)
+        value.py_addr = cgutils.get_null_value(pointer)
+        value.jit_addr = builder.inttoptr(args[2], pointer)
+        return value._getvalue()
+
+    return fnty(function_type, nt.int64, nt.int64), codegen
+
 
 EPS = 2.220446049250313e-16
 CHATTER_WINDOW = 20
@@ -1227,8 +1252,8 @@ def _needs_extrema(K, xmin):
     return False
 
 
-@njit(INTEGRATE_SIGNATURE, cache=True)
-def integrate_kernel(
+@njit(cache=True)
+def _integrate(
     model, t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step, max_events, max_steps,
     tr_table, n_surfaces, record, phi0, psi0, control_variational, exact_affine,
 ):
@@ -1652,7 +1677,7 @@ def _shot(model, x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps
     status != 0 on failure (also for a state in no mode)."""
     mode = model[INITIAL_MODE](t0, x, p)
     failed = mode < 0  # in no mode: not integrated, the caller sees the failure in info[0]
-    res = integrate_kernel(
+    res = _integrate(
         model, t0, t0 if failed else t1, x, max(mode, NONE + 1), p, ON, pidx, rtol, atol, 0.0, max_step, max_events,
         max_steps, tr_table, n_surfaces, OFF, phi0, psi0, control_variational, exact_affine,
     )
@@ -1756,8 +1781,8 @@ def _newton_result(code, it, z, history, n_history, jac, res):
     return code, it, packed, res[0], res[1]
 
 
-@njit(CORRECT_SIGNATURE, cache=True)
-def correct_periodic(model, z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref, tol, max_newton,
+@njit(cache=True)
+def _correct_periodic(model, z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref, tol, max_newton,
                      max_correction, damped, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
                      phi0, psi0, control_variational, exact_affine):
     """Newton on the periodic-orbit equations of a shooting problem, compiled.
@@ -1888,3 +1913,30 @@ def correct_periodic(model, z_pred, normal, t0, sign, autonomous, lam_index, spa
         it += 1
     # one call of the result (each literal code as an argument would compile it once more)
     return _newton_result(code, it, z, history, n_history, jac, res)
+
+
+# --------------------------------------------------------------------------------------------------
+# The entry points. Python passes the model as the addresses of its compiled functions (an integer
+# array, two per function: the C wrapper and the numba entry, as ``Flow`` takes them from the
+# dispatchers once) and the affine-mode flags: arrays are typed at once, where a tuple of dispatchers
+# would be typed and converted to function types on every call (some 200 microseconds).
+# --------------------------------------------------------------------------------------------------
+
+@njit(INTEGRATE_SIGNATURE, cache=True)
+def integrate_kernel(addresses, affine_modes, t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step,
+                     max_events, max_steps, tr_table, n_surfaces, record, phi0, psi0, control_variational, exact_affine):
+    """Integrate from ``t0`` to ``t_end`` (either direction), event by event (see ``_integrate``)."""
+    return _integrate(model_from_addresses(addresses, affine_modes), t0, t_end, x0, mode0, p, var, pidx, rtol, atol,  # noqa: F821
+                      h_init, max_step, max_events, max_steps, tr_table, n_surfaces, record, phi0, psi0,
+                      control_variational, exact_affine)
+
+
+@njit(CORRECT_SIGNATURE, cache=True)
+def correct_periodic(addresses, affine_modes, z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref,
+                     tol, max_newton, max_correction, damped, rtol, atol, max_step, max_events, max_steps, tr_table,
+                     n_surfaces, phi0, psi0, control_variational, exact_affine):
+    """Newton on the periodic-orbit equations of a shooting problem (see ``_correct_periodic``)."""
+    return _correct_periodic(model_from_addresses(addresses, affine_modes), z_pred, normal, t0, sign, autonomous,  # noqa: F821
+                             lam_index, span, p0, x_ref, f_ref, tol, max_newton, max_correction, damped, rtol, atol,
+                             max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0, control_variational,
+                             exact_affine)

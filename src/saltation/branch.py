@@ -174,6 +174,12 @@ class SpecialPoint:
     touch_mode: str = ""
     touch_time: float = float("nan")
 
+    def _repr_markdown_(self) -> str:
+        """A summary for Jupyter (:mod:`saltation.summary`)."""
+        from .summary import special_point_summary
+
+        return special_point_summary(self)
+
 
 @dataclass
 class Branch:
@@ -211,6 +217,12 @@ class Branch:
     fixed_parameters: dict[str, float] = field(default_factory=dict)
     label: str = ""
     autonomous: bool = False
+
+    def _repr_markdown_(self) -> str:
+        """A summary for Jupyter (:mod:`saltation.summary`)."""
+        from .summary import branch_summary
+
+        return branch_summary(self)
 
     def __len__(self) -> int:
         return len(self.points)

@@ -34,7 +34,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-from ._contract import MODEL_FUNCTIONS
+from ._contract import MODEL_FUNCTIONS, MODEL_SIGNATURES
 from .affine import affine_form
 from .model import TIME, PiecewiseSystem
 
@@ -380,7 +380,42 @@ def engine_source(n_state: int) -> str:
         "import numpy as np",
     ]
     head += [f"RK_{name} = np.array({arr.tolist()!r})" for name, arr in _dop853_tableau().items()]
-    return "\n".join(head) + "\n\n" + _TEMPLATE.read_text()
+    return "\n".join(head) + "\n\n" + _model_from_addresses_source() + "\n\n" + _TEMPLATE.read_text()
+
+
+def _model_from_addresses_source() -> str:
+    """``model_from_addresses(addresses, affine_modes)``: the engine's model tuple, in the contract's
+    order, built from the addresses of the model's functions (see :func:`model_addresses`)."""
+    lines = ["from numba import njit", ""]
+    lines += [f"_FUNCTION_TYPE_{k} = MODEL_TYPE.types[{k}]" for k in range(len(MODEL_FUNCTIONS))]
+    lines += [
+        "",
+        "",
+        "@njit(cache=True)",
+        "def model_from_addresses(a, affine_modes):",
+        '    """The model tuple (``MODEL_TYPE``) from the addresses of its functions, two per row (its'
+        ' function-type values are built by the template\'s ``_function_at``)."""',
+        "    return (",
+    ]
+    lines += [f"        _function_at(_FUNCTION_TYPE_{k}, a[{k}, 0], a[{k}, 1]),  # {name}" for k, name in enumerate(MODEL_FUNCTIONS)]
+    lines += ["        affine_modes,", "    )", ""]
+    return "\n".join(lines)
+
+
+def model_addresses(model: tuple) -> np.ndarray:
+    """The addresses the engine takes for a model tuple's functions: per function (in the contract's
+    order) its C wrapper and its numba entry point, from numba's own helpers for first-class functions.
+    They stay valid while the functions live (:class:`~saltation.integrate.Flow` keeps them)."""
+    from numba.experimental.function_type import _get_jit_address, _get_wrapper_address
+
+    rows = [
+        (_get_wrapper_address(f, sig), _get_jit_address(f, sig))
+        for f, sig in zip(model[: len(MODEL_FUNCTIONS)], MODEL_SIGNATURES.values())
+    ]
+    addresses = np.array(rows, dtype=np.int64)
+    if (addresses <= 0).any():
+        raise RuntimeError("a model function has no compiled entry point for its signature in the contract")
+    return addresses
 
 
 def model_source(system: PiecewiseSystem) -> str:
@@ -394,7 +429,8 @@ def _digest(*texts: str) -> str:
 
 def _engine_path(n_state: int) -> Path:
     """Where the engine of a dimension lives: named by a hash of the contract and the template."""
-    digest = _digest(_CONTRACT.read_text(), _TEMPLATE.read_text(), inspect.getsource(engine_source))
+    digest = _digest(_CONTRACT.read_text(), _TEMPLATE.read_text(), inspect.getsource(engine_source),
+                     inspect.getsource(_model_from_addresses_source))
     return cache_directory() / f"engine_n{n_state}_{digest}.py"
 
 

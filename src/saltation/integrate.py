@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import _contract as kc
-from .codegen import load_engine, load_model_functions, transition_table
+from .codegen import load_engine, load_model_functions, model_addresses, transition_table
 from .errors import (
     ChatteringError,
     IntegrationError,
@@ -341,6 +341,8 @@ class Flow:
         self.tolerances = tolerances or Tolerances()
         self._model = load_model_functions(system)  # the engine's first argument (see saltation._contract)
         self._engine = load_engine(system.n)
+        self._addresses = model_addresses(self._model)  # how the engine takes the model (see the engine)
+        self._affine_modes = self._model[kc.AFFINE_MODES]
         self._table = transition_table(system)
         self._n_surfaces = len(system.surface_names)
         self._identity = np.eye(system.n)  # read-only inputs of the kernel
@@ -482,7 +484,7 @@ class Flow:
             for k in disabled:
                 table[int(k), 0] = -1  # a source mode that is never current
         out = self._engine.integrate_kernel(
-            self._model, t0, t1, x0, int(m0), p, bool(variational), int(parameter), *steps, 0.0, *limits,
+            self._addresses, self._affine_modes, t0, t1, x0, int(m0), p, bool(variational), int(parameter), *steps, 0.0, *limits,
             table, self._n_surfaces, bool(dense), phi, self._zeros, *flags,
         )
         return self._unpack(out, x0, float(t0), m0, variational, parameter, dense)
@@ -508,7 +510,7 @@ class Flow:
         x_ref, f_ref = (_c_array(a) for a in phase) if phase is not None else (self._zeros, self._zeros)
         z0 = _c_array(z0)
         code, it, packed, *out = self._engine.correct_periodic(
-            self._model, z0, self._zeros if normal is None else _c_array(normal), float(t0), float(sign),
+            self._addresses, self._affine_modes, z0, self._zeros if normal is None else _c_array(normal), float(t0), float(sign),
             bool(phase is not None), int(lam_index), float(span), _c_array(p), x_ref, f_ref,
             float(tol), int(max_iter), float(max_correction), bool(damped), *steps, *limits, self._table,
             self._n_surfaces, self._identity, self._zeros, *flags,

@@ -448,6 +448,12 @@ class PiecewiseSystem(NamedParts):
         state.pop("_period_functions", None)
         return state
 
+    def _repr_markdown_(self) -> str:
+        """A summary for Jupyter (:mod:`saltation.summary`)."""
+        from .summary import system_summary
+
+        return system_summary(self)
+
     def __repr__(self) -> str:
         kind = "autonomous" if self.is_autonomous else f"forced, period {self.period_expr}"
         return (

@@ -164,6 +164,12 @@ class PeriodicOrbit:
     def events(self) -> list[tuple[str, float]]:
         return [(e.surface, e.t) for e in self.trajectory.events]
 
+    def _repr_markdown_(self) -> str:
+        """A summary for Jupyter (:mod:`saltation.summary`)."""
+        from .summary import orbit_summary
+
+        return orbit_summary(self)
+
 
 def newton(
     fun, u0: np.ndarray, *, tol: float = 1e-10, max_iter: int = 30, what: str = "Newton", damped: bool = False

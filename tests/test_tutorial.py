@@ -1,0 +1,60 @@
+"""The tutorial notebook (examples/tutorial.ipynb) runs from top to bottom, and its numbers are right."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.optimize
+
+NOTEBOOK = Path(__file__).parents[1] / "examples" / "tutorial.ipynb"
+
+
+@pytest.fixture(scope="module")
+def tutorial() -> dict:
+    """The notebook's code cells executed in order in one namespace, as Jupyter would (figures off screen)."""
+    matplotlib.use("Agg")
+    cells = json.loads(NOTEBOOK.read_text())["cells"]
+    namespace: dict = {}
+    for k, cell in enumerate(cells):
+        if cell["cell_type"] == "code":
+            exec(compile("".join(cell["source"]), f"{NOTEBOOK.name}, cell {k}", "exec"), namespace)  # noqa: S102
+    return namespace
+
+
+def test_every_summary_the_notebook_shows_renders(tutorial):
+    for name in ("system", "orbit", "branch", "corner"):
+        assert tutorial[name]._repr_markdown_().startswith("**")
+
+
+def test_the_monodromy_check_passes(tutorial):
+    """Central differences of the period map against the monodromy matrix: both modes are affine, so
+    the flow is exact to rounding and the differences are good to about 1e-9 (rounding over the step
+    1e-6); 1e-6 leaves room for the events' locations."""
+    assert np.abs(tutorial["differences"] - tutorial["orbit"].monodromy).max() < 1e-6
+
+
+def test_the_corner_is_where_the_free_orbit_reaches_the_support(tutorial):
+    """The first special point: where the free, linear response first has amplitude x_c, from its
+    closed form f0 / |k - m w^2 + i c w| = x_c (to the accuracy the point states); and on the free
+    side its multipliers are those of expm(A T) of the free mode at the located parameter (to the
+    accuracy the point states for its multipliers)."""
+    pars = tutorial["system"].defaults
+    m, c, k, x_c, f0 = (pars[name] for name in ("m", "c", "k", "x_c", "f0"))
+
+    def amplitude_gap(w):
+        return f0 / np.hypot(k - m * w**2, c * w) - x_c
+
+    w_a = scipy.optimize.brentq(amplitude_gap, 0.6, 1.0, xtol=1e-15)
+    corner = tutorial["corner"]
+    assert corner.kind.is_nonsmooth
+    assert abs(corner.parameter - w_a) <= corner.accuracy + 1e-9
+    A = np.array([[0.0, 1.0], [-k / m, -c / m]])
+    free = np.sort_complex(np.linalg.eigvals(scipy.linalg.expm(A * 2 * np.pi / corner.parameter)))
+    sides = [np.sort_complex(np.asarray(mu)) for mu in (corner.multipliers_minus, corner.multipliers_plus)]
+    assert np.isfinite(corner.multipliers_accuracy)
+    assert min(np.abs(side - free).max() for side in sides) <= corner.multipliers_accuracy
