@@ -10,7 +10,12 @@ import numpy as np
 import pytest
 
 from saltation import Crossing, Flow, Mode, PiecewiseSystem, Tolerances, Transition
-from saltation.codegen import SPECIALIZED_DIMENSIONS, engine_dimension, engine_source, model_source
+from saltation.codegen import (
+    SPECIALIZED_DIMENSIONS,
+    engine_dimension,
+    engine_source,
+    model_source,
+)
 from saltation.models import block_on_belt, trilinear
 from saltation.paper import block_on_belt_diagram, trilinear_diagram
 

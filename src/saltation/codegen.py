@@ -65,13 +65,13 @@ class _Printer(PythonCodePrinter):
         super().__init__({"standard": "python3", "fully_qualified_modules": True})
         self._names = names
 
-    def _print_Symbol(self, expr):  # noqa: N802 (sympy printer protocol)
+    def _print_Symbol(self, expr):
         return self._names.get(expr, super()._print_Symbol(expr))
 
-    def _print_Float(self, expr):  # noqa: N802
+    def _print_Float(self, expr):
         return repr(float(expr))
 
-    def _print_Integer(self, expr):  # noqa: N802
+    def _print_Integer(self, expr):
         return repr(float(expr))
 
 
@@ -393,8 +393,7 @@ def _model_from_addresses_source() -> str:
         "",
         "@njit(cache=True)",
         "def model_from_addresses(a, affine_modes):",
-        '    """The model tuple (``MODEL_TYPE``) from the addresses of its functions, two per row (its'
-        ' function-type values are built by the template\'s ``_function_at``)."""',
+        '    """The model tuple (``MODEL_TYPE``) from the addresses of its functions, two per row."""',
         "    return (",
     ]
     lines += [f"        _function_at(_FUNCTION_TYPE_{k}, a[{k}, 0], a[{k}, 1]),  # {name}" for k, name in enumerate(MODEL_FUNCTIONS)]

@@ -16,7 +16,12 @@ from typing import NamedTuple
 import numpy as np
 
 from . import _contract as kc
-from .codegen import load_engine, load_model_functions, model_addresses, transition_table
+from .codegen import (
+    load_engine,
+    load_model_functions,
+    model_addresses,
+    transition_table,
+)
 from .errors import (
     ChatteringError,
     IntegrationError,

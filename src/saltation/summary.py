@@ -71,8 +71,8 @@ def orbit_summary(orbit) -> str:
         ("multipliers", f"{_multipliers(orbit.multipliers)} ({stable})"),
         ("events per period", _sequence([s for s, _ in orbit.events])),
         ("initial state", ", ".join(f"{v:.10g}" for v in orbit.state0)),
-        ("Newton", f"{'converged' if orbit.converged else 'not converged'} in {orbit.iterations} iterations, "
-                   f"residual {orbit.residual_norm:.2e}"),
+        ("Newton", (f"{'converged' if orbit.converged else 'not converged'} in {orbit.iterations} iterations, "
+                    f"residual {orbit.residual_norm:.2e}")),
     ]
     return f"**periodic orbit** of {orbit.system_name} ({direction})\n\n" + _table(rows)
 
