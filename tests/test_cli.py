@@ -234,14 +234,14 @@ def test_help_explains_every_option(capsys):
     assert code == 0
     for option in ("MODEL", "--set", "--x0", "--t0", "--period", "--backward", "--json"):
         assert option in out
-    for name in cli.MODELS:
+    for name in cli.SHIPPED:
         assert name in out
     for pname in trilinear().parameter_names:
         assert f"{pname}=" in out
 
 
 def test_registry_and_helpers():
-    assert set(cli.MODELS) >= {"trilinear", "block_on_belt"}
+    assert set(cli.SHIPPED) >= {"trilinear", "block_on_belt"}
     assert cli.multipliers_json([0.5 + 0.25j, complex(np.inf, 0)]) == [[0.5, 0.25], "inf"]
     assert cli._join_negative_values(["orbit", "m", "--x0", "-1,0", "--json"]) == ["orbit", "m", "--x0=-1,0", "--json"]
     assert cli._join_negative_values(["--x0", "--json"]) == ["--x0", "--json"]
@@ -430,3 +430,21 @@ def test_model_file_that_fails_or_is_missing(tmp_path, capsys):
     assert code == 2 and str(broken) in err and "RuntimeError: no such support" in err
     code, _, err = _run(capsys, "orbit", f"{tmp_path / 'absent.py'}:model")
     assert code == 2 and "absent.py" in err and "does not exist" in err
+
+
+def test_each_shipped_model_declares_itself_in_its_own_file():
+    """The command line keeps no per-model tables: each model file ends with its ShippedModel, whose
+    name is the model's, and whose transient start (if any) is a state of the model."""
+    import importlib
+
+    from saltation.models import SHIPPED
+
+    for name, shipped in SHIPPED.items():
+        module = importlib.import_module(f"saltation.models.{name}")
+        assert module.SHIPPED is shipped
+        system = shipped.factory()
+        assert system.name == name and shipped.summary
+        if shipped.start is not None:
+            for backward in (False, True):
+                assert len(shipped.start(system.defaults, backward)) == system.n
+    assert "two_mass_stops" in SHIPPED  # the newest gallery model is on the command line too

@@ -2,7 +2,7 @@
 
 One function per subcommand (``cmd_<name>``), each registered by an
 ``_add_<name>_parser`` function in :data:`SUBCOMMANDS`; shipped models are
-looked up in :data:`MODELS`.  Every failure of a subcommand becomes one line
+looked up in :data:`saltation.models.SHIPPED`.  Every failure of a subcommand becomes one line
 ``saltation: error: ...`` on stderr and a non-zero exit status:
 
 * 0: success;
@@ -25,68 +25,14 @@ import numpy as np
 
 from .errors import SaltationError
 from .model import PiecewiseSystem
-from .models import (
-    block_on_belt,
-    bouncing_ball,
-    buck_converter,
-    friction_oscillator,
-    impact_oscillator,
-    relay_feedback,
-    trilinear,
-)
+from .models import SHIPPED
 
 PROG = "saltation"
-
-#: Models shipped with saltation, by the name the command line uses: ``{name: factory}``.
-#: A factory takes keyword overrides of the default parameter values.
-MODELS: dict[str, Callable[..., PiecewiseSystem]] = {
-    "trilinear": trilinear,
-    "block_on_belt": block_on_belt,
-    "impact_oscillator": impact_oscillator,
-    "bouncing_ball": bouncing_ball,
-    "friction_oscillator": friction_oscillator,
-    "relay_feedback": relay_feedback,
-    "buck_converter": buck_converter,
-}
-
-#: One-line summaries of the shipped models (for --help).
-MODEL_SUMMARIES: dict[str, str] = {
-    "trilinear": "forced mass on a spring and damper between two compliant supports (forcing f0 sin(omega t))",
-    "block_on_belt": "stick-slip oscillator: a mass on a spring and damper riding a belt at v_dr",
-    "friction_oscillator": "forced oscillator with Coulomb friction F on a belt moving at v_b (a Filippov system: sticking is sliding)",
-    "bouncing_ball": "a ball bouncing on a table that vibrates as A sin(omega t) (gravity g, restitution e)",
-    "impact_oscillator": "forced damped oscillator x'' + 2 zeta x' + x = cos(omega t) against a rigid stop at x = s (restitution r)",
-    "relay_feedback": "third-order linear plant under an ideal relay u = -sgn(x1) (autonomous; sliding on x1 = 0)",
-    "buck_converter": "DC-DC buck converter under ramp (PWM) control, time in ramp periods (autonomous, phase state tau)",
-}
 
 #: Number of forcing periods of the transient of a forced model (when --x0 is not given).
 TRANSIENT_PERIODS = 50
 #: Length of the transient of an autonomous model without a better hint, in time units.
 TRANSIENT_TIME = 200.0
-
-
-def _block_on_belt_start(p: Mapping[str, float], backward: bool) -> list[float]:
-    if backward:
-        # just off the equilibrium [F_slip/k, 0]: in backward time the flow spirals out
-        # from it onto the unstable (infinitely unstable) limit cycle
-        return [p["F_slip"] / p["k"] + 0.1 * p["v_dr"] * math.sqrt(p["m"] / p["k"]), 0.0]
-    # sticking to the belt: the stick phase leads onto the stable stick-slip cycle
-    return [0.0, p["v_dr"]]
-
-
-#: Start of the transient, per model: ``(parameter values, backward) -> state`` (zeros otherwise).
-TRANSIENT_START: dict[str, Callable[[Mapping[str, float], bool], list[float]]] = {
-    "block_on_belt": _block_on_belt_start,
-    "relay_feedback": lambda p, backward: [0.1, 0.0, 0.0],  # off the surface (the origin slides)
-}
-
-#: Length of the transient of an autonomous model, per model: ``parameter values -> time``
-#: (forced models use :data:`TRANSIENT_PERIODS` forcing periods).
-TRANSIENT_LENGTH: dict[str, Callable[[Mapping[str, float]], float]] = {
-    # 50 periods of the undamped oscillator
-    "block_on_belt": lambda p: 50 * 2 * math.pi * math.sqrt(p["m"] / p["k"]),
-}
 
 
 class UsageError(SaltationError, ValueError):
@@ -121,7 +67,7 @@ class _Parser(argparse.ArgumentParser):
 # --------------------------------------------------------------------------------------------
 
 def model_names() -> str:
-    return ", ".join(MODELS)
+    return ", ".join(SHIPPED)
 
 
 MODEL_HELP = (
@@ -147,7 +93,7 @@ def build_model(spec: str) -> PiecewiseSystem:
     if sep and path.endswith(".py"):
         return load_model_file(Path(path), attr)
     try:
-        factory = MODELS[spec]
+        factory = SHIPPED[spec].factory
     except KeyError:
         raise UsageError(
             f"unknown model {spec!r}; shipped models are {model_names()}, or give a model file as PATH.py:NAME"
@@ -380,18 +326,18 @@ def transient(flow, name: str, p: np.ndarray, state: np.ndarray | None, *, t0: f
     """Simulate a transient in the direction of integration; returns (trajectory, start state).
 
     Forced models run :data:`TRANSIENT_PERIODS` forcing periods (so the end
-    state has the phase ``t0``); autonomous ones :data:`TRANSIENT_LENGTH` (or
-    :data:`TRANSIENT_TIME`).  A run that would end on a sliding motion is
+    state has the phase ``t0``); autonomous ones the shipped model's
+    ``transient_length`` (or :data:`TRANSIENT_TIME`).  A run that would end on a sliding motion is
     extended until it does not.
     """
     system = flow.system
     values = dict(zip(system.parameter_names, map(float, p)))
     if state is None:
-        start = TRANSIENT_START.get(name)
+        start = SHIPPED[name].start if name in SHIPPED else None
         state = np.array(start(values, backward) if start else np.zeros(system.n), dtype=float)
     sign = -1.0 if backward else 1.0
     if system.is_autonomous:
-        length_fn = TRANSIENT_LENGTH.get(name)
+        length_fn = SHIPPED[name].transient_length if name in SHIPPED else None
         length = length_fn(values) if length_fn else TRANSIENT_TIME
         extra = 0.01 * length
     else:
@@ -541,10 +487,10 @@ def _paragraph(text: str, indent: str = "") -> str:
 
 def _orbit_epilog() -> str:
     parts = ["shipped models (states; parameters with their default values):"]
-    for name, factory in MODELS.items():
-        system = factory()
+    for name, shipped in SHIPPED.items():
+        system = shipped.factory()
         kind = "autonomous" if system.is_autonomous else f"forced, period {system.period_expr}"
-        parts.append(_paragraph(f"{name}: {MODEL_SUMMARIES.get(name, '')}; {kind}", "  "))
+        parts.append(_paragraph(f"{name}: {shipped.summary}; {kind}", "  "))
         parts.append(_paragraph(
             f"states {', '.join(system.state_names)}; "
             + " ".join(f"{k}={_fmt(v)}" for k, v in system.defaults.items()), "    "))
@@ -948,7 +894,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise UsageError("--periods must be positive and --transient non-negative")
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
     if x0 is None and system.is_autonomous:
-        start = TRANSIENT_START.get(args.model)
+        start = SHIPPED[args.model].start if args.model in SHIPPED else None
         values = dict(system.defaults) | overrides
         x0 = np.array(start(values, False)) if start else None
     two = [args.param2, args.start2, args.stop2, args.num2]

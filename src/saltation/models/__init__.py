@@ -1,4 +1,10 @@
-"""Models shipped with saltation, each a short file that reads like its source."""
+"""Models shipped with saltation, each a short file that reads like its source.
+
+:data:`SHIPPED` holds those the command line names, with what it needs to know of
+each (a summary, where a transient starts), declared in each model's own file.
+"""
+
+from importlib import import_module
 
 from .block_on_belt import WRegion, block_on_belt
 from .bouncing_ball import bouncing_ball
@@ -7,10 +13,24 @@ from .chain import chain
 from .friction_oscillator import friction_oscillator
 from .impact_oscillator import impact_oscillator
 from .relay_feedback import relay_feedback
+from .shipped import ShippedModel
 from .trilinear import trilinear
 from .two_mass_stops import two_mass_stops
 
+#: The models the command line names, in the order of its help: ``{name: ShippedModel}``.
+#: (Each module's own SHIPPED: the modules are looked up by name, since each exports a function of its
+#: own name that hides the module as an attribute of this package.)
+SHIPPED: dict[str, ShippedModel] = {
+    m.SHIPPED.name: m.SHIPPED
+    for m in (
+        import_module(f"{__name__}.{name}")
+        for name in ("trilinear", "block_on_belt", "impact_oscillator", "bouncing_ball", "friction_oscillator",
+                     "relay_feedback", "buck_converter", "two_mass_stops")
+    )
+}
+
 __all__ = [
+    "SHIPPED", "ShippedModel",
     "WRegion", "block_on_belt", "bouncing_ball", "buck_converter", "chain", "friction_oscillator",
     "impact_oscillator", "relay_feedback", "trilinear", "two_mass_stops",
 ]

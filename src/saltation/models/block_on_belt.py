@@ -17,11 +17,13 @@ of the stick band (an attraction sliding mode in backward time).
 
 from __future__ import annotations
 
-import functools
-
 import enum
+import functools
+import math
+from collections.abc import Mapping
 
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
+from .shipped import ShippedModel
 
 RISING, FALLING = Crossing.RISING, Crossing.FALLING
 
@@ -117,3 +119,26 @@ def block_on_belt(w_region: WRegion = WRegion.SLIP, **overrides: float) -> Piece
         surfaces=surfaces,
         transitions=transitions,
     )
+
+
+def _transient_start(p: Mapping[str, float], backward: bool) -> list[float]:
+    """Where a transient starts: sticking to the belt (it leads onto the stable stick-slip cycle), or in
+    backward time just off the equilibrium ``[F_slip/k, 0]``, from which the flow spirals out onto the
+    unstable (infinitely unstable) limit cycle."""
+    if backward:
+        return [p["F_slip"] / p["k"] + 0.1 * p["v_dr"] * math.sqrt(p["m"] / p["k"]), 0.0]
+    return [0.0, p["v_dr"]]
+
+
+def _transient_length(p: Mapping[str, float]) -> float:
+    """50 periods of the undamped oscillator."""
+    return 50 * 2 * math.pi * math.sqrt(p["m"] / p["k"])
+
+
+SHIPPED = ShippedModel(
+    "block_on_belt",
+    block_on_belt,
+    "stick-slip oscillator: a mass on a spring and damper riding a belt at v_dr",
+    start=_transient_start,
+    transient_length=_transient_length,
+)

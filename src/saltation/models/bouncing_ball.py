@@ -18,6 +18,7 @@ from __future__ import annotations
 import functools
 
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
+from .shipped import ShippedModel
 
 DEFAULTS = {"g": 9.81, "e": 0.5, "A": 0.3, "omega": 6.283185307179586}
 
@@ -36,3 +37,10 @@ def bouncing_ball(**overrides: float) -> PiecewiseSystem:
         ],
         period="2*pi/omega",
     )
+
+
+SHIPPED = ShippedModel(
+    "bouncing_ball",
+    bouncing_ball,
+    "a ball bouncing on a table that vibrates as A sin(omega t) (gravity g, restitution e)",
+)

@@ -48,6 +48,7 @@ from __future__ import annotations
 import functools
 
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
+from .shipped import ShippedModel
 
 DEFAULTS = {
     "R": 22.0,
@@ -91,3 +92,10 @@ def buck_converter(**overrides: float) -> PiecewiseSystem:
             Transition("off", "clock", Crossing.RISING, "on", reset=reset, guard=[f"{AFTER_RESET} < 0"]),
         ],
     )
+
+
+SHIPPED = ShippedModel(
+    "buck_converter",
+    buck_converter,
+    "DC-DC buck converter under ramp (PWM) control, time in ramp periods (autonomous, phase state tau)",
+)

@@ -17,6 +17,7 @@ from __future__ import annotations
 import functools
 
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
+from .shipped import ShippedModel
 
 DEFAULTS = {"zeta": 0.1, "F": 0.5, "a": 1.0, "omega": 0.8, "v_b": 2.0}
 
@@ -40,3 +41,10 @@ def friction_oscillator(**overrides: float) -> PiecewiseSystem:
         ],
         period="2*pi/omega",
     )
+
+
+SHIPPED = ShippedModel(
+    "friction_oscillator",
+    friction_oscillator,
+    "forced oscillator with Coulomb friction F on a belt moving at v_b (a Filippov system: sticking is sliding)",
+)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import functools
 
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
+from .shipped import ShippedModel
 
 DEFAULTS = {"zeta": 0.05, "omega": 0.8, "r": 0.8, "s": 2.0}
 
@@ -32,3 +33,10 @@ def impact_oscillator(**overrides: float) -> PiecewiseSystem:
         transitions=[Transition("free", "stop", Crossing.RISING, "free", reset=["x", "-r*v"])],
         period="2*pi/omega",
     )
+
+
+SHIPPED = ShippedModel(
+    "impact_oscillator",
+    impact_oscillator,
+    "forced damped oscillator x'' + 2 zeta x' + x = cos(omega t) against a rigid stop at x = s (restitution r)",
+)

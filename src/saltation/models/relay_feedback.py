@@ -39,8 +39,10 @@ of the symmetric orbit; at ``sigma = 0.03`` the period is ``6.4494``).
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping
 
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
+from .shipped import ShippedModel
 
 DEFAULTS = {"zeta": 0.05, "w": 1.0, "lam": 0.05, "sigma": 0.5}
 
@@ -71,3 +73,16 @@ def relay_feedback(**overrides: float) -> PiecewiseSystem:
             Transition("u_minus", "y", Crossing.FALLING, "u_plus"),
         ],
     )
+
+
+def _transient_start(p: Mapping[str, float], backward: bool) -> list[float]:
+    """Off the switching surface (the origin slides)."""
+    return [0.1, 0.0, 0.0]
+
+
+SHIPPED = ShippedModel(
+    "relay_feedback",
+    relay_feedback,
+    "third-order linear plant under an ideal relay u = -sgn(x1) (autonomous; sliding on x1 = 0)",
+    start=_transient_start,
+)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import functools
 
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
+from .shipped import ShippedModel
 
 RISING, FALLING = Crossing.RISING, Crossing.FALLING
 
@@ -56,3 +57,10 @@ def trilinear(**overrides: float) -> PiecewiseSystem:
         ],
         period="2*pi/omega",
     )
+
+
+SHIPPED = ShippedModel(
+    "trilinear",
+    trilinear,
+    "forced mass on a spring and damper between two compliant supports (forcing f0 sin(omega t))",
+)

@@ -45,6 +45,7 @@ from __future__ import annotations
 import functools
 
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
+from .shipped import ShippedModel
 
 RISING, FALLING = Crossing.RISING, Crossing.FALLING
 
@@ -104,3 +105,10 @@ def two_mass_stops(**overrides: float) -> PiecewiseSystem:
         transitions=transitions,
         period="2*pi/omega",
     )
+
+
+SHIPPED = ShippedModel(
+    "two_mass_stops",
+    two_mass_stops,
+    "two forced masses on springs, each against a compliant stop on its own side (forcing F cos(omega t) on mass 1)",
+)
