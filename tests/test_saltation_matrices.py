@@ -345,3 +345,19 @@ def test_unstable_cycle_sliding_start_is_singular(unstable_cycle):
     expected = np.array([[1.0, alpha * eta_value / s_a], [0.0, 0.0]])
     np.testing.assert_allclose(e.saltation, expected, rtol=1e-12, atol=1e-14)
     assert abs(np.linalg.det(e.saltation)) < 1e-14
+
+
+@pytest.mark.parametrize("make", [trilinear, block_on_belt])
+def test_the_fast_closed_form_is_the_same_function(make):
+    """``simplify=False`` (cancelled fractions, what corners evaluate) and sympy's simplify give the same
+    saltation matrices, on the surface, at random states and times (eliminating x on the surface)."""
+    system = make()
+    rng = np.random.default_rng(5)
+    p = [system.defaults[name] for name in system.parameter_names]
+    for k in range(len(system.transitions)):
+        slow = sp.lambdify((system.t, list(system.x), list(system.p)), _library_saltation(system, k))
+        fast = sp.lambdify((system.t, list(system.x), list(system.p)), system.saltation_matrix(k, simplify=False))
+        for _ in range(4):
+            t, x = rng.uniform(0, 5), rng.uniform(-2, 2, system.n)
+            a, b = np.array(slow(t, list(x), p), float), np.array(fast(t, list(x), p), float)
+            np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12)

@@ -33,7 +33,7 @@ from .diagram import BifurcationDiagram, follow_through_discontinuous_fold
 from .errors import SaltationError
 from .floquet import multipliers_from_monodromy
 from .integrate import Flow
-from .models import block_on_belt, trilinear
+from .models import SHIPPED, block_on_belt, trilinear
 from .regularize import regularize
 from .shooting import EquilibriumProblem, ShootingProblem, find_periodic_orbit
 
@@ -179,8 +179,10 @@ def block_on_belt_diagram(settings: PaperSettings = PaperSettings(), progress: P
 def stable_stick_slip_cycle(flow: Flow, v_dr: float):
     """The stable stick-slip limit cycle at belt velocity ``v_dr`` (transient, then shooting)."""
     p = flow.parameters({"v_dr": v_dr})
-    # every orbit through the stick band lies on the stable cycle after its stick phase
-    transient = flow.run([0.0, v_dr], 0.0, 40.0, p)
+    # every orbit through the stick band lies on the stable cycle after its stick phase: from the start
+    # the command line uses too (sticking to the belt)
+    values = dict(zip(flow.system.parameter_names, p))
+    transient = flow.run(SHIPPED["block_on_belt"].start(values, False), 0.0, 40.0, p)
     period = _return_time(transient)
     return find_periodic_orbit(flow, transient.x1, parameters={"v_dr": v_dr}, period=period)
 
