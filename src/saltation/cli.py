@@ -738,6 +738,7 @@ def cmd_locus(args: argparse.Namespace) -> int:
     from . import plotting
     from .branch import SpecialPointKind
     from .continuation import Continuation, ContinuationSettings
+    from .io import write_json
     from .loci import follow_locus
 
     try:
@@ -781,7 +782,7 @@ def cmd_locus(args: argparse.Namespace) -> int:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         stem = out / f"{system.name}_{kind.value}_{args.param}_{args.param2}_locus"
-        stem.with_suffix(".json").write_text(json.dumps(record, indent=1))
+        write_json(record, stem.with_suffix(".json"))
         plotting.save_figure(plotting.plot_loci(loci, title=f"{system.name}: {kind.value}"), stem)
     if args.json:
         print(json.dumps(record))

@@ -305,12 +305,18 @@ def branch_from_dict(d: dict[str, Any], *, points: list[BranchPoint] | None = No
     )
 
 
-def _write_json(obj: Any, path: PathType) -> Path:
+def write_json(obj: Any, path: PathType, *, allow_nan: bool = True) -> Path:
+    """Write ``obj`` as indented JSON with a final newline, creating the folder; every JSON file the
+    library writes goes through here.  ``allow_nan`` False refuses NaN and infinities (the branch
+    formats encode them as strings first)."""
     path = Path(path)
-    with path.open("w", encoding="utf-8") as fh:
-        json.dump(obj, fh, indent=2, allow_nan=False)
-        fh.write("\n")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(obj, indent=1, allow_nan=allow_nan) + "\n", encoding="utf-8")
     return path
+
+
+def _write_json(obj: Any, path: PathType) -> Path:
+    return write_json(obj, path, allow_nan=False)
 
 
 def _read_json(path: PathType) -> Any:

@@ -21,7 +21,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import json
 
 import numpy as np
 
@@ -352,9 +351,7 @@ def write(results: PaperResults, out: Path) -> list[Path]:
                      "the infinitely unstable branch is found by backward shooting of the discontinuous model",
                      fontsize=8)
         written += plotting.save_figure(fig8, out / "fig8_block_on_belt_smoothed", dpi=150)
-        path = out / "smoothing_table.json"
-        path.write_text(json.dumps([r.record() for r in results.smoothing], indent=1))
-        written.append(path)
+        written.append(io.write_json([r.record() for r in results.smoothing], out / "smoothing_table.json"))
     return written
 
 

@@ -45,6 +45,7 @@ from matplotlib.figure import Figure
 
 from .errors import ModelError, SaltationError
 from .integrate import Flow, Tolerances, Trajectory, dense_evaluate
+from .io import write_json
 from .model import PiecewiseSystem
 
 __all__ = ["PeriodMap", "SweepResult", "attractor_period", "period_map", "sweep"]
@@ -169,8 +170,7 @@ class SweepResult:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         if path.suffix.lower() == ".json":
-            path.write_text(json.dumps(self.to_dict(), indent=1) + "\n")
-            return path
+            return write_json(self.to_dict(), path)
         with path.open("w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow([self.parameter, *self.state_names])
@@ -411,10 +411,7 @@ class PeriodMap:
 
     def save(self, path: str | PathLike[str]) -> Path:
         """Write the map as JSON."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(self.to_dict(), indent=1) + "\n")
-        return path
+        return write_json(self.to_dict(), path)
 
     def plot(self, ax: Axes | None = None) -> Figure:
         """The map: one colour per period (1 ... max_period), grey for none found, white for failures."""
