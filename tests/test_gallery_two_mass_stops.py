@@ -611,10 +611,6 @@ def test_lower_fold_against_independent_computation(stop_2_branch):
     np.testing.assert_allclose(np.sort_complex(sp.multipliers), np.sort_complex(mu_ref), rtol=0, atol=1e-7)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "when one continuation step passes both a change of the event sequence and a smooth fold, only the "
-    "non-smooth point is recorded (SpecialPointDetector.check returns before the test functions): here the "
-    "upper fold, 9e-5 beyond the onset of contact with stop 2, is missed with ds_max = 0.1"))
 def test_upper_fold_is_recorded(stop_2_branch):
     upper, _ = folds()
     found = [sp for sp in stop_2_branch.special_points if sp.kind is SpecialPointKind.FOLD]

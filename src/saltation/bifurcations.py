@@ -155,8 +155,23 @@ class SpecialPointDetector:
 
     # -- detection ------------------------------------------------------------------------
     def check(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
+        """The special points between two consecutive branch points, in branch order.
+
+        Where the event sequence changes, the non-smooth point is located first; the smooth test
+        functions are then evaluated on each smooth piece of the step (from ``a`` to the located
+        point's near side, from its far side to ``b``), so that a fold or a multiplier crossing in the
+        same step as the change is found too.
+        """
         if canonical_events(a.summary.event_ids) != canonical_events(b.summary.event_ids):
-            return [self.locate_nonsmooth(a, b, index)]
+            lo, hi = self._bisect_event_change(a, b)
+            corner = self.nonsmooth_point(lo, hi, index, far=(a, b))
+            before = self._smooth_points(a, lo, index) if lo is not a else []
+            after = self._smooth_points(hi, b, index) if hi is not b else []
+            return [*before, corner, *after]
+        return self._smooth_points(a, b, index)
+
+    def _smooth_points(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
+        """Smooth special points between two solutions with the same event sequence (test functions)."""
         found = []
         secant = _unit(b.z - a.z)
         # a point's test values are kept for the next pair: both secants point along the branch,
@@ -234,6 +249,12 @@ class SpecialPointDetector:
 
     def locate_nonsmooth(self, a: Solution, b: Solution, index: int) -> SpecialPoint:
         """Bisection along the secant on the event sequence, then set-valued multipliers."""
+        lo, hi = self._bisect_event_change(a, b)
+        return self.nonsmooth_point(lo, hi, index, far=(a, b))
+
+    def _bisect_event_change(self, a: Solution, b: Solution) -> tuple[Solution, Solution]:
+        """The two solutions, with ``a``'s event sequence and without it, that bracket where it changes
+        (bisection along the secant, down to the location tolerance)."""
         seq_a = canonical_events(a.summary.event_ids)
         lo, hi = a, b
         sa, sb = 0.0, 1.0
@@ -249,7 +270,7 @@ class SpecialPointDetector:
                 sa, lo = sm, mid
             else:
                 sb, hi = sm, mid
-        return self.nonsmooth_point(lo, hi, index, far=(a, b))
+        return lo, hi
 
     def nonsmooth_point(
         self, lo: Solution, hi: Solution, index: int, note: str = "", *, far: tuple[Solution, Solution] | None = None
