@@ -97,3 +97,17 @@ def test_special_points_equal_those_of_the_per_model_kernels(figure):
         assert sp.parameter == pytest.approx(r["parameter"], abs=1e-12)
         got = [] if sp.multipliers is None else [[z.real, z.imag] for z in sp.multipliers]
         np.testing.assert_allclose(got, r["multipliers"], rtol=0, atol=1e-12)
+
+
+def test_a_flow_pickles_as_its_model_and_tolerances(trilinear_flow):
+    """A flow sent to another process (a worker, a Dask task) carries its model, not the addresses of
+    this process's compiled functions; the copy integrates the same trajectory, to the bit."""
+    import pickle
+
+    copy = pickle.loads(pickle.dumps(trilinear_flow))
+    assert copy.system.fingerprint == trilinear_flow.system.fingerprint and copy.tolerances == trilinear_flow.tolerances
+    p = trilinear_flow.parameters({"omega": 1.3})
+    a = trilinear_flow.run([1.5, 0.3], 0.0, 6.0, p, variational=True)
+    b = copy.run([1.5, 0.3], 0.0, 6.0, p, variational=True)
+    np.testing.assert_array_equal(a.x1, b.x1)
+    np.testing.assert_array_equal(a.monodromy, b.monodromy)

@@ -354,6 +354,11 @@ class Flow:
         self._offsets = kc.result_offsets(system.n)
         self._zeros = np.zeros(system.n)
 
+    def __reduce__(self):
+        # a flow travels as its model and tolerances (to a worker process, a Dask task): the compiled
+        # functions and their addresses belong to one process, and the receiver loads its own
+        return (Flow, (self.system, self.tolerances))
+
     def parameters(self, overrides: Mapping[str, float] | np.ndarray | None = None) -> np.ndarray:
         """Parameter vector from a mapping of overrides (or an array passed through)."""
         if isinstance(overrides, np.ndarray):
