@@ -177,3 +177,20 @@ def test_compiled_system_validation():
     with pytest.raises(ModelError, match="typo_field"):
         CompiledSystem("x", ref.state_names, ref.defaults, ref.mode_names, ref.surface_names, [],
                        base | {"indicator_grad": indicator_grad, "typo_field": vector_field})
+
+
+def test_a_callable_that_does_not_fit_its_signature_is_named():
+    """Each callable is compiled with its signature from the contract when the flow is built; one that
+    does not fit (here an indicator without the parameter argument) is a ModelError naming it."""
+    ref = trilinear()
+
+    def bad_indicator(surface, t, x):
+        return x[0]
+
+    system = CompiledSystem(
+        "test_bad_indicator", ref.state_names, ref.defaults, ref.mode_names, ref.surface_names, [],
+        {"vector_field": vector_field, "vector_field_jac": vector_field_jac, "indicator": bad_indicator,
+         "indicator_grad": indicator_grad},
+    )
+    with pytest.raises(ModelError, match="indicator does not compile with the signature"):
+        Flow(system)
