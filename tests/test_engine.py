@@ -111,3 +111,25 @@ def test_a_flow_pickles_as_its_model_and_tolerances(trilinear_flow):
     b = copy.run([1.5, 0.3], 0.0, 6.0, p, variational=True)
     np.testing.assert_array_equal(a.x1, b.x1)
     np.testing.assert_array_equal(a.monodromy, b.monodromy)
+
+
+def test_integrations_in_threads_equal_serial_ones(trilinear_flow):
+    """The engine releases the GIL (its entry points are nogil) and shares no state between calls:
+    integrations and Newton solves run in threads give the serial results, to the bit."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from saltation import find_periodic_orbit
+
+    omegas = [0.8, 1.0, 1.2, 1.4]
+
+    def job(w):
+        p = trilinear_flow.parameters({"omega": w})
+        tr = trilinear_flow.run([1.5, 0.3], 0.0, 12.0, p, variational=True, parameter=0)
+        orbit = find_periodic_orbit(trilinear_flow, [0.5, 0.5], parameters={"omega": w})
+        return np.concatenate([tr.x1, tr.monodromy.ravel(), tr.parameter_sensitivity, orbit.state0])
+
+    serial = [job(w) for w in omegas]
+    with ThreadPoolExecutor(2) as pool:
+        threaded = list(pool.map(job, omegas))
+    for a, b in zip(serial, threaded):
+        np.testing.assert_array_equal(a, b)

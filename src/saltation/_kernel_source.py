@@ -1922,7 +1922,7 @@ def _correct_periodic(model, z_pred, normal, t0, sign, autonomous, lam_index, sp
 # would be typed and converted to function types on every call (some 200 microseconds).
 # --------------------------------------------------------------------------------------------------
 
-@njit(INTEGRATE_SIGNATURE, cache=True)
+@njit(INTEGRATE_SIGNATURE, cache=True, nogil=True)
 def integrate_kernel(addresses, affine_modes, t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step,
                      max_events, max_steps, tr_table, n_surfaces, record, phi0, psi0, control_variational, exact_affine):
     """Integrate from ``t0`` to ``t_end`` (either direction), event by event (see ``_integrate``)."""
@@ -1931,7 +1931,7 @@ def integrate_kernel(addresses, affine_modes, t0, t_end, x0, mode0, p, var, pidx
                       control_variational, exact_affine)
 
 
-@njit(CORRECT_SIGNATURE, cache=True)
+@njit(CORRECT_SIGNATURE, cache=True, nogil=True)
 def correct_periodic(addresses, affine_modes, z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref,
                      tol, max_newton, max_correction, damped, rtol, atol, max_step, max_events, max_steps, tr_table,
                      n_surfaces, phi0, psi0, control_variational, exact_affine):

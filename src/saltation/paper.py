@@ -18,6 +18,7 @@ data (JSON, CSV) and ``special_points.json``.
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -295,11 +296,17 @@ def smoothing_table(rows: list[SmoothingRow], unstable_amplitude: float | None =
 def compute(settings: PaperSettings = PaperSettings(), progress: Progress = None) -> PaperResults:
     """Compute the data of Figs. 3, 4, 6 and 7 and the smoothing study (compiling the models at once on a cold cache)."""
     compile_in_parallel([trilinear(), block_on_belt(), smoothed_block_on_belt()])
-    rows, smoothed = smoothing_study(settings, progress)
+    # the smoothing study runs beside the figures: the engine releases the GIL, and the two share nothing
+    with ThreadPoolExecutor(1) as pool:
+        smoothing = pool.submit(smoothing_study, settings, progress)
+        trilinear_branch = trilinear_diagram(settings, progress)
+        diagram = block_on_belt_diagram(settings, progress)
+        plane = phase_plane(settings.phase_plane_v_dr)
+        rows, smoothed = smoothing.result()
     return PaperResults(
-        trilinear_branch=trilinear_diagram(settings, progress),
-        block_on_belt=block_on_belt_diagram(settings, progress),
-        phase_plane=phase_plane(settings.phase_plane_v_dr),
+        trilinear_branch=trilinear_branch,
+        block_on_belt=diagram,
+        phase_plane=plane,
         smoothing=rows,
         smoothed_branches=smoothed,
     )
