@@ -26,6 +26,7 @@ import inspect
 import os
 import sys
 import tempfile
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -41,6 +42,7 @@ from .model import TIME, PiecewiseSystem
 _TEMPLATE = Path(__file__).with_name("_kernel_source.py")
 _CONTRACT = Path(__file__).with_name("_contract.py")
 _LOADED: dict[str, ModuleType] = {}
+_IMPORT_LOCK = threading.RLock()  # threads that build flows at once import each module once
 _LOADED_COMPILED: dict[str, tuple] = {}
 
 
@@ -461,8 +463,14 @@ def is_compiled(system: PiecewiseSystem) -> bool:
     return is_engine_compiled(system.n) and _cached(_model_path(system), "vector_field")
 
 
-def _import(path: Path, text: str | None, modname: str) -> ModuleType:
-    """Write ``text`` to ``path`` (atomically, if given and not there yet) and import it under ``modname``."""
+def _import(path: Path, text, modname: str) -> ModuleType:
+    """Write ``text`` (a string, or a function that makes it) to ``path`` (atomically, if not there yet)
+    and import it under ``modname``, once per process even from several threads."""
+    with _IMPORT_LOCK:
+        return _import_locked(path, text, modname)
+
+
+def _import_locked(path: Path, text, modname: str) -> ModuleType:
     if modname in _LOADED:
         return _LOADED[modname]
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -502,8 +510,9 @@ def load_model_functions(system: PiecewiseSystem) -> tuple:
     from .compiled import CompiledSystem, build_model_functions
 
     if isinstance(system, CompiledSystem):
-        if system.fingerprint not in _LOADED_COMPILED:
-            _LOADED_COMPILED[system.fingerprint] = build_model_functions(system)
+        with _IMPORT_LOCK:
+            if system.fingerprint not in _LOADED_COMPILED:
+                _LOADED_COMPILED[system.fingerprint] = build_model_functions(system)
         return _LOADED_COMPILED[system.fingerprint]
     path = _model_path(system)
     return _import(path, lambda: model_source(system), f"_saltation_model_{path.stem}").MODEL
