@@ -129,7 +129,7 @@ def bench_orbit(quick: bool) -> dict:
         dx = float(np.max(np.abs(x_sp - orb.state0)))
         dmu = float(np.max(np.abs(sorted_multipliers(mu_sp) - sorted_multipliers(orb.multipliers))))
         assert dx < 1e-8 and dmu < 1e-8, f"scipy baseline disagrees at omega={omega}: |dx|={dx:.2e}, |dmu|={dmu:.2e}"
-        assert [s for s, _ in ev_sp] == [s for s, _ in orb.events], (ev_sp, orb.events)
+        assert [s for s, _ in ev_sp] == [e.surface for e in orb.events], (ev_sp, orb.event_labels)
         t_s = median_time(lambda: find_periodic_orbit(flow, guess, parameters={"omega": omega}, tol=1e-10),
                           20 if quick else 200)
         t_b = median_time(lambda: base.shoot(guess, tol=1e-10), 3 if quick else 15)

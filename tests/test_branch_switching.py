@@ -107,7 +107,7 @@ def test_period_2_branch_against_independent_shooting(ball):
     checked = 0
     for point in doubled.points[3::5]:
         A = point.parameter
-        assert len(point.events) == 2 and np.isclose(point.period, 2 * T)
+        assert len(point.event_labels) == 2 and np.isclose(point.period, 2 * T)
         # the library's two impacts as the guess; the fixed point of P(P(u)) = u + (2T, 0) by fsolve
         traj = problem.flow.run(point.state, 0.0, 2 * T, problem.flow.parameters({"A": A}))
         first = traj.events[0]

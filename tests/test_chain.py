@@ -44,8 +44,8 @@ def test_one_mass_is_the_trilinear_system(trilinear_flow, chain1_flow, omega):
     np.testing.assert_allclose(orb.state0, ref.state0, rtol=0, atol=1e-10)
     np.testing.assert_allclose(orb.monodromy, ref.monodromy, rtol=0, atol=1e-9)
     np.testing.assert_allclose(np.sort_complex(orb.multipliers), np.sort_complex(ref.multipliers), rtol=0, atol=1e-9)
-    assert [s for s, _ in orb.events] == [s for s, _ in ref.events]
-    np.testing.assert_allclose([t for _, t in orb.events], [t for _, t in ref.events], rtol=0, atol=1e-10)
+    assert [e.surface for e in orb.events] == [e.surface for e in ref.events]
+    np.testing.assert_allclose([e.t for e in orb.events], [e.t for e in ref.events], rtol=0, atol=1e-10)
     assert (len(ref.events) == 4) == (omega == 1.0)
 
 
@@ -67,7 +67,7 @@ def test_two_mass_monodromy_against_finite_differences(chain2_flow):
     T = 2 * np.pi / omega
     guess = chain2_flow.run(np.zeros(4), 0.0, 200 * T, p).x1
     orb = find_periodic_orbit(chain2_flow, guess, parameters={"omega": omega})
-    assert [s for s, _ in orb.events] == ["h1a", "h1b", "h2a", "h2b"]
+    assert [e.surface for e in orb.events] == ["h1a", "h1b", "h2a", "h2b"]
     assert orb.stable
 
     def period_map(x0):

@@ -149,7 +149,7 @@ def test_compiled_callables_match_expressions(flows):
         b = find_periodic_orbit(symbolic, [0.5, 0.5], parameters={"omega": w})
         assert np.allclose(a.state0, b.state0, atol=1e-9)
         assert np.allclose(a.monodromy, b.monodromy, atol=1e-8)
-        assert [s for s, _ in a.events] == [s for s, _ in b.events]
+        assert [e.surface for e in a.events] == [e.surface for e in b.events]
         for ea, eb in zip(a.trajectory.events, b.trajectory.events):
             assert np.allclose(ea.saltation, eb.saltation, atol=1e-9)
 

@@ -92,7 +92,7 @@ def test_compiled_corrector_matches_the_python_iteration(case, monkeypatch):
     np.testing.assert_allclose(fast.evaluation.jac_u, slow.evaluation.jac_u, rtol=0, atol=1e-11)
     np.testing.assert_allclose(fast.evaluation.jac_lam, slow.evaluation.jac_lam, rtol=0, atol=1e-11)
     np.testing.assert_allclose(fast.summary.multipliers, slow.summary.multipliers, rtol=0, atol=1e-11)
-    assert fast.summary.events == slow.summary.events
+    assert fast.summary.event_labels == slow.summary.event_labels
 
 
 def test_corrector_failure_raises_with_the_residual_history(trilinear_flow, contact_orbit):

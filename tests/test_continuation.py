@@ -54,7 +54,7 @@ def belt_diagram():
 
 def test_no_contact_branch_matches_closed_form_amplitude(tri_branch):
     branch, _ = tri_branch
-    free = [p for p in branch.points if not p.events]
+    free = [p for p in branch.points if not p.event_labels]
     assert len(free) > 20
     for p in free:
         assert p.amplitude == pytest.approx(linear_amplitude(p.parameter), rel=1e-8)
@@ -87,7 +87,7 @@ def test_smooth_fold_at_top_of_peak(tri_branch):
     # a fold of a forced orbit has a multiplier +1 ...
     assert np.min(np.abs(fold.multipliers - 1.0)) < 1e-5
     # ... and is the largest frequency reached by the contact part of the branch
-    contact = np.array([p.parameter for p in branch.points if p.events])
+    contact = np.array([p.parameter for p in branch.points if p.event_labels])
     assert fold.parameter >= contact.max() - 1e-12
     assert fold.parameter == pytest.approx(contact.max(), abs=1e-3)
 
@@ -115,12 +115,12 @@ def test_one_sided_multipliers_at_corners(tri_branch):
         assert sp.limits == "exact"
         m_free, m_contact = one_sided_monodromies(sp.parameter)
         free_side, contact_side = (
-            (sp.multipliers_minus, sp.multipliers_plus) if not sp.events_minus else (sp.multipliers_plus, sp.multipliers_minus)
+            (sp.multipliers_minus, sp.multipliers_plus) if not sp.event_labels_minus else (sp.multipliers_plus, sp.multipliers_minus)
         )
         np.testing.assert_allclose(np.sort_complex(free_side), np.sort_complex(np.linalg.eigvals(m_free)), rtol=0, atol=1e-9)
         np.testing.assert_allclose(np.sort_complex(contact_side), np.sort_complex(np.linalg.eigvals(m_contact)), rtol=0, atol=1e-9)
         # the crossing of the set-valued multipliers, from the reference matrices
-        ref = classify_nonsmooth(*((m_free, m_contact) if not sp.events_minus else (m_contact, m_free)))
+        ref = classify_nonsmooth(*((m_free, m_contact) if not sp.event_labels_minus else (m_contact, m_free)))
         assert ref.kind is sp.kind
         if ref.q is not None:
             assert sp.crossing_q == pytest.approx(ref.q, abs=1e-9)
@@ -351,7 +351,7 @@ def test_branch_stops_when_it_comes_round_a_loop(impacting_branch):
 
 def test_branch_stops_when_it_passes_its_start_again(tri_flow, impacting_branch):
     """Started on the loop, the run ends one step past its first point."""
-    start = next(pt for pt in impacting_branch.points if 0.80 < pt.parameter < 0.82 and len(pt.events) == 2)
+    start = next(pt for pt in impacting_branch.points if 0.80 < pt.parameter < 0.82 and len(pt.event_labels) == 2)
     problem = ShootingProblem(tri_flow, IMPACTING | {"omega": start.parameter}, continuation_parameter="omega")
     branch = continue_branch(problem, start.state, start.parameter, settings=LOOP_SETTINGS, directions=(1,))
     assert branch.stop_reason.name == "CLOSED_LOOP"

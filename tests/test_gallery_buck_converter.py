@@ -183,8 +183,8 @@ def test_period_one_orbit_against_closed_form(flow):
     np.testing.assert_allclose(orbit.state0[:2], x_tau0, rtol=0, atol=1e-10)
     assert orbit.period == pytest.approx(1.0, abs=1e-12)
     # the switch turns ON at d T = 160.9 us into the ramp's period, OFF at its reset
-    assert [s for s, _ in orbit.events] == ["ramp", "clock"]
-    np.testing.assert_allclose([t for _, t in orbit.events], [d - tau0, 1.0 - tau0], rtol=0, atol=1e-10)
+    assert [e.surface for e in orbit.events] == ["ramp", "clock"]
+    np.testing.assert_allclose([e.t for e in orbit.events], [d - tau0, 1.0 - tau0], rtol=0, atol=1e-10)
     assert d * T == pytest.approx(160.94e-6, abs=1e-8)
     np.testing.assert_allclose(orbit.monodromy, monodromy_3d(E_ORBIT, tau0), rtol=0, atol=1e-10)
     M, _ = monodromy(E_ORBIT)
@@ -253,13 +253,13 @@ def test_saturation_border_collision_against_closed_form(flow):
     assert bc.accuracy <= 1e-9
     assert bc.parameter == pytest.approx(E_BC, abs=1e-9)
     saturated = low.points[-1]
-    assert saturated.events == ("on -[clock+]-> on",)
+    assert saturated.event_labels == ("on -[clock+]-> on",)
     np.testing.assert_allclose(saturated.state[:2], [saturated.parameter / R, saturated.parameter], rtol=0, atol=1e-10)
     x_bc = np.array([E_BC / R, E_BC])  # the ON equilibrium, on the ramp's foot
     saturated_mu = np.linalg.eigvals(E_A)
     regulated_mu = np.linalg.eigvals(E_A @ ramp_saltation(x_bc, E_BC))
     # the side with the OFF interval comes first (the branch runs down in E)
-    assert bc.events_minus == ("on -[clock+]-> off", "off -[ramp-]-> on") and bc.events_plus == saturated.events
+    assert bc.event_labels_minus == ("on -[clock+]-> off", "off -[ramp-]-> on") and bc.event_labels_plus == saturated.event_labels
     # the saturated side: only the reset, whose saltation is the identity in (i, v); exact to rounding
     np.testing.assert_allclose(*same_multipliers(nontrivial(bc.multipliers_plus), saturated_mu), rtol=0, atol=1e-10)
     # the regulated side's limit, from the nearest orbit, as accurate as the point claims (1.6e-6)

@@ -199,7 +199,7 @@ def test_onset_of_sliding_against_independent_computation(branch):
     assert sp.accuracy < 1e-9
     assert min(sp.bracket) - 1e-13 <= sigma_star <= max(sp.bracket) + 1e-13  # the reference is exact to ~1e-15
     assert sp.parameter == pytest.approx(sigma_star, abs=1e-9)
-    sides = sorted((sorted(sp.events_minus), sorted(sp.events_plus)), key=len)  # the cycles, in any rotation
+    sides = sorted((sorted(sp.event_labels_minus), sorted(sp.event_labels_plus)), key=len)  # the cycles, in any rotation
     assert sides == [
         ["u_minus -[y-]-> u_plus", "u_plus -[y+]-> u_minus"],
         ["leave y sliding -> u_minus", "leave y sliding -> u_plus", "slide on y (u_minus|u_plus)",

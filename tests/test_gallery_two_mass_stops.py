@@ -372,7 +372,7 @@ def onset_branch(flow_):
 
 
 def test_free_branch_is_the_harmonic_response(onset_branch):
-    free = [p for p in onset_branch.points if not p.events]
+    free = [p for p in onset_branch.points if not p.event_labels]
     assert len(free) >= 5
     mu_free = np.sort_complex(np.linalg.eigvals(onset_1_monodromies()[0]))
     for p in free:
@@ -391,7 +391,7 @@ def test_onset_of_contact_against_closed_form(onset_branch):
     # the free orbit touches the corner of gap_1 and force_1 (x1 = d1, v1 = 0): a corner collision whose
     # one-sided multipliers stay inside the unit circle
     assert sp.kind is SpecialPointKind.NONSMOOTH_NO_CROSSING
-    assert sp.events_minus == () and sp.events_plus == ("free -[gap_1+]-> stop_1", "stop_1 -[force_1-]-> free")
+    assert sp.event_labels_minus == () and sp.event_labels_plus == ("free -[gap_1+]-> stop_1", "stop_1 -[force_1-]-> free")
     # located by bisection to locate_tol = 1e-9 in (state, F): the boundary lies in the final bracket, and
     # the reported parameter is one end of it, so it is within `accuracy` of the closed form (exact to
     # ~1e-16)
@@ -461,7 +461,7 @@ def test_onset_of_second_contact_against_independent_computation(stop_2_branch):
     assert len(corners) == 1, [(sp.kind, sp.parameter) for sp in stop_2_branch.special_points]
     (sp,) = corners
     assert sp.kind is SpecialPointKind.NONSMOOTH_NO_CROSSING
-    assert len(sp.events_minus) == 2 and len(sp.events_plus) == 4
+    assert len(sp.event_labels_minus) == 2 and len(sp.event_labels_plus) == 4
     # the same promise as for the first contact: the reference is exact to ~1e-15 (fsolve residual 1e-13
     # over derivatives of order 1)
     assert sp.accuracy <= 1e-9
@@ -474,7 +474,7 @@ def test_onset_of_second_contact_against_independent_computation(stop_2_branch):
     F_at = sp.parameter
     m_without, m_with, t_star = one_stop_limits(F_at, (t_in, t_out), t_g)
     assert abs(t_star - t_g) < 1e-6
-    fewer_minus = len(sp.events_minus) < len(sp.events_plus)
+    fewer_minus = len(sp.event_labels_minus) < len(sp.event_labels_plus)
     mu_without, mu_with = (sp.multipliers_minus, sp.multipliers_plus) if fewer_minus else \
         (sp.multipliers_plus, sp.multipliers_minus)
     # the boundary orbit is a continuation point (Newton residual <= 1e-10); its touching instant moves by
@@ -520,7 +520,7 @@ def test_second_onset_multipliers_accuracy_covers_the_exact_limit(stop_2_branch)
     (sp,) = [sp for sp in stop_2_branch.special_points if sp.kind.is_nonsmooth]
     m_without, m_with, t_star = one_stop_limits(F_star, (t_in, t_out), t_g)
     assert abs(t_star - t_g) < 1e-12  # at the corner the root of force_2 is the tangency instant
-    fewer_minus = len(sp.events_minus) < len(sp.events_plus)
+    fewer_minus = len(sp.event_labels_minus) < len(sp.event_labels_plus)
     mu_without, mu_with = (sp.multipliers_minus, sp.multipliers_plus) if fewer_minus else \
         (sp.multipliers_plus, sp.multipliers_minus)
     for got, ref in ((mu_without, m_without), (mu_with, m_with)):

@@ -156,7 +156,7 @@ def test_grazing_from_both_sides(impact_flow):
         assert g.crossing_q is None
         assert f"the side with the crossing is '{crossing_side}'" in g.note
         # both sides of the branch are there: orbits with and without impacts
-        assert any(p.events for p in branch.points) and any(not p.events for p in branch.points)
+        assert any(p.event_labels for p in branch.points) and any(not p.event_labels for p in branch.points)
     assert down.parameter.min() < S_STAR - 0.1  # followed onto the impacting branch, away from grazing
 
 
@@ -166,7 +166,7 @@ def test_impacting_orbits_against_closed_form(impact_flow):
     for s, (u, state0) in zip(stops, reference_orbits(stops)):
         np.testing.assert_allclose(impact_map(s, u), u, rtol=0, atol=1e-12)  # a fixed point of the closed form
         orbit = find_periodic_orbit(impact_flow, state0 + 1e-3, parameters={"s": s})
-        (t_impact,) = [t for _, t in orbit.events]
+        (t_impact,) = [e.t for e in orbit.events]
         assert u[0] % T == pytest.approx(t_impact, abs=1e-9)
         np.testing.assert_allclose(orbit.state0, state0, rtol=0, atol=1e-9)
         mu_ref = impact_map_multipliers(s, u)

@@ -36,7 +36,7 @@ def _point(k: int, *, stable: bool, mu: np.ndarray, events: tuple[str, ...]) -> 
         half_peak_to_peak=np.e - k / 7,
         multipliers=mu,
         stable=stable,
-        events=events,
+        event_labels=events,
         step=1e-3 / 3 * (k + 1),
         iterations=k % 4,
     )
@@ -73,8 +73,8 @@ def discontinuous_fold() -> SpecialPoint:
         monodromy_plus=np.array([[1.0, 0.0], [np.inf, 1.0]]),
         crossing_q=0.5,
         crossing_point=1.0 + 0.0j,
-        events_minus=("slip -[stick+]-> stick",),
-        events_plus=("slip -[stick+]-> stick", "stick -[slip-]-> slip"),
+        event_labels_minus=("slip -[stick+]-> stick",),
+        event_labels_plus=("slip -[stick+]-> stick", "stick -[slip-]-> slip"),
         note="set-valued multiplier crosses at +1",
     )
 
@@ -158,7 +158,7 @@ def assert_points_equal(p: BranchPoint, q: BranchPoint) -> None:
     assert _same_array(p.state, q.state)
     assert _same_array(p.multipliers, q.multipliers)
     assert p.stable == q.stable and isinstance(q.stable, bool)
-    assert p.events == q.events and isinstance(q.events, tuple)
+    assert p.event_labels == q.event_labels and isinstance(q.event_labels, tuple)
     assert p.iterations == q.iterations
 
 
@@ -171,7 +171,7 @@ def assert_special_points_equal(s: SpecialPoint, t: SpecialPoint) -> None:
     for name in ("state", "multipliers", "multipliers_minus", "multipliers_plus", "monodromy_minus", "monodromy_plus"):
         assert _same_array(getattr(s, name), getattr(t, name)), name
     assert s.crossing_point == t.crossing_point
-    assert s.events_minus == t.events_minus and s.events_plus == t.events_plus
+    assert s.event_labels_minus == t.event_labels_minus and s.event_labels_plus == t.event_labels_plus
     assert s.note == t.note
 
 
@@ -218,7 +218,7 @@ def test_branch_json_round_trip_of_equilibrium_branch(tmp_path):
         points=[
             BranchPoint(
                 parameter=v, state=np.array([1.0, 0.0]), period=math.nan, amplitude=1.0,
-                half_peak_to_peak=0.0, multipliers=np.array([-0.1 + 1j, -0.1 - 1j]), stable=True, events=(),
+                half_peak_to_peak=0.0, multipliers=np.array([-0.1 + 1j, -0.1 - 1j]), stable=True, event_labels=(),
             )
             for v in (0.1, 0.2)
         ],
@@ -254,17 +254,17 @@ def test_csv_columns(tmp_path):
     with path.open(newline="") as fh:
         rows = list(csv.reader(fh))
     assert rows[0] == [
-        "parameter", "period", "amplitude", "half_peak_to_peak", "stable", "events", "step", "iterations",
+        "parameter", "period", "amplitude", "half_peak_to_peak", "stable", "event_labels", "step", "iterations",
         "state_0", "state_1", "mu0_re", "mu0_im", "mu0_abs", "mu1_re", "mu1_im", "mu1_abs",
     ]
     assert len(rows) == 1 + len(synthetic_branch())
     first = dict(zip(rows[0], rows[1]))
     assert first["stable"] == "true"
-    assert first["events"] == "free -[h1+]-> contact;contact -[h1-]-> free"
+    assert first["event_labels"] == "free -[h1+]-> contact;contact -[h1-]-> free"
     assert float(first["parameter"]) == 1 / 3
     last = dict(zip(rows[0], rows[-1]))
     assert (last["mu0_re"], last["mu0_im"], last["mu0_abs"]) == ("inf", "0.0", "inf")
-    assert last["events"] == ""
+    assert last["event_labels"] == ""
 
 
 def test_csv_round_trip_of_points_is_lossless(tmp_path):
@@ -289,7 +289,7 @@ def test_csv_rejects_ragged_points(tmp_path):
     branch = synthetic_branch()
     p = branch.points[3]
     branch.points[3] = BranchPoint(
-        p.parameter, np.zeros(3), p.period, p.amplitude, p.half_peak_to_peak, p.multipliers, p.stable, p.events
+        p.parameter, np.zeros(3), p.period, p.amplitude, p.half_peak_to_peak, p.multipliers, p.stable, p.event_labels
     )
     with pytest.raises(ValueError, match="point 3"):
         save_branch_csv(branch, tmp_path / "bad.csv")
@@ -362,3 +362,26 @@ def test_every_dataclass_field_is_written(tmp_path):
     assert {f.name for f in fields(Branch)} <= set(d)
     assert {f.name for f in fields(BranchPoint)} == set(d["points"][0])
     assert {f.name for f in fields(SpecialPoint)} == set(d["special_points"][0])
+
+
+def test_files_written_before_the_event_labels_rename_are_read(tmp_path):
+    """Branch files (JSON and CSV) from before the fields were named event_labels (keys "events",
+    "events_minus", "events_plus") read back to the same branch."""
+    branch = synthetic_branch()
+    text = save_branch_json(branch, tmp_path / "new.json").read_text()
+    old = text.replace('"event_labels_minus"', '"events_minus"').replace('"event_labels_plus"', '"events_plus"')
+    old = old.replace('"event_labels"', '"events"')
+    (tmp_path / "old.json").write_text(old)
+    assert "event_labels" not in old
+    again = load_branch_json(tmp_path / "old.json")
+    assert [p.event_labels for p in again.points] == [p.event_labels for p in branch.points]
+    assert [(s.event_labels_minus, s.event_labels_plus) for s in again.special_points] == [
+        (s.event_labels_minus, s.event_labels_plus) for s in branch.special_points
+    ]
+    csv_path = save_branch_csv(branch, tmp_path / "new.csv")
+    lines = csv_path.read_text().splitlines()
+    lines[0] = lines[0].replace("event_labels", "events")
+    old_csv = tmp_path / "old.csv"
+    old_csv.write_text("\n".join(lines) + "\n")
+    csv_metadata_path(old_csv).write_text(csv_metadata_path(csv_path).read_text())
+    assert [p.event_labels for p in load_branch_csv(old_csv).points] == [p.event_labels for p in branch.points]

@@ -27,7 +27,7 @@ INF = complex(math.inf, 0.0)
 def _pt(p: float, a: float, mu: list[complex], stable: bool) -> BranchPoint:
     return BranchPoint(
         parameter=p, state=np.array([a, 0.0]), period=2 * np.pi / p, amplitude=a, half_peak_to_peak=0.9 * a,
-        multipliers=np.array(mu, dtype=complex), stable=stable, events=(),
+        multipliers=np.array(mu, dtype=complex), stable=stable, event_labels=(),
     )
 
 
@@ -119,7 +119,7 @@ def test_response_runs_split_by_stability_change():
     branch = trilinear_like()
     flags = [True, True, False, False, True]
     branch.points = [
-        BranchPoint(p.parameter, p.state, p.period, p.amplitude, p.half_peak_to_peak, p.multipliers, f, p.events)
+        BranchPoint(p.parameter, p.state, p.period, p.amplitude, p.half_peak_to_peak, p.multipliers, f, p.event_labels)
         for p, f in zip(branch.points[:5], flags)
     ]
     branch.special_points = []

@@ -157,7 +157,7 @@ def test_crossing_sliding_against_independent_computation(branch):
     assert c.parameter == pytest.approx(z[2], abs=1e-9)
     assert "field of 'slip_minus' is tangent to it, visible" in c.note
     # one side crosses into the slower mode, the other sticks for a moment and leaves into it
-    sides = {c.events_minus, c.events_plus}
+    sides = {c.event_labels_minus, c.event_labels_plus}
     assert ("slip_plus -[v_rel-]-> slip_minus", "slip_minus -[v_rel+]-> slip_plus") in sides
 
 
@@ -185,7 +185,7 @@ def test_adding_sliding_against_closed_form(adding):
     assert a.parameter == pytest.approx(reference, abs=1e-9)
     assert f"t = {TAU_ADDING:.10g}" in a.note
     # the side with the extra events has a second sticking motion
-    assert sorted(len(ev) for ev in (a.events_minus, a.events_plus)) == [2, 4]
+    assert sorted(len(ev) for ev in (a.event_labels_minus, a.event_labels_plus)) == [2, 4]
     assert (a.touch_surface, a.touch_mode) == ("v_rel", "slip_plus")
     assert a.touch_time == pytest.approx(TAU_ADDING, abs=1e-9)
 

@@ -380,8 +380,8 @@ def special_point_between(
         monodromy_plus=monodromy_plus,
         crossing_q=crossing.q,
         crossing_point=crossing.point,
-        events_minus=lo.summary.events,
-        events_plus=hi.summary.events,
+        event_labels_minus=lo.summary.event_labels,
+        event_labels_plus=hi.summary.event_labels,
         note=note,
     )
 
@@ -440,8 +440,8 @@ def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -
         multipliers_plus=hi.summary.multipliers,
         monodromy_minus=lo.summary.monodromy,
         monodromy_plus=hi.summary.monodromy,
-        events_minus=lo.summary.events,
-        events_plus=hi.summary.events,
+        event_labels_minus=lo.summary.event_labels,
+        event_labels_plus=hi.summary.event_labels,
         note=(f"the orbit {where} (surface {change.surface!r}, t = {found.t_touch:.10g}, d2h/dt2 there "
               f"{found.curvature:.3g}){'' if change.count == 1 else f', at {change.count} points of the orbit at once'}; "
               f"the side with the extra events is {'plus' if lo_fewer else 'minus'}"),
@@ -455,7 +455,7 @@ def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -
 
 def _sides(lo: Solution, hi: Solution):
     """``(lo has fewer events, side without the extra events, side with them, their trajectories)``, or None."""
-    lo_fewer = len(lo.summary.events) <= len(hi.summary.events)
+    lo_fewer = len(lo.summary.event_labels) <= len(hi.summary.event_labels)
     without, with_ = (lo, hi) if lo_fewer else (hi, lo)
     traj_wo, traj_w = without.evaluation.trajectory, with_.evaluation.trajectory
     if traj_wo is None or traj_w is None:
@@ -545,8 +545,8 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
         multipliers_plus=mu_hi,
         monodromy_minus=m_lo,
         monodromy_plus=m_hi,
-        events_minus=lo.summary.events,
-        events_plus=hi.summary.events,
+        event_labels_minus=lo.summary.event_labels,
+        event_labels_plus=hi.summary.event_labels,
         note=f"grazing of surface {surface!r} at t = {orbit.t_graze:.10g}; the side with the crossing is '{side}', {bounded}",
         # the grazing orbit is exact to the located parameter; the finite multipliers of an unbounded side
         # are those of the nearest orbit, of unknown accuracy

@@ -81,7 +81,7 @@ class BranchPoint:
     multipliers : ndarray, complex
         Forward-time Floquet multipliers (eigenvalues for equilibria).
     stable : bool
-    events : tuple of str
+    event_labels : tuple of str
         The orbit's event sequence (labels of the transitions met).
     step : float
         Arclength step that led to the point.
@@ -96,7 +96,7 @@ class BranchPoint:
     half_peak_to_peak: float
     multipliers: np.ndarray
     stable: bool
-    events: tuple[str, ...]
+    event_labels: tuple[str, ...]
     step: float = 0.0
     iterations: int = 0
 
@@ -128,8 +128,8 @@ class SpecialPoint:
         Where the set-valued multipliers ``eig((1-q) M- + q M+)`` cross the unit circle.
     crossing_point : complex or None
         The multiplier on the unit circle at ``crossing_q``.
-    events_minus, events_plus : tuple of str
-        Event sequences on either side.
+    event_labels_minus, event_labels_plus : tuple of str
+        Event sequences (labels) on either side.
     multipliers_accuracy : float
         How well the multipliers (one-sided or not) are known: an estimate of
         the error of their matrices (``nan`` when unknown).
@@ -165,8 +165,8 @@ class SpecialPoint:
     monodromy_plus: np.ndarray | None = None
     crossing_q: float | None = None
     crossing_point: complex | None = None
-    events_minus: tuple[str, ...] = ()
-    events_plus: tuple[str, ...] = ()
+    event_labels_minus: tuple[str, ...] = ()
+    event_labels_plus: tuple[str, ...] = ()
     note: str = ""
     multipliers_accuracy: float = float("nan")
     limits: str = ""

@@ -255,7 +255,7 @@ class Continuation:
                     cand = self.corrector.solve_fixed(start.state0, lam)
                 except SaltationError:
                     continue
-                if len(cand.summary.events) == len(prev.summary.events):
+                if len(cand.summary.event_labels) == len(prev.summary.event_labels):
                     continue  # the same side again: not across the grazing
                 away = cand.z - z_graze
                 cand.tangent = self.corrector.tangent(cand, away / np.linalg.norm(away))
@@ -308,7 +308,7 @@ class Continuation:
                 half_peak_to_peak=sm.half_peak_to_peak,
                 multipliers=sm.multipliers,
                 stable=sm.stable,
-                events=sm.events,
+                event_labels=sm.event_labels,
                 step=sol.step,
                 iterations=sol.iterations,
             )
@@ -319,8 +319,8 @@ def _same_special_point(a, b, rtol: float = 1e-6) -> bool:
     """The same special point located twice: kind, sides, parameter and state agree."""
     return (
         a.kind is b.kind
-        and a.events_minus == b.events_minus
-        and a.events_plus == b.events_plus
+        and a.event_labels_minus == b.event_labels_minus
+        and a.event_labels_plus == b.event_labels_plus
         and abs(a.parameter - b.parameter) <= rtol * (1.0 + abs(b.parameter))
         and float(np.linalg.norm(np.asarray(a.state) - np.asarray(b.state))) <= rtol * (1.0 + float(np.linalg.norm(b.state)))
     )

@@ -10,7 +10,7 @@ Diagram JSON (``save_diagram_json``)
     ``"format": "saltation.diagram"``: a list of branch objects as above.
 Branch CSV (``save_branch_csv``)
     One row per branch point with the columns ``parameter, period, amplitude,
-    half_peak_to_peak, stable, events, step, iterations, state_0 .. state_{n-1}`` and, per
+    half_peak_to_peak, stable, event_labels, step, iterations, state_0 .. state_{n-1}`` and, per
     multiplier ``i``, ``mu{i}_re, mu{i}_im, mu{i}_abs``. Events are joined with ``";"``;
     ``stable`` is ``true``/``false``. The CSV holds the points only: the branch's metadata and
     its special points go to a side file ``<stem>.meta.json`` (the branch JSON without its
@@ -146,7 +146,7 @@ def _point_to_dict(p: BranchPoint) -> dict[str, Any]:
         "half_peak_to_peak": _enc_float(p.half_peak_to_peak),
         "multipliers": _enc_complex_array(p.multipliers),
         "stable": bool(p.stable),
-        "events": list(p.events),
+        "event_labels": list(p.event_labels),
         "step": _enc_float(p.step),
         "iterations": int(p.iterations),
     }
@@ -161,7 +161,7 @@ def _point_from_dict(d: dict[str, Any]) -> BranchPoint:
         half_peak_to_peak=_dec_float(d["half_peak_to_peak"]),
         multipliers=_dec_complex_array(d["multipliers"]),
         stable=bool(d["stable"]),
-        events=tuple(d["events"]),
+        event_labels=tuple(d["event_labels"] if "event_labels" in d else d["events"]),  # (files before 2026-11-24: "events")
         step=_dec_float(d["step"]),
         iterations=int(d["iterations"]),
     )
@@ -184,8 +184,8 @@ def _special_point_to_dict(sp: SpecialPoint) -> dict[str, Any]:
         "monodromy_plus": _enc_real_array(sp.monodromy_plus),
         "crossing_q": None if sp.crossing_q is None else _enc_float(sp.crossing_q),
         "crossing_point": None if sp.crossing_point is None else _enc_complex(sp.crossing_point),
-        "events_minus": list(sp.events_minus),
-        "events_plus": list(sp.events_plus),
+        "event_labels_minus": list(sp.event_labels_minus),
+        "event_labels_plus": list(sp.event_labels_plus),
         "note": sp.note,
         "multipliers_accuracy": _enc_float(sp.multipliers_accuracy),
         "limits": sp.limits,
@@ -213,8 +213,8 @@ def _special_point_from_dict(d: dict[str, Any]) -> SpecialPoint:
         monodromy_plus=_dec_real_array(d.get("monodromy_plus")),
         crossing_q=None if d.get("crossing_q") is None else _dec_float(d["crossing_q"]),
         crossing_point=None if d.get("crossing_point") is None else _dec_complex(d["crossing_point"]),
-        events_minus=tuple(d.get("events_minus", ())),
-        events_plus=tuple(d.get("events_plus", ())),
+        event_labels_minus=tuple(d.get("event_labels_minus", d.get("events_minus", ()))),
+        event_labels_plus=tuple(d.get("event_labels_plus", d.get("events_plus", ()))),
         note=d.get("note", ""),
         multipliers_accuracy=_dec_float(d.get("multipliers_accuracy", "nan")),
         limits=d.get("limits", ""),
@@ -427,7 +427,7 @@ def save_branch_csv(branch: Branch, path: PathType, *, metadata: bool = True) ->
     path = Path(path)
     n_state = len(branch.points[0].state) if branch.points else 0
     n_mu = len(branch.points[0].multipliers) if branch.points else 0
-    header = ["parameter", "period", "amplitude", "half_peak_to_peak", "stable", "events", "step", "iterations"]
+    header = ["parameter", "period", "amplitude", "half_peak_to_peak", "stable", "event_labels", "step", "iterations"]
     header += [f"state_{i}" for i in range(n_state)]
     for i in range(n_mu):
         header += [f"mu{i}_re", f"mu{i}_im", f"mu{i}_abs"]
@@ -440,7 +440,7 @@ def save_branch_csv(branch: Branch, path: PathType, *, metadata: bool = True) ->
                     f"point {k} has {len(p.state)} states and {len(p.multipliers)} multipliers; "
                     f"point 0 has {n_state} and {n_mu}"
                 )
-            bad = [e for e in p.events if EVENT_SEPARATOR in e]
+            bad = [e for e in p.event_labels if EVENT_SEPARATOR in e]
             if bad:
                 raise ValueError(f"point {k}: event label {bad[0]!r} contains the separator {EVENT_SEPARATOR!r}")
             row = [
@@ -449,7 +449,7 @@ def save_branch_csv(branch: Branch, path: PathType, *, metadata: bool = True) ->
                 _csv_float(p.amplitude),
                 _csv_float(p.half_peak_to_peak),
                 "true" if p.stable else "false",
-                EVENT_SEPARATOR.join(p.events),
+                EVENT_SEPARATOR.join(p.event_labels),
                 _csv_float(p.step),
                 str(int(p.iterations)),
             ]
@@ -487,7 +487,7 @@ def load_branch_points_csv(path: PathType) -> list[BranchPoint]:
         for row in reader:
             if not row:
                 continue
-            events = row[col["events"]]
+            events = row[col["event_labels" if "event_labels" in col else "events"]]
             points.append(
                 BranchPoint(
                     parameter=float(row[col["parameter"]]),
@@ -500,7 +500,7 @@ def load_branch_points_csv(path: PathType) -> list[BranchPoint]:
                         dtype=complex,
                     ),
                     stable=_parse_bool(row[col["stable"]]),
-                    events=tuple(events.split(EVENT_SEPARATOR)) if events else (),
+                    event_labels=tuple(events.split(EVENT_SEPARATOR)) if events else (),
                     step=float(row[col["step"]]),
                     iterations=int(row[col["iterations"]]),
                 )

@@ -155,7 +155,7 @@ class _CurveProblem:
         return SolutionSummary(
             state=np.array(u[:-1]), period=period, amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
             half_peak_to_peak=float(0.5 * (traj.x_max[0] - traj.x_min[0])), multipliers=mu,
-            stable=is_stable(mu, autonomous=False), events=(), monodromy=monodromy,
+            stable=is_stable(mu, autonomous=False), event_labels=(), monodromy=monodromy,
         )
 
 
@@ -354,7 +354,7 @@ def follow_locus(
         runs.append([sol.z.copy() for sol in cont.solutions])
         kinds_by_run.append(list(getattr(curve, "kinds", [])))
         reasons.append(f"{'increasing' if direction > 0 else 'decreasing'} {second}: {cont.branch.stop_reason.value}")
-        events_by_run.append(list(getattr(curve, "events", [])))
+        events_by_run.append(list(getattr(curve, "event_ids", [])))
         if not classify and cont.branch.stop_reason is not StopReason.PARAMETER_BOUND:
             end = _end_at_a_corner(problem, curve, point.kind, runs[-1])
             if end is not None:
@@ -558,7 +558,7 @@ class MultiplierCurve(_CurveProblem):
         self.h = float(h)
         self._border: tuple[np.ndarray, np.ndarray] | None = None  # b, c: fixed at the first evaluation
         self._last = None
-        self.events: list[tuple[str, ...]] = []  # the orbit's event sequence at every accepted point
+        self.event_ids: list[tuple] = []  # the orbit's event sequence (by identity) at every accepted point
 
     @property
     def dimension(self) -> int:
@@ -615,10 +615,10 @@ class MultiplierCurve(_CurveProblem):
 
     def accept(self, u: np.ndarray, lam: float) -> None:
         if self._last is not None:
-            self.events.append(canonical_events(event_ids(self._last[2])))
+            self.event_ids.append(canonical_events(event_ids(self._last[2])))
 
     def snapshot(self) -> dict:
-        return {"_last": None, "events": []}
+        return {"_last": None, "event_ids": []}
 
     def _monodromy(self, z: np.ndarray) -> np.ndarray:
         n = self.system.n

@@ -21,7 +21,7 @@ import numpy as np
 
 from .errors import ConvergenceError, IntegrationError, ModelError, SaltationError
 from .floquet import is_stable, multipliers_from_monodromy, trivial_multiplier_error
-from .integrate import EventKind, Flow, Tolerances, Trajectory
+from .integrate import EventKind, Flow, SwitchingEvent, Tolerances, Trajectory
 
 
 @dataclass(frozen=True)
@@ -44,7 +44,7 @@ class SolutionSummary:
     half_peak_to_peak: float
     multipliers: np.ndarray
     stable: bool
-    events: tuple[str, ...]
+    event_labels: tuple[str, ...]
     monodromy: np.ndarray | None = None
     #: the event sequence by identity (see :func:`event_ids`): what detectors compare
     event_ids: tuple[tuple[int, int, int], ...] = ()
@@ -161,8 +161,14 @@ class PeriodicOrbit:
         return trivial_multiplier_error(self.multipliers) if self.autonomous else float("nan")
 
     @property
-    def events(self) -> list[tuple[str, float]]:
-        return [(e.surface, e.t) for e in self.trajectory.events]
+    def events(self) -> list[SwitchingEvent]:
+        """The events of one period (as :attr:`Trajectory.events`)."""
+        return self.trajectory.events
+
+    @property
+    def event_labels(self) -> tuple[str, ...]:
+        """Readable labels of the orbit's cycle of events (see :func:`event_labels`)."""
+        return event_labels(self.trajectory)
 
     def _repr_markdown_(self) -> str:
         """A summary for Jupyter (:mod:`saltation.summary`)."""
@@ -402,7 +408,7 @@ class ShootingProblem:
             half_peak_to_peak=float(0.5 * (traj.x_max[0] - traj.x_min[0])),
             multipliers=mu,
             stable=is_stable(mu, autonomous=self.autonomous),
-            events=event_labels(traj),
+            event_labels=event_labels(traj),
             monodromy=traj.monodromy,
             event_ids=event_ids(traj),
         )
@@ -573,7 +579,7 @@ class EquilibriumProblem:
             half_peak_to_peak=0.0,
             multipliers=eig,
             stable=bool(np.all(eig.real < 0)),
-            events=(),
+            event_labels=(),
         )
 
     def accept(self, u: np.ndarray, lam: float | None) -> None:

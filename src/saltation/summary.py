@@ -69,7 +69,7 @@ def orbit_summary(orbit) -> str:
         ("period", _number(orbit.period)),
         ("amplitude max abs(x1)", _number(orbit.amplitude, 8)),
         ("multipliers", f"{_multipliers(orbit.multipliers)} ({stable})"),
-        ("events per period", _sequence([s for s, _ in orbit.events])),
+        ("events per period", _sequence(orbit.event_labels)),
         ("initial state", ", ".join(f"{v:.10g}" for v in orbit.state0)),
         ("Newton", (f"{'converged' if orbit.converged else 'not converged'} in {orbit.iterations} iterations, "
                     f"residual {orbit.residual_norm:.2e}")),
@@ -94,9 +94,9 @@ def special_point_summary(point) -> str:
         rows.append(("multipliers known to", f"{point.multipliers_accuracy:.1e}"))
     if point.crossing_q is not None:
         rows.append(("unit circle crossed at", f"q = {point.crossing_q:.8g} (multiplier {point.crossing_point:.6g})"))
-    if point.events_minus or point.events_plus:
-        rows.append(("events, one side", _sequence(point.events_minus)))
-        rows.append(("events, other side", _sequence(point.events_plus)))
+    if point.event_labels_minus or point.event_labels_plus:
+        rows.append(("events, one side", _sequence(point.event_labels_minus)))
+        rows.append(("events, other side", _sequence(point.event_labels_plus)))
     if point.touch_surface:
         rows.append(("touches", f"surface {point.touch_surface} (field of {point.touch_mode}) at t = {point.touch_time:.8g}"))
     if point.note:
