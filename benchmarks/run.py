@@ -331,7 +331,7 @@ def bench_loci(quick: bool) -> dict:
     flow = Flow(trilinear())
     p = flow.parameters({"omega": 1.0})
     x0 = find_periodic_orbit(flow, flow.run([0.0, 0.0], 0.0, 100 * 2 * math.pi, p).x1, parameters={"omega": 1.0}).state0
-    t_map = median_time(lambda: flow.run(x0, 0.0, 2 * math.pi, p, variational=True, parameter=7), 50 if quick else 500)
+    t_map = median_time(lambda: flow.run(x0, 0.0, 2 * math.pi, p, variational=True, sensitivity=7), 50 if quick else 500)
     problem = ShootingProblem(flow, {"omega": 0.6}, continuation_parameter="omega")
     branch = continue_branch(problem, linear_response_state(dict(flow.system.defaults, omega=0.6)), 0.6,
                              settings=ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(0.6, 1.6)), directions=(1,))
@@ -376,7 +376,7 @@ def _sliding_locations(quick: bool) -> dict:
 
         x_near, p_near = orbit(near)
         x_far, p_far = orbit(far)
-        t_map = median_time(lambda: flow.run(x_near, 0.0, T, p_near, variational=True, parameter=0), 20 if quick else 200)
+        t_map = median_time(lambda: flow.run(x_near, 0.0, T, p_near, variational=True, sensitivity=0), 20 if quick else 200)
         a, b = flow.run(x_near, 0.0, T, p_near), flow.run(x_far, 0.0, T, p_far)
         without, with_, p_wo, p_w = (a, b, p_near, p_far) if len(a.events) < len(b.events) else (b, a, p_far, p_near)
         change = sliding_change(flow, without, with_, p_w, p_wo)

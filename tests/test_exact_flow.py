@@ -146,7 +146,7 @@ def test_a_fraction_of_an_exact_step_is_the_exact_step_to_that_point(trilinear_f
     # the same bound, up to the tail terms beyond the shorter step's own series (relative size ~ theta h |A|)
     assert err_f == pytest.approx(err_s, rel=1e-3, abs=1e-300)
     # and the step itself is the flow: against DOP853 at tight tolerances from the same state
-    ref = trilinear_flow.run(y[:n], t, t + theta * h, p, mode0="contact_1", variational=True, parameter=pidx,
+    ref = trilinear_flow.run(y[:n], t, t + theta * h, p, mode0="contact_1", variational=True, sensitivity=pidx,
                              phi0=y[n : n + n * n].reshape(n, n), tolerances=GENERAL_TIGHT)
     np.testing.assert_allclose(y_f[:n], ref.x1, rtol=0, atol=1e-13)
     np.testing.assert_allclose(y_f[n : n + n * n].reshape(n, n), ref.monodromy, rtol=0, atol=1e-12)
@@ -161,8 +161,8 @@ def test_contact_orbit_matches_the_general_integrator(trilinear_flow, contact_or
     omega = trilinear_flow.system.parameter_index("omega")
     t1 = -3 * 2 * np.pi if backward else 3 * 2 * np.pi
     x0 = contact_orbit.state0
-    fast = trilinear_flow.run(x0, 0.0, t1, p, variational=True, parameter=omega)
-    ref = trilinear_flow.run(x0, 0.0, t1, p, variational=True, parameter=omega, tolerances=GENERAL_TIGHT)
+    fast = trilinear_flow.run(x0, 0.0, t1, p, variational=True, sensitivity=omega)
+    ref = trilinear_flow.run(x0, 0.0, t1, p, variational=True, sensitivity=omega, tolerances=GENERAL_TIGHT)
     assert len(fast.events) == 12
     assert fast.event_sequence == ref.event_sequence
     np.testing.assert_allclose([e.t for e in fast.events], [e.t for e in ref.events], rtol=0, atol=1e-10)
@@ -178,7 +178,7 @@ def test_parameter_sensitivity_against_central_differences(trilinear_flow, conta
     p = trilinear_flow.parameters({"omega": 1.0})
     j = trilinear_flow.system.parameter_index(name)
     x0 = contact_orbit.state0
-    traj = trilinear_flow.run(x0, 0.0, 2 * np.pi, p, variational=True, parameter=j)
+    traj = trilinear_flow.run(x0, 0.0, 2 * np.pi, p, variational=True, sensitivity=j)
     assert len(traj.events) == 4
 
     def end_state(q):
@@ -230,8 +230,8 @@ def test_phase_shifted_forcing_with_sliding(filippov_flow, name):
     p = filippov_flow.parameters({"q": 0.3, "omega": 1.3, "phi": 0.4})
     j = system.parameter_index(name)
     x0 = [-1.0, -0.8]
-    fast = filippov_flow.run(x0, 0.0, 9.0, p, variational=True, parameter=j)
-    ref = filippov_flow.run(x0, 0.0, 9.0, p, variational=True, parameter=j, tolerances=GENERAL_TIGHT)
+    fast = filippov_flow.run(x0, 0.0, 9.0, p, variational=True, sensitivity=j)
+    ref = filippov_flow.run(x0, 0.0, 9.0, p, variational=True, sensitivity=j, tolerances=GENERAL_TIGHT)
     kinds = [e.kind.name for e in fast.events]
     assert "SLIDING_START" in kinds and "SLIDING_END" in kinds
     assert fast.event_sequence == ref.event_sequence

@@ -71,7 +71,7 @@ def test_trilinear_parameter_sensitivity(trilinear_flow, contact_orbit, name):
     """d x(T) / d p at fixed times; x_c enters indicators and guards, omega the forcing."""
     orb = contact_orbit
     idx = trilinear_flow.system.parameter_index(name)
-    traj = trilinear_flow.run(orb.state0, 0.0, orb.period, orb.parameters, variational=True, parameter=idx)
+    traj = trilinear_flow.run(orb.state0, 0.0, orb.period, orb.parameters, variational=True, sensitivity=idx)
 
     def end_state(pk):
         p = orb.parameters.copy()
@@ -134,7 +134,7 @@ def test_stick_slip_parameter_sensitivity(belt_flow, stable_cycle, name):
     """F_stick enters the stick boundary (the indicator), v_dr every field and the band."""
     orb = stable_cycle
     idx = belt_flow.system.parameter_index(name)
-    traj = belt_flow.run(orb.state0, 0.0, orb.period, orb.parameters, variational=True, parameter=idx)
+    traj = belt_flow.run(orb.state0, 0.0, orb.period, orb.parameters, variational=True, sensitivity=idx)
 
     def end_state(pk):
         p = orb.parameters.copy()
@@ -170,7 +170,7 @@ def test_unstable_cycle_parameter_sensitivity(belt_flow, unstable_cycle, name):
     """Parameter sensitivity through a sliding motion (the sliding field depends on p)."""
     orb = unstable_cycle
     idx = belt_flow.system.parameter_index(name)
-    traj = belt_flow.run(orb.state0, 0.0, -orb.period, orb.parameters, variational=True, parameter=idx)
+    traj = belt_flow.run(orb.state0, 0.0, -orb.period, orb.parameters, variational=True, sensitivity=idx)
 
     def end_state(pk):
         p = orb.parameters.copy()

@@ -101,7 +101,7 @@ def test_monodromy_through_sliding_finite_differences(filippov_flow, q, t_end):
 def test_parameter_sensitivity_through_sliding(filippov_flow, name):
     p = filippov_flow.parameters({"q": 0.3})
     idx = filippov_flow.system.parameter_index(name)
-    traj = filippov_flow.run(X0, 0.0, T_END, p, variational=True, parameter=idx)
+    traj = filippov_flow.run(X0, 0.0, T_END, p, variational=True, sensitivity=idx)
 
     def end_state(pk):
         pp = p.copy()

@@ -169,14 +169,14 @@ def grazing_system(
     n = system.n
     disabled = (int(transition), *map(int, also_disabled))
     T = float(period) if system.is_autonomous else system.forcing_period(p)
-    runs = [flow.run(x0, t0, t0 + T, p, variational=True, parameter=j, disabled=disabled, tolerances=tolerances)
+    runs = [flow.run(x0, t0, t0 + T, p, variational=True, sensitivity=j, disabled=disabled, tolerances=tolerances)
             for j in params]
     full = runs[0]
     t_g = tangency_time(flow, x0, t0, p, surface, t_guess, T, mode0=full.mode0, disabled=disabled, tolerances=tolerances)
     if t_g is None:
         raise ConvergenceError(f"grazing of surface {system.surface_names[surface]!r}: no tangency near t = {t_guess:.6g}",
                                history or [])
-    parts = [flow.run(x0, t0, t_g, p, variational=True, parameter=j, mode0=full.mode0, disabled=disabled,
+    parts = [flow.run(x0, t0, t_g, p, variational=True, sensitivity=j, mode0=full.mode0, disabled=disabled,
                       tolerances=tolerances) for j in params]
     part = parts[0]
     hx, _, hp = flow.indicator_gradient(surface, t_g, part.x1, p)

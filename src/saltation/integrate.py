@@ -436,7 +436,7 @@ class Flow:
         *,
         mode0: int | str | None = None,
         variational: bool = False,
-        parameter: int = -1,
+        sensitivity: int | str = -1,
         dense: bool = False,
         tolerances: Tolerances | None = None,
         phi0: np.ndarray | None = None,
@@ -456,8 +456,9 @@ class Flow:
             Initial mode; by default the model's initial-mode rule.
         variational : bool
             Carry the fundamental solution matrix through modes and events.
-        parameter : int
-            Index of a parameter whose sensitivity ``dx/dp`` to carry (-1: none).
+        sensitivity : int or str
+            The parameter (index or name) whose sensitivity ``dx/dp`` to carry
+            (-1: none); with ``variational``, :attr:`Trajectory.parameter_sensitivity`.
         dense : bool
             Keep the dense output for :meth:`Trajectory.sample`.
         disabled : sequence of int
@@ -482,8 +483,9 @@ class Flow:
         if not (math.isfinite(t0) and math.isfinite(t1)):
             raise ValueError(f"integration times must be finite, got t0={t0}, t1={t1}")
         m0 = self.initial_mode(x0, p, t0) if mode0 is None else sys_.mode_index(mode0)
-        if not -1 <= parameter < sys_.n_params:
-            raise ModelError(f"parameter index {parameter} out of range")
+        sens = sys_.parameter_index(sensitivity) if isinstance(sensitivity, str) else int(sensitivity)
+        if not -1 <= sens < sys_.n_params:
+            raise ModelError(f"sensitivity: parameter index {sens} out of range (the model has {sys_.n_params} parameters)")
         phi = self._identity if phi0 is None else _c_array(phi0)
         if phi.shape != (sys_.n, sys_.n):
             raise ModelError(f"initial fundamental matrix must have shape ({sys_.n}, {sys_.n}), got {phi.shape}")
@@ -494,10 +496,10 @@ class Flow:
             for k in disabled:
                 table[int(k), 0] = -1  # a source mode that is never current
         out = self._engine.integrate_kernel(
-            self._addresses, self._affine_modes, t0, t1, x0, int(m0), p, bool(variational), int(parameter), *steps, 0.0, *limits,
+            self._addresses, self._affine_modes, t0, t1, x0, int(m0), p, bool(variational), sens, *steps, 0.0, *limits,
             table, self._n_surfaces, bool(dense), phi, self._zeros, *flags,
         )
-        return self._unpack(out, x0, float(t0), m0, variational, parameter, dense)
+        return self._unpack(out, x0, float(t0), m0, variational, sens, dense)
 
     def compiled_newton(
         self, z0: np.ndarray, normal: np.ndarray | None, p: np.ndarray, *, t0: float, sign: float, lam_index: int,
@@ -530,14 +532,14 @@ class Flow:
         return CompiledNewton(code=int(code), iterations=int(it), z=z, history=history.tolist(), jacobian=jac,
                               shot=out)
 
-    def shot_trajectory(self, result: CompiledNewton, x0: np.ndarray, t0: float, p: np.ndarray, parameter: int) -> Trajectory:
+    def shot_trajectory(self, result: CompiledNewton, x0: np.ndarray, t0: float, p: np.ndarray, sensitivity: int) -> Trajectory:
         """The trajectory of the last shot of :meth:`compiled_newton` (raises that shot's error if it failed)."""
         ok = int(result.shot[0][kc.INFO_STATUS]) == _STATUS_OK
         # the shot's initial mode; after a failure the rule itself, which raises for a state in no mode
         m0 = int(result.shot[0][kc.INFO_INITIAL_MODE]) if ok else self.initial_mode(x0, p, t0)
-        return self._unpack(result.shot, x0, float(t0), m0, True, parameter, False)
+        return self._unpack(result.shot, x0, float(t0), m0, True, sensitivity, False)
 
-    def _unpack(self, out, x0, t0, m0, variational, parameter, dense) -> Trajectory:
+    def _unpack(self, out, x0, t0, m0, variational, sensitivity, dense) -> Trajectory:
         sys_ = self.system
         n = sys_.n
         info, res = out  # the kernel's two packed arrays, laid out as saltation._contract says
@@ -566,7 +568,7 @@ class Flow:
             mode1=names[int(info[kc.INFO_FINAL_MODE])],
             event_log=event_log,
             monodromy=Phi if variational else None,
-            parameter_sensitivity=psi if (variational and parameter >= 0) else None,
+            parameter_sensitivity=psi if (variational and sensitivity >= 0) else None,
             x_min=xmin,
             x_max=xmax,
             sliding_at_end=bool(info[kc.INFO_SLIDE]),

@@ -507,8 +507,8 @@ class SlidingCurve(_CurveProblem):
         p = self.parameters_at(u, lam)
         T = self.system.forcing_period(p)
         t0, tol = self.shooting.t0, self.shooting.tolerances
-        traj1 = self.flow.run(u[:n], t0, t0 + T, p, variational=True, parameter=self.j1, tolerances=tol)
-        traj2 = self.flow.run(u[:n], t0, t0 + T, p, variational=True, parameter=self.lam_index, tolerances=tol)
+        traj1 = self.flow.run(u[:n], t0, t0 + T, p, variational=True, sensitivity=self.j1, tolerances=tol)
+        traj2 = self.flow.run(u[:n], t0, t0 + T, p, variational=True, sensitivity=self.lam_index, tolerances=tol)
         c, t_touch = self._conditions(u, lam)
         residual = np.concatenate([traj1.x1 - u[:n], c])
         jac_u = np.zeros((m, m))
@@ -566,7 +566,7 @@ class MultiplierCurve(_CurveProblem):
 
     def _shot(self, x0: np.ndarray, p: np.ndarray, j: int):
         T = self.system.forcing_period(p)
-        traj = self.flow.run(x0, self.shooting.t0, self.shooting.t0 + T, p, variational=True, parameter=j,
+        traj = self.flow.run(x0, self.shooting.t0, self.shooting.t0 + T, p, variational=True, sensitivity=j,
                              tolerances=self.shooting.tolerances)
         return traj, T
 

@@ -329,7 +329,7 @@ class ShootingProblem:
             raise IntegrationError(f"shooting period must be positive, got {T}")
         pidx = self.lam_index if (need_lam and lam is not None) else -1
         traj = self.flow.run(
-            x0, self.t0, self.t0 + self.sign * T, p, variational=True, parameter=pidx, tolerances=self.tolerances
+            x0, self.t0, self.t0 + self.sign * T, p, variational=True, sensitivity=pidx, tolerances=self.tolerances
         )
         M = traj.monodromy
         jl = None

@@ -290,7 +290,7 @@ def _newton(flow: Flow, z0: np.ndarray, lam_name: str, extra: Callable, n_extra:
     for it in range(max_iter + 1):
         q = params(z)
         T = z[-1] if autonomous else system.forcing_period(q)
-        full = flow.run(z[:n], t0, t0 + T, q, variational=True, parameter=j, tolerances=tolerances)
+        full = flow.run(z[:n], t0, t0 + T, q, variational=True, sensitivity=j, tolerances=tolerances)
         c, info = extra(z, q)
         phase = [f_ref @ (z[:n] - x_ref)] if autonomous else []
         residual = np.concatenate([full.x1 - z[:n], phase, c])

@@ -5,6 +5,8 @@ replaced (the revision before it, run with ``PYTHONPATH`` pointing at that
 revision's ``src``); the engine must reproduce it to 1e-12.  Run by hand::
 
     PYTHONPATH=<old checkout>/src python tests/data/engine_reference.py
+
+(It calls ``Flow.run(..., parameter=0)``, the name of ``sensitivity`` in that revision.)
 """
 
 from __future__ import annotations
