@@ -76,7 +76,7 @@ def test_period_map_round_trip_and_plot(tmp_path):
     grid = period_map(bouncing_ball(), "A", [0.33, 0.39], "e", [0.5], max_period=4, x0=start_state(), workers=1)
     again = PeriodMap.from_dict(grid.to_dict())
     np.testing.assert_array_equal(again.periods, grid.periods)
-    assert (again.parameter, again.parameter2, again.max_period) == ("A", "e", 4)
+    assert (again.parameter_name, again.parameter2_name, again.max_period) == ("A", "e", 4)
     fig = grid.plot()
     assert fig.axes[0].get_xlabel() == "A" and fig.axes[0].get_ylabel() == "e"
     assert grid.save(tmp_path / "map.json").exists()

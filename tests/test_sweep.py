@@ -119,7 +119,7 @@ def test_save_and_load(tmp_path, no_contact_sweep):
     np.testing.assert_array_equal(back.states, res.states)
     np.testing.assert_array_equal(back.parameter_points, res.parameter_points)
     np.testing.assert_array_equal(back.counts, res.counts)
-    assert (back.model, back.parameter, back.section, back.state_names) == ("trilinear", "omega", "poincare", ("x", "v"))
+    assert (back.model, back.parameter_name, back.section, back.state_names) == ("trilinear", "omega", "poincare", ("x", "v"))
     assert json.loads(path.read_text())["settings"]["transient"] == 300
 
     csv_path = res.save(tmp_path / "sweep.csv")

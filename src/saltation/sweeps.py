@@ -67,8 +67,8 @@ class SweepResult:
     ----------
     model : str
         Name of the model.
-    parameter : str
-        Name of the swept parameter.
+    parameter_name : str
+        Name of the swept parameter (``"parameter"`` in files).
     values : ndarray, shape (m,)
         The parameter values, in the order given.
     counts : ndarray of int, shape (m,)
@@ -88,7 +88,7 @@ class SweepResult:
     """
 
     model: str
-    parameter: str
+    parameter_name: str
     values: np.ndarray
     counts: np.ndarray
     parameter_points: np.ndarray
@@ -132,7 +132,7 @@ class SweepResult:
         return {
             "format": "saltation.sweep/1",
             "model": self.model,
-            "parameter": self.parameter,
+            "parameter": self.parameter_name,
             "section": self.section,
             "state_names": list(self.state_names),
             "settings": dict(self.settings),
@@ -150,7 +150,7 @@ class SweepResult:
         names = tuple(d["state_names"])
         return cls(
             model=d["model"],
-            parameter=d["parameter"],
+            parameter_name=d["parameter"],
             values=np.array(d["values"], dtype=float),
             counts=np.array(d["counts"], dtype=int),
             parameter_points=np.array(d["parameter_points"], dtype=float),
@@ -173,7 +173,7 @@ class SweepResult:
             return write_json(self.to_dict(), path)
         with path.open("w", newline="") as fh:
             w = csv.writer(fh)
-            w.writerow([self.parameter, *self.state_names])
+            w.writerow([self.parameter_name, *self.state_names])
             for lam, row in zip(self.parameter_points, self.states):
                 w.writerow([repr(float(lam)), *(repr(float(v)) for v in row)])
         return path
@@ -194,7 +194,7 @@ class SweepResult:
             fig = ax.get_figure()
         kw = {"s": 1.0, "color": "k", "marker": ".", "linewidths": 0, "rasterized": True} | style
         ax.scatter(self.parameter_points, self.states[:, k], **kw)
-        ax.set_xlabel(self.parameter)
+        ax.set_xlabel(self.parameter_name)
         name = self.state_names[k]
         if self.section == "poincare":
             ax.set_ylabel(f"{name} (Poincare section)")
@@ -338,7 +338,7 @@ def sweep(
         settings["period"] = period
     return SweepResult(
         model=system.name,
-        parameter=parameter,
+        parameter_name=parameter,
         values=values,
         counts=counts_arr,
         parameter_points=np.repeat(values, counts_arr),
@@ -358,8 +358,8 @@ class PeriodMap:
     Attributes
     ----------
     model : str
-    parameter, parameter2 : str
-        The parameters of the columns and of the rows.
+    parameter_name, parameter2_name : str
+        The parameters of the columns and of the rows (``"parameter"``, ``"parameter2"`` in files).
     values, values2 : ndarray
         Their values.
     periods : ndarray of int, shape (len(values2), len(values))
@@ -374,8 +374,8 @@ class PeriodMap:
     """
 
     model: str
-    parameter: str
-    parameter2: str
+    parameter_name: str
+    parameter2_name: str
     values: np.ndarray
     values2: np.ndarray
     periods: np.ndarray
@@ -388,8 +388,8 @@ class PeriodMap:
         return {
             "format": "saltation.period_map/1",
             "model": self.model,
-            "parameter": self.parameter,
-            "parameter2": self.parameter2,
+            "parameter": self.parameter_name,
+            "parameter2": self.parameter2_name,
             "values": [float(v) for v in self.values],
             "values2": [float(v) for v in self.values2],
             "periods": [[int(c) for c in row] for row in self.periods],
@@ -403,7 +403,7 @@ class PeriodMap:
         if d.get("format") != "saltation.period_map/1":
             raise ValueError(f"not a saltation period map (format {d.get('format')!r})")
         return cls(
-            model=d["model"], parameter=d["parameter"], parameter2=d["parameter2"],
+            model=d["model"], parameter_name=d["parameter"], parameter2_name=d["parameter2"],
             values=np.array(d["values"], dtype=float), values2=np.array(d["values2"], dtype=float),
             periods=np.array(d["periods"], dtype=int), max_period=int(d["max_period"]),
             failures=tuple((float(a), float(b), str(m)) for a, b, m in d["failures"]), settings=dict(d["settings"]),
@@ -432,8 +432,8 @@ class PeriodMap:
         bar = fig.colorbar(mesh, ax=ax, ticks=np.arange(-1, self.max_period + 1))
         bar.ax.set_yticklabels(["failed", "none"] + [str(k) for k in range(1, self.max_period + 1)])
         bar.set_label("period of the attractor (forcing periods)")
-        ax.set_xlabel(self.parameter)
-        ax.set_ylabel(self.parameter2)
+        ax.set_xlabel(self.parameter_name)
+        ax.set_ylabel(self.parameter2_name)
         ax.set_title(f"{self.model}: period of the attractor")
         return fig
 
@@ -536,7 +536,7 @@ def period_map(
             grid[i, j] = attractor_period(next(it), int(max_period), tolerance)
         failures += [(float(v), float(values2[i]), m) for v, m in fails]
     return PeriodMap(
-        model=system.name, parameter=parameter, parameter2=parameter2, values=values, values2=values2, periods=grid,
+        model=system.name, parameter_name=parameter, parameter2_name=parameter2, values=values, values2=values2, periods=grid,
         max_period=int(max_period), failures=tuple(failures),
         settings={"periods": periods, "transient": int(transient), "tolerance": float(tolerance), "t0": float(t0)},
     )
