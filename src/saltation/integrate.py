@@ -1,7 +1,8 @@
 """Event-driven integration of piecewise-smooth systems, forward and backward in time.
 
-The work happens in a compiled kernel generated per model (see
-:mod:`saltation.codegen`); this module is the thin typed driver around it.
+The work happens in the compiled engine, shared by every model, with the
+model's own compiled functions (see :mod:`saltation.codegen`); this module is
+the thin typed driver around it.
 """
 
 from __future__ import annotations
