@@ -260,7 +260,7 @@ def generate_source(system: PiecewiseSystem) -> str:
     src += _dispatch("reset_map", "k, t, x, p, out", "k", reset_cases, "None")
     src += _dispatch("reset_jac", "k, t, x, p, gx, gt, gp", "k", rjac_cases, "None")
 
-    src += _affine_source(system, em, ind)
+    src += _affine_source(system, em)
 
     # guards of transitions, domains of modes (the initial-mode rule)
     src += _dispatch("guard", "k, t, x, p", "k", _condition_cases(em, system.guards, ind), "True")
@@ -293,7 +293,7 @@ def _period_source(system: PiecewiseSystem, em: _Emitter) -> list[str]:
     return src
 
 
-def _affine_source(system: PiecewiseSystem, em: _Emitter, ind: str) -> list[str]:
+def _affine_source(system: PiecewiseSystem, em: _Emitter) -> list[str]:
     """``affine_modes`` and the parts ``A, B, (omega, phase)`` of affine modes with their parameter derivatives."""
     forms = [affine_form(f, system.x, TIME) for f in system.fields]
     src = [f"affine_modes = np.array({[f is not None for f in forms]!r}, dtype=np.bool_)"]
