@@ -95,7 +95,11 @@ def test_special_points_equal_those_of_the_per_model_kernels(figure):
     ref = REFERENCE["special_points"][figure]
     assert [sp.kind.value for sp in points] == [r["kind"] for r in ref]
     for sp, r in zip(points, ref):
-        assert sp.parameter == pytest.approx(r["parameter"], abs=1e-12)
+        # the same point, located to its own accuracy: since the recording, a shooting guess next to a
+        # switching surface starts from the middle of its longest stretch between events (the unstable
+        # branch of Fig. 7 starts in the stick band's border), so the bisection path, and the located
+        # parameter within its bracket, differ; everything else is the recorded result
+        assert abs(sp.parameter - r["parameter"]) <= sp.accuracy
         got = [] if sp.multipliers is None else [[z.real, z.imag] for z in sp.multipliers]
         np.testing.assert_allclose(got, r["multipliers"], rtol=0, atol=1e-12)
 

@@ -14,12 +14,14 @@ from .continuation import ContinuationSettings, continue_branch, continue_orbit
 from .errors import (
     ChatteringError,
     ConvergenceError,
+    InconsistentResultError,
     InitialModeError,
     IntegrationError,
     ModelError,
     NonFiniteError,
     SaltationError,
     SlidingError,
+    StationaryStateError,
     StepSizeError,
 )
 from .integrate import EventKind, Flow, Status, SwitchingEvent, Tolerances, Trajectory, simulate
@@ -30,9 +32,9 @@ from .sweeps import period_map, sweep
 __version__ = "0.1.0"
 
 __all__ = [
-    "Branch", "ChatteringError", "ContinuationSettings", "ConvergenceError", "Crossing", "EventKind", "Flow",
+    "Branch", "ChatteringError", "ContinuationSettings", "ConvergenceError", "Crossing", "InconsistentResultError", "EventKind", "Flow",
     "InitialModeError", "IntegrationError", "Mode", "ModelError", "NonFiniteError", "PeriodicOrbit",
-    "PiecewiseSystem", "SaltationError", "ShootingProblem", "SlidingError", "SpecialPoint", "SpecialPointKind",
+    "PiecewiseSystem", "SaltationError", "ShootingProblem", "SlidingError", "SpecialPoint", "StationaryStateError", "SpecialPointKind",
     "Status", "StepSizeError", "SwitchingEvent", "Tolerances", "Trajectory", "Transition", "continue_branch",
     "continue_orbit", "find_periodic_orbit", "period_map", "simulate", "sweep",
 ]

@@ -183,12 +183,12 @@ class SpecialPointDetector:
             hopf = _remembered("hopf", _hopf_test)
             if _crosses(hopf(a), hopf(b)):
                 found.append(self.locate_smooth(a, b, index, SpecialPointKind.HOPF, hopf))
-            return found
+            return [sp for sp in found if sp is not None]
         for kind, test in ((SpecialPointKind.PERIOD_DOUBLING, _flip_test), (SpecialPointKind.NEIMARK_SACKER, _ns_test)):
             g = _remembered(kind.value, lambda s, test=test: test(_nontrivial(s, self.autonomous)))
             if _crosses(g(a), g(b)):
                 found.append(self.locate_smooth(a, b, index, kind, g))
-        return found
+        return [sp for sp in found if sp is not None]
 
     def _oriented_tangent(self, sol: Solution, direction: np.ndarray) -> np.ndarray:
         """The unit tangent at ``sol`` oriented along ``direction`` (the one continuation computed, if any)."""
@@ -203,8 +203,16 @@ class SpecialPointDetector:
 
     def locate_smooth(
         self, a: Solution, b: Solution, index: int, kind: SpecialPointKind, test: Callable[[Solution], float]
-    ) -> SpecialPoint:
-        """Illinois iteration on a continuous test function along the secant from ``a`` to ``b``."""
+    ) -> SpecialPoint | None:
+        """Illinois iteration on a continuous test function along the secant from ``a`` to ``b``.
+
+        A fold or period doubling is reported only if the located orbit has a (nontrivial)
+        multiplier at +1 or -1 (an equilibrium's fold an eigenvalue at 0) within the point's
+        ``multipliers_accuracy``: how much the multipliers change across the final bracket plus
+        the error of the monodromy matrices.  A turning point without it is no fold (a corner
+        of the branch that the event sequence does not show, or an orbit the integration cannot
+        resolve), and None is returned.
+        """
         sa, sb = 0.0, 1.0
         ga, gb = test(a), test(b)
         lo, hi = a, b
@@ -235,6 +243,13 @@ class SpecialPointDetector:
                 side = 1
         best = lo if abs(test(lo)) <= abs(test(hi)) else hi
         bracket = (min(lo.lam, hi.lam), max(lo.lam, hi.lam))
+        multipliers_accuracy = float("nan")
+        target = _CRITICAL_MULTIPLIER.get((kind, self.equilibrium))
+        if target is not None:
+            near = [_nearest(_nontrivial(s, self.autonomous), target) for s in (lo, hi, best)]
+            multipliers_accuracy = abs(near[0] - near[1]) + max(self._matrix_error(lo), self._matrix_error(hi))
+            if not abs(near[2] - target) <= multipliers_accuracy:
+                return None
         return SpecialPoint(
             kind=kind,
             parameter=best.lam,
@@ -245,7 +260,22 @@ class SpecialPointDetector:
             period=best.summary.period,
             amplitude=best.summary.amplitude,
             multipliers=best.summary.multipliers,
+            multipliers_accuracy=multipliers_accuracy,
         )
+
+    def _matrix_error(self, sol: Solution) -> float:
+        """An error estimate of the multipliers' matrix at a solution: for autonomous orbits
+        ``|M n - n|`` (the trivial multiplier's error), for forced ones the flow's error estimate
+        relative to the state, times ``|M|``; rounding for an equilibrium's Jacobian."""
+        ev = sol.evaluation
+        if self.equilibrium:
+            return 1e-12 * (1.0 + float(np.linalg.norm(ev.jac_u)))
+        if self.autonomous:
+            return float(sol.summary.trivial_error)
+        traj = ev.trajectory
+        flow = self.problem.flow
+        relative = flow.integration_error(traj, self.problem.tolerances) / (1.0 + float(np.abs(traj.x1).max()))
+        return relative * (1.0 + float(np.linalg.norm(traj.monodromy)))
 
     def locate_nonsmooth(self, a: Solution, b: Solution, index: int) -> SpecialPoint:
         """Bisection along the secant on the event sequence, then set-valued multipliers."""
@@ -591,6 +621,22 @@ def _remembered(name: str, test: Callable[[Solution], float]) -> Callable[[Solut
         return sol.tests[name]
 
     return value
+
+
+#: The multiplier (eigenvalue, for equilibria) a smooth special point must have, by kind and
+#: whether the branch is of equilibria.
+_CRITICAL_MULTIPLIER = {
+    (SpecialPointKind.FOLD, False): 1.0,
+    (SpecialPointKind.PERIOD_DOUBLING, False): -1.0,
+    (SpecialPointKind.FOLD, True): 0.0,
+}
+
+
+def _nearest(mu: np.ndarray, target: float) -> complex:
+    """The multiplier nearest ``target`` (``inf`` when there is none)."""
+    mu = np.asarray(mu, dtype=complex)
+    mu = mu[np.isfinite(mu)]
+    return complex(mu[int(np.argmin(np.abs(mu - target)))]) if mu.size else complex(np.inf)
 
 
 def _crosses(ga: float, gb: float) -> bool:

@@ -26,6 +26,8 @@ class SpecialPointKind(enum.Enum):
     CROSSING_SLIDING = "crossing_sliding"
     SWITCHING_SLIDING = "switching_sliding"
     ADDING_SLIDING = "adding_sliding"
+    #: the orbits of a branch shrink onto an equilibrium: located where their excursion extrapolates to zero
+    CYCLE_COLLAPSE = "cycle_collapse"
 
     @property
     def is_nonsmooth(self) -> bool:
@@ -55,6 +57,7 @@ class StopReason(enum.Enum):
     MIN_STEP = "the corrector failed at the minimum step size"
     CLOSED_LOOP = "the branch closed on itself"
     USER = "stopped by the user"
+    CYCLE_COLLAPSE = "the cycle collapsed onto an equilibrium"
 
 
 class BranchKind(enum.Enum):

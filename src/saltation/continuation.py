@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .bifurcations import SpecialPointDetector, grazing_point
-from .branch import Branch, BranchKind, BranchPoint, StopReason
+from .branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind, StopReason
 from .corrector import Corrector, Solution, canonical_events
 from .errors import ModelError, SaltationError
 from .shooting import EquilibriumProblem, PeriodicOrbit, ShootingProblem
@@ -184,6 +184,11 @@ class Continuation:
                 if jumped is not None:
                     new, grazing = jumped
             if new is None:
+                collapse = self._collapse(strict=False)
+                if collapse is not None:
+                    self.branch.special_points.append(collapse)
+                    self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
+                    return
                 self.branch.stop_reason = StopReason.MIN_STEP
                 return
             self._accept(new)
@@ -197,7 +202,13 @@ class Continuation:
                         closed = True  # met again, from the same side: the branch has come round a loop
                     else:
                         self.branch.special_points.append(sp)
+            collapse = self._collapse(strict=True)
+            if collapse is not None:
+                self.branch.special_points.append(collapse)
             yield self.branch.points[-1]
+            if collapse is not None:
+                self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
+                return
             if closed:
                 self.branch.stop_reason = StopReason.CLOSED_LOOP
                 return
@@ -265,6 +276,50 @@ class Continuation:
                     continue
                 return cand, special
         return None
+
+    def _collapse(self, *, strict: bool) -> SpecialPoint | None:
+        """The cycle collapse ahead of the last three orbits of an autonomous branch, or None.
+
+        Where the orbits shrink onto an equilibrium their excursion ``e`` (see
+        :class:`~saltation.shooting.SolutionSummary`) tends to zero.  With the last three points
+        shrinking, ``e`` is extrapolated linearly in the parameter from the last two; if it reaches
+        zero within 1.5 steps ahead (4 when the corrector has failed: ``strict`` False), the branch
+        ends there.  The accuracy is the distance between that extrapolation and the one from the
+        two points before, which tend to the limit together.
+        """
+        prob = self.problem
+        if not isinstance(prob, ShootingProblem) or not prob.autonomous or len(self.solutions) < 3:
+            return None
+        sols = self.solutions[-3:]
+        e = [float(s.summary.excursion) for s in sols]
+        lam = [s.lam for s in sols]
+        if not (np.all(np.isfinite(e)) and e[0] > e[1] > e[2] > 0.0) or lam[2] == lam[1] or lam[1] == lam[0]:
+            return None
+
+        def zero_of(i: int, j: int) -> float:
+            return lam[j] - e[j] * (lam[j] - lam[i]) / (e[j] - e[i])
+
+        limit, before = zero_of(1, 2), zero_of(0, 1)
+        step = lam[2] - lam[1]
+        ahead = (limit - lam[2]) / step
+        if not 0.0 <= ahead <= (1.5 if strict else 4.0):
+            return None
+        accuracy = abs(limit - before)
+        last = sols[-1]
+        traj = last.evaluation.trajectory
+        return SpecialPoint(
+            kind=SpecialPointKind.CYCLE_COLLAPSE,
+            parameter=float(limit),
+            bracket=(float(limit - accuracy), float(limit + accuracy)),
+            accuracy=float(accuracy),
+            index=len(self.branch.points) - 1,
+            state=0.5 * (traj.x_max + traj.x_min),
+            period=last.summary.period,
+            amplitude=0.0,
+            note=(f"the orbits shrink onto an equilibrium: excursions {e[0]:.3g}, {e[1]:.3g}, {e[2]:.3g} at "
+                  f"{prob.lam_name} = {lam[0]:.6g}, {lam[1]:.6g}, {lam[2]:.6g} extrapolate to zero at "
+                  f"{limit:.10g} (within {accuracy:.1e}); the state is the centre of the last orbit"),
+        )
 
     def _predict(self, ds: float) -> np.ndarray:
         """Predictor along the last tangent, with the curvature of the last step where the branch is smooth.

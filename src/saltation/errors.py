@@ -54,3 +54,33 @@ class ConvergenceError(SaltationError, RuntimeError):
         self.residuals = [float(r) for r in residuals]
         history = ", ".join(f"{r:.3e}" for r in self.residuals)
         super().__init__(f"{message} (residual history: [{history}])" if self.residuals else message)
+
+
+class StationaryStateError(SaltationError, RuntimeError):
+    """Shooting converged to a state that does not move: not a periodic orbit.
+
+    An equilibrium of a mode, a point of a sliding or sticking set where the
+    motion stops (a pseudo-equilibrium), or a period that shrank to zero.  The
+    message says "equilibrium" and gives the state.
+
+    Attributes
+    ----------
+    state : ndarray, shape (n,)
+        The state shooting converged to.
+    period : float
+        The period it converged to.
+    """
+
+    def __init__(self, message: str, state: Sequence[float] = (), period: float = float("nan")):
+        self.state = [float(v) for v in state]
+        self.period = float(period)
+        super().__init__(message)
+
+
+class InconsistentResultError(SaltationError, RuntimeError):
+    """A computed result contradicts itself beyond its stated accuracy.
+
+    For example the trivial multiplier of an autonomous orbit that is not 1, or
+    a state on a switching surface whose event the monodromy misses.  Raised
+    instead of returning the result.
+    """

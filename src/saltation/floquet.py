@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import cmath
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +27,75 @@ def multipliers_from_monodromy(monodromy: np.ndarray, *, backward: bool = False)
     if backward:
         mu = reciprocal(mu)
     return sort_multipliers(mu)
+
+
+@dataclass(frozen=True)
+class AutonomousMultipliers:
+    """Floquet multipliers of an autonomous orbit, the trivial direction deflated.
+
+    Attributes
+    ----------
+    multipliers : ndarray, complex
+        Forward-time multipliers, sorted as :func:`sort_multipliers`: the
+        trivial one (``n.T M n`` along the unit velocity ``n``) and the
+        eigenvalues of the return map's derivative on the section normal to the flow.
+    trivial_error : float
+        ``|M n - n|``: how far the monodromy is from mapping the flow direction
+        to itself (0 for an exact monodromy of a closed orbit).  It bounds the
+        trivial multiplier's distance from 1 and is the accuracy figure of the
+        monodromy matrix.
+    """
+
+    multipliers: np.ndarray
+    trivial_error: float
+
+
+def autonomous_multipliers(monodromy: np.ndarray, velocity: np.ndarray, *, backward: bool = False) -> AutonomousMultipliers:
+    """Multipliers of an autonomous orbit with the trivial direction deflated.
+
+    The monodromy ``M`` of a closed orbit maps the velocity ``f(x0)`` to itself.
+    In an orthonormal basis ``[n, Q]`` with ``n = f / |f|``, ``Q.T M Q`` is the
+    derivative of the return map on the section through ``x0`` normal to the
+    flow (the projection along ``f`` of ``M`` onto that section), whose
+    eigenvalues are the nontrivial multipliers; the trivial one is
+    ``n.T M n``.  A fold of a two-state orbit then reports ``1`` and ``1``
+    (not the pair ``1 +- i sqrt(err)`` that the double eigenvalue of the full
+    matrix gives under rounding).
+
+    Parameters
+    ----------
+    monodromy : ndarray, shape (n, n)
+        In the direction of integration.
+    velocity : ndarray, shape (n,)
+        The vector field at the orbit's state (the sliding field on a sliding motion).
+    backward : bool
+        Reciprocal multipliers (see :func:`multipliers_from_monodromy`); a backward
+        multiplier not above ``max(1e-13, trivial_error)`` in magnitude, zero to the
+        monodromy's accuracy, becomes an infinite forward one.
+
+    Raises
+    ------
+    ValueError
+        If the velocity is zero (a stationary state has no flow direction).
+    """
+    M = np.asarray(monodromy, dtype=float)
+    f = np.asarray(velocity, dtype=float)
+    norm = float(np.linalg.norm(f))
+    if not norm > 0.0 or not math.isfinite(norm):
+        raise ValueError("the velocity is zero or not finite: no flow direction to deflate")
+    n_dir = f / norm
+    # Householder reflection: an orthonormal basis whose first vector is n_dir
+    v = n_dir.copy()
+    v[0] += math.copysign(1.0, v[0] if v[0] != 0.0 else 1.0)
+    H = np.eye(len(f)) - 2.0 * np.outer(v, v) / float(v @ v)
+    Q = H[:, 1:]
+    Mn = M @ n_dir
+    trivial = float(n_dir @ Mn)
+    error = float(np.linalg.norm(Mn - n_dir))
+    mu = np.append(complex(trivial), eigenvalues(Q.T @ M @ Q)) if len(f) > 1 else np.array([complex(trivial)])
+    if backward:  # a backward multiplier within the monodromy's accuracy of zero is an infinite forward one
+        mu = reciprocal(mu, zero=max(1e-13, error))
+    return AutonomousMultipliers(sort_multipliers(mu), error)
 
 
 def eigenvalues(matrix: np.ndarray) -> np.ndarray:

@@ -428,6 +428,51 @@ class Flow:
         ht = self._model[kc.INDICATOR_GRAD](int(s), float(t), _c_array(x), _c_array(p), hx, hp)
         return hx, float(ht), hp[: self.system.n_params]
 
+    def guard_holds(self, transition: int, t: float, x: Sequence[float], p: np.ndarray) -> bool:
+        """Whether every condition of a transition's guard holds at ``(t, x)``."""
+        return bool(self._model[kc.GUARD](int(transition), float(t), _c_array(x), _c_array(p)))
+
+    def transition_jump(
+        self, transition: int, t: float, x: Sequence[float], p: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Fire a transition at a state on its surface: ``(x+, S, dx+/dp)``.
+
+        The saltation matrix by the general formula (eq. 9 with a reset ``g``),
+        ``S = g_x + (f+ - g_x f- - g_t) h_x / (h_x f- + h_t)``, with ``f-`` the
+        field of the transition's source mode and ``f+`` that of its target at
+        ``x+ = g(t, x, p)``; the same formula as the engine's at every event,
+        and the same in backward time (reversing time flips the numerator and
+        the denominator alike).
+        The third item is the jump's own parameter derivative
+        ``g_p + (f+ - g_x f- - g_t) h_p / (h_x f- + h_t)``, shape ``(n, n_params)``.
+
+        Raises
+        ------
+        IntegrationError
+            If the flow is tangent to the surface there (the saltation matrix is undefined).
+        """
+        sys_ = self.system
+        n, k = sys_.n, int(transition)
+        tr = sys_.transitions[k]
+        x = _c_array(np.array(x, dtype=float))
+        p = _c_array(p)
+        gx, gt, gp = np.eye(n), np.zeros(n), np.zeros((n, max(sys_.n_params, 1)))
+        x_plus = x.copy()
+        if sys_.resets[k] is not None:
+            self._model[kc.RESET_MAP](k, float(t), x, p, x_plus)
+            self._model[kc.RESET_JAC](k, float(t), x, p, gx, gt, gp)
+        f_minus = self.vector_field(tr.source, t, x, p)
+        f_plus = self.vector_field(tr.target, t, x_plus, p)
+        hx, ht, hp = self.indicator_gradient(tr.surface, t, x, p)
+        den = float(hx @ f_minus) + ht
+        if den == 0.0 or not math.isfinite(den):
+            raise IntegrationError(f"transition {tr.label!r} at t = {t:.12g}: the flow is tangent to surface "
+                                   f"{tr.surface!r}, the saltation matrix is undefined")
+        w = f_plus - gx @ f_minus - gt
+        S = gx + np.outer(w, hx) / den
+        dp = gp[:, : sys_.n_params] + np.outer(w, hp) / den
+        return x_plus, S, dp
+
     def run(
         self,
         x0: Sequence[float],

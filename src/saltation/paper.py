@@ -85,7 +85,7 @@ class SmoothingRow:
     stop_reason : str
     unstable_multiplier : float
         ``|mu|`` of the smoothed unstable cycle at ``v_dr = 1`` found by backward-time shooting
-        (``inf`` when its backward multiplier is below ``1e-13``: beyond double precision).
+        (``inf`` when its backward multiplier is zero to the monodromy's accuracy: beyond double precision).
     unstable_amplitude : float
         Its amplitude, against the discontinuous model's infinitely unstable cycle.
     """

@@ -56,6 +56,7 @@ SPECIAL_POINT_MARKERS: dict[SpecialPointKind, tuple[str, str]] = {
     SpecialPointKind.CROSSING_SLIDING: ("<", "crossing-sliding"),
     SpecialPointKind.SWITCHING_SLIDING: (">", "switching-sliding"),
     SpecialPointKind.ADDING_SLIDING: ("d", "adding-sliding"),
+    SpecialPointKind.CYCLE_COLLAPSE: ("8", "cycle collapses onto an equilibrium"),
 }
 
 #: Axis label per amplitude measure; ``{x}`` is the name of the first state.

@@ -10,18 +10,54 @@ the small protocol that :mod:`saltation.continuation` uses:
   (backward time).
 * Autonomous systems: ``u = (x0, T)``, the same residual closed by the phase
   condition ``f(x_ref) . (x0 - x_ref) = 0``.
+
+Degenerate cases, each with its rule (see the orbits page of the user guide):
+
+* the guess lies on (or next to) a switching surface: the shooting state is
+  moved along the guess's own trajectory to the middle of its longest stretch
+  between events, so that the section (the phase condition) is transverse to
+  the flow and away from every surface;
+* a shot that ends on a surface, in the mode the transition out of it leads
+  away from the start mode, gets that transition applied at the end of the
+  period (its reset and saltation matrix): every event is logged once per period;
+* a state that does not move over the period (an equilibrium, a
+  pseudo-equilibrium, a period shrunk to zero) raises
+  :class:`~saltation.errors.StationaryStateError`;
+* an autonomous orbit whose monodromy does not map the flow direction to itself
+  (trivial multiplier off by more than :data:`TRIVIAL_MULTIPLIER_ACCURACY`)
+  raises :class:`~saltation.errors.InconsistentResultError`;
+* forced systems integrate from ``t0`` reduced modulo the forcing period,
+  autonomous ones from ``t = 0``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .errors import ConvergenceError, IntegrationError, ModelError, SaltationError
-from .floquet import is_stable, multipliers_from_monodromy, trivial_multiplier_error
+import math
+
+from .errors import (
+    ConvergenceError,
+    InconsistentResultError,
+    IntegrationError,
+    ModelError,
+    SaltationError,
+    StationaryStateError,
+)
+from .floquet import autonomous_multipliers, is_stable, multipliers_from_monodromy
 from .integrate import EventKind, Flow, SwitchingEvent, Tolerances, Trajectory
+
+#: The largest error of an autonomous orbit's trivial multiplier (``|M n - n|``, see
+#: :func:`saltation.floquet.autonomous_multipliers`) that a converged orbit may have.
+TRIVIAL_MULTIPLIER_ACCURACY = 1e-6
+#: An event closer than this fraction of the period to the start of the shooting interval moves the
+#: shooting state of a guess (or of a branch's orbit) to the middle of its longest stretch between events.
+SEAM_MARGIN = 0.02
+#: A state whose excursion over the period is below this many times the integration tolerance does not move.
+STATIONARY_FACTOR = 100.0
 
 
 @dataclass(frozen=True)
@@ -48,6 +84,10 @@ class SolutionSummary:
     monodromy: np.ndarray | None = None
     #: the event sequence by identity (see :func:`event_ids`): what detectors compare
     event_ids: tuple[tuple[int, int, int], ...] = ()
+    #: autonomous orbits: ``|M n - n|`` along the flow direction ``n``, the monodromy's accuracy figure
+    trivial_error: float = float("nan")
+    #: ``max_i (max x_i - min x_i)`` over the period: how far the orbit moves (0 for an equilibrium)
+    excursion: float = float("nan")
 
 
 def orbit_events(traj: Trajectory) -> list:
@@ -116,6 +156,10 @@ class PeriodicOrbit:
     residual_norm : float
     residuals : list of float
         Newton residual history.
+    trivial_error : float
+        Autonomous orbits: ``|M n - n|`` along the unit velocity ``n`` (see
+        :func:`saltation.floquet.autonomous_multipliers`), at most
+        :data:`TRIVIAL_MULTIPLIER_ACCURACY`; ``nan`` for forced orbits.
     """
 
     system_name: str
@@ -132,6 +176,7 @@ class PeriodicOrbit:
     iterations: int
     residual_norm: float
     residuals: list[float] = field(default_factory=list)
+    trivial_error: float = float("nan")
     #: the shooting problem that found it (its flow, tolerances and section): what
     #: :func:`saltation.continuation.continue_orbit` follows
     problem: ShootingProblem | None = field(default=None, repr=False, compare=False)
@@ -157,8 +202,8 @@ class PeriodicOrbit:
 
     @property
     def trivial_multiplier_error(self) -> float:
-        """Distance of the trivial multiplier from 1 (autonomous orbits): an accuracy figure."""
-        return trivial_multiplier_error(self.multipliers) if self.autonomous else float("nan")
+        """How far the trivial multiplier can be from 1 (autonomous orbits): ``|M n - n|``, an accuracy figure."""
+        return self.trivial_error
 
     @property
     def events(self) -> list[SwitchingEvent]:
@@ -269,9 +314,14 @@ class ShootingProblem:
         self.lam_name = continuation_parameter
         self.backward = bool(backward)
         self.sign = -1.0 if backward else 1.0
-        self.t0 = float(t0)
         self.tolerances = tolerances
         self.autonomous = self.system.is_autonomous
+        t0 = float(t0)
+        if not math.isfinite(t0):
+            raise ModelError(f"t0 must be finite, got {t0}")
+        # an autonomous field does not depend on time: integrate from 0; a forced one from the phase of the
+        # forcing at t0 (a time of 1e12 keeps only 4 decimals: the orbit there is the orbit at t0 mod T)
+        self.t0 = 0.0 if self.autonomous else math.fmod(t0, self.system.forcing_period(self.p))
         self.x_ref: np.ndarray | None = None
         self.f_ref: np.ndarray | None = None
 
@@ -309,12 +359,66 @@ class ShootingProblem:
         """Anchor the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` at ``u``."""
         x = u[: self.system.n]
         p = self.parameters_at(lam)
-        f = self.flow.vector_field(self.flow.initial_mode(x, p, self.t0), self.t0, x, p)
+        mode = self.flow.initial_mode(x, p, self.t0)
+        f = self.flow.vector_field(mode, self.t0, x, p)
         norm = np.linalg.norm(f)
-        if norm == 0:
-            raise ModelError(f"phase condition undefined: the vector field vanishes at {x.tolist()}")
+        if not norm > 0:
+            raise StationaryStateError(
+                f"the state x = {x.tolist()} is an equilibrium of mode {self.system.mode_names[mode]!r} of "
+                f"{self.system.name!r} (its vector field vanishes there): no phase condition, not a periodic orbit", x)
         self.x_ref = x.copy()
         self.f_ref = f / norm
+
+    def start_off_surfaces(self, u: np.ndarray, lam: float | None = None) -> np.ndarray:
+        """An autonomous guess whose state lies away from every switching surface.
+
+        When the guess's state lies on a surface or next to one (the flow reaches it within
+        :data:`SEAM_MARGIN` of the period, either way in time), the state is moved along the guess's
+        own trajectory to the middle of its longest stretch between events that is not a sliding
+        motion.  The phase condition anchored there is transverse to the flow and away from the
+        surfaces, so Newton does not put the shooting state on a surface.  Otherwise, or when the
+        guess cannot be integrated (Newton then reports why), ``u`` is returned as it is.
+        """
+        if not self.autonomous:
+            return u
+        n = self.system.n
+        x0, T = np.asarray(u[:n], dtype=float), float(u[n])
+        if not (T > 0 and math.isfinite(T)):
+            return u
+        p = self.parameters_at(lam)
+        try:
+            traj = self.flow.run(x0, self.t0, self.t0 + self.sign * T, p, tolerances=self.tolerances)
+        except SaltationError:
+            return u
+        times = [abs(e.t - self.t0) for e in traj.events]
+        margin = SEAM_MARGIN * T
+        if not times or (min(times[0], T - times[-1]) >= margin and self._time_to_surfaces(x0, p) >= margin):
+            return u
+        best, t_mid, sliding = 0.0, None, False
+        for k, (a, b) in enumerate(zip([0.0, *times], [*times, T])):
+            if k > 0:
+                sliding = traj.events[k - 1].kind == EventKind.SLIDING_START
+            if not sliding and b - a > best:
+                best, t_mid = b - a, 0.5 * (a + b)
+        if t_mid is None or best < 2.0 * margin:
+            return u
+        try:
+            x_mid = self.flow.run(x0, self.t0, self.t0 + self.sign * t_mid, p, tolerances=self.tolerances).x1
+        except SaltationError:
+            return u
+        return np.append(x_mid, T)
+
+    def _time_to_surfaces(self, x: np.ndarray, p: np.ndarray) -> float:
+        """The least time ``|h| / |dh/dt|`` in which the flow at ``x`` reaches a switching surface (linearised)."""
+        flow, t = self.flow, self.t0
+        f = flow.vector_field(flow.initial_mode(x, p, t), t, x, p)
+        least = math.inf
+        for k in range(len(self.system.surface_names)):
+            h = abs(flow.indicator(k, t, x, p))
+            hx, ht, _ = flow.indicator_gradient(k, t, x, p)
+            rate = abs(float(hx @ f) + ht)
+            least = min(least, 0.0 if h == 0.0 else (h / rate if rate > 0.0 else math.inf))
+        return least
 
     def period_of(self, u: np.ndarray, lam: float | None = None) -> float:
         return float(u[-1]) if self.autonomous else self.periods * self.system.forcing_period(self.parameters_at(lam))
@@ -331,6 +435,7 @@ class ShootingProblem:
         traj = self.flow.run(
             x0, self.t0, self.t0 + self.sign * T, p, variational=True, sensitivity=pidx, tolerances=self.tolerances
         )
+        traj = self.close_period(traj, p, pidx)
         M = traj.monodromy
         jl = None
         if not self.autonomous:
@@ -356,6 +461,49 @@ class ShootingProblem:
             jl = np.zeros(n + 1)
             jl[:n] = traj.parameter_sensitivity
         return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
+
+    def close_period(self, traj: Trajectory, p: np.ndarray, sensitivity: int = -1) -> Trajectory:
+        """The shot with the event at the end of the period that closes it, if the engine left it pending.
+
+        A shot that starts in mode ``a`` (no event at its start) and ends, within rounding, on the
+        surface of a transition from its final mode ``b`` back to ``a`` has met that transition at the
+        end of the period: the orbit crosses there once per period.  The engine fires an event only
+        once the indicator has changed sign, so such a crossing exactly at ``t0 + T`` (a shooting state
+        on the surface, wherever the phase condition put it) would be missing from the monodromy.
+        It is applied here (reset, saltation matrix of eq. 9, parameter sensitivity) and logged
+        as an event at the end.  Any other shot is returned as it is.
+        """
+        sys_ = self.system
+        if traj.mode1 == traj.mode0 or traj.sliding_at_end or traj.monodromy is None:
+            return traj
+        if traj.events and traj.events[0].t == traj.t0:
+            return traj  # the start fired its own event: the shot starts after it
+        flow, t1, x1 = self.flow, traj.t1, traj.x1
+        scale = 1.0 + float(np.abs(x1).max())
+        for k, tr in enumerate(sys_.transitions):
+            if tr.source != traj.mode1 or tr.target != traj.mode0:
+                continue
+            h = flow.indicator(tr.surface, t1, x1, p)
+            hx, ht, _ = flow.indicator_gradient(tr.surface, t1, x1, p)
+            rate = abs(float(hx @ flow.vector_field(tr.source, t1, x1, p)) + ht)
+            # within a rounding error of the state (1e-12 relative), measured along the flow
+            if abs(h) > 1e-12 * scale * max(rate, float(np.linalg.norm(hx))) or not flow.guard_holds(k, t1, x1, p):
+                continue
+            x_plus, S, dp = flow.transition_jump(k, t1, x1, p)
+            psi = traj.parameter_sensitivity
+            if psi is not None and sensitivity >= 0:
+                psi = S @ psi + dp[:, sensitivity]
+            ev_t, ev_int, ev_xm, ev_xp, ev_S = traj.event_log
+            row = np.array([[0, k, sys_.surface_index(tr.surface), sys_.mode_index(tr.source),
+                             sys_.mode_index(tr.target)]], dtype=ev_int.dtype)
+            row[0, 0] = int(EventKind.TRANSITION)
+            log = (np.append(ev_t, t1), np.vstack([ev_int, row]), np.vstack([ev_xm, x1[None, :]]),
+                   np.vstack([ev_xp, x_plus[None, :]]), np.concatenate([ev_S, S[None, :, :]]))
+            return replace(
+                traj, x1=x_plus, mode1=tr.target, event_log=log, monodromy=S @ traj.monodromy,
+                parameter_sensitivity=psi, velocity_end=flow.vector_field(tr.target, t1, x_plus, p),
+            )
+        return traj
 
     def correct(
         self, z_pred: np.ndarray, normal: np.ndarray, *, tol: float, max_newton: int, max_correction: float
@@ -390,6 +538,8 @@ class ShootingProblem:
         p_end = self.p.copy()
         p_end[self.lam_index] = z[-1]
         traj = self.flow.shot_trajectory(found, z[:n].copy(), self.t0, p_end, self.lam_index)  # a failed shot raises
+        if self.close_period(traj, p_end) is not traj:
+            return None  # an event at the end of the period, which the kernel's iteration does not apply
         if not found.converged:
             raise ConvergenceError("corrector did not converge", found.history)
         m, jac = len(z) - 1, found.jacobian
@@ -397,10 +547,80 @@ class ShootingProblem:
                         trajectory=traj)
         return z, ev, found.iterations
 
+    def verify(self, u: np.ndarray, lam: float | None, traj: Trajectory) -> tuple[np.ndarray, float]:
+        """The forward-time multipliers of a solved point and its trivial multiplier's error, once the
+        point is known to be a periodic orbit.
+
+        Raises
+        ------
+        StationaryStateError
+            If the state does not move over the period (see :meth:`stationary_reason`).
+        InconsistentResultError
+            If an autonomous orbit's monodromy does not map the flow direction to itself within
+            :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
+        """
+        reason = self.stationary_reason(u, lam, traj)
+        if reason is not None:
+            raise StationaryStateError(reason, u[: self.system.n], self.period_of(u, lam))
+        if not self.autonomous:
+            return multipliers_from_monodromy(traj.monodromy, backward=self.backward), float("nan")
+        found = autonomous_multipliers(traj.monodromy, traj.velocity_end, backward=self.backward)
+        if not found.trivial_error <= TRIVIAL_MULTIPLIER_ACCURACY:
+            x0 = np.array2string(np.asarray(u[: self.system.n]), precision=8)
+            raise InconsistentResultError(
+                f"the orbit of {self.system.name!r} from x0 = {x0} (period {self.period_of(u, lam):.10g}) does not "
+                f"map its own flow direction to itself: |M n - n| = {found.trivial_error:.2e} > "
+                f"{TRIVIAL_MULTIPLIER_ACCURACY:g}, so its trivial multiplier is not 1 and its monodromy is wrong "
+                "(an event missing from it, or too loose integration tolerances)"
+            )
+        return found.multipliers, found.trivial_error
+
+    def stationary_reason(self, u: np.ndarray, lam: float | None, traj: Trajectory) -> str | None:
+        """Why a solved point is not a periodic orbit, or None: its state does not move over the period.
+
+        The excursion ``max_i (max x_i - min x_i)`` over the period is compared with
+        :data:`STATIONARY_FACTOR` times the integration tolerance at the state's scale.  Below it, the
+        point is an equilibrium of a mode, a pseudo-equilibrium (a point of a sliding or sticking set
+        where the sliding motion stops), or a period shrunk to zero.
+        """
+        tol = self.tolerances or self.flow.tolerances
+        n = self.system.n
+        x0 = np.asarray(u[:n], dtype=float)
+        scale = 1.0 + float(np.abs(x0).max())
+        floor = STATIONARY_FACTOR * (tol.atol + tol.rtol * scale)
+        excursion = float(np.max(traj.x_max - traj.x_min))
+        if excursion > floor:
+            return None
+        T = self.period_of(u, lam)
+        where = f"at x = {np.array2string(x0, precision=10)}"
+        p = self.parameters_at(lam)
+        sliding = traj.sliding_at_end or any(e.kind != EventKind.TRANSITION for e in traj.events)
+        speed = float(np.linalg.norm(traj.velocity_end))
+        if sliding and speed <= floor:
+            surfaces = sorted({e.surface for e in traj.events if e.kind == EventKind.SLIDING_START})
+            on = f" on surface {surfaces[0]!r}" if surfaces else ""
+            return (f"shooting for {self.system.name!r} converged to a pseudo-equilibrium{on} {where}: a point of a "
+                    f"sliding or sticking set where the motion stops (it moves by {excursion:.1e} over the period "
+                    f"{T:.6g}), not a periodic orbit")
+        f = self.flow.vector_field(traj.mode0, self.t0, x0, p)
+        if float(np.linalg.norm(f)) <= floor:
+            return (f"shooting for {self.system.name!r} converged to an equilibrium of mode {traj.mode0!r} {where} "
+                    f"(|f| = {float(np.linalg.norm(f)):.1e}; it moves by {excursion:.1e} over the period {T:.6g}), "
+                    "not a periodic orbit")
+        return (f"shooting for {self.system.name!r} converged to the period T = {T:.3e} {where}, over which the "
+                f"state moves by {excursion:.1e} only (|f| = {float(np.linalg.norm(f)):.3g}): it does not return by "
+                "its own motion; not a periodic orbit, nor an equilibrium; give a better period guess")
+
     def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
-        """Summary of a solved point for a branch (multipliers, amplitude, events)."""
+        """Summary of a solved point for a branch (multipliers, amplitude, events).
+
+        Raises
+        ------
+        StationaryStateError, InconsistentResultError
+            As :meth:`verify`: such a point is not accepted on a branch.
+        """
         traj = ev.trajectory
-        mu = multipliers_from_monodromy(traj.monodromy, backward=self.backward)
+        mu, trivial_error = self.verify(u, lam, traj)
         return SolutionSummary(
             state=np.array(u[: self.system.n]),
             period=self.period_of(u, lam),
@@ -411,6 +631,8 @@ class ShootingProblem:
             event_labels=event_labels(traj),
             monodromy=traj.monodromy,
             event_ids=event_ids(traj),
+            trivial_error=trivial_error,
+            excursion=float(np.max(traj.x_max - traj.x_min)),
         )
 
     def accept(self, u: np.ndarray, lam: float | None) -> None:
@@ -426,9 +648,15 @@ class ShootingProblem:
         ------
         ConvergenceError
             With the residual history when Newton fails.
+        StationaryStateError
+            When it converges to a state that does not move (an equilibrium, a pseudo-equilibrium, a
+            period shrunk to zero).
+        InconsistentResultError
+            When an autonomous orbit's trivial multiplier is not 1 within :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
         """
         u0 = np.asarray(u0, dtype=float)
         if self.autonomous:
+            u0 = self.start_off_surfaces(u0, lam)
             self.set_phase_reference(u0, lam)
         else:
             # the period is fixed: the whole iteration runs in the compiled kernel
@@ -441,7 +669,8 @@ class ShootingProblem:
             if found is not None and found.converged:  # otherwise the Python iteration explains the failure
                 x = found.z.copy()
                 traj = self.flow.shot_trajectory(found, x, self.t0, p, -1)
-                return self.orbit(x, lam, traj, found.history, period=T, parameters=p)
+                if self.close_period(traj, p) is traj:  # else an event at the end: iterate in Python
+                    return self.orbit(x, lam, traj, found.history, period=T, parameters=p)
 
         def fun(u):
             ev = self.evaluate(u, lam, need_lam=False)
@@ -462,6 +691,7 @@ class ShootingProblem:
         ``period`` and ``parameters`` (at ``lam``) when the caller has them already.
         """
         M = trajectory.monodromy
+        mu, trivial_error = self.verify(u, lam, trajectory)
         return PeriodicOrbit(
             system_name=self.system.name,
             state0=np.array(u[: self.system.n]),
@@ -471,12 +701,13 @@ class ShootingProblem:
             autonomous=self.autonomous,
             parameters=self.parameters_at(lam) if parameters is None else parameters,
             monodromy=M,
-            multipliers=multipliers_from_monodromy(M, backward=self.backward),
+            multipliers=mu,
             trajectory=trajectory,
             converged=True,
             iterations=max(len(history) - 1, 0),
             residual_norm=float(history[-1]),
             residuals=list(history),
+            trivial_error=trivial_error,
             problem=self,
         )
 
@@ -503,11 +734,47 @@ def find_periodic_orbit(
     parameters : mapping, optional
         Parameter overrides.
     period : float, optional
-        Period guess (autonomous systems; forced systems use the forcing period).
+        Period guess of an autonomous system.  A forced system's period is its
+        forcing period; a ``period`` given for it must equal that.
     backward : bool
         Shoot in backward time.
+    t0 : float
+        Initial time (forced systems: the phase of the forcing; reduced modulo
+        the forcing period before integrating).
+    tol : float
+        Newton tolerance: converged when ``|r| <= tol (1 + |u|)``.
+    max_iter : int
+        Largest number of Newton iterations.
+    tolerances : Tolerances, optional
+        Integration tolerances (the flow's by default).
+
+    Returns
+    -------
+    PeriodicOrbit
+        With its forward-time multipliers; for autonomous orbits the trivial
+        direction is deflated (:func:`saltation.floquet.autonomous_multipliers`).
+
+    Raises
+    ------
+    ModelError
+        A ``period`` that contradicts the forcing period, a state of the wrong size.
+    ConvergenceError
+        Newton did not converge (with its residual history).
+    StationaryStateError
+        Shooting converged to a state that does not move: an equilibrium, a
+        pseudo-equilibrium, or a period shrunk to zero.
+    InconsistentResultError
+        An autonomous orbit whose trivial multiplier is not 1 to
+        :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
     """
     prob = ShootingProblem(flow, parameters, backward=backward, t0=t0, tolerances=tolerances)
+    if not prob.autonomous and period is not None:
+        forced = prob.period_of(prob.pack(state0))
+        if not abs(float(period) - forced) <= 1e-12 * forced:
+            raise ModelError(
+                f"model {flow.system.name!r} is forced: its period is the forcing period {forced:.10g} at these "
+                f"parameters, not the period {period!r} given (omit period, or change the forcing parameters)"
+            )
     return prob.solve(prob.pack(state0, period), tol=tol, max_iter=max_iter)
 
 
