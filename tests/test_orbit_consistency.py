@@ -1,0 +1,198 @@
+"""Periodic orbits that agree with themselves, from the most natural (and most degenerate) guesses.
+
+References: the Floquet multipliers of the same cycle from a guess off the switching surface (a
+different section, a different Newton path), closed-form equilibria, the forcing period, and the
+eigenvalues of matrices built with a known eigenstructure.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from saltation import (
+    Crossing,
+    Flow,
+    InconsistentResultError,
+    Mode,
+    ModelError,
+    PiecewiseSystem,
+    SaltationError,
+    ShootingProblem,
+    StationaryStateError,
+    Transition,
+    find_periodic_orbit,
+)
+from saltation.floquet import autonomous_multipliers
+from saltation.models import block_on_belt, trilinear
+from saltation.shooting import TRIVIAL_MULTIPLIER_ACCURACY, newton
+
+
+def vdp_friction() -> PiecewiseSystem:
+    """``x'' - eps (1 - x^2) x' + x + mu sgn(x') = 0``, the surface ``v = 0`` listed both ways."""
+    return PiecewiseSystem(
+        name="vdp_friction_consistency",
+        states=["x", "v"],
+        parameters={"eps": 0.5, "mu": 0.2},
+        modes=[
+            Mode("plus", ["v", "eps*(1 - x**2)*v - x - mu"], domain=["v > 0"]),
+            Mode("minus", ["v", "eps*(1 - x**2)*v - x + mu"]),
+        ],
+        surfaces={"v0": "v"},
+        transitions=[
+            Transition("plus", "v0", Crossing.FALLING, "minus"),
+            Transition("minus", "v0", Crossing.RISING, "plus"),
+        ],
+    )
+
+
+@pytest.fixture(scope="module")
+def vdp_flow() -> Flow:
+    return Flow(vdp_friction())
+
+
+@pytest.fixture(scope="module")
+def off_surface_orbit(vdp_flow):
+    """The stable cycle from a guess off the surface: the reference for the degenerate starts."""
+    return find_periodic_orbit(vdp_flow, [2.0, 0.5], period=7.0)
+
+
+def _newton_on_the_surface(flow: Flow) -> tuple[ShootingProblem, np.ndarray, list, object]:
+    """Shooting with the phase condition anchored at the turning point (2, 0): its hyperplane is the
+    switching surface v = 0 itself, so Newton keeps the state on the surface (what the guess's own
+    relocation avoids)."""
+    prob = ShootingProblem(flow)
+    u0 = prob.pack([2.0, 0.0], 7.0)
+    prob.set_phase_reference(u0)
+
+    def fun(u):
+        ev = prob.evaluate(u, need_lam=False)
+        return ev.residual, ev.jac_u, ev
+
+    u, history, ev = newton(fun, u0, damped=True)
+    return prob, u, history, ev
+
+
+def test_a_state_on_the_surface_keeps_every_saltation_matrix_in_the_monodromy(vdp_flow, off_surface_orbit):
+    prob, u, history, ev = _newton_on_the_surface(vdp_flow)
+    assert abs(u[1]) <= 1e-12  # the state lies on v = 0, as the phase condition says
+    orbit = prob.orbit(u, None, ev.trajectory, history)
+    # the crossing at t0 + T is applied and logged: one crossing each way per period
+    assert sorted(e.mode_to for e in orbit.events) == ["minus", "plus"]
+    assert orbit.events[-1].t == pytest.approx(orbit.t0 + orbit.period, abs=1e-12)
+    np.testing.assert_allclose(orbit.period, off_surface_orbit.period, rtol=1e-10)
+    np.testing.assert_allclose(orbit.multipliers, off_surface_orbit.multipliers, atol=1e-8)
+    assert orbit.trivial_multiplier_error <= 1e-8
+
+
+def test_a_monodromy_without_the_crossing_is_an_error_not_a_printout(vdp_flow, monkeypatch):
+    """With the crossing at the end left out (as before it was applied), the trivial multiplier is
+    1.27: the orbit is refused, not printed."""
+    monkeypatch.setattr(ShootingProblem, "close_period", lambda self, traj, p, sensitivity=-1: traj)
+    prob, u, history, ev = _newton_on_the_surface(vdp_flow)
+    with pytest.raises(InconsistentResultError, match="trivial multiplier"):
+        prob.orbit(u, None, ev.trajectory, history)
+
+
+def test_a_guess_at_a_turning_point_on_the_surface_finds_the_cycle(vdp_flow, off_surface_orbit):
+    orbit = find_periodic_orbit(vdp_flow, [2.0, 0.0], period=7.0)
+    np.testing.assert_allclose(orbit.period, off_surface_orbit.period, rtol=1e-10)
+    np.testing.assert_allclose(orbit.multipliers, off_surface_orbit.multipliers, atol=1e-8)
+    assert len(orbit.events) == 2 and orbit.trivial_multiplier_error <= 1e-8
+    # the shooting state was moved off the surface, along the guess's own trajectory
+    assert abs(orbit.state0[1]) > 0.1
+
+
+def test_the_equilibrium_of_the_block_on_a_belt_is_not_an_orbit():
+    """At v_dr = 2 shooting from (2, 0) converges to the equilibrium [F_slip / k, 0] of eq. (15)."""
+    flow = Flow(block_on_belt())
+    with pytest.raises(StationaryStateError, match="equilibrium") as info:
+        find_periodic_orbit(flow, [2.0, 0.0], parameters={"v_dr": 2.0}, period=6.3)
+    np.testing.assert_allclose(info.value.state, [1.0, 0.0], atol=1e-9)
+
+
+@pytest.mark.parametrize("period", [1e-300, 1e-12, 0.5, 2.0])
+def test_a_period_near_zero_is_never_an_orbit(period):
+    """From a state of the stick-slip cycle, a short period guess gives the cycle or a named error."""
+    flow = Flow(block_on_belt())
+    p = flow.parameters()
+    start = flow.run([0.0, 1.0], 0.0, 40.0, p).x1
+    cycle = find_periodic_orbit(flow, start, period=6.4)
+    try:
+        orbit = find_periodic_orbit(flow, start, period=period)
+    except (StationaryStateError, SaltationError) as exc:
+        assert isinstance(exc, SaltationError)
+        return
+    assert orbit.period == pytest.approx(cycle.period, rel=1e-9)
+
+
+def test_a_guess_at_an_equilibrium_is_named():
+    flow = Flow(block_on_belt())
+    with pytest.raises(StationaryStateError, match="equilibrium"):
+        find_periodic_orbit(flow, [1.0, 0.0], period=6.3)
+
+
+def test_a_forced_orbit_far_from_t0_zero_is_the_same_orbit():
+    """t0 = 1e12 is reduced modulo the forcing period: the orbit there is the orbit at t0 = 0,
+    integrated to that phase (exact affine flows: rounding)."""
+    flow = Flow(trilinear())
+    p = flow.parameters({"omega": 1.2})
+    near = find_periodic_orbit(flow, [0.5, 0.5], parameters={"omega": 1.2})
+    far = find_periodic_orbit(flow, [0.5, 0.5], parameters={"omega": 1.2}, t0=1e12)
+    np.testing.assert_allclose(far.multipliers, near.multipliers, rtol=0, atol=1e-12)
+    phase = math.fmod(1e12, 2 * math.pi / 1.2)
+    on_orbit = flow.run(near.state0, 0.0, phase, p).x1
+    np.testing.assert_allclose(far.state0, on_orbit, rtol=0, atol=1e-12)
+
+
+def test_a_period_that_contradicts_the_forcing_is_refused():
+    flow = Flow(trilinear())
+    with pytest.raises(ModelError, match="forcing period 5.23598"):
+        find_periodic_orbit(flow, [0.5, 0.5], parameters={"omega": 1.2}, period=5.0)
+    orbit = find_periodic_orbit(flow, [0.5, 0.5], parameters={"omega": 1.2}, period=2 * math.pi / 1.2)
+    assert orbit.period == pytest.approx(2 * math.pi / 1.2, rel=1e-15)
+
+
+def test_deflated_multipliers_have_the_known_eigenstructure():
+    """``M = R [[1, a], [0, mu]] R^-1`` maps ``f = R e1`` to itself: the deflated multipliers are
+    exactly ``(1, mu)``; a two-state fold ``mu = 1`` reads 1 and 1, where the full matrix's double
+    eigenvalue under a perturbation of 1e-12 splits into a complex pair."""
+    rng = np.random.default_rng(3)
+    for mu in (0.3, -0.8, 1.0, 2.5):
+        R = rng.normal(size=(2, 2))
+        M = R @ np.array([[1.0, 0.7], [0.0, mu]]) @ np.linalg.inv(R)
+        found = autonomous_multipliers(M, R[:, 0])
+        np.testing.assert_allclose(sorted(found.multipliers.real), sorted([1.0, mu]), atol=1e-12)
+        assert np.all(found.multipliers.imag == 0.0) and found.trivial_error <= 1e-12
+    fold = np.array([[1.0, 1.0], [-1e-12, 1.0]])  # a Jordan block at a fold, with rounding
+    assert np.all(np.abs(np.linalg.eigvals(fold).imag) > 1e-7)  # 1 +- 1e-6 i
+    found = autonomous_multipliers(fold, np.array([1.0, 0.0]))
+    np.testing.assert_allclose(found.multipliers, [1.0, 1.0], atol=1e-11)
+    # three states: a complex pair on the section
+    A = np.array([[1.0, 0.2, 0.1], [0.0, 0.5, -0.4], [0.0, 0.4, 0.5]])
+    R = rng.normal(size=(3, 3))
+    found = autonomous_multipliers(R @ A @ np.linalg.inv(R), R[:, 0])
+    np.testing.assert_allclose(sorted(found.multipliers, key=lambda z: z.imag), [0.5 - 0.4j, 1.0, 0.5 + 0.4j], atol=1e-12)
+    with pytest.raises(ValueError, match="velocity is zero"):
+        autonomous_multipliers(np.eye(2), np.zeros(2))
+
+
+def test_backward_multipliers_zero_to_the_monodromy_accuracy_are_infinite():
+    M = np.array([[1.0, 0.3], [1e-12, 5e-13]])  # |M n - n| = 1e-12: the small eigenvalue is that uncertain
+    found = autonomous_multipliers(M, np.array([1.0, 0.0]), backward=True)
+    assert np.isinf(found.multipliers).sum() == 1
+
+
+def test_every_fold_of_the_paper_diagram_has_a_multiplier_at_one():
+    from saltation.paper import trilinear_diagram
+
+    for sp in trilinear_diagram().special_points:
+        if sp.kind.value == "fold":
+            assert np.min(np.abs(sp.multipliers - 1.0)) <= sp.multipliers_accuracy
+            assert sp.multipliers_accuracy < 1e-6
+
+
+def test_trivial_multiplier_accuracy_is_what_the_issue_promised():
+    assert TRIVIAL_MULTIPLIER_ACCURACY <= 1e-6
