@@ -24,9 +24,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .boundary import one_sided_limits, saltation_at_corner, zero_length_segments
 from .branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
 from .corrector import Corrector, Solution, canonical_events
-from .boundary import one_sided_limits, saltation_at_corner, zero_length_segments
 from .errors import SaltationError
 from .floquet import multipliers_from_monodromy, set_valued_multipliers
 from .grazing import locate_grazing

@@ -32,12 +32,11 @@ Degenerate cases, each with its rule (see the orbits page of the user guide):
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-
-import math
 
 from .errors import (
     ConvergenceError,
