@@ -8,6 +8,14 @@ looked up in :data:`saltation.models.SHIPPED`.  Every failure of a subcommand be
 * 0: success;
 * 1: the computation failed (integration, Newton, ...);
 * 2: bad usage (unknown model, parameter or option, malformed value).
+
+Numeric options are checked before any computation: a count must be a positive
+(or non-negative) integer, a step size, tolerance or period a positive finite
+number, every number finite, and a range's two ends must differ; each bad value
+is bad usage naming the option and the value.  An unexpected exception (a bug,
+not one of saltation's errors) is one line too, ``internal error: TYPE: MESSAGE``,
+with exit status 1; the global option ``--debug`` lets every exception through
+with its traceback instead.
 """
 
 from __future__ import annotations
@@ -33,6 +41,24 @@ PROG = "saltation"
 TRANSIENT_PERIODS = 50
 #: Length of the transient of an autonomous model without a better hint, in time units.
 TRANSIENT_TIME = 200.0
+#: The shortest period (guess) accepted, in time units, relative to ``max(1, |t0|)``: over shorter times
+#: the time axis near ``t0`` no longer resolves the period to a millionth, and every state of a model whose
+#: field is of order one moves by less than the shooting tolerance, so shooting would "converge" anywhere.
+MIN_PERIOD = 1e-9
+#: The largest ``|t0|`` accepted: ``1 / MIN_PERIOD``, where a period of one time unit is still accepted (beyond
+#: it, the time axis resolves a time unit to worse than a millionth, and a transient of a few hundred time units
+#: is lost to rounding altogether near 1e300).
+MAX_T0 = 1.0 / MIN_PERIOD
+#: Relative difference below which a --period given for a forced model is its forcing period.
+FORCING_PERIOD_MATCH = 1e-9
+#: The smallest continuation step the command line accepts (``ContinuationSettings.ds_min``).
+MIN_STEP = 1e-6
+#: The smallest ``--ds-max`` of ``saltation paper``: each of its branches has at most 5000 points, and
+#: Fig. 7's stable branch takes about 3300 of them at a largest step of 0.002.
+PAPER_MIN_DS_MAX = 2e-3
+#: Help of ``--period`` of ``continue`` and ``locus``.
+PERIOD_HELP = (f"period guess for autonomous models, at least {MIN_PERIOD:g} (forced models take the forcing period: "
+               "a --period must equal it)")
 
 
 class UsageError(SaltationError, ValueError):
@@ -248,7 +274,9 @@ def parse_vector(text: str, system: PiecewiseSystem, option: str = "--x0") -> np
     return np.array(values)
 
 
-def _positive(option: str) -> Callable[[str], float]:
+def _positive(option: str, minimum: float | None = None, why: str = "") -> Callable[[str], float]:
+    """A converter of a positive finite number (at least ``minimum`` if given, ``why`` saying why)."""
+
     def convert(text: str) -> float:
         try:
             value = float(text)
@@ -256,6 +284,25 @@ def _positive(option: str) -> Callable[[str], float]:
             raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
         if not (math.isfinite(value) and value > 0):
             raise argparse.ArgumentTypeError(f"{text!r} must be a positive finite number")
+        if minimum is not None and value < minimum:
+            raise argparse.ArgumentTypeError(f"{text!r} is below the smallest accepted value {minimum:g}{why}")
+        return value
+
+    convert.__name__ = option
+    return convert
+
+
+def _integer(option: str, minimum: int) -> Callable[[str], int]:
+    """A converter of an integer of at least ``minimum`` (1: a positive count, 0: a non-negative one)."""
+    what = "a positive integer" if minimum == 1 else f"an integer of at least {minimum}"
+
+    def convert(text: str) -> int:
+        try:
+            value = int(text.strip())
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"{text!r} must be {what}")
         return value
 
     convert.__name__ = option
@@ -270,6 +317,94 @@ def _finite(text: str) -> float:
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"{text!r} must be finite")
     return value
+
+
+def check_period(period: float | None, t0: float = 0.0) -> None:
+    """A ``--period`` long enough to resolve at ``t0`` (see :data:`MIN_PERIOD`).
+
+    Raises
+    ------
+    UsageError
+        Naming the value and the shortest accepted one.
+    """
+    if period is None:
+        return
+    shortest = MIN_PERIOD * max(1.0, abs(t0))
+    if period < shortest:
+        relative = f" ({MIN_PERIOD:g} times |t0| = {abs(t0):g})" if abs(t0) > 1 else ""
+        raise UsageError(f"--period {period:g} is too short: a period must be at least {shortest:g}{relative}")
+
+
+def forcing_period_at(system: PiecewiseSystem, p: np.ndarray, where: str) -> float:
+    """The forcing period of a forced model at the parameter values ``p``.
+
+    Raises
+    ------
+    UsageError
+        If it is not a positive finite number there (``where`` names the options that set ``p``).
+    """
+    try:
+        value = float(system.forcing_period(p))
+    except (SaltationError, ArithmeticError, ValueError) as exc:  # e.g. 2*pi/omega at omega = 0
+        value, detail = math.nan, f" ({type(exc).__name__}: {exc})"
+    else:
+        detail = ""
+    if not (math.isfinite(value) and value > 0):
+        values = ", ".join(f"{k}={_fmt(v)}" for k, v in zip(system.parameter_names, p))
+        raise UsageError(
+            f"{where}: the forcing period {system.period_expr} of model {system.name!r} is not a positive finite "
+            f"number at {values}{detail}"
+        )
+    return value
+
+
+def check_forced_period(system: PiecewiseSystem, period: float | None, p: np.ndarray, where: str) -> None:
+    """A ``--period`` given for a forced model must be its forcing period (which shooting uses anyway).
+
+    Raises
+    ------
+    UsageError
+        Naming the forcing period when ``period`` contradicts it.
+    """
+    if period is None or system.is_autonomous:
+        return
+    forcing = forcing_period_at(system, p, where)
+    if abs(period - forcing) > FORCING_PERIOD_MATCH * forcing:
+        raise UsageError(
+            f"model {system.name!r} is forced: its period is the forcing period {system.period_expr} = "
+            f"{_fmt(forcing)} at {where}; --period {_fmt(period)} contradicts it (drop --period, or change "
+            "the forcing with --set)"
+        )
+
+
+def check_not_set(overrides: Mapping[str, float], name: str, flag: str) -> None:
+    """A parameter whose values an option sets (``--param``) may not be given by ``--set`` as well.
+
+    Raises
+    ------
+    UsageError
+        Naming both options.
+    """
+    if name in overrides:
+        raise UsageError(f"--set {name}={_fmt(overrides[name])} conflicts with {flag} {name}, which sets its values")
+
+
+def check_grid(start: float, stop: float, num: int, names: tuple[str, str, str]) -> np.ndarray:
+    """``num`` evenly spaced values from ``start`` to ``stop``: one value needs ``start == stop``,
+    several need them to differ.
+
+    Raises
+    ------
+    UsageError
+        Naming the three options and their values.
+    """
+    first, last, count = names
+    if num == 1 and start != stop:
+        raise UsageError(f"{count} 1 takes one value, but {first} {_fmt(start)} and {last} {_fmt(stop)} differ "
+                         f"(give {count} 2 or more, or the same value twice)")
+    if num > 1 and start == stop:
+        raise UsageError(f"{first} and {last} are both {_fmt(start)}: {count} {num} values would all be the same")
+    return np.linspace(start, stop, num)
 
 
 def _fmt(value: float) -> str:
@@ -457,14 +592,19 @@ def cmd_orbit(args: argparse.Namespace) -> int:
     system = build_model(args.model)
     overrides = parse_sets(args.set, system)
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
-    if not system.is_autonomous and args.period is not None:
-        raise UsageError(
-            f"model {system.name!r} is forced: its period is fixed by the forcing ({system.period_expr}); "
-            "drop --period (change the forcing with --set)"
-        )
+    period = args.period
+    if abs(args.t0) > MAX_T0:
+        raise UsageError(f"--t0 {args.t0:g} is too large: |t0| must be at most {MAX_T0:g} (floating-point times there are "
+                         f"{math.ulp(args.t0):.1g} apart)")
+    if system.is_autonomous:
+        check_period(period, args.t0)
+    else:
+        where = "the parameters of --set" if overrides else "the default parameters"
+        forcing_period_at(system, system.parameter_vector(overrides), where)
+        check_forced_period(system, period, system.parameter_vector(overrides), where)
+        period = None  # shooting takes the forcing period
     flow = make_flow(system)
     p = flow.parameters(overrides)
-    period = args.period
     if x0 is None or (system.is_autonomous and period is None):
         traj, _ = transient(flow, args.model, p, x0, t0=args.t0, backward=args.backward)
         if x0 is None:
@@ -554,12 +694,12 @@ def _add_orbit_parser(sub) -> None:
     )
     p.add_argument(
         "--t0", metavar="T", type=_finite, default=0.0,
-        help="initial time, i.e. the phase of the forcing at state0 (default 0)",
+        help=f"initial time, i.e. the phase of the forcing at state0 (default 0; |t0| at most {MAX_T0:g})",
     )
     p.add_argument(
         "--period", metavar="T", type=_positive("--period"),
-        help="period guess for autonomous models (default: estimated from a transient); forced models "
-        "take the forcing period",
+        help=f"period guess for autonomous models, at least {MIN_PERIOD:g} (default: estimated from a transient); "
+        "forced models take the forcing period (a --period must equal it)",
     )
     p.add_argument(
         "--backward", action="store_true",
@@ -601,9 +741,7 @@ def periodic_start(args: argparse.Namespace, flow, overrides: dict[str, float], 
     from .shooting import ShootingProblem, find_periodic_orbit
 
     system = flow.system
-    if not system.is_autonomous and args.period is not None:
-        raise UsageError(f"model {system.name!r} is forced: drop --period")
-    period = args.period
+    period = args.period if system.is_autonomous else None  # checked by the caller (check_start_period)
     if x0 is None or (system.is_autonomous and period is None):
         traj, _ = transient(flow, args.model, p, x0, t0=0.0, backward=args.backward)
         x0 = traj.x1.copy() if x0 is None else x0
@@ -612,6 +750,21 @@ def periodic_start(args: argparse.Namespace, flow, overrides: dict[str, float], 
     orbit = find_periodic_orbit(flow, x0, parameters=overrides, period=period, backward=args.backward)
     problem = ShootingProblem(flow, overrides, continuation_parameter=args.param, backward=args.backward)
     return problem, problem.pack(orbit.state0, orbit.period if system.is_autonomous else None)
+
+
+def check_start_period(args: argparse.Namespace, system: PiecewiseSystem, p: np.ndarray, where: str) -> None:
+    """``--period`` of ``continue`` and ``locus``: long enough (autonomous models), or the forcing period at the
+    start of the branch (forced ones).
+
+    Raises
+    ------
+    UsageError
+        Naming the value (and the forcing period it contradicts).
+    """
+    if system.is_autonomous:
+        check_period(args.period)
+    else:
+        check_forced_period(system, args.period, p, where)
 
 
 def cmd_continue(args: argparse.Namespace) -> int:
@@ -624,16 +777,42 @@ def cmd_continue(args: argparse.Namespace) -> int:
     system = build_model(args.model)
     check_parameter(system, args.param, "--param")
     overrides = parse_sets(args.set, system)
+    check_not_set(overrides, args.param, "--param")
     start, stop = float(args.start), float(args.stop)
     if start == stop:
-        raise UsageError("--from and --to must differ")
+        raise UsageError(f"--from and --to must differ, got {_fmt(start)} twice")
+    if args.ds is not None and args.ds > args.ds_max:
+        raise UsageError(f"--ds {_fmt(args.ds)} exceeds --ds-max {_fmt(args.ds_max)}: the first step cannot be "
+                         "longer than the largest")
+    ds = min(0.01, args.ds_max) if args.ds is None else args.ds
+    if args.equilibrium is not None:
+        if not system.is_autonomous:
+            raise UsageError(
+                f"--equilibrium {args.equilibrium}: model {system.name!r} is forced (forcing period "
+                f"{system.period_expr}): it has no equilibria; continue its periodic orbits (drop --equilibrium)"
+            )
+        try:
+            system.mode_index(args.equilibrium)
+        except SaltationError:
+            raise UsageError(f"unknown mode {args.equilibrium!r} in --equilibrium for model {system.name!r}; modes "
+                             f"are {', '.join(system.mode_names)}") from None
+        for flag, given in (("--period", args.period is not None), ("--backward", args.backward)):
+            if given:
+                raise UsageError(f"{flag} does not apply to --equilibrium (an equilibrium has no period and no "
+                                 "direction of time)")
     overrides[args.param] = start
+    p0 = system.parameter_vector(overrides)
+    if not system.is_autonomous:
+        for flag, value in (("--from", start), ("--to", stop)):
+            forcing_period_at(system, system.parameter_vector(overrides | {args.param: value}),
+                              f"{flag} {_fmt(value)}")
+    check_start_period(args, system, p0, f"--from {_fmt(start)}")
     flow = make_flow(system)
     p = flow.parameters(overrides)
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
     settings = ContinuationSettings(
-        ds=min(args.ds, args.ds_max), ds_max=args.ds_max, bounds=(min(start, stop), max(start, stop)),
-        max_points=args.max_points,
+        ds=ds, ds_max=args.ds_max, bounds=(min(start, stop), max(start, stop)), max_points=args.max_points,
+        ds_min=MIN_STEP,
     )
     direction = 1 if stop > start else -1
     update, close = _progress_bar(not args.no_progress)
@@ -705,13 +884,16 @@ def _add_continue_parser(sub) -> None:
         help="override another parameter of the model (repeat for several)",
     )
     p.add_argument("--x0", metavar="V1,V2,...", help="guess of the start state (default: the end of a transient)")
-    p.add_argument("--period", metavar="T", type=_positive("--period"), help="period guess for autonomous models")
+    p.add_argument("--period", metavar="T", type=_positive("--period"), help=PERIOD_HELP)
     p.add_argument("--backward", action="store_true", help="shoot in backward time (infinitely unstable branches)")
-    p.add_argument("--equilibrium", metavar="MODE", help="continue an equilibrium of this mode instead of periodic orbits")
+    p.add_argument("--equilibrium", metavar="MODE", help="continue an equilibrium of this mode instead of periodic orbits (autonomous models)")
     p.add_argument("--out", metavar="DIR", default=".", help="output directory (default: the current one)")
-    p.add_argument("--ds", metavar="S", type=_positive("--ds"), default=0.01, help="initial arclength step (default 0.01)")
-    p.add_argument("--ds-max", metavar="S", type=_positive("--ds-max"), default=0.02, help="largest step (default 0.02)")
-    p.add_argument("--max-points", metavar="N", type=int, default=2000, help="largest number of points (default 2000)")
+    p.add_argument("--ds", metavar="S", type=_positive("--ds", MIN_STEP, " (the smallest step of a continuation)"),
+                   default=None, help="initial arclength step, at most --ds-max (default 0.01, or --ds-max if smaller)")
+    p.add_argument("--ds-max", metavar="S", type=_positive("--ds-max", MIN_STEP, " (the smallest step of a continuation)"),
+                   default=0.02, help="largest step (default 0.02)")
+    p.add_argument("--max-points", metavar="N", type=_integer("--max-points", 1), default=2000,
+                   help="largest number of points, a positive integer (default 2000)")
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(handler=cmd_continue)
 
@@ -724,10 +906,10 @@ def _range(option: str):
     def parse(text: str) -> tuple[float, float]:
         parts = text.split(",")
         if len(parts) != 2:
-            raise argparse.ArgumentTypeError(f"{option} takes two numbers A,B, got {text!r}")
+            raise argparse.ArgumentTypeError(f"expected two numbers A,B, got {text!r}")
         a, b = (_finite(v) for v in parts)
         if a == b:
-            raise argparse.ArgumentTypeError(f"{option}: the two ends must differ, got {text!r}")
+            raise argparse.ArgumentTypeError(f"the two ends must differ, got {text!r}")
         return a, b
 
     return parse
@@ -752,7 +934,13 @@ def cmd_locus(args: argparse.Namespace) -> int:
         raise UsageError("--param and --param2 must differ")
     (start, stop), (lo2, hi2) = args.range, args.range2
     overrides = parse_sets(args.set, system)
+    check_not_set(overrides, args.param, "--param")
     overrides[args.param] = start
+    if not system.is_autonomous:
+        for value in (start, stop):
+            forcing_period_at(system, system.parameter_vector(overrides | {args.param: value}),
+                              f"--range {_fmt(start)},{_fmt(stop)}")
+    check_start_period(args, system, system.parameter_vector(overrides), f"{args.param} = {_fmt(start)}")
     flow = make_flow(system)
     p = flow.parameters(overrides)
     if not lo2 <= p[system.parameter_index(args.param2)] <= hi2 and not hi2 <= p[system.parameter_index(args.param2)] <= lo2:
@@ -822,7 +1010,7 @@ def _add_locus_parser(sub) -> None:
     p.add_argument("--range2", metavar="C,D", type=_range("--range2"), required=True, help="the range of the second parameter")
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="override a parameter (repeat for several)")
     p.add_argument("--x0", metavar="V1,V2,...", help="guess of the start state (default: the end of a transient)")
-    p.add_argument("--period", metavar="T", type=_positive("--period"), help="period guess for autonomous models")
+    p.add_argument("--period", metavar="T", type=_positive("--period"), help=PERIOD_HELP)
     p.add_argument("--backward", action="store_true", help="shoot in backward time")
     p.add_argument("--out", metavar="DIR", help="write the curves (JSON) and their plot here")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -870,8 +1058,10 @@ def _add_paper_parser(sub) -> None:
     )
     p.add_argument("--out", metavar="DIR", required=True, help="output directory")
     p.add_argument(
-        "--ds-max", metavar="S", type=_positive("--ds-max"), default=0.015,
-        help="largest continuation step: smaller gives denser diagrams (default 0.015, about 400 points in Fig. 3)",
+        "--ds-max", metavar="S", default=0.015,
+        type=_positive("--ds-max", PAPER_MIN_DS_MAX, " (a branch of the paper has at most 5000 points)"),
+        help=f"largest continuation step: smaller gives denser diagrams (default 0.015, about 400 points in Fig. 3; "
+             f"at least {PAPER_MIN_DS_MAX:g})",
     )
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(handler=cmd_paper)
@@ -881,41 +1071,81 @@ def _add_paper_parser(sub) -> None:
 # sweep
 # --------------------------------------------------------------------------------------------
 
+def sweep_start(args: argparse.Namespace, system: PiecewiseSystem):
+    """The start of a sweep's values and the rule using it: ``(x0, SweepStart)``.
+
+    ``--x0`` gives one state; without it a shipped model with a ``start`` function starts each value from
+    that function of the value's own parameters, and any other model from zeros.  ``--start`` chooses the
+    rule; by default ``own`` with a start function, ``previous`` otherwise.
+    """
+    from .sweeps import SweepStart
+
+    if args.x0 is not None:
+        x0 = parse_vector(args.x0, system)
+    else:
+        function = SHIPPED[args.model].start if args.model in SHIPPED else None
+        x0 = None
+        if function is not None:
+            def x0(values: Mapping[str, float], _function=function) -> list[float]:
+                return list(_function(values, False))
+
+            x0.__module__, x0.__qualname__ = function.__module__, function.__qualname__  # as the files record it
+    if args.start_rule is not None:
+        rule = SweepStart(args.start_rule)
+    else:
+        rule = SweepStart.OWN if callable(x0) else SweepStart.PREVIOUS
+    return x0, rule
+
+
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``saltation sweep``: a brute-force diagram of a shipped model."""
     from . import plotting
-    from .sweeps import sweep
+    from .sweeps import SweepStart, sweep
 
     system = build_model(args.model)
     check_parameter(system, args.param, "--param")
     overrides = parse_sets(args.set, system)
-    if args.num < 1:
-        raise UsageError(f"--num must be at least 1, got {args.num}")
-    if args.periods < 1 or args.transient < 0:
-        raise UsageError("--periods must be positive and --transient non-negative")
-    x0 = parse_vector(args.x0, system) if args.x0 is not None else None
-    if x0 is None and system.is_autonomous:
-        start = SHIPPED[args.model].start if args.model in SHIPPED else None
-        values = dict(system.defaults) | overrides
-        x0 = np.array(start(values, False)) if start else None
+    check_not_set(overrides, args.param, "--param")
+    values = check_grid(args.start, args.stop, args.num, ("--from", "--to", "--num"))
     two = [args.param2, args.start2, args.stop2, args.num2]
     if any(v is not None for v in two) and not all(v is not None for v in two):
         raise UsageError("a two-parameter map needs all of --param2, --from2, --to2 and --num2")
+    if args.param2 is None and args.max_period is not None:
+        raise UsageError("--max-period belongs to a two-parameter map (--param2 ...)")
+    values2 = None
     if args.param2 is not None:
         check_parameter(system, args.param2, "--param2")
-        if args.num2 < 1:
-            raise UsageError(f"--num2 must be at least 1, got {args.num2}")
-        if args.max_period < 1:
-            raise UsageError(f"--max-period must be at least 1, got {args.max_period}")
+        if args.param2 == args.param:
+            raise UsageError(f"--param and --param2 must differ, got {args.param!r} twice")
+        check_not_set(overrides, args.param2, "--param2")
+        if system.is_autonomous:
+            raise UsageError(f"--param2 (a period map counts forcing periods) needs a forced model; {system.name!r} "
+                             "is autonomous")
+        values2 = check_grid(args.start2, args.stop2, args.num2, ("--from2", "--to2", "--num2"))
+        max_period = 16 if args.max_period is None else args.max_period
+        if args.periods is not None and args.periods <= max_period:
+            raise UsageError(f"--periods {args.periods} must exceed --max-period {max_period}: a period is read off "
+                             "its repetitions")
+    if not system.is_autonomous:  # every value's forcing period (e.g. 2*pi/omega at omega = 0 is none)
+        base = system.parameter_vector(overrides)
+        for v in values:
+            for v2 in (values2 if values2 is not None else [None]):
+                p = base.copy()
+                p[system.parameter_index(args.param)] = v
+                where = f"--param {args.param} = {_fmt(v)}"
+                if v2 is not None:
+                    p[system.parameter_index(args.param2)] = v2
+                    where += f", --param2 {args.param2} = {_fmt(v2)}"
+                forcing_period_at(system, p, where)
+    x0, rule = sweep_start(args, system)
     make_flow(system)  # compile (or load) here, with the notice, before the workers load it from the cache
-    values = np.linspace(args.start, args.stop, args.num)
     client = _dask_client(args.scheduler)
     try:
         if args.param2 is not None:
-            return _period_map_command(args, system, values, x0, overrides, client)
+            return _period_map_command(args, system, values, values2, x0, rule, overrides, client)
         result = sweep(
-            system, args.param, values, periods=args.periods, transient=args.transient, x0=x0,
-            parameters=overrides, workers=args.workers, client=client,
+            system, args.param, values, periods=200 if args.periods is None else args.periods,
+            transient=args.transient, x0=x0, start=rule, parameters=overrides, workers=args.workers, client=client,
         )
     finally:
         if client is not None:
@@ -926,8 +1156,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     result.save(stem.with_suffix(".json"))
     plotting.save_figure(result.plot(), stem)
     kind = "Poincare section points" if not system.is_autonomous else "maxima of x_1"
-    print(f"{sum(len(result.at(k)) for k in range(args.num))} {kind} at {args.num} values of {args.param}; "
-          f"written to {stem}.json/.png/.pdf")
+    how = "its own start" if rule is SweepStart.OWN else "the previous value's final state"
+    print(f"{sum(len(result.at(k)) for k in range(args.num))} {kind} at {args.num} values of {args.param} "
+          f"(each from {how}); written to {stem}.json/.png/.pdf")
+    if result.failures:
+        print(f"{len(result.failures)} value(s) failed: " + "; ".join(f"{args.param} = {_fmt(v)}: {m}"
+                                                                     for v, m in result.failures[:3])
+              + ("; ..." if len(result.failures) > 3 else ""))
     return 0
 
 
@@ -945,15 +1180,15 @@ def _dask_client(address: str | None):
         raise UsageError(f"cannot reach the Dask scheduler at {address!r}: {exc}") from None
 
 
-def _period_map_command(args, system, values, x0, overrides, client) -> int:
+def _period_map_command(args, system, values, values2, x0, rule, overrides, client) -> int:
     """``saltation sweep ... --param2``: the attractor's period on a grid of two parameters."""
     from . import plotting
     from .sweeps import period_map
 
-    values2 = np.linspace(args.start2, args.stop2, args.num2)
+    max_period = 16 if args.max_period is None else args.max_period
     grid = period_map(
-        system, args.param, values, args.param2, values2, max_period=args.max_period, transient=args.transient,
-        x0=x0, parameters=overrides, workers=args.workers, client=client,
+        system, args.param, values, args.param2, values2, max_period=max_period, periods=args.periods,
+        transient=args.transient, x0=x0, start=rule, parameters=overrides, workers=args.workers, client=client,
     )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -961,7 +1196,7 @@ def _period_map_command(args, system, values, x0, overrides, client) -> int:
     grid.save(stem.with_suffix(".json"))
     plotting.save_figure(grid.plot(), stem)
     found = int((grid.periods > 0).sum())
-    print(f"{grid.periods.size} cells ({args.num} x {args.num2}): a period up to {args.max_period} found in {found}, "
+    print(f"{grid.periods.size} cells ({args.num} x {args.num2}): a period up to {max_period} found in {found}, "
           f"none in {int((grid.periods == 0).sum())}, failed in {int((grid.periods < 0).sum())}; "
           f"written to {stem}.json/.png/.pdf")
     return 0
@@ -974,7 +1209,10 @@ def _add_sweep_parser(sub) -> None:
         description=_paragraph(
             """Simulate a shipped model at --num parameter values between --from and --to, discard a
             transient, and sample the attractor: the Poincare section x(t0 + k T) for forced models,
-            the maxima of x_1 for autonomous ones. Uses every local core, or a Dask cluster
+            the maxima of x_1 for autonomous ones. Each value starts from its own start (--start own:
+            --x0, or the shipped model's start at that value's parameters) or from the previous value's
+            final state (--start previous); the default is own where the model has a start of its own
+            and --x0 is not given, previous otherwise. Uses every local core, or a Dask cluster
             (--scheduler). Writes MODEL_PARAM_sweep.json and a plot (PNG, PDF) into --out. With
             --param2 NAME --from2 V --to2 V --num2 N, a grid of two parameters whose cells record the
             period of the attractor in forcing periods (or none found: chaos or a period longer
@@ -985,12 +1223,21 @@ def _add_sweep_parser(sub) -> None:
     p.add_argument("--param", metavar="NAME", required=True, help="the swept parameter")
     p.add_argument("--from", dest="start", metavar="V", type=_finite, required=True, help="first value")
     p.add_argument("--to", dest="stop", metavar="V", type=_finite, required=True, help="last value")
-    p.add_argument("--num", metavar="N", type=int, required=True, help="number of values")
-    p.add_argument("--periods", metavar="P", type=int, default=200, help="periods sampled per value (default 200)")
-    p.add_argument("--transient", metavar="Q", type=int, default=100, help="periods discarded first (default 100)")
+    p.add_argument("--num", metavar="N", type=_integer("--num", 1), required=True,
+                   help="number of values (1 takes --from = --to)")
+    p.add_argument("--periods", metavar="P", type=_integer("--periods", 1), default=None,
+                   help="periods sampled per value (default 200; a map: 4 times --max-period)")
+    p.add_argument("--transient", metavar="Q", type=_integer("--transient", 0), default=100,
+                   help="periods discarded first (default 100)")
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="override another parameter")
-    p.add_argument("--x0", metavar="V1,V2,...", help="initial state (default: zeros, or the model's usual start)")
-    p.add_argument("--workers", metavar="N", type=int, default=None,
+    p.add_argument("--x0", metavar="V1,V2,...",
+                   help="start state (default: the shipped model's start at each value's own parameters, if it has "
+                        "one, else zeros)")
+    p.add_argument("--start", dest="start_rule", choices=("own", "previous"), default=None,
+                   help="where each value starts: 'own' from the start (--x0, or the model's start at that value's "
+                        "parameters), 'previous' from the previous value's final state, following an attractor while "
+                        "it lasts (default: own for a shipped model's start, previous otherwise)")
+    p.add_argument("--workers", metavar="N", type=_integer("--workers", 1), default=None,
                    help="worker processes, or chunks on a Dask cluster (default: every core, every cluster thread)")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="run the values as tasks on the Dask cluster at this scheduler address (pip install "
@@ -999,8 +1246,8 @@ def _add_sweep_parser(sub) -> None:
                    help="a second parameter: a two-parameter map of the attractor's period (forced models)")
     p.add_argument("--from2", dest="start2", metavar="V", type=_finite, default=None, help="first value of --param2")
     p.add_argument("--to2", dest="stop2", metavar="V", type=_finite, default=None, help="last value of --param2")
-    p.add_argument("--num2", metavar="N", type=int, default=None, help="number of values of --param2")
-    p.add_argument("--max-period", dest="max_period", metavar="K", type=int, default=16,
+    p.add_argument("--num2", metavar="N", type=_integer("--num2", 1), default=None, help="number of values of --param2")
+    p.add_argument("--max-period", dest="max_period", metavar="K", type=_integer("--max-period", 1), default=None,
                    help="the longest period (in forcing periods) a map looks for (default 16)")
     p.add_argument("--out", metavar="DIR", default=".", help="output directory (default: the current one)")
     p.set_defaults(handler=cmd_sweep)
@@ -1035,14 +1282,20 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=f"Run '{PROG} SUBCOMMAND --help' for the options of a subcommand. Shipped models: {model_names()}.",
     )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     sub = parser.add_subparsers(dest="command", metavar="SUBCOMMAND", title="subcommands", parser_class=_Parser)
     for add in SUBCOMMANDS:
         add(sub)
+    for subparser in sub.choices.values():  # also after the subcommand; SUPPRESS keeps a --debug given before it
+        subparser.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=DEBUG_HELP)
     return parser
 
 
-def _join_negative_values(argv: list[str], options: Sequence[str] = ("--x0",)) -> list[str]:
-    """Let ``--x0 -1,0`` through argparse (which would take ``-1,0`` for an option)."""
+DEBUG_HELP = "let a failed computation or an unexpected error through with its Python traceback (instead of one line)"
+
+
+def _join_negative_values(argv: list[str], options: Sequence[str] = ("--x0", "--range", "--range2")) -> list[str]:
+    """Let ``--x0 -1,0`` (and ``--range -1,2``) through argparse (which would take ``-1,0`` for an option)."""
     out: list[str] = []
     i = 0
     while i < len(argv):
@@ -1057,11 +1310,19 @@ def _join_negative_values(argv: list[str], options: Sequence[str] = ("--x0",)) -
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status."""
+    """Run the command line; returns the exit status.
+
+    Every failure is one line ``saltation: error: ...`` on stderr: bad usage exits with 2, a failed
+    computation (a :class:`~saltation.errors.SaltationError` or ``ValueError``) with 1, and any other
+    exception, a bug, with 1 as ``internal error: TYPE: MESSAGE``.  With ``--debug`` (before or after
+    the subcommand) a failed computation or a bug is raised instead, with its traceback.
+    """
     argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv[: argv.index("--")] if "--" in argv else "--debug" in argv  # before parsing succeeds
     try:
         parser = build_parser()
         args = parser.parse_args(_join_negative_values(argv))
+        debug = bool(getattr(args, "debug", False))
         if getattr(args, "handler", None) is None:
             raise UsageError(f"choose a subcommand ({', '.join(parser._subparsers._group_actions[0].choices)}); "
                              f"see '{PROG} --help'")
@@ -1071,16 +1332,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as exc:
         _fail(exc)
         return 2
-    except (SaltationError, ValueError) as exc:
-        _fail(exc)
-        return 1
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130
+    except (SaltationError, ValueError) as exc:
+        if debug:
+            raise
+        _fail(exc)
+        return 1
+    except Exception as exc:  # a bug: one line, unless --debug asks for the traceback
+        if debug:
+            raise
+        text = " ".join(str(exc).split())
+        _fail(f"internal error: {type(exc).__name__}{': ' + text if text else ''} "
+              f"(run with --debug for the traceback)")
+        return 1
 
 
-def _fail(exc: BaseException) -> None:
-    message = " ".join(str(exc).split()) or type(exc).__name__
+def _fail(exc: BaseException | str) -> None:
+    """Print ``saltation: error: MESSAGE`` as one line on stderr."""
+    message = (" ".join(str(exc).split()) or type(exc).__name__) if isinstance(exc, BaseException) else exc
     print(f"{PROG}: error: {message}", file=sys.stderr)
 
 

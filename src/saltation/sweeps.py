@@ -11,14 +11,32 @@ it settles to:
   ``x_1`` has no maximum in the sampling window (an equilibrium) contributes
   its final state once.
 
+Where each value starts is a documented choice, ``start=`` (a
+:class:`SweepStart`), applied to ``x0``: a state, or a function
+``parameters -> state`` of the parameter values (a mapping of every
+parameter's name to its value, the swept one included), called once per
+value in the calling process before any simulation:
+
+* :attr:`SweepStart.PREVIOUS` (the default, what brute-force diagrams
+  classically do): each value starts from the final state (and mode) of the
+  value before it, so a branch is followed as long as it stays attracting,
+  and a jump shows where it stops; the first value of each chunk, and the
+  value after a failed one, start from ``x0`` (evaluated at that value).
+  Near a fold the previous final state can lie in the basin of another
+  attractor of the next value (for the block on a belt, inside the unstable
+  stick-slip cycle, so the sweep falls onto the equilibrium while the stable
+  cycle still exists): what a diagram shows then depends on the path.
+* :attr:`SweepStart.OWN`: every value runs its own transient from ``x0``
+  evaluated at its own parameters.  The values are then independent: the
+  diagram shows the attractor whose basin holds that start, whatever the
+  order of the values and the number of workers.
+
 The values are split into one contiguous chunk of equal length per worker
 process (the integrator's work per forcing period hardly depends on the
-period, so equal numbers of values are about equal work); within a
-chunk each value starts from the final state of the previous one, as
-brute-force diagrams do (so a branch is followed as far as it stays
-attracting), and the first value of each chunk starts from ``x0``.  A value
+period, so equal numbers of values are about equal work).  A value
 whose simulation fails (chattering, a state in no mode, ...) is recorded in
-:attr:`SweepResult.failures`, and the next value restarts from ``x0``.
+:attr:`SweepResult.failures`.  The rule used is recorded as
+:attr:`SweepResult.start` (and in its file).
 
 Each value costs two calls of the compiled integrator: one over the transient,
 one over the sampling window with dense output; the samples are read off the
@@ -29,11 +47,12 @@ tolerance), not by stopping the integrator at every section crossing.
 from __future__ import annotations
 
 import csv
+import enum
 import json
 import math
 import multiprocessing
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from os import PathLike
@@ -48,7 +67,7 @@ from .integrate import Flow, Tolerances, Trajectory, dense_evaluate
 from .io import write_json
 from .model import PiecewiseSystem
 
-__all__ = ["PeriodMap", "SweepResult", "attractor_period", "period_map", "sweep"]
+__all__ = ["PeriodMap", "SweepResult", "SweepStart", "attractor_period", "period_map", "sweep"]
 
 _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 #: Dense-output evaluations per integration step when looking for maxima.
@@ -57,6 +76,85 @@ _MAXIMA_GRID = 12
 _MAXIMA_ITERATIONS = 60
 #: ``x_1`` varying by less than this (relative) over the sampling window has no maxima.
 _FLAT = 1e-9
+
+
+class SweepStart(enum.Enum):
+    """Where each parameter value of a sweep (or each cell of a row of a period map) starts.
+
+    The values are the command line's words (``saltation sweep --start previous|own``) and the
+    files' (``"start"``).
+    """
+
+    #: From the final state and mode of the value before it (the first value of each chunk, and the
+    #: value after a failed one, from ``x0``): follows an attractor for as long as it lasts.
+    PREVIOUS = "previous"
+    #: Each value its own transient, from ``x0`` evaluated at that value's parameters.
+    OWN = "own"
+
+
+#: A start state, or a function of the parameter values (every parameter's name to its value) giving one.
+StartState = Sequence[float] | np.ndarray | Callable[[Mapping[str, float]], Sequence[float]]
+
+
+def _start_rule(start: SweepStart | str) -> SweepStart:
+    """``start`` as a :class:`SweepStart` (its value as a string is accepted)."""
+    try:
+        return SweepStart(start.value if isinstance(start, SweepStart) else start)
+    except ValueError:
+        raise ValueError(
+            f"start must be one of {', '.join(repr(k.value) for k in SweepStart)} (a SweepStart), got {start!r}"
+        ) from None
+
+
+def _start_states(
+    system: PiecewiseSystem, x0: StartState | None, rows: np.ndarray, where: Callable[[np.ndarray], str]
+) -> np.ndarray:
+    """The start state of every parameter vector in ``rows`` (shape (m, len(parameters))): ``x0`` itself,
+    zeros, or ``x0`` called with each row's parameters (in order, once each); shape (m, n).
+
+    Raises
+    ------
+    ModelError
+        If a state (given or returned) has the wrong number of components or is not finite; the
+        message names the parameter values (``where(row)``) of a returned one.
+    """
+    n, m = system.n, rows.shape[0]
+    if x0 is None:
+        return np.zeros((m, n))
+    if not callable(x0):
+        state = np.asarray(x0, dtype=float).reshape(-1)
+        if state.shape != (n,):
+            raise ModelError(f"x0 must have {n} components {list(system.state_names)}, got {state.size}")
+        if not np.all(np.isfinite(state)):
+            raise ModelError(f"x0 must be finite, got {state.tolist()}")
+        return np.tile(state, (m, 1))
+    out = np.empty((m, n))
+    for i, p in enumerate(rows):
+        values = dict(zip(system.parameter_names, map(float, p)))
+        try:
+            state = np.asarray(x0(values), dtype=float).reshape(-1)
+        except (TypeError, ValueError) as exc:
+            raise ModelError(f"x0({where(p)}) did not return {n} numbers: {exc}") from exc
+        if state.shape != (n,):
+            raise ModelError(
+                f"x0({where(p)}) returned {state.size} component{'s' if state.size != 1 else ''}; the states are "
+                f"{list(system.state_names)}"
+            )
+        if not np.all(np.isfinite(state)):
+            raise ModelError(f"x0({where(p)}) returned a state that is not finite: {state.tolist()}")
+        out[i] = state
+    return out
+
+
+def _describe_x0(x0: StartState | None) -> list[float] | str:
+    """``x0`` as the files record it: the state, or the name of the function."""
+    if x0 is None:
+        return "zeros"
+    if callable(x0):
+        name = getattr(x0, "__qualname__", None) or type(x0).__name__
+        module = getattr(x0, "__module__", None)
+        return f"function {module}.{name}" if module else f"function {name}"
+    return [float(v) for v in np.asarray(x0, dtype=float).reshape(-1)]
 
 
 @dataclass(frozen=True)
@@ -84,7 +182,11 @@ class SweepResult:
     failures : tuple of (float, str)
         Parameter values whose simulation failed, with the error message.
     settings : dict
-        ``periods``, ``transient`` and the time of one period for autonomous systems.
+        ``periods``, ``transient``, ``t0``, the time of one period for autonomous systems,
+        and ``x0``: the start state, ``"zeros"``, or ``"function NAME"`` for a function of the parameters.
+    start : SweepStart
+        Where each value started: from the previous value's final state, or its own start
+        (:class:`SweepStart`).  Files written before it was recorded were all ``PREVIOUS``.
     """
 
     model: str
@@ -97,6 +199,7 @@ class SweepResult:
     section: str
     failures: tuple[tuple[float, str], ...] = ()
     settings: dict = field(default_factory=dict)
+    start: SweepStart = SweepStart.PREVIOUS
 
     @property
     def x(self) -> np.ndarray:
@@ -134,6 +237,7 @@ class SweepResult:
             "model": self.model,
             "parameter": self.parameter_name,
             "section": self.section,
+            "start": self.start.value,
             "state_names": list(self.state_names),
             "settings": dict(self.settings),
             "values": [enc(v) for v in self.values],
@@ -145,6 +249,8 @@ class SweepResult:
 
     @classmethod
     def from_dict(cls, d: dict) -> SweepResult:
+        """The result :meth:`to_dict` describes (a record without ``"start"``, written before it was
+        recorded, started each value from the previous one: :attr:`SweepStart.PREVIOUS`)."""
         if d.get("format") != "saltation.sweep/1":
             raise ValueError(f"not a saltation sweep record (format {d.get('format')!r})")
         names = tuple(d["state_names"])
@@ -159,6 +265,7 @@ class SweepResult:
             section=d["section"],
             failures=tuple((float(v), str(m)) for v, m in d["failures"]),
             settings=dict(d.get("settings", {})),
+            start=_start_rule(d.get("start", SweepStart.PREVIOUS.value)),
         )
 
     def save(self, path: str | PathLike[str]) -> Path:
@@ -208,7 +315,10 @@ class SweepResult:
 @dataclass(frozen=True)
 class _Job:
     values: np.ndarray
-    x0: np.ndarray
+    #: the start state of each value, shape (len(values), n): used by every value (own starts), or by the
+    #: first one and the one after a failure (previous starts)
+    starts: np.ndarray
+    own: bool
     parameter_index: int
     base: np.ndarray
     periods: int
@@ -246,11 +356,12 @@ def sweep(
     *,
     periods: int = 200,
     transient: int = 100,
-    x0: Sequence[float] | None = None,
+    x0: StartState | None = None,
+    start: SweepStart | str = SweepStart.PREVIOUS,
     poincare: bool = True,
     workers: int | None = None,
     tolerances: Tolerances | None = None,
-    parameters: dict[str, float] | None = None,
+    parameters: Mapping[str, float] | None = None,
     period: float | None = None,
     t0: float = 0.0,
     client=None,
@@ -264,15 +375,22 @@ def sweep(
     parameter : str
         Name of the swept parameter.
     values : sequence of float
-        Parameter values, simulated in this order (within each worker's chunk
-        each starts from the previous one's final state).
+        Parameter values, simulated in this order.
     periods : int
         Number of periods sampled per value (forced systems: section points).
     transient : int
         Number of periods simulated and discarded first.
-    x0 : array_like, shape (n,), optional
-        Initial state of the first value of each chunk (and after a failure);
-        zeros by default.
+    x0 : array_like, shape (n,), or callable, optional
+        The start state (zeros by default), or a function
+        ``parameters -> state`` of a mapping of every parameter's name to its
+        value at the value being started (called once per value, here,
+        before any simulation).  Which values start from it is ``start``'s rule.
+    start : SweepStart or {"previous", "own"}
+        ``PREVIOUS`` (default): each value starts from the final state of the
+        value before it in its worker's chunk; the first value of a chunk,
+        and the value after a failed one, start from ``x0``.  ``OWN``: every
+        value starts from ``x0`` at its own parameters (the values are
+        independent: the result does not depend on ``workers``).
     poincare : bool
         Forced systems: sample the Poincare section ``x(t0 + k T)`` (True) or
         the maxima of ``x_1`` (False).  Autonomous systems always sample maxima.
@@ -295,8 +413,20 @@ def sweep(
     Returns
     -------
     SweepResult
+        With the rule used as :attr:`SweepResult.start`.
+
+    Raises
+    ------
+    ModelError
+        For an unknown parameter, or a start state (given or returned by
+        ``x0``) with the wrong number of components or not finite.
+    ValueError
+        For no values, values or ``t0`` not finite, ``periods`` not a
+        positive integer, ``transient`` not a non-negative one, ``period``
+        not positive and finite, or an unknown ``start``.
     """
     p_index = system.parameter_index(parameter)
+    rule = _start_rule(start)
     values = np.asarray(values, dtype=float).reshape(-1)
     if values.size == 0:
         raise ValueError("sweep needs at least one parameter value")
@@ -304,25 +434,28 @@ def sweep(
         raise ValueError(f"parameter values must be finite, got {values.tolist()}")
     if int(periods) != periods or periods < 1 or int(transient) != transient or transient < 0:
         raise ValueError(f"periods must be a positive and transient a non-negative integer, got {periods}, {transient}")
+    if not math.isfinite(t0):
+        raise ValueError(f"t0 must be finite, got {t0}")
     base = system.parameter_vector(parameters)
-    x0 = np.zeros(system.n) if x0 is None else np.asarray(x0, dtype=float).reshape(-1)
-    if x0.shape != (system.n,):
-        raise ModelError(f"x0 must have {system.n} components {list(system.state_names)}, got {x0.size}")
     autonomous = system.is_autonomous
     if autonomous:
         period = 2.0 * math.pi if period is None else float(period)
-        if not period > 0:
-            raise ValueError(f"period must be positive, got {period}")
+        if not (math.isfinite(period) and period > 0):
+            raise ValueError(f"period must be positive and finite, got {period}")
     else:
         period = None
+    rows = np.tile(base, (values.size, 1))
+    rows[:, p_index] = values
+    starts = _start_states(system, x0, rows, lambda p: f"{parameter}={p[p_index]:.10g}")
     use_poincare = bool(poincare) and not autonomous
 
     n_workers = _workers(workers, client)
     n_workers = min(n_workers, values.size)
-    chunks = np.array_split(values, n_workers)
+    pieces = np.array_split(np.arange(values.size), n_workers)
     jobs = [
-        _Job(c, x0, p_index, base, int(periods), int(transient), use_poincare, period, float(t0), tolerances)
-        for c in chunks
+        _Job(values[k], starts[k], rule is SweepStart.OWN, p_index, base, int(periods), int(transient), use_poincare,
+             period, float(t0), tolerances)
+        for k in pieces
     ]
     results = _run_jobs(system, jobs, client)
 
@@ -333,7 +466,7 @@ def sweep(
         failures += chunk_failures
     counts_arr = np.array(counts, dtype=int)
     states = np.concatenate(samples) if samples else np.zeros((0, system.n))
-    settings = {"periods": int(periods), "transient": int(transient), "t0": float(t0)}
+    settings = {"periods": int(periods), "transient": int(transient), "t0": float(t0), "x0": _describe_x0(x0)}
     if period is not None:
         settings["period"] = period
     return SweepResult(
@@ -347,6 +480,7 @@ def sweep(
         section="poincare" if use_poincare else "maxima",
         failures=tuple(failures),
         settings=settings,
+        start=rule,
     )
 
 
@@ -370,7 +504,10 @@ class PeriodMap:
     failures : tuple of (float, float, str)
         ``(value, value2, message)`` of each failed cell.
     settings : dict
-        ``periods``, ``transient``, ``tolerance``.
+        ``periods``, ``transient``, ``tolerance``, ``t0`` and ``x0`` (as in :class:`SweepResult`).
+    start : SweepStart
+        Where each cell started (:class:`SweepStart`); ``PREVIOUS`` for files written before it was
+        recorded.
     """
 
     model: str
@@ -382,6 +519,7 @@ class PeriodMap:
     max_period: int
     failures: tuple[tuple[float, float, str], ...] = ()
     settings: dict = field(default_factory=dict)
+    start: SweepStart = SweepStart.PREVIOUS
 
     def to_dict(self) -> dict:
         """A JSON-ready dictionary."""
@@ -390,6 +528,7 @@ class PeriodMap:
             "model": self.model,
             "parameter": self.parameter_name,
             "parameter2": self.parameter2_name,
+            "start": self.start.value,
             "values": [float(v) for v in self.values],
             "values2": [float(v) for v in self.values2],
             "periods": [[int(c) for c in row] for row in self.periods],
@@ -400,6 +539,7 @@ class PeriodMap:
 
     @classmethod
     def from_dict(cls, d: dict) -> PeriodMap:
+        """The map :meth:`to_dict` describes (a record without ``"start"`` is :attr:`SweepStart.PREVIOUS`)."""
         if d.get("format") != "saltation.period_map/1":
             raise ValueError(f"not a saltation period map (format {d.get('format')!r})")
         return cls(
@@ -407,6 +547,7 @@ class PeriodMap:
             values=np.array(d["values"], dtype=float), values2=np.array(d["values2"], dtype=float),
             periods=np.array(d["periods"], dtype=int), max_period=int(d["max_period"]),
             failures=tuple((float(a), float(b), str(m)) for a, b, m in d["failures"]), settings=dict(d["settings"]),
+            start=_start_rule(d.get("start", SweepStart.PREVIOUS.value)),
         )
 
     def save(self, path: str | PathLike[str]) -> Path:
@@ -468,8 +609,9 @@ def period_map(
     periods: int | None = None,
     transient: int = 200,
     tolerance: float = 1e-6,
-    x0: Sequence[float] | None = None,
-    parameters: dict[str, float] | None = None,
+    x0: StartState | None = None,
+    start: SweepStart | str = SweepStart.PREVIOUS,
+    parameters: Mapping[str, float] | None = None,
     workers: int | None = None,
     client=None,
     tolerances: Tolerances | None = None,
@@ -478,22 +620,61 @@ def period_map(
     """Two-parameter brute-force map of a forced system: the attractor's period in each grid cell.
 
     Each row (a value of ``parameter2``) is simulated like :func:`sweep` over
-    ``values`` (each cell from the previous cell's final state), and the
-    period is read off the stroboscopic samples (:func:`attractor_period`).
-    Rows run in local worker processes, or as Dask tasks on ``client``.
+    ``values``, and the period is read off the stroboscopic samples
+    (:func:`attractor_period`).  Rows run in local worker processes, or as
+    Dask tasks on ``client``.
 
     Parameters
     ----------
+    system : PiecewiseSystem
+        A forced model.
+    parameter, parameter2 : str
+        The parameters of the columns and of the rows.
+    values, values2 : sequence of float
+        Their values (a row is simulated in the order of ``values``).
     max_period : int
         Longest period looked for; ``periods`` samples (default ``4 max_period``) are taken after
         ``transient`` forcing periods.
+    periods : int, optional
+        Forcing periods sampled per cell; more than ``max_period``.
+    transient : int
+        Forcing periods simulated and discarded first.
     tolerance : float
         Relative tolerance of the periodicity test.
+    x0 : array_like, shape (n,), or callable, optional
+        The start state (zeros by default), or a function ``parameters -> state``
+        of a mapping of every parameter's name to its value in the cell being
+        started (called once per cell, here, before any simulation).
+    start : SweepStart or {"previous", "own"}
+        ``PREVIOUS`` (default): each cell starts from the final state of the
+        cell before it in its row (the first cell of a row, and the cell after
+        a failed one, from ``x0``).  ``OWN``: every cell starts from ``x0`` at
+        its own parameters.
+    parameters : mapping, optional
+        Values of the other parameters.
+    workers : int, optional
+        Worker processes (default: every available core); rows are dealt to them in turn.
+    client : dask.distributed.Client, optional
+        Run the rows as tasks on this Dask cluster.
+    tolerances : Tolerances, optional
+        Integration tolerances.
+    t0 : float
+        Initial time, the phase of the section.
+
+    Returns
+    -------
+    PeriodMap
+        With the rule used as :attr:`PeriodMap.start`.
 
     Raises
     ------
     ModelError
-        For an autonomous model (its period is not a number of forcing periods).
+        For an autonomous model (its period is not a number of forcing periods), unknown or equal
+        parameters, or a start state (given or returned by ``x0``) with the wrong number of
+        components or not finite.
+    ValueError
+        For no values or values not finite, ``max_period`` not a positive integer, ``periods`` not
+        above it, ``transient`` not a non-negative integer, ``t0`` not finite, or an unknown ``start``.
     """
     if system.is_autonomous:
         raise ModelError(f"a period map counts forcing periods; {system.name!r} is autonomous")
@@ -507,17 +688,25 @@ def period_map(
     if int(max_period) != max_period or max_period < 1:
         raise ValueError(f"max_period must be a positive integer, got {max_period}")
     periods = 4 * int(max_period) if periods is None else int(periods)
-    if periods <= max_period or transient < 0:
-        raise ValueError(f"periods must exceed max_period and transient be non-negative, got {periods}, {transient}")
+    if periods <= max_period or int(transient) != transient or transient < 0:
+        raise ValueError(
+            f"periods must exceed max_period and transient be a non-negative integer, got {periods}, {transient}"
+        )
+    if not math.isfinite(t0):
+        raise ValueError(f"t0 must be finite, got {t0}")
+    rule = _start_rule(start)
     base = system.parameter_vector(parameters)
-    x0 = np.zeros(system.n) if x0 is None else np.asarray(x0, dtype=float).reshape(-1)
-    if x0.shape != (system.n,):
-        raise ModelError(f"x0 must have {system.n} components {list(system.state_names)}, got {x0.size}")
     jobs = []
     for v2 in values2:
         row = base.copy()
         row[p2] = v2
-        jobs.append(_Job(values, x0, p1, row, periods, int(transient), True, None, float(t0), tolerances))
+        cells = np.tile(row, (values.size, 1))
+        cells[:, p1] = values
+        starts = _start_states(
+            system, x0, cells, lambda p: f"{parameter}={p[p1]:.10g}, {parameter2}={p[p2]:.10g}"
+        )
+        jobs.append(_Job(values, starts, rule is SweepStart.OWN, p1, row, periods, int(transient), True, None,
+                         float(t0), tolerances))
     n_workers = min(_workers(workers, client), len(jobs))
     grouped = [_RowsJob(jobs[k::n_workers]) for k in range(n_workers)]  # rows dealt round-robin to the workers
     results: list = [None] * len(jobs)
@@ -538,7 +727,9 @@ def period_map(
     return PeriodMap(
         model=system.name, parameter_name=parameter, parameter2_name=parameter2, values=values, values2=values2, periods=grid,
         max_period=int(max_period), failures=tuple(failures),
-        settings={"periods": periods, "transient": int(transient), "tolerance": float(tolerance), "t0": float(t0)},
+        settings={"periods": periods, "transient": int(transient), "tolerance": float(tolerance), "t0": float(t0),
+                  "x0": _describe_x0(x0)},
+        start=rule,
     )
 
 
@@ -597,16 +788,18 @@ def _context():
 
 
 def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list[tuple[float, str]]]:
-    """Simulate one chunk of values, each from the previous final state."""
+    """Simulate one chunk of values, each from its own start or from the previous final state."""
     system = flow.system
     p = job.base.copy()
-    x = job.x0.copy()
+    x: np.ndarray | None = None  # a fresh start: the job's start state of the value
     mode: str | None = None
     counts: list[int] = []
     samples: list[np.ndarray] = []
     failures: list[tuple[float, str]] = []
-    for value in job.values:
+    for i, value in enumerate(job.values):
         p[job.parameter_index] = value
+        if job.own or x is None:
+            x, mode = job.starts[i].copy(), None
         try:
             T = job.period if job.period is not None else system.forcing_period(p)
             t_sample = job.t0 + job.transient * T
@@ -627,7 +820,7 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
         except (SaltationError, ValueError, ArithmeticError) as exc:
             failures.append((float(value), f"{type(exc).__name__}: {exc}"))
             counts.append(0)
-            x, mode = job.x0.copy(), None
+            x, mode = None, None  # the next value starts afresh
             continue
         counts.append(len(pts))
         samples.append(np.asarray(pts, dtype=float))
