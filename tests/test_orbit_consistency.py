@@ -196,3 +196,16 @@ def test_every_fold_of_the_paper_diagram_has_a_multiplier_at_one():
 
 def test_trivial_multiplier_accuracy_is_what_the_issue_promised():
     assert TRIVIAL_MULTIPLIER_ACCURACY <= 1e-6
+
+
+def test_a_forced_model_has_no_equilibria():
+    from saltation.shooting import EquilibriumProblem
+
+    with pytest.raises(ModelError, match="forced"):
+        EquilibriumProblem(Flow(trilinear()), "free")
+
+
+def test_a_forcing_period_that_divides_by_zero_is_a_model_error():
+    system = trilinear()
+    with pytest.raises(ModelError, match="forcing period"):
+        system.forcing_period(system.parameter_vector({"omega": 0.0}))

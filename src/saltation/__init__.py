@@ -27,7 +27,7 @@ from .errors import (
 from .integrate import EventKind, Flow, Status, SwitchingEvent, Tolerances, Trajectory, simulate
 from .model import Crossing, Mode, PiecewiseSystem, Transition
 from .shooting import PeriodicOrbit, ShootingProblem, find_periodic_orbit
-from .sweeps import period_map, sweep
+from .sweeps import SweepStart, period_map, sweep
 
 __version__ = "0.1.0"
 
@@ -35,6 +35,6 @@ __all__ = [
     "Branch", "ChatteringError", "ContinuationSettings", "ConvergenceError", "Crossing", "InconsistentResultError", "EventKind", "Flow",
     "InitialModeError", "IntegrationError", "Mode", "ModelError", "NonFiniteError", "PeriodicOrbit",
     "PiecewiseSystem", "SaltationError", "ShootingProblem", "SlidingError", "SpecialPoint", "StationaryStateError", "SpecialPointKind",
-    "Status", "StepSizeError", "SwitchingEvent", "Tolerances", "Trajectory", "Transition", "continue_branch",
+    "Status", "StepSizeError", "SweepStart", "SwitchingEvent", "Tolerances", "Trajectory", "Transition", "continue_branch",
     "continue_orbit", "find_periodic_orbit", "period_map", "simulate", "sweep",
 ]

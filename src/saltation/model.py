@@ -348,7 +348,10 @@ class PiecewiseSystem(NamedParts):
         """The forcing period for parameter values ``p`` (forced systems only)."""
         if self.period_expr is None:
             raise ModelError(f"model {self.name!r} is autonomous: it has no forcing period")
-        value = float(self._period_functions[0](*np.asarray(p, dtype=float).tolist()))
+        try:
+            value = float(self._period_functions[0](*np.asarray(p, dtype=float).tolist()))
+        except (ZeroDivisionError, OverflowError, ValueError):
+            value = math.nan
         if not (math.isfinite(value) and value > 0):
             raise ModelError(f"forcing period {self.period_expr} evaluates to {value} for these parameters")
         return value

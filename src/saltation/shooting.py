@@ -805,6 +805,9 @@ class EquilibriumProblem:
     ):
         self.flow = flow
         self.system = flow.system
+        if not self.system.is_autonomous:
+            raise ModelError(f"model {self.system.name!r} is forced (its fields depend on time): it has no "
+                             "equilibria; its stationary responses are periodic orbits (ShootingProblem)")
         self.mode = self.system.mode_index(mode)
         self.p = flow.parameters(parameters)
         self.lam_index = -1 if continuation_parameter is None else self.system.parameter_index(continuation_parameter)
