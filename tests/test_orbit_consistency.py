@@ -209,3 +209,12 @@ def test_a_forcing_period_that_divides_by_zero_is_a_model_error():
     system = trilinear()
     with pytest.raises(ModelError, match="forcing period"):
         system.forcing_period(system.parameter_vector({"omega": 0.0}))
+
+
+def test_a_guess_that_comes_to_rest_in_the_sticking_set_is_named(vdp_flow):
+    """Beyond the fold (mu = 0.2975) there is no cycle: the flow from (2, 0) passes the ghost of the
+    cycle and sticks on v = 0 inside the sticking set |x| <= mu, where the motion stops."""
+    with pytest.raises(StationaryStateError, match="pseudo-equilibrium") as info:
+        find_periodic_orbit(vdp_flow, [2.0, 0.0], parameters={"mu": 0.3}, period=7.0)
+    x, v = info.value.state
+    assert abs(v) <= 1e-12 and abs(x) <= 0.3

@@ -676,10 +676,45 @@ class ShootingProblem:
             return ev.residual, ev.jac_u, ev
 
         direction = "backward" if self.backward else "forward"
-        u, history, ev = newton(
-            fun, u0, tol=tol, max_iter=max_iter, what=f"shooting ({direction} time) for {self.system.name!r}", damped=True
-        )
+        try:
+            u, history, ev = newton(
+                fun, u0, tol=tol, max_iter=max_iter, what=f"shooting ({direction} time) for {self.system.name!r}",
+                damped=True,
+            )
+        except ConvergenceError as exc:
+            rest = self.comes_to_rest(u0, lam)
+            if rest is not None:
+                raise StationaryStateError(f"{exc}; {rest[1]}", rest[0], float(u0[-1])) from exc
+            raise
         return self.orbit(u, lam, ev.trajectory, history)
+
+    def comes_to_rest(self, u: np.ndarray, lam: float | None = None, periods: int = 100) -> tuple[np.ndarray, str] | None:
+        """Where the flow from an autonomous guess comes to rest within ``periods`` guessed periods, or None.
+
+        A guess near no periodic orbit often lies in the basin of a stationary state: a sticking
+        set (a sliding motion that stops, a pseudo-equilibrium) or an equilibrium.  That is the
+        explanation a failed shooting gives.
+        """
+        if not self.autonomous:
+            return None
+        n = self.system.n
+        x0, T = np.asarray(u[:n], dtype=float), float(u[n])
+        if not (T > 0 and math.isfinite(T)):
+            return None
+        p = self.parameters_at(lam)
+        try:
+            traj = self.flow.run(x0, self.t0, self.t0 + self.sign * periods * T, p, tolerances=self.tolerances)
+        except SaltationError:
+            return None
+        tol = self.tolerances or self.flow.tolerances
+        floor = STATIONARY_FACTOR * (tol.atol + tol.rtol * (1.0 + float(np.abs(traj.x1).max())))
+        if not float(np.linalg.norm(traj.velocity_end)) <= floor:
+            return None
+        where = np.array2string(traj.x1, precision=10)
+        if traj.sliding_at_end:
+            return traj.x1, (f"no periodic orbit near the guess: the flow from it comes to rest at a "
+                             f"pseudo-equilibrium x = {where} (a sliding or sticking set where the motion stops)")
+        return traj.x1, f"no periodic orbit near the guess: the flow from it comes to rest at an equilibrium x = {where}"
 
     def orbit(
         self, u: np.ndarray, lam: float | None, trajectory: Trajectory, history: Sequence[float], *,
