@@ -62,15 +62,13 @@ BAD = [
     (["paper", "--out", "unused", "--ds-max", "1e-5"], ["--ds-max", "'1e-5'", "smallest accepted value 0.002"]),
     # periods and times
     ([*ORBIT, "--period", "1e-300"], ["--period 1e-300 is too short", "at least 1e-09"]),
-    ([*ORBIT, "--period", "1e-6", "--t0", "1e4"], ["--period 1e-06 is too short", "at least 1e-05", "|t0| = 10000"]),
+    ([*ORBIT, "--period", "1e-10", "--t0", "1e4"], ["--period 1e-10 is too short", "at least 1e-09"]),
     ([*ORBIT, "--period", "0"], ["--period", "'0'", "positive finite"]),
     ([*ORBIT, "--period", "-6.3"], ["--period", "'-6.3'", "positive finite"]),
     ([*ORBIT, "--period", "nan"], ["--period", "'nan'", "positive finite"]),
     ([*ORBIT, "--period", "inf"], ["--period", "'inf'", "positive finite"]),
     ([*ORBIT, "--t0", "inf"], ["--t0", "'inf'", "finite"]),
     ([*ORBIT, "--t0", "nan"], ["--t0", "'nan'", "finite"]),
-    ([*ORBIT, "--t0", "1e300"], ["--t0 1e+300 is too large", "at most 1e+09"]),
-    (["orbit", "trilinear", "--t0=-2e9"], ["--t0 -2e+09 is too large", "at most 1e+09"]),
     ([*CONTINUE, "--period", "1e-300"], ["--period 1e-300 is too short"]),
     ([*LOCUS, "--period", "0"], ["--period", "'0'", "positive finite"]),
     # a --period that contradicts the forcing period
@@ -142,6 +140,18 @@ def test_forcing_period_given_as_period_is_accepted(capsys, trilinear_flow):
     data = json.loads(out)
     assert data["period"] == pytest.approx(2 * np.pi / w, rel=1e-14)
     assert data["amplitude"] == pytest.approx(0.2 / np.hypot(1 - w**2, 0.05 * w), rel=1e-8)
+
+
+def test_a_forced_orbit_far_from_t0_zero_is_the_orbit_there(capsys, trilinear_flow):
+    """--t0 1e12 is reduced modulo the forcing period: the multipliers equal those at t0 = 0 to rounding
+    (the time 1e12 itself keeps only four decimals, and the orbit through it is the orbit at its remainder)."""
+    runs = []
+    for t0 in ("0", "1e12", "-2e9"):
+        code, out, err = _run(capsys, "orbit", "trilinear", "--x0", "0.5,0.5", f"--t0={t0}", "--json")
+        assert code == 0, err
+        runs.append(json.loads(out))
+    for run in runs[1:]:
+        np.testing.assert_allclose(run["multipliers"], runs[0]["multipliers"], rtol=0, atol=1e-12)
 
 
 # -- exceptions that are not bad usage ---------------------------------------------------------------------

@@ -45,10 +45,6 @@ TRANSIENT_TIME = 200.0
 #: the time axis near ``t0`` no longer resolves the period to a millionth, and every state of a model whose
 #: field is of order one moves by less than the shooting tolerance, so shooting would "converge" anywhere.
 MIN_PERIOD = 1e-9
-#: The largest ``|t0|`` accepted: ``1 / MIN_PERIOD``, where a period of one time unit is still accepted (beyond
-#: it, the time axis resolves a time unit to worse than a millionth, and a transient of a few hundred time units
-#: is lost to rounding altogether near 1e300).
-MAX_T0 = 1.0 / MIN_PERIOD
 #: Relative difference below which a --period given for a forced model is its forcing period.
 FORCING_PERIOD_MATCH = 1e-9
 #: The smallest continuation step the command line accepts (``ContinuationSettings.ds_min``).
@@ -593,26 +589,25 @@ def cmd_orbit(args: argparse.Namespace) -> int:
     overrides = parse_sets(args.set, system)
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
     period = args.period
-    if abs(args.t0) > MAX_T0:
-        raise UsageError(f"--t0 {args.t0:g} is too large: |t0| must be at most {MAX_T0:g} (floating-point times there are "
-                         f"{math.ulp(args.t0):.1g} apart)")
     if system.is_autonomous:
-        check_period(period, args.t0)
+        t0 = 0.0  # an autonomous field does not depend on time: the orbit is the same from any t0
+        check_period(period, t0)
     else:
         where = "the parameters of --set" if overrides else "the default parameters"
-        forcing_period_at(system, system.parameter_vector(overrides), where)
+        # the orbit at t0 is the orbit at t0 modulo the forcing period (where times keep their digits)
+        t0 = math.fmod(args.t0, forcing_period_at(system, system.parameter_vector(overrides), where))
         check_forced_period(system, period, system.parameter_vector(overrides), where)
         period = None  # shooting takes the forcing period
     flow = make_flow(system)
     p = flow.parameters(overrides)
     if x0 is None or (system.is_autonomous and period is None):
-        traj, _ = transient(flow, args.model, p, x0, t0=args.t0, backward=args.backward)
+        traj, _ = transient(flow, args.model, p, x0, t0=t0, backward=args.backward)
         if x0 is None:
             x0 = traj.x1.copy()
         if system.is_autonomous and period is None:
             period = estimate_period(traj)
     orbit = find_periodic_orbit(
-        flow, x0, parameters=overrides, period=period, backward=args.backward, t0=args.t0
+        flow, x0, parameters=overrides, period=period, backward=args.backward, t0=t0
     )
     if args.json:
         print(json.dumps(orbit_to_dict(orbit, system)))
@@ -694,7 +689,7 @@ def _add_orbit_parser(sub) -> None:
     )
     p.add_argument(
         "--t0", metavar="T", type=_finite, default=0.0,
-        help=f"initial time, i.e. the phase of the forcing at state0 (default 0; |t0| at most {MAX_T0:g})",
+        help="initial time, i.e. the phase of the forcing at state0 (default 0; reduced modulo the forcing period)",
     )
     p.add_argument(
         "--period", metavar="T", type=_positive("--period"),
