@@ -18,6 +18,7 @@ from .errors import (
     InitialModeError,
     IntegrationError,
     ModelError,
+    NoOrbitNearGuessError,
     NonFiniteError,
     SaltationError,
     SlidingError,
@@ -33,7 +34,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Branch", "ChatteringError", "ContinuationSettings", "ConvergenceError", "Crossing", "InconsistentResultError", "EventKind", "Flow",
-    "InitialModeError", "IntegrationError", "Mode", "ModelError", "NonFiniteError", "PeriodicOrbit",
+    "InitialModeError", "IntegrationError", "Mode", "ModelError", "NoOrbitNearGuessError", "NonFiniteError", "PeriodicOrbit",
     "PiecewiseSystem", "SaltationError", "ShootingProblem", "SlidingError", "SpecialPoint", "StationaryStateError", "SpecialPointKind",
     "Status", "StepSizeError", "SweepStart", "SwitchingEvent", "Tolerances", "Trajectory", "Transition", "continue_branch",
     "continue_orbit", "find_periodic_orbit", "period_map", "simulate", "sweep",

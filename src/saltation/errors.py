@@ -84,3 +84,15 @@ class InconsistentResultError(SaltationError, RuntimeError):
     a state on a switching surface whose event the monodromy misses.  Raised
     instead of returning the result.
     """
+
+
+class NoOrbitNearGuessError(StationaryStateError, ConvergenceError):
+    """Shooting did not converge, and the flow from the guess comes to rest: at an equilibrium or in a
+    sticking set (a pseudo-equilibrium).  Both a :class:`ConvergenceError` (with the residual
+    history) and a :class:`StationaryStateError` (with the state where the flow stops).
+    """
+
+    def __init__(self, message: str, residuals: Sequence[float], state: Sequence[float], period: float):
+        ConvergenceError.__init__(self, message, residuals)
+        self.state = [float(v) for v in state]
+        self.period = float(period)

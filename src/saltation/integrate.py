@@ -315,7 +315,7 @@ class Tolerances:
     exact_affine: bool = True
 
     def __post_init__(self):
-        if not (0 < self.rtol < 1 and self.atol > 0):
+        if not (0 < self.rtol < 1 and 0 < self.atol < math.inf):
             raise ValueError(f"tolerances must satisfy 0 < rtol < 1 and atol > 0, got rtol={self.rtol}, atol={self.atol}")
         if not self.max_step > 0:
             raise ValueError(f"max_step must be positive, got {self.max_step}")
@@ -365,7 +365,11 @@ class Flow:
         if isinstance(overrides, np.ndarray):
             if overrides.shape != (self.system.n_params,):
                 raise ModelError(f"parameter array must have shape ({self.system.n_params},), got {overrides.shape}")
-            return overrides.astype(float)
+            p = overrides.astype(float)
+            check = getattr(self.system, "check_parameters", None)
+            if check is not None:
+                check(p)
+            return p
         return self.system.parameter_vector(overrides)
 
     def initial_mode(self, x0: np.ndarray, p: np.ndarray, t0: float = 0.0) -> int:
@@ -525,6 +529,9 @@ class Flow:
         if not math.isfinite(x0.sum()):
             raise ModelError(f"initial state {x0.tolist()} is not finite")
         p = _c_array(p)
+        if p.shape != (sys_.n_params,) or not math.isfinite(p.sum()):
+            raise ModelError(f"parameters of {sys_.name!r}: expected {sys_.n_params} finite values "
+                             f"{list(sys_.parameter_names)}, got {p.tolist()}")
         t0, t1 = float(t0), float(t1)
         if not (math.isfinite(t0) and math.isfinite(t1)):
             raise ValueError(f"integration times must be finite, got t0={t0}, t1={t1}")

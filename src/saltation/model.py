@@ -27,12 +27,17 @@ from __future__ import annotations
 
 import enum
 import math
+import threading
+import unicodedata
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 import sympy as sp
+from sympy.core.function import AppliedUndef
+from sympy.logic.boolalg import Boolean
+from sympy.printing.pycode import PythonCodePrinter
 
 from .errors import InitialModeError, ModelError
 
@@ -112,11 +117,87 @@ class Condition:
         return value > 0.0 if self.strict else value >= 0.0
 
 
-def _sympify(value: Expr, symbols: Mapping[str, sp.Symbol], where: str) -> sp.Expr:
+#: Functions that are not smooth: in a field, an indicator or a reset they are switching surfaces in disguise.
+_NONSMOOTH = (sp.sign, sp.Heaviside, sp.Abs, sp.Min, sp.Max, sp.Piecewise, sp.floor, sp.ceiling, sp.frac, sp.Mod,
+              sp.DiracDelta)
+#: Numbers that no compiled model can use.
+_NOT_FINITE = (sp.nan, sp.zoo, sp.oo, -sp.oo)
+
+
+#: Seconds sympy may take to parse one expression of a model (some evaluate special functions at huge
+#: arguments for ever).
+SYMPY_TIME_LIMIT = 10.0
+
+
+def _bounded(work, where: str, value):
+    """``work()`` in a helper thread, or a :class:`ModelError` if sympy takes longer than
+    :data:`SYMPY_TIME_LIMIT` (the thread cannot be stopped; it finishes in the background)."""
+    outcome: list = []
+
+    def run():
+        try:
+            outcome.append((True, work()))
+        except BaseException as exc:  # noqa: BLE001 (handed to the caller)
+            outcome.append((False, exc))
+
+    thread = threading.Thread(target=run, daemon=True)  # a daemon: a hung sympy does not block the exit
+    thread.start()
+    thread.join(SYMPY_TIME_LIMIT)
+    if not outcome:
+        raise _SympyTimeout(f"{where}: sympy did not finish evaluating {value!r} within {SYMPY_TIME_LIMIT:g} s; "
+                            "simplify the expression")
+    ok, result = outcome[0]
+    if not ok:
+        raise result
+    return result
+
+
+class _SympyTimeout(ModelError):
+    """sympy took longer than :data:`SYMPY_TIME_LIMIT`."""
+
+
+class _StrictPrinter(PythonCodePrinter):
+    """Python's code printer in strict mode: what it cannot print, the compiled model cannot compute."""
+
+    def __init__(self):
+        super().__init__({"standard": "python3", "strict": True, "fully_qualified_modules": True})
+
+
+_PRINTER = _StrictPrinter()
+
+
+def _sympify(value: Expr, symbols: Mapping[str, sp.Symbol], where: str, *, relation: bool = False) -> sp.Expr:
+    """Parse one expression of a model and check that it can be compiled.
+
+    ``relation`` allows an inequality (domains and guards).  Raises :class:`ModelError` naming
+    ``where`` for anything else: a wrong type, a relation where an expression is expected, an
+    unknown symbol or function, a complex or non-finite value, a function the compiled model
+    cannot compute.
+    """
+    if isinstance(value, bool) or value is None or not isinstance(value, (str, int, float, sp.Basic, np.number)):
+        raise ModelError(f"{where}: expected an expression (a string or a sympy expression), got "
+                         f"{type(value).__name__} {value!r}")
+    if isinstance(value, str) and not value.strip():
+        raise ModelError(f"{where}: the expression is empty")
+
+    def parse():
+        return sp.sympify(value, locals=dict(symbols)) if isinstance(value, str) else sp.sympify(value)
+
     try:
-        expr = sp.sympify(value, locals=dict(symbols)) if isinstance(value, str) else sp.sympify(value)
-    except (sp.SympifyError, SyntaxError, TypeError) as exc:
-        raise ModelError(f"{where}: cannot parse expression {value!r}: {exc}") from None
+        expr = _bounded(parse, where, value)
+    except _SympyTimeout:
+        raise
+    except (sp.SympifyError, SyntaxError, TypeError, AttributeError, ValueError, ZeroDivisionError) as exc:
+        raise ModelError(f"{where}: cannot parse expression {value!r}: {type(exc).__name__}: {exc}") from None
+    if not isinstance(expr, sp.Basic):
+        raise ModelError(f"{where}: {value!r} is not an expression")
+    if isinstance(expr, Boolean) and not isinstance(expr, sp.Expr) and not relation:
+        raise ModelError(f"{where}: {value!r} is a relation or a truth value; an expression such as 'x - a' is expected")
+    if not isinstance(expr, (sp.Expr, Boolean)):
+        raise ModelError(f"{where}: {value!r} is not an expression (it parses as a {type(expr).__name__})")
+    undefined = sorted({str(f.func) for f in expr.atoms(AppliedUndef)})
+    if undefined:
+        raise ModelError(f"{where}: unknown function(s) {undefined} in {value!r}")
     unknown = {s.name for s in expr.free_symbols} - set(symbols)
     if unknown:
         raise ModelError(
@@ -124,11 +205,42 @@ def _sympify(value: Expr, symbols: Mapping[str, sp.Symbol], where: str) -> sp.Ex
             f"known states, parameters and time: {sorted(symbols)}"
         )
     # Re-bind symbols created elsewhere with other assumptions to ours.
-    return expr.xreplace({s: symbols[s.name] for s in expr.free_symbols})
+    expr = expr.xreplace({s: symbols[s.name] for s in expr.free_symbols})
+    if expr.has(sp.I) or any(a.is_real is False for a in expr.atoms(sp.Number)):
+        raise ModelError(f"{where}: {value!r} is complex-valued; a model's expressions are real")
+    if any(expr.has(z) for z in _NOT_FINITE):
+        raise ModelError(f"{where}: {value!r} is not finite (it evaluates to {expr})")
+    return expr
+
+
+def _check_compilable(expr: sp.Expr, variables: Sequence[sp.Symbol], where: str, *, smooth: bool) -> None:
+    """An expression, and (``smooth``) its first derivatives in ``variables``, can be compiled.
+
+    A non-smooth function (``sign``, ``Heaviside``, ``Abs``, ``Min``, ``Max``, ``Piecewise``...) in a
+    field, an indicator or a reset is a switching surface in disguise: its derivative is not a
+    function the integrator can use, and the saltation matrix at its switch would be missing.
+    """
+    if smooth:
+        bad = sorted({str(f) for f in expr.atoms(*_NONSMOOTH)})
+        if bad:
+            raise ModelError(
+                f"{where}: {bad[0]} in {expr} is not smooth; write it as modes split by a switching surface where "
+                "its argument changes sign (listed both ways, see 'Writing models'), so that the switch gets its "
+                "saltation matrix"
+            )
+    parts = [expr]
+    if smooth:
+        parts += [sp.diff(expr, v) for v in variables if expr.has(v)]
+    for part in parts:
+        try:
+            _PRINTER.doprint(part)
+        except Exception as exc:  # noqa: BLE001 (sympy's printers raise many kinds)
+            raise ModelError(f"{where}: {expr} cannot be compiled ({type(exc).__name__}: "
+                             f"{' '.join(str(exc).split())[:200]})") from None
 
 
 def _condition(value: Expr, symbols: Mapping[str, sp.Symbol], where: str) -> Condition:
-    rel = _sympify(value, symbols, where) if not isinstance(value, sp.Basic) else value
+    rel = _sympify(value, symbols, where, relation=True) if not isinstance(value, sp.Basic) else value
     if isinstance(rel, sp.Basic) and not isinstance(rel, sp.core.relational.Relational):
         raise ModelError(f"{where}: {value!r} is not an inequality such as 'x - x_c > 0'")
     if isinstance(rel, (sp.StrictGreaterThan, sp.GreaterThan)):
@@ -139,7 +251,23 @@ def _condition(value: Expr, symbols: Mapping[str, sp.Symbol], where: str) -> Con
         raise ModelError(f"{where}: {value!r} must be a strict or non-strict inequality")
     strict = isinstance(rel, (sp.StrictGreaterThan, sp.StrictLessThan))
     expr = _sympify(expr, symbols, where)
+    _check_compilable(expr, (), where, smooth=False)
     return Condition(expr=expr, strict=strict)
+
+
+def _conditions(values, symbols: Mapping[str, sp.Symbol], where: str) -> tuple[Condition, ...]:
+    """A sequence of conditions (a plain string would be iterated character by character)."""
+    if isinstance(values, (str, sp.Basic)) or not isinstance(values, Sequence):
+        raise ModelError(f"{where}: expected a list of conditions such as ['x - a > 0'], got {values!r}")
+    return tuple(_condition(c, symbols, where) for c in values)
+
+
+def _name(value, what: str) -> str:
+    """A name of a state, parameter, mode or surface: a non-empty identifier that sympy and Python keep as written."""
+    if not isinstance(value, str) or not value.isidentifier() or unicodedata.normalize("NFKC", value) != value:
+        raise ModelError(f"{what} name {value!r} must be a non-empty identifier (letters, digits, underscores, "
+                         "not starting with a digit, without compatibility characters such as ligatures)")
+    return value
 
 
 @dataclass(frozen=True)
@@ -194,16 +322,68 @@ class NamedParts:
         Raises
         ------
         ModelError
-            If an override names an unknown parameter or is not finite.
+            If an override names an unknown parameter, is not finite, or makes a divisor of the
+            model zero (see :meth:`check_parameters`).
         """
+        if overrides is not None and not isinstance(overrides, Mapping):
+            raise ModelError(f"parameter overrides must be a mapping of names to values, got {overrides!r}")
         values = dict(self.defaults)
         for key, val in (overrides or {}).items():
             self.parameter_index(key)
-            val = float(val)
+            try:
+                val = float(val)
+            except (TypeError, ValueError):
+                raise ModelError(f"parameter {key!r} must be a number, got {val!r}") from None
             if not math.isfinite(val):
                 raise ModelError(f"parameter {key!r} must be finite, got {val}")
             values[key] = val
-        return np.array([values[k] for k in self.parameter_names], dtype=float)
+        p = np.array([values[k] for k in self.parameter_names], dtype=float)
+        self.check_parameters(p)
+        return p
+
+    def check_parameters(self, p: np.ndarray) -> None:
+        """Parameter values a compiled model can use: the right number, finite, and no divisor of the
+        model's expressions that depends on parameters alone equal to zero (``m = 0`` in ``F/m``).
+
+        Raises
+        ------
+        ModelError
+            Naming the parameter (and the expression whose divisor vanishes).
+        """
+        p = np.asarray(p, dtype=float)
+        if p.shape != (self.n_params,):
+            raise ModelError(f"{self.name!r} has {self.n_params} parameters {list(self.parameter_names)}, "
+                             f"got an array of shape {p.shape}")
+        bad = [name for name, v in zip(self.parameter_names, p) if not math.isfinite(v)]
+        if bad:
+            raise ModelError(f"parameter {bad[0]!r} must be finite, got {p[self.parameter_names.index(bad[0])]}")
+        for divisor, function, where in self._parameter_divisors:
+            try:
+                value = float(function(*p.tolist()))
+            except (ZeroDivisionError, ValueError, OverflowError):
+                value = 0.0
+            if value == 0.0:
+                names = sorted(str(q) for q in divisor.free_symbols)
+                values = ", ".join(f"{q} = {p[self.parameter_names.index(q)]:g}" for q in names)
+                raise ModelError(f"{where} divides by {divisor}, which is zero at {values}")
+
+    @cached_property
+    def _parameter_divisors(self) -> list:
+        """``(divisor, compiled divisor, where)`` for each divisor that depends on parameters only."""
+        found, seen = [], set()
+        expressions = list(self._expressions())
+        params = set(self.p) if expressions else set()
+        for expr, where in expressions:
+            for power in expr.atoms(sp.Pow):
+                base, exponent = power.as_base_exp()
+                if exponent.is_negative and base.free_symbols and base.free_symbols <= params and base not in seen:
+                    seen.add(base)
+                    found.append((base, sp.lambdify(list(self.p), base, modules="math"), where))
+        return found
+
+    def _expressions(self):
+        """Every expression of the model with where it stands (overridden by models that have them)."""
+        return []
 
     @cached_property
     def _period_functions(self):
@@ -254,11 +434,15 @@ class PiecewiseSystem(NamedParts):
         *,
         period: Expr | None = None,
     ):
-        if not name.replace("_", "").isalnum():
-            raise ModelError(f"model name {name!r} must be alphanumeric (underscores allowed)")
+        if not isinstance(name, str) or not name.replace("_", "").isalnum():
+            raise ModelError(f"model name {name!r} must be a string of letters and digits (underscores allowed)")
         self.name = name
-        self.state_names: tuple[str, ...] = tuple(states)
-        self.parameter_names: tuple[str, ...] = tuple(parameters)
+        if isinstance(states, str) or not isinstance(states, Sequence):
+            raise ModelError(f"states must be a list of names, got {states!r}")
+        if not isinstance(parameters, Mapping):
+            raise ModelError(f"parameters must be a mapping of names to default values, got {type(parameters).__name__}")
+        self.state_names: tuple[str, ...] = tuple(_name(s, "state") for s in states)
+        self.parameter_names: tuple[str, ...] = tuple(_name(q, "parameter") for q in parameters)
         self.defaults: dict[str, float] = {}
         for pname, value in parameters.items():
             if value is None:
@@ -267,6 +451,8 @@ class PiecewiseSystem(NamedParts):
                 self.defaults[pname] = float(value)
             except (TypeError, ValueError):
                 raise ModelError(f"parameter {pname!r} has non-numeric value {value!r}") from None
+            if not math.isfinite(self.defaults[pname]):
+                raise ModelError(f"parameter {pname!r} must be finite, got {value!r}")
         names = list(self.state_names) + list(self.parameter_names) + ["t"]
         dupes = {n for n in names if names.count(n) > 1}
         if dupes:
@@ -278,21 +464,34 @@ class PiecewiseSystem(NamedParts):
         self.t = TIME
         self._symbols = {s.name: s for s in list(self.x) + list(self.p)} | {"t": TIME}
 
-        if not modes:
-            raise ModelError("a model needs at least one mode")
+        if isinstance(modes, (str, Mode)) or not isinstance(modes, Sequence) or not modes:
+            raise ModelError("a model needs a list of at least one Mode")
+        for m in modes:
+            if not isinstance(m, Mode):
+                raise ModelError(f"modes must be Mode(...) objects, got {m!r}")
+            if not isinstance(m.name, str) or not m.name:
+                raise ModelError(f"a mode's name must be a non-empty string, got {m.name!r}")
         self.modes: tuple[Mode, ...] = tuple(modes)
         self.mode_names: tuple[str, ...] = tuple(m.name for m in modes)
         if len(set(self.mode_names)) != len(self.mode_names):
             raise ModelError(f"mode names must be unique: {self.mode_names}")
         self.fields: tuple[sp.Matrix, ...] = tuple(self._parse_field(m) for m in modes)
         self.domains: tuple[tuple[Condition, ...], ...] = tuple(
-            tuple(_condition(c, self._symbols, f"domain of mode {m.name!r}") for c in m.domain) for m in modes
+            _conditions(m.domain, self._symbols, f"domain of mode {m.name!r}") for m in modes
         )
 
+        if not isinstance(surfaces, Mapping):
+            raise ModelError(f"surfaces must be a mapping of names to indicators, got {type(surfaces).__name__}")
+        for sname in surfaces:
+            if not isinstance(sname, str) or not sname:
+                raise ModelError(f"a surface's name must be a non-empty string, got {sname!r}")
         self.surface_names: tuple[str, ...] = tuple(surfaces)
         self.indicators: tuple[sp.Expr, ...] = tuple(
             _sympify(expr, self._symbols, f"surface {sname!r}") for sname, expr in surfaces.items()
         )
+        variables = [*self.x, *self.p, TIME]
+        for sname, h in zip(self.surface_names, self.indicators):
+            _check_compilable(h, variables, f"surface {sname!r}", smooth=True)
         for sname, h in zip(self.surface_names, self.indicators):
             if not (h.free_symbols & set(self.x)):
                 raise ModelError(
@@ -300,27 +499,39 @@ class PiecewiseSystem(NamedParts):
                     "a switching surface must be crossed by moving in state space"
                 )
 
+        if isinstance(transitions, (str, Transition)) or not isinstance(transitions, Sequence):
+            raise ModelError(f"transitions must be a list of Transition(...) objects, got {transitions!r}")
         self.transitions: tuple[Transition, ...] = tuple(transitions)
         self.resets: list[sp.Matrix | None] = []
         self.guards: list[tuple[Condition, ...]] = []
         for k, tr in enumerate(self.transitions):
+            if not isinstance(tr, Transition):
+                raise ModelError(f"transition {k}: expected a Transition(...), got {tr!r}")
             where = f"transition {k} ({tr.source} -> {tr.target})"
             for role, mname in (("source", tr.source), ("target", tr.target)):
                 if mname not in self.mode_names:
                     raise ModelError(f"{where}: {role} mode {mname!r} does not exist; modes are {list(self.mode_names)}")
             if tr.surface not in self.surface_names:
                 raise ModelError(f"{where}: surface {tr.surface!r} does not exist; surfaces are {list(self.surface_names)}")
-            try:
-                Crossing(int(tr.direction))
-            except ValueError:
-                raise ModelError(f"{where}: direction must be a Crossing (+1, -1 or 0), got {tr.direction!r}") from None
+            direction = tr.direction
+            if isinstance(direction, bool) or not isinstance(direction, (int, np.integer)) or direction not in (1, -1, 0):
+                raise ModelError(f"{where}: direction must be a Crossing (RISING +1, FALLING -1 or EITHER 0), "
+                                 f"got {direction!r}")
             if tr.reset is None:
                 self.resets.append(None)
             else:
+                if isinstance(tr.reset, (str, sp.Basic)) or not isinstance(tr.reset, Sequence):
+                    raise ModelError(f"{where}: a reset map is a list of expressions, one per state, got {tr.reset!r}")
                 if len(tr.reset) != self.n:
                     raise ModelError(f"{where}: reset map has {len(tr.reset)} components, the model has {self.n} states")
-                self.resets.append(sp.Matrix([_sympify(e, self._symbols, f"{where} reset") for e in tr.reset]))
-            self.guards.append(tuple(_condition(c, self._symbols, f"{where} guard") for c in tr.guard))
+                reset = []
+                for i, e in enumerate(tr.reset):
+                    slot = f"{where} reset component {i} ({self.state_names[i]}+)"
+                    g = _sympify(e, self._symbols, slot)
+                    _check_compilable(g, variables, slot, smooth=True)
+                    reset.append(g)
+                self.resets.append(sp.Matrix(reset))
+            self.guards.append(_conditions(tr.guard, self._symbols, f"{where} guard"))
 
         if period is None:
             self.period_expr: sp.Expr | None = None
@@ -328,16 +539,41 @@ class PiecewiseSystem(NamedParts):
             self.period_expr = _sympify(period, self._symbols, "forcing period")
             if self.period_expr.free_symbols & (set(self.x) | {TIME}):
                 raise ModelError("the forcing period may depend on parameters only")
+            _check_compilable(self.period_expr, list(self.p), "forcing period", smooth=True)
         if self.period_expr is None and any(TIME in f.free_symbols for f in self.fields):
             raise ModelError("a vector field depends on time t but no forcing period is given (period=...)")
+        self.check_parameters(np.array([self.defaults[k] for k in self.parameter_names]))
 
     # -- construction helpers ---------------------------------------------------------------
+    def _expressions(self):
+        """Every expression of the model with where it stands (fields, indicators, resets, the period)."""
+        for m, f in zip(self.mode_names, self.fields):
+            for i, e in enumerate(f):
+                yield e, f"mode {m!r}, field component {i} ({self.state_names[i]}')"
+        for sname, h in zip(self.surface_names, self.indicators):
+            yield h, f"surface {sname!r}"
+        for k, g in enumerate(self.resets):
+            if g is not None:
+                for i, e in enumerate(g):
+                    yield e, f"transition {k}, reset component {i}"
+        if self.period_expr is not None:
+            yield self.period_expr, "the forcing period"
+
     def _parse_field(self, mode: Mode) -> sp.Matrix:
         where = f"mode {mode.name!r}"
-        if isinstance(mode.field, (str, sp.Basic)) or len(mode.field) != len(self.state_names):
-            size = "?" if isinstance(mode.field, (str, sp.Basic)) else len(mode.field)
-            raise ModelError(f"{where}: vector field has {size} components, the model has {len(self.state_names)} states")
-        return sp.Matrix([_sympify(e, self._symbols, where) for e in mode.field])
+        if isinstance(mode.field, (str, sp.Basic)) or not isinstance(mode.field, Sequence):
+            raise ModelError(f"{where}: the vector field is a list of expressions, one per state, got {mode.field!r}")
+        if len(mode.field) != len(self.state_names):
+            raise ModelError(f"{where}: vector field has {len(mode.field)} components, the model has "
+                             f"{len(self.state_names)} states")
+        variables = [*self.x, *self.p, TIME]
+        components = []
+        for i, e in enumerate(mode.field):
+            slot = f"{where}, field component {i} ({self.state_names[i]}')"
+            f = _sympify(e, self._symbols, slot)
+            _check_compilable(f, variables, slot, smooth=True)
+            components.append(f)
+        return sp.Matrix(components)
 
     # -- sizes and lookups ------------------------------------------------------------------
     @property
@@ -446,6 +682,8 @@ class PiecewiseSystem(NamedParts):
             *(repr((t.source, t.surface, int(t.direction), t.target)) for t in self.transitions),
             *(sp.srepr(g) if g is not None else "None" for g in self.resets),
             *(repr([(sp.srepr(c.expr), c.strict) for c in gs]) for gs in self.guards),
+            *(repr([(sp.srepr(c.expr), c.strict) for c in d]) for d in self.domains),
+            "period " + (sp.srepr(self.period_expr) if self.period_expr is not None else "None"),
         ]
         return "\n".join(parts)
 
@@ -453,6 +691,7 @@ class PiecewiseSystem(NamedParts):
         # compiled helper functions are rebuilt on demand (they do not pickle)
         state = dict(self.__dict__)
         state.pop("_period_functions", None)
+        state.pop("_parameter_divisors", None)
         return state
 
     def _repr_markdown_(self) -> str:

@@ -43,6 +43,7 @@ from .errors import (
     InconsistentResultError,
     IntegrationError,
     ModelError,
+    NoOrbitNearGuessError,
     SaltationError,
     StationaryStateError,
 )
@@ -684,7 +685,8 @@ class ShootingProblem:
         except ConvergenceError as exc:
             rest = self.comes_to_rest(u0, lam)
             if rest is not None:
-                raise StationaryStateError(f"{exc}; {rest[1]}", rest[0], float(u0[-1])) from exc
+                message = str(exc).split(" (residual history")[0]
+                raise NoOrbitNearGuessError(f"{message}; {rest[1]}", exc.residuals, rest[0], float(u0[-1])) from exc
             raise
         return self.orbit(u, lam, ev.trajectory, history)
 
