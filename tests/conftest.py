@@ -163,3 +163,25 @@ def stable_cycle(belt_flow):
 @pytest.fixture(scope="session")
 def unstable_cycle(belt_flow):
     return unstable_orbit(belt_flow)
+
+
+# -- hypothesis profiles (the property suites, e.g. tests/test_degenerate_orbits.py) ------
+# "ci", the default: few examples per property and no deadline (a first call may compile a model),
+# so that each property file runs in well under a minute.  "thorough" draws many more:
+#     HYPOTHESIS_PROFILE=thorough python -m pytest tests/test_degenerate_orbits.py
+try:
+    from hypothesis import HealthCheck
+    from hypothesis import settings as _hypothesis_settings
+except ImportError:  # hypothesis comes with the test extra; without it only the property suites fail
+    pass
+else:
+    # (a failure prints its @reproduce_failure blob; the example database, .hypothesis/, ignores itself in git)
+    _hypothesis_settings.register_profile(
+        "ci", max_examples=50, deadline=None, print_blob=True, suppress_health_check=[HealthCheck.too_slow]
+    )
+    _hypothesis_settings.register_profile(
+        "thorough", max_examples=1000, deadline=None, print_blob=True, suppress_health_check=[HealthCheck.too_slow]
+    )
+    import os as _os
+
+    _hypothesis_settings.load_profile(_os.environ.get("HYPOTHESIS_PROFILE", "ci"))
