@@ -53,6 +53,12 @@ INFO_REJECTED = 5
 INFO_FINAL_MODE = 6
 INFO_SLIDE = 7
 SLIDE_WIDTH = 5
+# The first entry of the sliding state: 0 not sliding, 1 sliding. A run stopped with STATUS_SLIDING_UNDEFINED
+# during a sliding motion gives the cause there instead (with the motion's modes, surface and crossing after it):
+SLIDE_LEAVES_REGION = 2  # it leaves the domain of its mode INFO_FAILED_MODE (across INFO_FAILED_SURFACE, or its own
+#                          surface when no other lies there), and no transition out of either mode holds there
+SLIDE_BLOCKED = 3  # the transition on INFO_FAILED_SURFACE leads to no motion the integrator defines: the field of
+#                    INFO_FAILED_MODE pushes back across that surface, or (mode -1) both new modes leave the sliding surface
 INFO_INITIAL_MODE = 12
 INFO_EVENT_LOG = 13
 EVENT_LOG_INTS = 5

@@ -30,7 +30,11 @@ The integrator (see ``docs/algorithms.md``):
   ``_saltation_jump``;
 * slides (Filippov) when the new field pushes back into the surface, and
   leaves the sliding motion where either field turns tangent
-  (``_sliding_exit_event``).
+  (``_sliding_exit_event``), or where it crosses another surface on which a
+  transition out of either of its modes holds (``_sliding_match``,
+  ``_sliding_transition``); a sliding motion that leaves the domain of one
+  of its modes where no transition holds stops the run
+  (``_sliding_region_margin``).
 """
 
 import math
@@ -83,6 +87,8 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         SHOOT_FAILED,
         SHOOT_MAX_ITER,
         SHOOT_SINGULAR,
+        SLIDE_BLOCKED,
+        SLIDE_LEAVES_REGION,
         SLIDE_WIDTH,
         STATUS_CHATTERING,
         STATUS_MAX_EVENTS,
@@ -136,6 +142,7 @@ EPS = 2.220446049250313e-16
 CHATTER_WINDOW = 20
 SLIDING_EXIT_SAMPLES = 8  # samples of the sliding-exit functions inside a sliding step (see the event search)
 DOMAIN_TOLERANCE = 1e-8  # relative: a state beyond its mode's domain by more is an error of the model
+SIDE_NUDGE = 1e-10  # relative: how far off its surface a sliding state is moved to take one side's guards and domain
 
 # event kinds (0: an indicator; 1, 2: a sliding motion's exit on side a, b) and "none", as typed
 # integers: a literal int argument would make numba compile the callee once more for it
@@ -805,7 +812,8 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
     """Entering a mode (or a sliding motion): which surfaces its transitions watch, which way each
     fires (``fires``: 1 to the negative side, 2 to the positive, 3 both), and the sign memory of each
     (value, slope along the motion and side, in the direction of travel), except the signs an event
-    has just fixed (``fixed_sign``)."""
+    has just fixed (``fixed_sign``).  A sliding motion watches the surfaces, other than its own, of
+    the transitions out of either of its modes (its region may end there: ``_sliding_match``)."""
     n = N_STATE or hx.shape[0]  # (see the engine's header)
     n_surfaces = watched.shape[0]
     n_tr = tr_table.shape[0]
@@ -813,12 +821,12 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
     for s in range(n_surfaces):
         watched[s] = False
         fires[s] = 0
-    if slide[0] == 0:
-        for k in range(n_tr):
-            if tr_table[k, 0] == mode:
-                watched[tr_table[k, 1]] = True
-                dk = tr_table[k, 2]
-                fires[tr_table[k, 1]] |= 3 if dk == 0 else (1 if dk < 0 else 2)
+    for k in range(n_tr):
+        src = tr_table[k, 0]
+        if (src == mode) if slide[0] == 0 else ((src == slide[1] or src == slide[2]) and tr_table[k, 1] != slide[3]):
+            watched[tr_table[k, 1]] = True
+            dk = tr_table[k, 2]
+            fires[tr_table[k, 1]] |= 3 if dk == 0 else (1 if dk < 0 else 2)
     for s in range(n_surfaces):
         if watched[s]:
             v = model[INDICATOR](s, t, y[:n], p)
@@ -841,13 +849,17 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
 
 
 @njit(cache=True, inline="always")  # once per mode entered; its arrays are the integrator's own
-def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, last_kind, n_ev, tr_table, surf_old, slope_old,
-                  surf_sign, fixed_sign, xtmp):
+def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surface, drift, last_kind, n_ev, tr_table,
+                  surf_old, slope_old, surf_sign, fixed_sign, xtmp):
     """A transition out of the mode just entered that fires at once, without a step: at the start, on a
     surface the field crosses in the transition's direction; after a transition at a corner of
     switching surfaces, an exit that already holds.  Returns ``(transition or -1, status)``: the status
     is STATUS_OUTSIDE_DOMAIN when the state lies outside the mode's domain by more than rounding and no
-    exit holds (the model's domains and transitions disagree)."""
+    exit holds (the model's domains and transitions disagree).
+
+    After a transition that has ended a sliding motion (``at_start`` then too), the state lies on the
+    sliding surface ``on_surface`` (-1: none) up to the integration's ``drift`` off it (a distance):
+    the new field may cross it, and the drift counts as rounding in the domain's test."""
     n = N_STATE or xtmp.shape[0]  # (see the engine's header)
     n_tr = tr_table.shape[0]
     pending = NONE
@@ -858,13 +870,17 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, last_kind
         # A start on a surface (|h| <= 1e-12) with this mode's field crossing it in the direction
         # of one of its transitions: the transition fires at once, as if the motion had just
         # arrived (it may start a sliding motion), instead of moving on in this mode beyond its
-        # surface. Its guard is taken a hair along the motion.
+        # surface. Its guard is taken a hair along the motion. The same where a transition has
+        # ended a sliding motion: the state lies on the sliding surface, and the new mode's field
+        # may cross it (into a new sliding motion, say).
         for k in range(n_tr):
             if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
                 continue
             s = tr_table[k, 1]
-            if abs(surf_old[s]) > 1e-12 or slope_old[s] * tr_table[k, 2] <= 0.0:
+            if (abs(surf_old[s]) > 1e-12 and s != on_surface) or slope_old[s] * tr_table[k, 2] <= 0.0:
                 continue
+            if fixed_sign[s] and surf_sign[s] == tr_table[k, 2]:
+                continue  # the side an event has just put the state on (the surface just crossed)
             if model[GUARD](k, t + dt_nudge, xtmp, p):
                 pending = k
                 break
@@ -891,7 +907,7 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, last_kind
             scale = 1.0
             for i in range(n):
                 scale = max(scale, abs(y[i]))
-            if model[DOMAIN_MARGIN](mode, t + dt_nudge, xtmp, p) < -DOMAIN_TOLERANCE * scale:
+            if model[DOMAIN_MARGIN](mode, t + dt_nudge, xtmp, p) < -DOMAIN_TOLERANCE * scale - 2.0 * drift:
                 return NONE, STATUS_OUTSIDE_DOMAIN
     return pending, STATUS_OK
 
@@ -964,7 +980,7 @@ def _refine_event(model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, s_e
 
 @njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
 def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_once, n_ev, chatter_ring, hx, hp, fa,
-                      fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign):
+                      fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding):
     """Apply transition ``k`` (surface ``s``) at the event ``(t_e, x_e)`` in ``mode``: the reset
     ``xplus = g(x_e)`` with ``g_x, g_t, g_p``, the surface's gradient ``h_x, h_p``, the fields ``f-``
     (``fa``) and ``f+`` (``fplus``) and the denominator ``h_x f- + h_t`` of eq. (9), which
@@ -974,12 +990,17 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_on
     starts (``slide`` set, ``f+`` the sliding field).  Returns ``(status, mode_to, kind, den)``: a
     status other than OK for a tangential crossing, a sliding motion that is not defined, or impacts
     accumulating below the resolution of the state (chattering).
+
+    ``from_sliding``: the transition ends a sliding motion (``_sliding_transition``), whose field the
+    caller has put in ``fa``; a new field that pushes back across this surface would call for sliding
+    on two surfaces at once, which is not defined here (STATUS_SLIDING_UNDEFINED).
     """
     n = N_STATE or fa.shape[0]  # (see the engine's header)
     kind_logged = EVENT_TRANSITION
     mode_to = tr_table[k, 3]
     ht = model[INDICATOR_GRAD](s, t_e, x_e, p, hx, hp)
-    model[VECTOR_FIELD](mode, t_e, x_e, p, fa)
+    if not from_sliding:
+        model[VECTOR_FIELD](mode, t_e, x_e, p, fa)
     den = ht
     for i in range(n):
         den += hx[i] * fa[i]
@@ -1011,7 +1032,7 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_on
             return STATUS_CHATTERING, mode_to, EVENT_TRANSITION, den
     if tr_table[k, 4] == 0 and direction * sig_b * cross < 0.0:
         # no jump, and the new field pushes back: Filippov sliding along the surface
-        if den == sig_b:
+        if den == sig_b or from_sliding:
             return STATUS_SLIDING_UNDEFINED, mode_to, EVENT_TRANSITION, den
         alpha = den / (den - sig_b)
         for i in range(n):
@@ -1072,6 +1093,166 @@ def _leave_sliding(model, kind, mode, slide, t_e, x_e, p, hx, hp, fa, fplus, xpl
     if den == 0.0:
         den = 1e-300
     return mode_from, mode_to, den
+
+
+@njit(cache=True)
+def _sliding_side(model, slide, side, t, x, p, hs, hsp, out):
+    """A sliding state ``x`` moved a hair (``SIDE_NUDGE`` of its size) to the side of its surface where
+    the indicator has the sign ``side`` (mode a's side is ``-slide[4]``, b's ``slide[4]``), into
+    ``out``: where that mode's guards and domain are taken, so that their conditions on the surface
+    itself are not decided by rounding.  The state is moved along the indicator's gradient, and only
+    as far as needed (not when the integration has left it that far on that side already); returns
+    the distance moved (the integration's drift off the surface, or the hair)."""
+    n = N_STATE or x.shape[0]  # (see the engine's header)
+    s = slide[3]
+    h = model[INDICATOR](s, t, x, p)
+    model[INDICATOR_GRAD](s, t, x, p, hs, hsp)
+    g2 = 0.0
+    scale = 1.0
+    for i in range(n):
+        g2 += hs[i] * hs[i]
+        scale = max(scale, abs(x[i]))
+    c = 0.0
+    if g2 > 0.0 and math.isfinite(g2):
+        target = side * SIDE_NUDGE * scale * math.sqrt(g2)
+        if side * h < side * target:
+            c = (target - h) / g2
+    for i in range(n):
+        out[i] = x[i] + c * hs[i]
+    return abs(c) * math.sqrt(g2)
+
+
+@njit(cache=True)
+def _sliding_match(model, slide, w, cross, t, x, p, tr_table, hs, hsp, xside):
+    """Where a sliding motion crosses surface ``w`` (not its own) to the side ``cross``: ``(ka, kb)``, the
+    first transition out of its mode a (b) on ``w`` in that direction whose guard holds on a's (b's) side of
+    the sliding surface, or -1 for none."""
+    ka = NONE
+    kb = NONE
+    n_tr = tr_table.shape[0]
+    for j in range(1, 3):
+        m = slide[j]
+        side = -slide[4] if j == 1 else slide[4]
+        moved = False
+        for k in range(n_tr):
+            if tr_table[k, 0] != m or tr_table[k, 1] != w:
+                continue
+            dk = tr_table[k, 2]
+            if dk != 0 and dk != cross:
+                continue
+            if not moved:
+                _sliding_side(model, slide, side, t, x, p, hs, hsp, xside)
+                moved = True
+            if model[GUARD](k, t, xside, p):
+                if j == 1:
+                    ka = k
+                else:
+                    kb = k
+                break
+    return ka, kb
+
+
+@njit(cache=True)
+def _sliding_transition(model, slide, ka, kb, t_e, x_e, p, tr_table, direction, hs, hsp, fc, fd):
+    """Which transition ends a sliding motion (modes a, b on surface s) where it meets another surface on
+    which a transition out of a (``ka``) or b (``kb``, -1 for none) holds: ``(transition, mode, status)``.
+
+    Beyond that surface, a's side of s belongs to the target c of ``ka`` (or still to a), b's side to the
+    target d of ``kb`` (or to b).  One transition, or two into one mode: it fires.  Two into different
+    modes: if c's field crosses s towards b's side and d's does not push back, the motion goes on in d
+    (``kb`` fires); if neither pushes towards s, both leave the surface and the motion is not unique
+    (STATUS_SLIDING_UNDEFINED, mode -1); otherwise ``ka`` fires (c leaves s on its side, or both push
+    towards s and c's own transition on s starts their sliding motion at once).
+    """
+    n = N_STATE or x_e.shape[0]  # (see the engine's header)
+    if ka < 0:
+        return kb, NONE, STATUS_OK
+    if kb < 0:
+        return ka, NONE, STATUS_OK
+    c = tr_table[ka, 3]
+    d = tr_table[kb, 3]
+    if c == d:
+        return ka, NONE, STATUS_OK
+    ht = model[INDICATOR_GRAD](slide[3], t_e, x_e, p, hs, hsp)
+    model[VECTOR_FIELD](c, t_e, x_e, p, fc)
+    model[VECTOR_FIELD](d, t_e, x_e, p, fd)
+    sc = ht
+    sd = ht
+    for i in range(n):
+        sc += hs[i] * fc[i]
+        sd += hs[i] * fd[i]
+    towards_c = direction * sc * slide[4] > 0.0
+    towards_d = direction * sd * slide[4] < 0.0
+    if towards_c and not towards_d:
+        return kb, NONE, STATUS_OK
+    if not towards_c and not towards_d:
+        return NONE, NONE, STATUS_SLIDING_UNDEFINED
+    return ka, NONE, STATUS_OK
+
+
+@njit(cache=True)
+def _sliding_region_margin(model, slide, t, x, p, hs, hsp, xside):
+    """How far a sliding state lies inside the domains of the motion's two modes, each taken on its own
+    side of the surface (``_sliding_side``), relative to the state's size (negative: outside):
+    ``(margin, mode)`` of the nearer boundary (``inf`` for modes without a domain).  Twice the distance
+    the state was moved counts as inside: where the integration has drifted off the surface (by its
+    local errors, in a curved surface's sliding motion at loose tolerances), moving the state to a side
+    moves it along the other conditions too."""
+    n = N_STATE or x.shape[0]  # (see the engine's header)
+    scale = 1.0
+    for i in range(n):
+        scale = max(scale, abs(x[i]))
+    best = np.inf
+    which = slide[1]
+    for j in range(1, 3):
+        moved = _sliding_side(model, slide, -slide[4] if j == 1 else slide[4], t, x, p, hs, hsp, xside)
+        m = (model[DOMAIN_MARGIN](slide[j], t, xside, p) + 2.0 * moved) / scale
+        if m < best:
+            best = m
+            which = slide[j]
+    return best, which
+
+
+@njit(cache=True)
+def _sliding_region_end(model, slide, t, h, F, y, p, hs, hsp, xside, xtmp, n_surfaces):
+    """A sliding step that ends outside the domain of one of the motion's modes (by more than
+    DOMAIN_TOLERANCE): the fraction of the step where it leaves it (bisection on the dense output),
+    that mode, and the surface it leaves across (the nearest other surface within 1e-6 of the state's
+    size, else the sliding surface: the domain ends where no surface is).  Returns ``(s, mode, surface)``."""
+    n = N_STATE or xtmp.shape[0]  # (see the engine's header)
+    lo = 0.0
+    hi = 1.0
+    _dense_eval(F, y, hi, xtmp)
+    _, mode_out = _sliding_region_margin(model, slide, t + h, xtmp, p, hs, hsp, xside)
+    for _ in range(100):
+        if hi - lo <= 4.0 * EPS * max(1.0, hi):
+            break
+        mid = 0.5 * (lo + hi)
+        _dense_eval(F, y, mid, xtmp)
+        m, which = _sliding_region_margin(model, slide, t + mid * h, xtmp, p, hs, hsp, xside)
+        if m < -DOMAIN_TOLERANCE:
+            hi = mid
+            mode_out = which
+        else:
+            lo = mid
+    _dense_eval(F, y, hi, xtmp)
+    scale = 1.0
+    for i in range(n):
+        scale = max(scale, abs(xtmp[i]))
+    surface = slide[3]
+    nearest = 1e-6 * scale
+    for w in range(n_surfaces):
+        if w == slide[3]:
+            continue
+        v = model[INDICATOR](w, t + hi * h, xtmp, p)
+        model[INDICATOR_GRAD](w, t + hi * h, xtmp, p, hs, hsp)
+        g = 0.0
+        for i in range(n):
+            g += hs[i] * hs[i]
+        if g > 0.0 and abs(v) / math.sqrt(g) <= nearest:
+            nearest = abs(v) / math.sqrt(g)
+            surface = w
+    return hi, mode_out, surface
 
 
 @njit(cache=True, inline="always")  # once per event; a call costs more than it saves here
@@ -1295,6 +1476,11 @@ def _integrate(
     wvec = np.zeros(n)
     Phi_tmp = np.zeros((n, n))
     psi_tmp = np.zeros(n)
+    # while sliding: the sliding surface's gradient and a state moved to one of its sides (_sliding_side),
+    # in arrays that only an event's jump (wvec, psi_tmp) or a field's evaluation (W) use otherwise
+    hs = psi_tmp
+    hsp = W[1]
+    xside = wvec
 
     # exact flows of affine modes: A, B, (omega, phase, d omega/dp, d phase/dp), dA/dp, dB/dp
     n_modes = model[AFFINE_MODES].shape[0]
@@ -1402,6 +1588,8 @@ def _integrate(
     pending = NONE  # a transition to fire at once, without a step (see below)
     last_kind = EVENT_TRANSITION  # kind of the last event (the start counts as a transition)
     at_start = True
+    after_sliding = NONE  # the surface of the sliding motion the last event (a transition) has ended
+    drift = 0.0  # how far the state lies off that surface (the integration's drift along the motion)
     samples = np.zeros(SLIDING_EXIT_SAMPLES + 1)
     # a sliding motion steps at most an eighth of the forcing period: its field can be so simple that
     # the error control allows any step, while its exit functions vary with the forcing
@@ -1413,9 +1601,12 @@ def _integrate(
         if need_signs:
             _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_table, watched, fires, surf_old,
                             slope_old, surf_sign, fixed_sign, hx, hp, gtmp, gptmp)
-            pending, status = _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, last_kind, n_ev,
-                                            tr_table, surf_old, slope_old, surf_sign, fixed_sign, xtmp)
+            pending, status = _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start or after_sliding >= 0,
+                                            after_sliding, drift, last_kind, n_ev, tr_table, surf_old, slope_old,
+                                            surf_sign, fixed_sign, xtmp)
             at_start = False
+            after_sliding = NONE
+            drift = 0.0
             if status != STATUS_OK:
                 info_mode = mode
                 break
@@ -1430,6 +1621,7 @@ def _integrate(
             best_kind = KIND_INDICATOR
             best_idx = tr_table[pending, 1]
             best_tr = pending
+            best_tr2 = NONE
             pending = NONE
             s_e = 0.0
             h = direction * habs
@@ -1493,55 +1685,87 @@ def _integrate(
             best_kind = NONE
             best_idx = NONE
             best_tr = NONE
-            if slide[0] == 0:
-                for s in range(n_surfaces):
-                    if not watched[s]:
-                        continue
-                    v = model[INDICATOR](s, t_new, ynew[:n], p)
-                    surf_new[s] = v
-                    sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
-                    slope_new[s] = sl
-                    sg = surf_sign[s]
-                    sb = 2.0
-                    if sg * v <= 0.0:
-                        sb = 1.0
-                    elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
-                        if not have_dense:
-                            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                            have_dense = True
-                        smin, vmin = _dip_search(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0)
-                        if vmin <= 0.0:
-                            sb = smin
-                    if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
-                        sb = 2.0  # no transition of this mode crosses this way: nothing to locate
-                    if sb <= 1.0:
-                        if not have_dense:
-                            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                            have_dense = True
-                        gb = _dense_event(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
-                        if gb > 0.0:
-                            gb = -1e-300
-                        sr = _bracket_root(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
-                        if sr < best_s:
-                            # find a transition that fires at this crossing
-                            _dense_eval(F, y, sr, xtmp)
-                            cross = -sg  # new sign in the direction of travel
-                            for k in range(n_tr):
-                                if tr_table[k, 0] != mode or tr_table[k, 1] != s:
-                                    continue
-                                dk = tr_table[k, 2]
-                                if dk != 0 and dk != cross:
-                                    continue
-                                if not model[GUARD](k, t + sr * h, xtmp, p):
-                                    continue
+            best_tr2 = NONE
+            if slide[0] != 0:
+                best_s, best_kind, best_idx, have_dense = _sliding_exit_event(
+                    model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp)
+            # the surfaces watched in this mode, or by this sliding motion (see _watch_surfaces)
+            for s in range(n_surfaces):
+                if not watched[s]:
+                    continue
+                v = model[INDICATOR](s, t_new, ynew[:n], p)
+                surf_new[s] = v
+                sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
+                slope_new[s] = sl
+                sg = surf_sign[s]
+                sb = 2.0
+                if sg * v <= 0.0:
+                    sb = 1.0
+                elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
+                    if not have_dense:
+                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                        have_dense = True
+                    smin, vmin = _dip_search(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0)
+                    if vmin <= 0.0:
+                        sb = smin
+                if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
+                    sb = 2.0  # no transition of this mode crosses this way: nothing to locate
+                if sb <= 1.0:
+                    if not have_dense:
+                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                        have_dense = True
+                    gb = _dense_event(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
+                    if gb > 0.0:
+                        gb = -1e-300
+                    sr = _bracket_root(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
+                    if sr < best_s:
+                        # find a transition that fires at this crossing
+                        _dense_eval(F, y, sr, xtmp)
+                        cross = -sg  # new sign in the direction of travel
+                        if slide[0] != 0:
+                            # a sliding motion crosses another surface: the transitions out of its
+                            # modes there, each with its guard on its own side of the sliding surface
+                            ka, kb = _sliding_match(model, slide, s, cross, t + sr * h, xtmp, p, tr_table, hs, hsp, xside)
+                            if ka >= 0 or kb >= 0:
                                 best_s = sr
                                 best_kind = KIND_INDICATOR
                                 best_idx = s
-                                best_tr = k
-                                break
-            else:
-                best_s, best_kind, best_idx, have_dense = _sliding_exit_event(
-                    model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp)
+                                best_tr = ka
+                                best_tr2 = kb
+                            continue
+                        for k in range(n_tr):
+                            if tr_table[k, 0] != mode or tr_table[k, 1] != s:
+                                continue
+                            dk = tr_table[k, 2]
+                            if dk != 0 and dk != cross:
+                                continue
+                            if not model[GUARD](k, t + sr * h, xtmp, p):
+                                continue
+                            best_s = sr
+                            best_kind = KIND_INDICATOR
+                            best_idx = s
+                            best_tr = k
+                            break
+            if slide[0] != 0:
+                # a sliding motion is defined where both its modes are: one that leaves the domain of
+                # either where no transition out of them holds (located above) stops the run
+                margin, _ = _sliding_region_margin(model, slide, t_new, ynew[:n], p, hs, hsp, xside)
+                if margin < -DOMAIN_TOLERANCE:
+                    if not have_dense:
+                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                        have_dense = True
+                    s_out, mode_out, surface_out = _sliding_region_end(model, slide, t, h, F, y, p, hs, hsp, xside, xtmp,
+                                                                       n_surfaces)
+                    if s_out < best_s:
+                        status = STATUS_SLIDING_UNDEFINED
+                        info_mode = mode_out
+                        info_surface = surface_out
+                        slide[0] = SLIDE_LEAVES_REGION
+                        t = t + s_out * h
+                        _dense_eval(F, y, s_out, xtmp)
+                        for i in range(n):
+                            y[i] = xtmp[i]
+                        break
 
             if best_kind < 0:
                 # ----------------------------------------------------------- accept whole step
@@ -1611,12 +1835,36 @@ def _integrate(
             for j in range(gp.shape[1]):
                 gp[i, j] = 0.0
         if best_kind == 0:
-            status, mode_to, kind_logged, den = _apply_transition(
-                model, best_tr, best_idx, mode, t_e, x_e, p, tr_table, direction, at_once, n_ev, chatter_ring, hx, hp,
-                fa, fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign)
+            from_sliding = slide[0] != 0
+            if from_sliding:
+                # a sliding motion meets another surface where a transition out of one of its modes
+                # holds: the motion ends, from its own field (f-), by the transition that decides
+                best_tr, info_mode, status = _sliding_transition(model, slide, best_tr, best_tr2, t_e, x_e, p, tr_table,
+                                                                 direction, hx, hp, fb, fplus)
+                if status == STATUS_OK:
+                    _field_called(model, mode, slide, t_e, x_e, p, fa, WJ, WP, wv, W)
+                    mode = tr_table[best_tr, 0]
+                    mode_from = mode
+                    slide[0] = 0
+                    if tr_table[best_tr, 4] == 0:
+                        # the state stays on the sliding surface, on the side of the mode whose
+                        # transition fired: a new field that crosses the surface fires at once
+                        # (_exit_at_once), or at the first step's sign change
+                        side = -slide[4] if mode == slide[1] else slide[4]
+                        drift = _sliding_side(model, slide, side, t_e, x_e, p, hs, hsp, xside)
+                        after_sliding = slide[3]
+                        surf_sign[slide[3]] = side
+                        fixed_sign[slide[3]] = True
+            if status == STATUS_OK:
+                status, mode_to, kind_logged, den = _apply_transition(
+                    model, best_tr, best_idx, mode, t_e, x_e, p, tr_table, direction, at_once, n_ev, chatter_ring, hx, hp,
+                    fa, fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding)
+                info_mode = mode_to if from_sliding and status == STATUS_SLIDING_UNDEFINED else mode
             if status != STATUS_OK:
-                info_mode = mode
                 info_surface = best_idx
+                if from_sliding and status == STATUS_SLIDING_UNDEFINED:
+                    slide[0] = SLIDE_BLOCKED  # (the motion's modes, surface and crossing are kept for the message)
+                    t = t_e
                 if status == STATUS_CHATTERING:
                     t = t_e
                 break

@@ -690,9 +690,32 @@ def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, 
     if status == Status.NON_FINITE:
         return NonFiniteError(f"the vector field of mode {mode!r} returned NaN or infinity {where}")
     if status == Status.SLIDING_UNDEFINED:
+        cause = int(info[kc.INFO_SLIDE])
+        if cause not in (kc.SLIDE_LEAVES_REGION, kc.SLIDE_BLOCKED):
+            return SlidingError(
+                f"sliding on surface {surface!r} {where} is required (the target field pushes back into the surface) "
+                "but is not defined: the transition has a reset map or both fields are tangent"
+            )
+        # a sliding motion that cannot go on: its modes and surface are kept in the sliding state
+        a, b = (system.mode_names[int(info[kc.INFO_SLIDE + j])] for j in (1, 2))
+        own = int(info[kc.INFO_SLIDE + 3])
+        motion = f"the sliding motion on surface {system.surface_names[own]!r} ({a}|{b})"
+        at = f"at t = {t:.12g}, x = {np.array2string(np.asarray(x), precision=6)}"
+        if cause == kc.SLIDE_LEAVES_REGION:
+            across = f"across surface {surface!r}" if k != own else "where no other switching surface lies"
+            return SlidingError(
+                f"{motion} leaves the domain of mode {mode!r} {across} {at}, and no transition out of {a!r} or {b!r} "
+                "holds there: the model does not say how the motion goes on (a sliding motion is defined only where "
+                "both its modes are)"
+            )
+        if m >= 0:
+            return SlidingError(
+                f"{motion} meets surface {surface!r} {at}, where a transition leads into mode {mode!r}, whose field "
+                f"pushes back across {surface!r}: that would be sliding on two surfaces at once, which is not supported"
+            )
         return SlidingError(
-            f"sliding on surface {surface!r} {where} is required (the target field pushes back into the surface) "
-            "but is not defined: the transition has a reset map or both fields are tangent"
+            f"{motion} meets surface {surface!r} {at}, where the transitions out of {a!r} and {b!r} lead into two "
+            f"modes whose fields both leave surface {system.surface_names[own]!r}: the motion beyond is not unique"
         )
     if status == Status.TANGENTIAL:
         return IntegrationError(f"switching event exactly tangent to surface {surface!r} {where}: the saltation matrix is undefined")
