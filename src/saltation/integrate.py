@@ -548,10 +548,16 @@ class Flow:
             table = table.copy()
             for k in disabled:
                 table[int(k), 0] = -1  # a source mode that is never current
-        out = self._engine.integrate_kernel(
-            self._addresses, self._affine_modes, t0, t1, x0, int(m0), p, bool(variational), sens, *steps, 0.0, *limits,
-            table, self._n_surfaces, bool(dense), phi, self._zeros, *flags,
-        )
+        try:
+            out = self._engine.integrate_kernel(
+                self._addresses, self._affine_modes, t0, t1, x0, int(m0), p, bool(variational), sens, *steps, 0.0,
+                *limits, table, self._n_surfaces, bool(dense), phi, self._zeros, *flags,
+            )
+        except ArithmeticError as exc:  # the compiled engine raises Python's errors for a division by zero
+            raise IntegrationError(
+                f"the engine failed ({type(exc).__name__}: {exc}) integrating {sys_.name!r} from t = {t0:.12g} to "
+                f"{t1:.12g}, x0 = {x0.tolist()}, parameters {p.tolist()}: a degenerate case it does not resolve"
+            ) from None
         return self._unpack(out, x0, float(t0), m0, variational, sens, dense)
 
     def compiled_newton(

@@ -58,6 +58,9 @@ TRIVIAL_MULTIPLIER_ACCURACY = 1e-6
 SEAM_MARGIN = 0.02
 #: A state whose excursion over the period is below this many times the integration tolerance does not move.
 STATIONARY_FACTOR = 100.0
+#: Newton steps of an autonomous orbit that make the period longer than this many times its guess are
+#: shortened (as steps that do not reduce the residual): a period near zero can throw the next iterate far away.
+PERIOD_GROWTH = 100.0
 
 
 @dataclass(frozen=True)
@@ -463,18 +466,45 @@ class ShootingProblem:
         return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
 
     def close_period(self, traj: Trajectory, p: np.ndarray, sensitivity: int = -1) -> Trajectory:
-        """The shot with the event at the end of the period that closes it, if the engine left it pending.
+        """The shot with the crossing at the seam ``t0 = t0 + T`` counted once, as the orbit crosses there.
 
-        A shot that starts in mode ``a`` (no event at its start) and ends, within rounding, on the
-        surface of a transition from its final mode ``b`` back to ``a`` has met that transition at the
-        end of the period: the orbit crosses there once per period.  The engine fires an event only
-        once the indicator has changed sign, so such a crossing exactly at ``t0 + T`` (a shooting state
-        on the surface, wherever the phase condition put it) would be missing from the monodromy.
-        It is applied here (reset, saltation matrix of eq. 9, parameter sensitivity) and logged
-        as an event at the end.  Any other shot is returned as it is.
+        A shooting state on a switching surface (wherever the phase condition, or a forced orbit's
+        ``t0``, put it) meets the crossing at both ends of the interval, and the engine, which fires
+        an event once the indicator has changed sign, may log it at the start, at the end, at
+        both or at neither, as rounding falls:
+
+        * at both (the first and the last event are the same transition, within ``1e-7 T`` of the
+          ends): the shot is run again from the start in the mode that crossing enters, so that it
+          is logged once, at the end (a reset there is ambiguous: InconsistentResultError);
+        * at neither (the shot starts in mode ``a`` with no event and ends, within rounding, on the
+          surface of a transition from its final mode ``b`` back to ``a``): that transition is
+          applied at the end (reset, saltation matrix of eq. 9, parameter sensitivity) and logged.
+
+        Any other shot is returned as it is.
+
+        Raises
+        ------
+        InconsistentResultError
+            For a reset (an impact) exactly at the seam, logged at both ends.
         """
         sys_ = self.system
-        if traj.mode1 == traj.mode0 or traj.sliding_at_end or traj.monodromy is None:
+        if traj.monodromy is None:
+            return traj
+        events = traj.events
+        if len(events) >= 2:
+            first, last = events[0], events[-1]
+            delta = 1e-7 * max(1.0, abs(traj.t1 - traj.t0))
+            if (first.kind == last.kind == EventKind.TRANSITION and first.transition == last.transition
+                    and abs(first.t - traj.t0) <= delta and abs(traj.t1 - last.t) <= delta):
+                if sys_.resets[first.transition] is not None:
+                    raise InconsistentResultError(
+                        f"transition {sys_.transitions[first.transition].label!r} (a reset) happens at the start and at "
+                        f"the end of the shooting interval of {sys_.name!r}, at t = {traj.t0:.12g}: the state there is "
+                        "ambiguous (before or after the reset); shoot from another t0"
+                    )
+                return self.flow.run(traj.x0, traj.t0, traj.t1, p, mode0=first.mode_to, variational=True,
+                                     sensitivity=sensitivity, tolerances=self.tolerances)
+        if traj.mode1 == traj.mode0 or traj.sliding_at_end:
             return traj
         if traj.events and traj.events[0].t == traj.t0:
             return traj  # the start fired its own event: the shot starts after it
@@ -672,7 +702,11 @@ class ShootingProblem:
                 if self.close_period(traj, p) is traj:  # else an event at the end: iterate in Python
                     return self.orbit(x, lam, traj, found.history, period=T, parameters=p)
 
+        longest = PERIOD_GROWTH * float(u0[-1]) if self.autonomous else math.inf
+
         def fun(u):
+            if self.autonomous and not u[-1] <= longest:  # a Newton step that throws the period far away
+                raise ConvergenceError(f"the period {u[-1]:.3g} exceeds {PERIOD_GROWTH:g} times its guess")
             ev = self.evaluate(u, lam, need_lam=False)
             return ev.residual, ev.jac_u, ev
 
