@@ -6,9 +6,13 @@ looked up in :data:`saltation.models.SHIPPED`.  Every failure of a subcommand be
 ``saltation: error: ...`` on stderr and a non-zero exit status:
 
 * 0: success;
-* 1: the computation failed (integration, Newton, ...);
-* 2: bad usage (unknown model, parameter or option, malformed value).
+* 1: the computation failed (integration, Newton, ...), or writing its files did (a full disk: the
+  message names the file; files are written atomically, so an old file of that name is untouched);
+* 2: bad usage (unknown model, parameter or option, malformed value, an ``--out`` that is a file or
+  cannot be created or written in);
+* 141 (128 + SIGPIPE): standard output was closed early (``saltation orbit ... | head -1``): no message.
 
+The output folder (``--out``) is created and tried with a test file before any computation.
 Numeric options are checked before any computation: a count must be a positive
 (or non-negative) integer, a step size, tolerance or period a positive finite
 number, every number finite, and a range's two ends must differ; each bad value
@@ -21,13 +25,15 @@ with its traceback instead.
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 import json
 import math
+import os
 import sys
+import tempfile
 import textwrap
 import threading
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -371,6 +377,85 @@ def check_forced_period(system: PiecewiseSystem, period: float | None, p: np.nda
             f"{_fmt(forcing)} at {where}; --period {_fmt(period)} contradicts it (drop --period, or change "
             "the forcing with --set)"
         )
+
+
+def check_out_dir(path: str | os.PathLike[str], option: str = "--out") -> Path:
+    """The output folder of a subcommand, created if missing and tried with a test file (before computing).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The folder given on the command line.
+    option : str
+        The option that gave it, for the message.
+
+    Returns
+    -------
+    Path
+        The folder.
+
+    Raises
+    ------
+    UsageError
+        If it is a file, or cannot be created or written in (exit status 2), naming the option, the
+        folder and the reason.
+    """
+    out = Path(path)
+    where = f"{option} {str(path)!r}"
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"{where} is a file, not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        if isinstance(exc, (FileExistsError, NotADirectoryError)):
+            reason = "a file is in the way"
+            if exc.filename and str(exc.filename) != str(path):
+                reason += f" ({exc.filename})"
+        else:
+            reason = exc.strerror or str(exc)
+        raise UsageError(f"{where}: cannot create the folder: {reason}") from None
+    try:
+        fd, probe = tempfile.mkstemp(dir=out, prefix=".saltation-write-test-")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UsageError(f"{where}: cannot write in the folder: {exc.strerror or exc}") from None
+    return out
+
+
+def _os_error_text(exc: OSError) -> str:
+    """An OS error as one line naming its file: ``FILE: REASON``."""
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    if exc.filename is None:
+        return reason
+    files = f"{exc.filename} -> {exc.filename2}" if exc.filename2 is not None else f"{exc.filename}"
+    return f"{files}: {reason}"
+
+
+def _stdout_closed() -> bool:
+    """Whether standard output is a pipe (or socket) whose reader has gone."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return False
+    try:
+        import select
+
+        poller = select.poll()
+        poller.register(fd, select.POLLOUT)
+        return any(event & select.POLLERR for _, event in poller.poll(0))
+    except (AttributeError, OSError, ValueError):  # no poll (Windows): assume it was stdout
+        return True
+
+
+def _silence_stdout() -> None:
+    """Point standard output at the null device, so the interpreter's last flush cannot fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (AttributeError, OSError, ValueError):
+        pass
 
 
 def check_not_set(overrides: Mapping[str, float], name: str, flag: str) -> None:
@@ -802,6 +887,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
             forcing_period_at(system, system.parameter_vector(overrides | {args.param: value}),
                               f"{flag} {_fmt(value)}")
     check_start_period(args, system, p0, f"--from {_fmt(start)}")
+    check_out_dir(args.out)
     flow = make_flow(system)
     p = flow.parameters(overrides)
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
@@ -936,6 +1022,8 @@ def cmd_locus(args: argparse.Namespace) -> int:
             forcing_period_at(system, system.parameter_vector(overrides | {args.param: value}),
                               f"--range {_fmt(start)},{_fmt(stop)}")
     check_start_period(args, system, system.parameter_vector(overrides), f"{args.param} = {_fmt(start)}")
+    if args.out is not None:
+        check_out_dir(args.out)
     flow = make_flow(system)
     p = flow.parameters(overrides)
     if not lo2 <= p[system.parameter_index(args.param2)] <= hi2 and not hi2 <= p[system.parameter_index(args.param2)] <= lo2:
@@ -1021,6 +1109,7 @@ def cmd_paper(args: argparse.Namespace) -> int:
     """``saltation paper``: reproduce Figures 3, 4, 6 and 7 with their data."""
     from . import paper
 
+    check_out_dir(args.out)
     settings = paper.PaperSettings(ds=args.ds_max, ds_max=args.ds_max)
     update, close = _progress_bar(not args.no_progress)
     try:
@@ -1133,6 +1222,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                     where += f", --param2 {args.param2} = {_fmt(v2)}"
                 forcing_period_at(system, p, where)
     x0, rule = sweep_start(args, system)
+    check_out_dir(args.out)
     make_flow(system)  # compile (or load) here, with the notice, before the workers load it from the cache
     client = _dask_client(args.scheduler)
     try:
@@ -1307,10 +1397,13 @@ def _join_negative_values(argv: list[str], options: Sequence[str] = ("--x0", "--
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status.
 
-    Every failure is one line ``saltation: error: ...`` on stderr: bad usage exits with 2, a failed
-    computation (a :class:`~saltation.errors.SaltationError` or ``ValueError``) with 1, and any other
-    exception, a bug, with 1 as ``internal error: TYPE: MESSAGE``.  With ``--debug`` (before or after
-    the subcommand) a failed computation or a bug is raised instead, with its traceback.
+    Every failure is one line ``saltation: error: ...`` on stderr: bad usage (a bad ``--out``
+    included, found before computing) exits with 2, a failed computation (a
+    :class:`~saltation.errors.SaltationError` or ``ValueError``) with 1, an OS error while writing
+    the results (a full disk: ``FILE: REASON``) with 1, and any other exception, a bug, with 1 as
+    ``internal error: TYPE: MESSAGE``.  With ``--debug`` (before or after the subcommand) a failed
+    computation, an OS error or a bug is raised instead, with its traceback.  A standard output
+    closed by its reader (``| head``) ends the command quietly with 141 (128 + SIGPIPE).
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv[: argv.index("--")] if "--" in argv else "--debug" in argv  # before parsing succeeds
@@ -1321,7 +1414,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if getattr(args, "handler", None) is None:
             raise UsageError(f"choose a subcommand ({', '.join(parser._subparsers._group_actions[0].choices)}); "
                              f"see '{PROG} --help'")
-        return int(args.handler(args) or 0)
+        status = int(args.handler(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's last flush
+        return status
     except SystemExit as exc:  # --help, --version
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
     except UsageError as exc:
@@ -1330,6 +1425,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError as exc:
+        if _stdout_closed():  # the reader of our output has gone (| head): nothing to say, nowhere to say it
+            _silence_stdout()
+            return 141
+        if debug:
+            raise
+        _fail(_os_error_text(exc))
+        return 1
+    except OSError as exc:  # writing the results failed (a full disk, a folder removed meanwhile): one line
+        if debug:
+            raise
+        _fail(_os_error_text(exc))
+        return 1
     except (SaltationError, ValueError) as exc:
         if debug:
             raise

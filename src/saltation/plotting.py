@@ -524,7 +524,11 @@ def plot_phase_plane(
 
 
 def save_figure(fig: Figure, stem: str | PathLike[str], *, dpi: int = 200) -> tuple[Path, Path]:
-    """Write ``stem.png`` and ``stem.pdf``.
+    """Write ``stem.png`` and ``stem.pdf``, atomically.
+
+    Both images are drawn in memory first, then written through
+    :func:`saltation.io.write_atomically`: each file is the whole new image or the old file, never a
+    part of one (a failure while drawing leaves both old files untouched).
 
     Parameters
     ----------
@@ -538,13 +542,25 @@ def save_figure(fig: Figure, stem: str | PathLike[str], *, dpi: int = 200) -> tu
     -------
     (Path, Path)
         The PNG and PDF files.
+
+    Raises
+    ------
+    OSError
+        If a file cannot be written (naming it).
     """
+    from io import BytesIO
+
+    from .io import write_atomically
+
     stem = Path(stem)
-    stem.parent.mkdir(parents=True, exist_ok=True)
     png = stem.with_name(stem.name + ".png")
     pdf = stem.with_name(stem.name + ".pdf")
-    fig.savefig(png, dpi=dpi)
-    fig.savefig(pdf)
+    images = {}
+    for path, options in ((png, {"format": "png", "dpi": dpi}), (pdf, {"format": "pdf"})):
+        buffer = BytesIO()
+        fig.savefig(buffer, **options)
+        images[path] = buffer.getvalue()
+    write_atomically(images)
     return png, pdf
 
 

@@ -48,13 +48,13 @@ from __future__ import annotations
 
 import csv
 import enum
-import json
 import math
 import multiprocessing
 import os
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
+from io import StringIO
 from os import PathLike
 from pathlib import Path
 
@@ -64,7 +64,7 @@ from matplotlib.figure import Figure
 
 from .errors import ModelError, SaltationError
 from .integrate import Flow, Tolerances, Trajectory, dense_evaluate
-from .io import write_json
+from .io import _Fields, _read_json, write_atomically, write_json
 from .model import PiecewiseSystem
 
 __all__ = ["PeriodMap", "SweepResult", "SweepStart", "attractor_period", "period_map", "sweep"]
@@ -248,47 +248,113 @@ class SweepResult:
         }
 
     @classmethod
-    def from_dict(cls, d: dict) -> SweepResult:
-        """The result :meth:`to_dict` describes (a record without ``"start"``, written before it was
-        recorded, started each value from the previous one: :attr:`SweepStart.PREVIOUS`)."""
-        if d.get("format") != "saltation.sweep/1":
-            raise ValueError(f"not a saltation sweep record (format {d.get('format')!r})")
-        names = tuple(d["state_names"])
+    def from_dict(cls, d: dict, *, source: str = "sweep record") -> SweepResult:
+        """The result :meth:`to_dict` describes, every field checked (a record without ``"start"``, written
+        before it was recorded, started each value from the previous one: :attr:`SweepStart.PREVIOUS`).
+
+        Parameters
+        ----------
+        d : dict
+            A record as :meth:`to_dict` returns it (or as read from its JSON file).
+        source : str
+            What ``d`` was read from, for the messages (a file name).
+
+        Returns
+        -------
+        SweepResult
+
+        Raises
+        ------
+        FileFormatError
+            If ``d`` is not a sweep record, or a field is missing, of the wrong type or of the wrong
+            length (``counts`` as long as ``values``, as many ``states`` and ``parameter_points`` as
+            the counts add up to, each state as long as ``state_names``, each point's parameter its
+            value's); the message names ``source`` and the field.
+        """
+        f = _Fields(source)
+        d = f.obj(d, "(top level)")
+        fmt = f.take(d, "", "format", lambda v, field: v)
+        if fmt != "saltation.sweep/1":
+            f.fail("format", f"expected 'saltation.sweep/1': not a saltation sweep record (format {fmt!r})")
+        names = f.take(d, "", "state_names", f.strings)
+        if not names:
+            f.fail("state_names", "expected at least one state name")
+        values = f.take(d, "", "values", lambda v, field: f.reals(v, field, finite=True))
+        counts = f.take(d, "", "counts", lambda v, field: f.list(v, field, len(values)))
+        counts = np.array([f.integer(c, f"counts[{k}]", minimum=0) for k, c in enumerate(counts)], dtype=int)
+        total = int(counts.sum())
+        points = f.take(d, "", "parameter_points", lambda v, field: f.reals(v, field, total, finite=True))
+        expected = np.repeat(values, counts)
+        for k in np.flatnonzero(points != expected)[:1]:
+            f.fail(f"parameter_points[{k}]", f"is {float(points[k])!r}; by the counts it is a point of the value "
+                   f"{float(expected[k])!r}")
+        rows = f.take(d, "", "states", lambda v, field: f.list(v, field, total))
+        states = np.array([f.reals(r, f"states[{k}]", len(names)) for k, r in enumerate(rows)],
+                          dtype=float).reshape(-1, len(names))
+        failures = [f.list(v, f"failures[{k}]", 2) for k, v in enumerate(f.take(d, "", "failures", f.list))]
         return cls(
-            model=d["model"],
-            parameter_name=d["parameter"],
-            values=np.array(d["values"], dtype=float),
-            counts=np.array(d["counts"], dtype=int),
-            parameter_points=np.array(d["parameter_points"], dtype=float),
-            states=np.array(d["states"], dtype=float).reshape(-1, len(names)),
+            model=f.take(d, "", "model", f.string),
+            parameter_name=f.take(d, "", "parameter", f.string),
+            values=values,
+            counts=counts,
+            parameter_points=points,
+            states=states,
             state_names=names,
-            section=d["section"],
-            failures=tuple((float(v), str(m)) for v, m in d["failures"]),
-            settings=dict(d.get("settings", {})),
-            start=_start_rule(d.get("start", SweepStart.PREVIOUS.value)),
+            section=f.take(d, "", "section", lambda v, field: f.choice(v, field, {"poincare": "poincare",
+                                                                                   "maxima": "maxima"})),
+            failures=tuple((f.real(v, f"failures[{k}][0]"), f.string(m, f"failures[{k}][1]"))
+                           for k, (v, m) in enumerate(failures)),
+            settings=dict(f.take(d, "", "settings", f.obj, {})),
+            start=f.take(d, "", "start", lambda v, field: f.choice(v, field, {k.value: k for k in SweepStart}), SweepStart.PREVIOUS),
         )
 
     def save(self, path: str | PathLike[str]) -> Path:
-        """Write the points as JSON (``.json``) or CSV (any other suffix).
+        """Write the points as JSON (``.json``) or CSV (any other suffix), atomically.
 
         The CSV has one row per point: the parameter value, then every state
         (full precision); the JSON keeps everything, :meth:`load` reads it back.
+        The file is written to a temporary file next to it and renamed over it
+        (:func:`saltation.io.write_atomically`): on a failure the old file is untouched.
+
+        Parameters
+        ----------
+        path : str or path-like
+
+        Returns
+        -------
+        Path
+            The file written.
         """
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
         if path.suffix.lower() == ".json":
             return write_json(self.to_dict(), path)
-        with path.open("w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow([self.parameter_name, *self.state_names])
-            for lam, row in zip(self.parameter_points, self.states):
-                w.writerow([repr(float(lam)), *(repr(float(v)) for v in row)])
-        return path
+        buffer = StringIO(newline="")
+        w = csv.writer(buffer)
+        w.writerow([self.parameter_name, *self.state_names])
+        for lam, row in zip(self.parameter_points, self.states):
+            w.writerow([repr(float(lam)), *(repr(float(v)) for v in row)])
+        return write_atomically({path: buffer.getvalue()})[0]
 
     @classmethod
     def load(cls, path: str | PathLike[str]) -> SweepResult:
-        """Read a sweep written by :meth:`save` as JSON."""
-        return cls.from_dict(json.loads(Path(path).read_text()))
+        """Read a sweep written by :meth:`save` as JSON.
+
+        Parameters
+        ----------
+        path : str or path-like
+
+        Returns
+        -------
+        SweepResult
+
+        Raises
+        ------
+        FileFormatError
+            If the file is not a complete sweep record (naming the file and the field).
+        OSError
+            If the file cannot be read.
+        """
+        return cls.from_dict(_read_json(path, bare_constants=True), source=str(path))
 
     # -- figure ------------------------------------------------------------------------------
     def plot(self, ax: Axes | None = None, *, state: int | str = 0, **style) -> Figure:
@@ -538,21 +604,91 @@ class PeriodMap:
         }
 
     @classmethod
-    def from_dict(cls, d: dict) -> PeriodMap:
-        """The map :meth:`to_dict` describes (a record without ``"start"`` is :attr:`SweepStart.PREVIOUS`)."""
-        if d.get("format") != "saltation.period_map/1":
-            raise ValueError(f"not a saltation period map (format {d.get('format')!r})")
+    def from_dict(cls, d: dict, *, source: str = "period map record") -> PeriodMap:
+        """The map :meth:`to_dict` describes, every field checked (a record without ``"start"`` is
+        :attr:`SweepStart.PREVIOUS`).
+
+        Parameters
+        ----------
+        d : dict
+            A record as :meth:`to_dict` returns it (or as read from its JSON file).
+        source : str
+            What ``d`` was read from, for the messages (a file name).
+
+        Returns
+        -------
+        PeriodMap
+
+        Raises
+        ------
+        FileFormatError
+            If ``d`` is not a period map, or a field is missing, of the wrong type or of the wrong
+            length (``periods`` one row of ``len(values)`` integers from -1 to ``max_period`` per
+            value of ``values2``); the message names ``source`` and the field.
+        """
+        f = _Fields(source)
+        d = f.obj(d, "(top level)")
+        fmt = f.take(d, "", "format", lambda v, field: v)
+        if fmt != "saltation.period_map/1":
+            f.fail("format", f"expected 'saltation.period_map/1': not a saltation period map (format {fmt!r})")
+        values = f.take(d, "", "values", lambda v, field: f.reals(v, field, finite=True))
+        values2 = f.take(d, "", "values2", lambda v, field: f.reals(v, field, finite=True))
+        max_period = f.take(d, "", "max_period", lambda v, field: f.integer(v, field, minimum=1))
+        rows = f.take(d, "", "periods", lambda v, field: f.list(v, field, len(values2)))
+        periods = np.array(
+            [[f.integer(c, f"periods[{i}][{j}]", minimum=-1, maximum=max_period)
+              for j, c in enumerate(f.list(row, f"periods[{i}]", len(values)))] for i, row in enumerate(rows)],
+            dtype=int,
+        ).reshape(len(values2), len(values))
+        failures = [f.list(v, f"failures[{k}]", 3) for k, v in enumerate(f.take(d, "", "failures", f.list))]
         return cls(
-            model=d["model"], parameter_name=d["parameter"], parameter2_name=d["parameter2"],
-            values=np.array(d["values"], dtype=float), values2=np.array(d["values2"], dtype=float),
-            periods=np.array(d["periods"], dtype=int), max_period=int(d["max_period"]),
-            failures=tuple((float(a), float(b), str(m)) for a, b, m in d["failures"]), settings=dict(d["settings"]),
-            start=_start_rule(d.get("start", SweepStart.PREVIOUS.value)),
+            model=f.take(d, "", "model", f.string),
+            parameter_name=f.take(d, "", "parameter", f.string),
+            parameter2_name=f.take(d, "", "parameter2", f.string),
+            values=values,
+            values2=values2,
+            periods=periods,
+            max_period=max_period,
+            failures=tuple((f.real(a, f"failures[{k}][0]"), f.real(b, f"failures[{k}][1]"),
+                            f.string(m, f"failures[{k}][2]")) for k, (a, b, m) in enumerate(failures)),
+            settings=dict(f.take(d, "", "settings", f.obj)),
+            start=f.take(d, "", "start", lambda v, field: f.choice(v, field, {k.value: k for k in SweepStart}), SweepStart.PREVIOUS),
         )
 
     def save(self, path: str | PathLike[str]) -> Path:
-        """Write the map as JSON."""
+        """Write the map as JSON, atomically (:func:`saltation.io.write_atomically`); :meth:`load` reads it.
+
+        Parameters
+        ----------
+        path : str or path-like
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
         return write_json(self.to_dict(), path)
+
+    @classmethod
+    def load(cls, path: str | PathLike[str]) -> PeriodMap:
+        """Read a map written by :meth:`save`.
+
+        Parameters
+        ----------
+        path : str or path-like
+
+        Returns
+        -------
+        PeriodMap
+
+        Raises
+        ------
+        FileFormatError
+            If the file is not a complete period map (naming the file and the field).
+        OSError
+            If the file cannot be read.
+        """
+        return cls.from_dict(_read_json(path, bare_constants=True), source=str(path))
 
     def plot(self, ax: Axes | None = None) -> Figure:
         """The map: one colour per period (1 ... max_period), grey for none found, white for failures."""
