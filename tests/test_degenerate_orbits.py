@@ -297,6 +297,7 @@ def test_relay_oscillator(case):
 @example((0.5, "switching_surface", [3.0, 0.0], 2 * math.pi))
 @example((0.5, "equilibrium", [0.5, 0.0], 2 * math.pi))
 @example((0.7001513769944144, "switching_surface", [4.243050789658888, 0.0], 2 * math.pi))  # Newton's period 1.6e16
+@example((1.4703132660826086, "anywhere", [-8.125, 0.75], 2 * math.pi))
 def test_coulomb_friction_has_no_periodic_orbit(case):
     F, kind, guess, period = case
     result = outcome(lambda: find_periodic_orbit(relay_flow(), guess, parameters={"z": 0.0, "F": F}, period=period))
@@ -335,12 +336,14 @@ def at_crossing(ref, params: dict, index: int):
 
 _BILINEAR = {"z": 0.2, "a": 1.0, "w": 1.2, "k2": 0.6, "d": 0.3}
 _SHORT_EXCURSION = {"z": 0.5, "a": 1.0, "w": 1.0, "k2": 0.0, "d": 0.9996891820008162}
+_SLOW = {"z": 0.59765625, "a": 1.0, "w": 0.6015625, "k2": 1.0, "d": 0.06501084261206838}
 
 
 @given(bilinear_cases())
 @example(at_crossing(R.bilinear_orbit(**_BILINEAR), _BILINEAR, 0))  # upwards into the stiffer spring
 @example(at_crossing(R.bilinear_orbit(**_BILINEAR), _BILINEAR, 1))
 @example(at_crossing(R.bilinear_orbit(**_SHORT_EXCURSION), _SHORT_EXCURSION, 0))  # above x = d for 0.05 of 6.28
+@example(at_crossing(R.bilinear_orbit(**_SLOW), _SLOW, 1))  # upwards
 def test_forced_bilinear_oscillator(case):
     params, ref, kind, t0, guess, period = case
     assert R.bilinear_unique(params["z"], params["k2"])  # one periodic orbit: the reference's
@@ -401,6 +404,7 @@ _CROSSING, _STICKING = {"z": 0.1, "a": 1.0, "w": 1.2, "F": 0.3}, {"z": 0.1, "a":
 @example(at_event(_CROSSING, 1))  # downwards
 @example(at_event(_STICKING, 0))  # as it starts sticking
 @example(at_event(_STICKING, 1))  # as it leaves the stick
+@example(at_event({"z": 0.25, "a": 1.0, "w": 1.0, "F": 0.625}, 3))  # as it leaves the second stick
 def test_forced_relay(case):
     """Orbits crossing v = 0 or sticking on it, against the closed-form period map from the orbit's own state."""
     params, ref, kind, t0, guess, period = case
