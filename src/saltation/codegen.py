@@ -1,8 +1,8 @@
 """Code generation: the compiled engine, and a :class:`~saltation.model.PiecewiseSystem`'s functions.
 
 Two kinds of generated module, each written once to the kernel cache
-directory under a name that hashes what it is made of, and imported; numba
-compiles them with ``cache=True``, so each compiles once per machine:
+directory and imported; numba compiles them with ``cache=True``, so each
+compiles once per machine:
 
 * the **engine** (the integrator template ``_kernel_source.py``), one per
   state dimension up to 4 (``N_STATE`` a compile-time constant) and one for
@@ -14,19 +14,54 @@ compiles them with ``cache=True``, so each compiles once per machine:
   its signature from the contract (``_contract.py``); a new or changed model
   compiles only these (seconds).
 
-The cache directory is ``$SALTATION_CACHE_DIR`` if set, otherwise
-``$XDG_CACHE_HOME/saltation`` (``~/.cache/saltation``).
+The kernel cache
+----------------
+The folder is ``$SALTATION_CACHE_DIR`` if set, otherwise
+``$XDG_CACHE_HOME/saltation`` (``~/.cache/saltation``); numba keeps the
+compiled code in its ``__pycache__`` (or under ``$NUMBA_CACHE_DIR`` if set).
+
+*Keys.*  A module is named after a hash of its own generated source text
+(``<model name>_<hash>.py``, ``engine_n<N>_<hash>.py``), together with the
+versions of numba and Python.  The source holds the contract and everything
+compiled: fields and their derivatives, surfaces, transitions with their
+guards and resets, the modes' domains (the initial-mode rule), the forcing
+period and its derivatives, the order of states and parameters.  Two models
+therefore share a module exactly when they compile to the same code, whatever
+the model's own fingerprint leaves out, and a change to the generators (this
+module, ``affine.py``, ``model.py``) that changes the code changes the name.
+A model's source is generated once per system object in a process (about 0.2 s;
+about 1.3 s for a 32-state chain).
+
+*Checks.*  Before a module is imported, the file must be exactly the source it
+is named after (a truncated or altered module is rewritten), and each of
+numba's index and data files for it must consist of whole pickles (checked
+without running them; damaged ones are removed, so numba compiles again).  A
+module that still fails to import from what was cached is rebuilt from scratch
+once.  Every file saltation writes goes through a temporary file renamed over
+the target, so a crash leaves the old file or the whole new one.  What cannot
+be rebuilt raises :class:`KernelCacheError` naming the folder to delete.
+
+*Read-only caches.*  If the folder (or numba's folder for it) cannot be
+written, the process says so once on standard error and uses a private
+per-user folder in the temporary directory (:func:`fallback_directory`)
+instead; modules already compiled in the read-only folder are copied there,
+not recompiled.  If that cannot be used either, :class:`KernelCacheError` says
+why.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.util
-import inspect
 import os
+import pickletools
+import stat
 import sys
 import tempfile
 import threading
+import uuid
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -37,13 +72,13 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from ._contract import MODEL_FUNCTIONS, MODEL_SIGNATURES
 from .affine import affine_form
+from .errors import SaltationError
 from .model import TIME, PiecewiseSystem
 
 _TEMPLATE = Path(__file__).with_name("_kernel_source.py")
 _CONTRACT = Path(__file__).with_name("_contract.py")
 _LOADED: dict[str, ModuleType] = {}
 _IMPORT_LOCK = threading.RLock()  # threads that build flows at once import each module once
-_LOADED_COMPILED: dict[str, tuple] = {}
 
 
 def _dop853_tableau() -> dict[str, np.ndarray]:
@@ -51,15 +86,6 @@ def _dop853_tableau() -> dict[str, np.ndarray]:
     from scipy.integrate._ivp import dop853_coefficients as dop853
 
     return {name: np.asarray(getattr(dop853, name), dtype=float) for name in ("A", "B", "C", "E3", "E5", "D")}
-
-
-def cache_directory() -> Path:
-    """Directory of generated kernel modules (and numba's cache beside them)."""
-    env = os.environ.get("SALTATION_CACHE_DIR")
-    if env:
-        return Path(env)
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "saltation"
 
 
 class _Printer(PythonCodePrinter):
@@ -424,34 +450,200 @@ def model_source(system: PiecewiseSystem) -> str:
     return _CONTRACT.read_text() + "\n\n" + generate_source(system)
 
 
+# -- the kernel cache ---------------------------------------------------------------------------------
+
+
+class KernelCacheError(SaltationError, RuntimeError):
+    """The kernel cache cannot be used: it cannot be written, or an entry cannot be rebuilt.
+
+    The message names the folder concerned and what to do (make it writable, free space, delete it, or
+    point ``SALTATION_CACHE_DIR`` elsewhere).
+    """
+
+
+def cache_directory() -> Path:
+    """The configured kernel cache folder: ``$SALTATION_CACHE_DIR`` if set, otherwise
+    ``$XDG_CACHE_HOME/saltation`` (``~/.cache/saltation``), as an absolute path.
+
+    It is used if it can be written; otherwise :func:`active_cache_directory` falls back to
+    :func:`fallback_directory`.
+    """
+    env = os.environ.get("SALTATION_CACHE_DIR")
+    if env:
+        return Path(os.path.abspath(os.path.expanduser(env)))
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(os.path.abspath(base)) / "saltation"
+
+
+def fallback_directory() -> Path:
+    """The per-user folder used when :func:`cache_directory` cannot be written:
+    ``saltation-<user id>`` in the temporary folder (``/tmp``), private to the user."""
+    uid = os.getuid() if hasattr(os, "getuid") else os.environ.get("USERNAME", "user")
+    return Path(tempfile.gettempdir()) / f"saltation-{uid}"
+
+
+_ACTIVE: dict[str, Path] = {}  # configured folder -> the folder used (itself, or the fallback)
+_NOTICES: set[str] = set()  # messages already printed by this process
+
+
+def _notice(message: str) -> None:
+    """Print ``message`` on standard error, once per process."""
+    if message not in _NOTICES:
+        _NOTICES.add(message)
+        print(f"saltation: {message}", file=sys.stderr, flush=True)
+
+
+def _numba_cache_dir(directory: Path) -> Path:
+    """Where numba keeps the compiled code of the modules in ``directory``: ``__pycache__`` beside them,
+    or under ``$NUMBA_CACHE_DIR`` if that is set (numba's own choice of location)."""
+    from numba.core import config
+
+    if config.CACHE_DIR:
+        from numba.core.caching import _CacheLocator
+
+        return Path(config.CACHE_DIR) / _CacheLocator.get_suitable_cache_subpath(str(directory / "module.py"))
+    return directory / "__pycache__"
+
+
+def _write_problem(directory: Path) -> str | None:
+    """Why modules cannot be written to ``directory`` and compiled there (``None``: they can).
+
+    Creates the folder and numba's folder for it if needed, and writes a temporary file in each (the
+    test numba makes before it caches anything)."""
+    for folder in (directory, _numba_cache_dir(directory)):
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            tempfile.TemporaryFile(dir=folder).close()
+        except OSError as exc:
+            return f"{folder}: {type(exc).__name__}: {exc.strerror or exc}"
+    return None
+
+
+def _private_problem(directory: Path) -> str | None:
+    """Why the fallback folder may not be used (``None``: it may): it must be a real folder of this user
+    that no one else can write, since the modules in it are imported."""
+    try:
+        directory.mkdir(mode=0o700, parents=True, exist_ok=True)
+        st = os.lstat(directory)
+    except OSError as exc:
+        return f"{type(exc).__name__}: {exc.strerror or exc}"
+    if not stat.S_ISDIR(st.st_mode):
+        return "it is not a folder (a symbolic link or a file)"
+    if hasattr(os, "getuid") and (st.st_uid != os.getuid() or st.st_mode & 0o022):
+        return "it belongs to another user or others can write to it"
+    return _write_problem(directory)
+
+
+def active_cache_directory() -> Path:
+    """The kernel cache folder this process uses.
+
+    :func:`cache_directory` if modules can be written to it (and numba's cache beside them);
+    otherwise :func:`fallback_directory`, saying so once on standard error (modules already compiled
+    in the configured folder are copied from it, not recompiled).
+
+    Raises
+    ------
+    KernelCacheError
+        If neither folder can be used.
+    """
+    primary = cache_directory()
+    with _IMPORT_LOCK:
+        if str(primary) in _ACTIVE:
+            return _ACTIVE[str(primary)]
+        problem = _write_problem(primary)
+        if problem is None:
+            active = primary
+        else:
+            active = fallback_directory()
+            other = _private_problem(active)
+            if other is not None:
+                raise KernelCacheError(
+                    f"the kernel cache {primary} cannot be written ({problem}), nor the fallback {active} ({other}); "
+                    "make one of them writable, or set SALTATION_CACHE_DIR to a writable folder"
+                )
+            _notice(
+                f"the kernel cache {primary} cannot be written ({problem}); using {active} instead (modules "
+                f"compiled in {primary} are copied from it). Make {primary} writable or set SALTATION_CACHE_DIR "
+                "to a writable folder to keep compiled modules there."
+            )
+        _ACTIVE[str(primary)] = active
+        return active
+
+
+def _versions() -> str:
+    """What a compiled module depends on besides its source: numba's and Python's versions."""
+    import numba
+
+    return f"numba {numba.__version__}; {sys.implementation.cache_tag} {sys.version_info[:3]}; {sys.platform}"
+
+
 def _digest(*texts: str) -> str:
     return hashlib.sha256("\0".join(texts).encode()).hexdigest()[:20]
 
 
+_ENGINES: dict[int, tuple[str, str]] = {}  # N_STATE -> (stem, source) in this process
+_MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # system -> (stem, source)
+
+
+def _engine_module(n_state: int) -> tuple[str, str]:
+    """The engine's module name (``engine_n<N>_<hash of its source and versions>``) and its source."""
+    with _IMPORT_LOCK:
+        if n_state not in _ENGINES:
+            source = engine_source(n_state)
+            _ENGINES[n_state] = (f"engine_n{n_state}_{_digest(source, _versions())}", source)
+        return _ENGINES[n_state]
+
+
+def _model_module(system: PiecewiseSystem) -> tuple[str, str]:
+    """A model's module name (``<model name>_<hash of its source and versions>``) and its source.
+
+    The name hashes the generated source itself, so two models share a module exactly when everything
+    compiled into it is the same (fields, surfaces, transitions, guards, resets, domains, the period and
+    its derivatives, the order of states and parameters, the contract, the code that generates it).
+    The source is generated once per system object in a process."""
+    with _IMPORT_LOCK:
+        try:
+            hit = _MODELS.get(system)
+        except TypeError:  # an object that cannot be a weak key: generate each time
+            hit = None
+        if hit is None:
+            source = model_source(system)
+            hit = (f"{system.name}_{_digest(source, _versions())}", source)
+            try:
+                _MODELS[system] = hit
+            except TypeError:
+                pass
+        return hit
+
+
 def _engine_path(n_state: int) -> Path:
-    """Where the engine of a dimension lives: named by a hash of the contract and the template."""
-    digest = _digest(_CONTRACT.read_text(), _TEMPLATE.read_text(), inspect.getsource(engine_source),
-                     inspect.getsource(_model_from_addresses_source))
-    return cache_directory() / f"engine_n{n_state}_{digest}.py"
+    """Where the engine of a dimension lives in the active cache folder."""
+    return active_cache_directory() / f"{_engine_module(n_state)[0]}.py"
 
 
 def _model_path(system: PiecewiseSystem) -> Path:
-    """Where a model's functions live: named by a hash of the model's mathematics, the contract and
-    the code that generates them (this module and the affine-mode detection), so the source need not
-    be generated to know."""
-    generators = [Path(__file__).read_text(), Path(__file__).with_name("affine.py").read_text()]
-    return cache_directory() / f"{system.name}_{_digest(system.fingerprint, _CONTRACT.read_text(), *generators)}.py"
+    """Where a model's functions live in the active cache folder."""
+    return active_cache_directory() / f"{_model_module(system)[0]}.py"
 
 
-def _cached(path: Path, function: str) -> bool:
-    """Whether numba's on-disk cache holds ``function`` of the generated module at ``path``."""
-    return any((path.parent / "__pycache__").glob(f"{path.stem}.{function}-*.nbi"))
+def _numba_files(numba_dir: Path, stem: str) -> list[Path]:
+    """numba's index (``.nbi``) and data (``.nbc``) files of the module ``stem``."""
+    files = [*numba_dir.glob(f"{stem}.*.nbi"), *numba_dir.glob(f"{stem}.*.nbc")]
+    files += [*numba_dir.glob(f"*-{stem}.*.nbi"), *numba_dir.glob(f"*-{stem}.*.nbc")]  # (library caches)
+    return sorted(set(files))
+
+
+def _cached(stem: str, function: str) -> bool:
+    """Whether numba's on-disk cache holds ``function`` of the module ``stem`` (in the active folder, or
+    in the configured one it would be copied from)."""
+    folders = {active_cache_directory(), cache_directory()}
+    return any(any(_numba_cache_dir(d).glob(f"{stem}.{function}-*.nbi")) for d in folders)
 
 
 def is_engine_compiled(n: int) -> bool:
     """Whether the engine that integrates models of ``n`` states is compiled on this machine."""
-    path = _engine_path(engine_dimension(n))
-    return _cached(path, "integrate_kernel") and _cached(path, "correct_periodic")
+    stem = _engine_module(engine_dimension(n))[0]
+    return _cached(stem, "integrate_kernel") and _cached(stem, "correct_periodic")
 
 
 def is_compiled(system: PiecewiseSystem) -> bool:
@@ -460,48 +652,174 @@ def is_compiled(system: PiecewiseSystem) -> bool:
 
     if isinstance(system, CompiledSystem):
         return False  # its functions are compiled in each process
-    return is_engine_compiled(system.n) and _cached(_model_path(system), "vector_field")
+    return is_engine_compiled(system.n) and _cached(_model_module(system)[0], "vector_field")
 
 
-def _import(path: Path, text, modname: str) -> ModuleType:
-    """Write ``text`` (a string, or a function that makes it) to ``path`` (atomically, if not there yet)
-    and import it under ``modname``, once per process even from several threads."""
-    with _IMPORT_LOCK:
-        return _import_locked(path, text, modname)
-
-
-def _import_locked(path: Path, text, modname: str) -> ModuleType:
-    if modname in _LOADED:
-        return _LOADED[modname]
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if not path.exists():
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text() if callable(text) else text)
+def _write_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file renamed over it, so that a crash leaves
+    either the old file or the whole new one, never a part."""
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
         os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+def _intact(path: Path, pickles: int) -> bool:
+    """Whether ``path`` holds ``pickles`` whole pickles and nothing else (read without running them)."""
+    try:
+        with open(path, "rb") as fh:
+            for _ in range(pickles):
+                for _op in pickletools.genops(fh):
+                    pass
+            return fh.read(1) == b""
+    except Exception:  # noqa: BLE001 (a damaged pickle raises anything: ValueError, EOFError, ...)
+        return False
+
+
+def _remove(files: list[Path]) -> None:
+    for f in files:
+        with contextlib.suppress(FileNotFoundError):
+            f.unlink()
+
+
+def _seed(stem: str, data: bytes, directory: Path) -> bool:
+    """Copy the module ``stem`` and numba's files for it from the configured cache folder to ``directory``
+    (the fallback), if the configured folder holds it intact.  Whether it did."""
+    primary = cache_directory()
+    if primary == directory:
+        return False
+    try:
+        if (primary / f"{stem}.py").read_bytes() != data:
+            return False
+        files = _numba_files(_numba_cache_dir(primary), stem)
+        contents = [(f.name, f.read_bytes()) for f in files]
+    except OSError:
+        return False
+    target = _numba_cache_dir(directory)
+    for name, content in contents:
+        _write_atomic(target / name, content)
+    _write_atomic(directory / f"{stem}.py", data)
+    return True
+
+
+def _prepare(directory: Path, stem: str, source: str, what: str) -> bool:
+    """Make ``directory/<stem>.py`` hold exactly ``source`` and numba's files for it whole (a damaged
+    module is rewritten; damaged numba files are removed, so numba compiles those functions again).
+    Whether anything compiled before is there to be loaded."""
+    path = directory / f"{stem}.py"
+    data = source.encode()
+    try:
+        current = path.read_bytes()
+    except FileNotFoundError:
+        current = None
+    if current != data and not (current is None and _seed(stem, data, directory)):
+        if current is not None:
+            _notice(f"the cached module of {what} {path} was damaged (it is not the source it is named after); "
+                    "rewriting it")
+        _remove(list((directory / "__pycache__").glob(f"{stem}.*.pyc")))  # Python's own bytecode of it
+        _write_atomic(path, data)
+    numba_dir = _numba_cache_dir(directory)
+    files = _numba_files(numba_dir, stem)
+    damaged = [f for f in files if not _intact(f, 2 if f.suffix == ".nbi" else 1)]
+    if damaged:
+        names = ", ".join(f.name for f in damaged[:2]) + (f" and {len(damaged) - 2} more" if len(damaged) > 2 else "")
+        _notice(f"numba's cache of {what} in {numba_dir} was damaged ({names}); compiling it again")
+        _remove(damaged)  # (numba compiles what has no index, or whose index names a missing data file)
+    return current == data or len(files) > len(damaged)
+
+
+def _execute(path: Path, modname: str) -> ModuleType:
+    """Import the module at ``path`` under ``modname`` (numba compiles, or loads from its cache, the
+    functions compiled eagerly)."""
     spec = importlib.util.spec_from_file_location(modname, path)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
-    sys.modules[modname] = module
-    spec.loader.exec_module(module)
-    _LOADED[modname] = module
+    sys.modules[modname] = module  # numba finds a module's globals by its name when it loads its cache
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        sys.modules.pop(modname, None)
+        raise
     return module
+
+
+def _environment_failure(exc: BaseException) -> bool:
+    """Whether ``exc`` is the file system's (a folder numba or saltation cannot write, a full disk)
+    rather than a fault of the generated code."""
+    return isinstance(exc, OSError) or (isinstance(exc, RuntimeError) and "no locator" in str(exc))
+
+
+def _load(stem: str, source: str, modname: str, what: str) -> ModuleType:
+    """Import the generated module ``stem`` (``source``) from the active cache folder, once per process.
+
+    A module or numba cache file that is damaged is rebuilt; a module that does not load from what
+    was cached (a damaged file that still looked whole) is rebuilt from scratch, once.
+
+    Raises
+    ------
+    KernelCacheError
+        If the folder cannot be written, or the module cannot be rebuilt in it.
+    """
+    with _IMPORT_LOCK:
+        if modname in _LOADED:
+            return _LOADED[modname]
+        directory = active_cache_directory()
+        path = directory / f"{stem}.py"
+        delete = f"delete the folder {directory} (it only holds compiled code) and run again"
+        try:
+            prior = _prepare(directory, stem, source, what)
+        except OSError as exc:
+            raise KernelCacheError(f"cannot read or write {what} in the kernel cache {directory} "
+                                   f"({type(exc).__name__}: {exc}); free space or make it writable, or {delete}") from exc
+        try:
+            module = _execute(path, modname)
+        except Exception as exc:
+            if not prior:  # a fresh build failed: the cache did not cause it
+                if _environment_failure(exc):
+                    raise KernelCacheError(f"cannot compile {what} in the kernel cache {directory} "
+                                           f"({type(exc).__name__}: {exc}); make it writable, or {delete}") from exc
+                raise
+            _notice(f"{what} did not load from the kernel cache {directory} ({type(exc).__name__}: "
+                    f"{' '.join(str(exc).split())[:200]}); compiling it again")
+            try:
+                numba_dir = _numba_cache_dir(directory)
+                _remove(_numba_files(numba_dir, stem) + list((directory / "__pycache__").glob(f"{stem}.*.pyc")))
+                _write_atomic(path, source.encode())
+                module = _execute(path, modname)
+            except Exception as again:
+                if _environment_failure(again) or _environment_failure(exc):
+                    raise KernelCacheError(f"{what} cannot be rebuilt in the kernel cache {directory} "
+                                           f"({type(again).__name__}: {again}); {delete}") from again
+                raise
+        _LOADED[modname] = module
+        return module
 
 
 def load_engine(n: int) -> ModuleType:
     """Import the engine that integrates models of ``n`` states, compiling it first if this machine has
     not yet (once; it says so on standard error, since it takes a while)."""
     n_state = engine_dimension(n)
-    path = _engine_path(n_state)
-    modname = f"_saltation_engine_{path.stem}"
+    stem, source = _engine_module(n_state)
+    modname = f"_saltation_engine_{stem}"
     if modname not in _LOADED and not is_engine_compiled(n):
         which = f"{n_state}-state models" if n_state else f"models of {min(SPECIALIZED_DIMENSIONS.stop, n)} or more states"
         print(
             f"saltation: compiling the integrator for {which}, once for this machine (about a minute; "
-            f"cached in {path.parent})",
+            f"cached in {active_cache_directory()})",
             file=sys.stderr, flush=True,
         )
-    return _import(path, lambda: engine_source(n_state), modname)
+    return _load(stem, source, modname, f"the integrator for N_STATE = {n_state}")
+
+
+_LOADED_COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # CompiledSystem -> model tuple
 
 
 def load_model_functions(system: PiecewiseSystem) -> tuple:
@@ -510,9 +828,9 @@ def load_model_functions(system: PiecewiseSystem) -> tuple:
     from .compiled import CompiledSystem, build_model_functions
 
     if isinstance(system, CompiledSystem):
-        with _IMPORT_LOCK:
-            if system.fingerprint not in _LOADED_COMPILED:
-                _LOADED_COMPILED[system.fingerprint] = build_model_functions(system)
-        return _LOADED_COMPILED[system.fingerprint]
-    path = _model_path(system)
-    return _import(path, lambda: model_source(system), f"_saltation_model_{path.stem}").MODEL
+        with _IMPORT_LOCK:  # (kept per object: an id in a key could be reused by a later object)
+            if system not in _LOADED_COMPILED:
+                _LOADED_COMPILED[system] = build_model_functions(system)
+            return _LOADED_COMPILED[system]
+    stem, source = _model_module(system)
+    return _load(stem, source, f"_saltation_model_{stem}", f"the functions of model {system.name!r}").MODEL
