@@ -78,7 +78,7 @@ BAD = [
     ([*FORCED_CONTINUE, "--period", "6.3"], ["forcing period 2*pi/omega = 10.47197551 at --from 0.6", "--period 6.3"]),
     ([*LOCUS, "--period", "6.3"], ["forcing period 2*pi/omega = 10.47197551 at omega = 0.6", "--period 6.3"]),
     # parameter values for which the forcing period is none
-    (["orbit", "trilinear", "--set", "omega=0"], ["forcing period 2*pi/omega", "omega=0", "--set"]),
+    (["orbit", "trilinear", "--set", "omega=0"], ["--set", "forcing period", "divides by omega", "omega = 0"]),
     (["continue", "trilinear", "--param", "omega", "--from", "0", "--to", "1"], ["--from 0", "forcing period"]),
     (["sweep", "trilinear", "--param", "omega", "--from", "-1", "--to", "1", "--num", "3"],
      ["--param omega = -1", "forcing period"]),

@@ -247,7 +247,17 @@ def parse_sets(items: Sequence[str] | None, system: PiecewiseSystem) -> dict[str
         if not math.isfinite(value):
             raise UsageError(f"--set {item!r}: the value must be finite")
         out[name] = value
+    if isinstance(system, PiecewiseSystem):
+        usable_parameters(system, out, "--set")  # a zero divisor (m = 0), named with its expression
     return out
+
+
+def usable_parameters(system: PiecewiseSystem, values: Mapping[str, float], where: str) -> np.ndarray:
+    """The parameter vector at ``values``, or bad usage naming ``where`` (a zero divisor, a non-finite value)."""
+    try:
+        return system.parameter_vector(values)
+    except SaltationError as exc:
+        raise UsageError(f"{where}: {exc}") from None
 
 
 def parse_vector(text: str, system: PiecewiseSystem, option: str = "--x0") -> np.ndarray:
@@ -881,11 +891,10 @@ def cmd_continue(args: argparse.Namespace) -> int:
                 raise UsageError(f"{flag} does not apply to --equilibrium (an equilibrium has no period and no "
                                  "direction of time)")
     overrides[args.param] = start
-    p0 = system.parameter_vector(overrides)
-    if not system.is_autonomous:
-        for flag, value in (("--from", start), ("--to", stop)):
-            forcing_period_at(system, system.parameter_vector(overrides | {args.param: value}),
-                              f"{flag} {_fmt(value)}")
+    for flag, value in (("--to", stop), ("--from", start)):
+        p0 = usable_parameters(system, overrides | {args.param: value}, f"{flag} {_fmt(value)}")
+        if not system.is_autonomous:
+            forcing_period_at(system, p0, f"{flag} {_fmt(value)}")
     check_start_period(args, system, p0, f"--from {_fmt(start)}")
     check_out_dir(args.out)
     flow = make_flow(system)

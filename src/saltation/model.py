@@ -40,6 +40,7 @@ from sympy.logic.boolalg import Boolean
 from sympy.printing.pycode import PythonCodePrinter
 
 from .errors import InitialModeError, ModelError
+from .nonsmooth import Expansion, expand_nonsmooth
 
 TIME = sp.Symbol("t", real=True)
 
@@ -228,9 +229,13 @@ def _check_compilable(expr: sp.Expr, variables: Sequence[sp.Symbol], where: str,
                 "its argument changes sign (listed both ways, see 'Writing models'), so that the switch gets its "
                 "saltation matrix"
             )
-    parts = [expr]
-    if smooth:
-        parts += [sp.diff(expr, v) for v in variables if expr.has(v)]
+    try:
+        parts = [expr]
+        if smooth:
+            parts += [sp.diff(expr, v) for v in variables if expr.has(v)]
+    except Exception as exc:  # noqa: BLE001 (sympy raises many kinds on what it cannot differentiate)
+        raise ModelError(f"{where}: {expr} cannot be differentiated ({type(exc).__name__}: "
+                         f"{' '.join(str(exc).split())[:200]})") from None
     for part in parts:
         try:
             _PRINTER.doprint(part)
@@ -471,6 +476,13 @@ class PiecewiseSystem(NamedParts):
                 raise ModelError(f"modes must be Mode(...) objects, got {m!r}")
             if not isinstance(m.name, str) or not m.name:
                 raise ModelError(f"a mode's name must be a non-empty string, got {m.name!r}")
+        #: where generated modes and surfaces came from (sign, Heaviside, Abs, Min, Max in a field)
+        self.expansion = Expansion({}, {})
+        if isinstance(surfaces, Mapping) and isinstance(transitions, Sequence) and not isinstance(transitions, str):
+            modes, surfaces, transitions, self.expansion = expand_nonsmooth(
+                modes, surfaces, transitions, lambda value, where: _sympify(value, self._symbols, where), set(self.x),
+                (Mode, Transition, Crossing),
+            )
         self.modes: tuple[Mode, ...] = tuple(modes)
         self.mode_names: tuple[str, ...] = tuple(m.name for m in modes)
         if len(set(self.mode_names)) != len(self.mode_names):
@@ -561,6 +573,8 @@ class PiecewiseSystem(NamedParts):
 
     def _parse_field(self, mode: Mode) -> sp.Matrix:
         where = f"mode {mode.name!r}"
+        if mode.name in self.expansion.modes:  # generated from a field with sign, Abs, ... (see saltation.nonsmooth)
+            where = f"mode {self.expansion.modes[mode.name][0]!r} (its part {mode.name!r})"
         if isinstance(mode.field, (str, sp.Basic)) or not isinstance(mode.field, Sequence):
             raise ModelError(f"{where}: the vector field is a list of expressions, one per state, got {mode.field!r}")
         if len(mode.field) != len(self.state_names):
