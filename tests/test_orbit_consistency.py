@@ -218,3 +218,24 @@ def test_a_guess_that_comes_to_rest_in_the_sticking_set_is_named(vdp_flow):
         find_periodic_orbit(vdp_flow, [2.0, 0.0], parameters={"mu": 0.3}, period=7.0)
     x, v = info.value.state
     assert abs(v) <= 1e-12 and abs(x) <= 0.3
+
+
+def test_a_sliding_motion_that_ends_at_the_seam_is_logged_with_the_engines_saltation_matrix():
+    """The forced friction oscillator sticks once per period (v_b = 1).  Shot from the instant the
+    stick ends, the exit falls on the seam: it is logged once, at t0 + T, and its saltation matrix equals
+    the one the engine logs at the same exit from an earlier start (both the identity: at a tangential
+    exit the sliding field equals the exit side's field); the multipliers agree."""
+    from saltation.models import friction_oscillator
+
+    flow = Flow(friction_oscillator())
+    pars = {"v_b": 1.0}
+    inside = find_periodic_orbit(flow, [0.3, 0.1], parameters=pars)
+    exits = [e for e in inside.events if e.kind.name == "SLIDING_END"]
+    assert len(exits) == 1
+    exit_ = exits[0]
+    seam = find_periodic_orbit(flow, exit_.x_plus, parameters=pars, t0=exit_.t)
+    last = seam.events[-1]
+    assert last.kind.name == "SLIDING_END" and last.t == pytest.approx(seam.t0 + seam.period, abs=1e-12)
+    assert [e.kind for e in seam.events].count(last.kind) == 1
+    np.testing.assert_allclose(last.saltation, exit_.saltation, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(seam.multipliers, inside.multipliers, rtol=0, atol=1e-9)

@@ -432,6 +432,19 @@ class Flow:
         ht = self._model[kc.INDICATOR_GRAD](int(s), float(t), _c_array(x), _c_array(p), hx, hp)
         return hx, float(ht), hp[: self.system.n_params]
 
+    def lie_derivative(
+        self, mode: int | str, surface: int | str, t: float, x: Sequence[float], p: np.ndarray
+    ) -> tuple[float, np.ndarray, np.ndarray, float]:
+        """``L = h_x f + h_t`` of a surface along a mode's field, with ``L_x``, ``L_p`` and ``L_t``."""
+        m = self.system.mode_index(mode)
+        k = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
+        gx = np.zeros(self.system.n)
+        gp = np.zeros(max(self.system.n_params, 1))
+        x, p = _c_array(np.array(x, dtype=float)), _c_array(p)
+        value = float(self._model[kc.LIE_DERIVATIVE](m, int(k), float(t), x, p, gx, gp))
+        rate_t = float(self._model[kc.LIE_DERIVATIVE_DT](m, int(k), float(t), x, p))
+        return value, gx, gp[: self.system.n_params], rate_t
+
     def guard_holds(self, transition: int, t: float, x: Sequence[float], p: np.ndarray) -> bool:
         """Whether every condition of a transition's guard holds at ``(t, x)``."""
         return bool(self._model[kc.GUARD](int(transition), float(t), _c_array(x), _c_array(p)))

@@ -505,7 +505,9 @@ class ShootingProblem:
                     )
                 traj = self.flow.run(traj.x0, traj.t0, traj.t1, p, mode0=first.mode_to, variational=True,
                                      sensitivity=sensitivity, tolerances=self.tolerances)  # then as below
-        if traj.mode1 == traj.mode0 or traj.sliding_at_end:
+        if traj.sliding_at_end:
+            return self._leave_sliding_at_the_end(traj, p, sensitivity)
+        if traj.mode1 == traj.mode0:
             return traj
         if traj.events and traj.events[0].t == traj.t0:
             return traj  # the start fired its own event: the shot starts after it
@@ -535,6 +537,43 @@ class ShootingProblem:
                 parameter_sensitivity=psi, velocity_end=flow.vector_field(tr.target, t1, x_plus, p),
             )
         return traj
+
+    def _leave_sliding_at_the_end(self, traj: Trajectory, p: np.ndarray, sensitivity: int) -> Trajectory:
+        """A shot that starts off a sliding motion, in one of its modes, and ends on it where that mode's
+        field turns tangent to the surface: the orbit leaves the sliding motion at the seam.  Its end is
+        applied and logged at ``t0 + T``, with the saltation matrix the engine uses at a sliding exit
+        (eq. 9 with the exit side's Lie derivative ``L = h_x f + h_t`` as the event function and the
+        sliding field before it)."""
+        starts = [e for e in traj.events if e.kind == EventKind.SLIDING_START]
+        if not starts or (traj.events[0].kind == EventKind.SLIDING_START and traj.events[0].t == traj.t0):
+            return traj
+        last = starts[-1]
+        if traj.mode0 not in (last.mode_from, last.mode_to):
+            return traj
+        flow, t1, x1 = self.flow, traj.t1, traj.x1
+        L, L_x, L_p, L_t = flow.lie_derivative(traj.mode0, last.surface, t1, x1, p)
+        scale = 1.0 + float(np.abs(x1).max())
+        if abs(L) > 1e-8 * scale * float(np.linalg.norm(L_x)):
+            return traj
+        f_slide = traj.velocity_end
+        f_out = flow.vector_field(traj.mode0, t1, x1, p)
+        den = float(L_x @ f_slide) + L_t
+        if den == 0.0:
+            return traj
+        w = f_out - f_slide
+        S = np.eye(self.system.n) + np.outer(w, L_x) / den
+        psi = traj.parameter_sensitivity
+        if psi is not None and sensitivity >= 0:
+            psi = S @ psi + w * L_p[sensitivity] / den
+        sys_ = self.system
+        other = last.mode_to if traj.mode0 == last.mode_from else last.mode_from
+        ev_t, ev_int, ev_xm, ev_xp, ev_S = traj.event_log
+        row = np.array([[int(EventKind.SLIDING_END), -1, sys_.surface_index(last.surface), sys_.mode_index(other),
+                         sys_.mode_index(traj.mode0)]], dtype=ev_int.dtype)
+        log = (np.append(ev_t, t1), np.vstack([ev_int, row]), np.vstack([ev_xm, x1[None, :]]),
+               np.vstack([ev_xp, x1[None, :]]), np.concatenate([ev_S, S[None, :, :]]))
+        return replace(traj, mode1=traj.mode0, event_log=log, monodromy=S @ traj.monodromy, sliding_at_end=False,
+                       parameter_sensitivity=psi, velocity_end=f_out)
 
     def correct(
         self, z_pred: np.ndarray, normal: np.ndarray, *, tol: float, max_newton: int, max_correction: float
