@@ -1424,6 +1424,75 @@ def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, x
     return best_s, best_kind, best_idx, have_dense
 
 
+@njit(cache=True)  # a call, not inlined: a step that does not slide never comes here
+def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp,
+                    gptmp, hx, hp, hs, hsp, xside, direction, tr_table, watched, fires, surf_sign, surf_new, slope_old,
+                    slope_new):
+    """The first event of a sliding step from ``(t, y)`` to ``(t_new, ynew)``: an exit (kind 1 or 2,
+    ``_sliding_exit_event``), or a crossing of a watched surface (kind 0) where a transition out of
+    either mode holds (``_sliding_match``: ``best_tr``, ``best_tr2`` for modes a and b); and where the
+    motion leaves the domain of one of its modes (``_sliding_region_margin``; 2.0 for nowhere).
+    Returns ``(s, kind, surface, ka, kb, whether the dense output was built, s_out, mode_out,
+    surface_out)``; the watched surfaces' values and slopes at the step's end go to ``surf_new``,
+    ``slope_new``, as in the step of a mode."""
+    n = N_STATE or xtmp.shape[0]  # (see the engine's header)
+    best_s, best_kind, best_idx, have_dense = _sliding_exit_event(
+        model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp)
+    best_tr = NONE
+    best_tr2 = NONE
+    for s in range(watched.shape[0]):
+        if not watched[s]:
+            continue
+        v = model[INDICATOR](s, t_new, ynew[:n], p)
+        surf_new[s] = v
+        sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
+        slope_new[s] = sl
+        sg = surf_sign[s]
+        sb = 2.0
+        if sg * v <= 0.0:
+            sb = 1.0
+        elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
+            if not have_dense:
+                _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                have_dense = True
+            smin, vmin = _dip_search(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0)
+            if vmin <= 0.0:
+                sb = smin
+        if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
+            sb = 2.0  # no transition of either mode crosses this way: nothing to locate
+        if sb <= 1.0:
+            if not have_dense:
+                _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                have_dense = True
+            gb = _dense_event(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
+            if gb > 0.0:
+                gb = -1e-300
+            sr = _bracket_root(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
+            if sr < best_s:
+                # the transitions out of the motion's modes there, each with its guard on its own side
+                # of the sliding surface
+                _dense_eval(F, y, sr, xtmp)
+                ka, kb = _sliding_match(model, slide, s, -sg, t + sr * h, xtmp, p, tr_table, hs, hsp, xside)
+                if ka >= 0 or kb >= 0:
+                    best_s = sr
+                    best_kind = KIND_INDICATOR
+                    best_idx = s
+                    best_tr = ka
+                    best_tr2 = kb
+    # a sliding motion is defined where both its modes are: where it leaves the domain of either
+    s_out = 2.0
+    mode_out = NONE
+    surface_out = NONE
+    margin, _ = _sliding_region_margin(model, slide, t_new, ynew[:n], p, hs, hsp, xside)
+    if margin < -DOMAIN_TOLERANCE:
+        if not have_dense:
+            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+            have_dense = True
+        s_out, mode_out, surface_out = _sliding_region_end(model, slide, t, h, F, y, p, hs, hsp, xside, xtmp,
+                                                           watched.shape[0])
+    return best_s, best_kind, best_idx, best_tr, best_tr2, have_dense, s_out, mode_out, surface_out
+
+
 @njit(cache=True)
 def _needs_extrema(K, xmin):
     n = N_STATE or xmin.shape[0]
@@ -1686,86 +1755,68 @@ def _integrate(
             best_idx = NONE
             best_tr = NONE
             best_tr2 = NONE
-            if slide[0] != 0:
-                best_s, best_kind, best_idx, have_dense = _sliding_exit_event(
-                    model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp)
-            # the surfaces watched in this mode, or by this sliding motion (see _watch_surfaces)
-            for s in range(n_surfaces):
-                if not watched[s]:
-                    continue
-                v = model[INDICATOR](s, t_new, ynew[:n], p)
-                surf_new[s] = v
-                sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
-                slope_new[s] = sl
-                sg = surf_sign[s]
-                sb = 2.0
-                if sg * v <= 0.0:
-                    sb = 1.0
-                elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
-                    if not have_dense:
-                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                        have_dense = True
-                    smin, vmin = _dip_search(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0)
-                    if vmin <= 0.0:
-                        sb = smin
-                if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
-                    sb = 2.0  # no transition of this mode crosses this way: nothing to locate
-                if sb <= 1.0:
-                    if not have_dense:
-                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                        have_dense = True
-                    gb = _dense_event(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
-                    if gb > 0.0:
-                        gb = -1e-300
-                    sr = _bracket_root(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
-                    if sr < best_s:
-                        # find a transition that fires at this crossing
-                        _dense_eval(F, y, sr, xtmp)
-                        cross = -sg  # new sign in the direction of travel
-                        if slide[0] != 0:
-                            # a sliding motion crosses another surface: the transitions out of its
-                            # modes there, each with its guard on its own side of the sliding surface
-                            ka, kb = _sliding_match(model, slide, s, cross, t + sr * h, xtmp, p, tr_table, hs, hsp, xside)
-                            if ka >= 0 or kb >= 0:
+            if slide[0] == 0:
+                for s in range(n_surfaces):
+                    if not watched[s]:
+                        continue
+                    v = model[INDICATOR](s, t_new, ynew[:n], p)
+                    surf_new[s] = v
+                    sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
+                    slope_new[s] = sl
+                    sg = surf_sign[s]
+                    sb = 2.0
+                    if sg * v <= 0.0:
+                        sb = 1.0
+                    elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
+                        if not have_dense:
+                            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                            have_dense = True
+                        smin, vmin = _dip_search(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0)
+                        if vmin <= 0.0:
+                            sb = smin
+                    if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
+                        sb = 2.0  # no transition of this mode crosses this way: nothing to locate
+                    if sb <= 1.0:
+                        if not have_dense:
+                            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                            have_dense = True
+                        gb = _dense_event(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
+                        if gb > 0.0:
+                            gb = -1e-300
+                        sr = _bracket_root(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
+                        if sr < best_s:
+                            # find a transition that fires at this crossing
+                            _dense_eval(F, y, sr, xtmp)
+                            cross = -sg  # new sign in the direction of travel
+                            for k in range(n_tr):
+                                if tr_table[k, 0] != mode or tr_table[k, 1] != s:
+                                    continue
+                                dk = tr_table[k, 2]
+                                if dk != 0 and dk != cross:
+                                    continue
+                                if not model[GUARD](k, t + sr * h, xtmp, p):
+                                    continue
                                 best_s = sr
                                 best_kind = KIND_INDICATOR
                                 best_idx = s
-                                best_tr = ka
-                                best_tr2 = kb
-                            continue
-                        for k in range(n_tr):
-                            if tr_table[k, 0] != mode or tr_table[k, 1] != s:
-                                continue
-                            dk = tr_table[k, 2]
-                            if dk != 0 and dk != cross:
-                                continue
-                            if not model[GUARD](k, t + sr * h, xtmp, p):
-                                continue
-                            best_s = sr
-                            best_kind = KIND_INDICATOR
-                            best_idx = s
-                            best_tr = k
-                            break
-            if slide[0] != 0:
-                # a sliding motion is defined where both its modes are: one that leaves the domain of
-                # either where no transition out of them holds (located above) stops the run
-                margin, _ = _sliding_region_margin(model, slide, t_new, ynew[:n], p, hs, hsp, xside)
-                if margin < -DOMAIN_TOLERANCE:
-                    if not have_dense:
-                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                        have_dense = True
-                    s_out, mode_out, surface_out = _sliding_region_end(model, slide, t, h, F, y, p, hs, hsp, xside, xtmp,
-                                                                       n_surfaces)
-                    if s_out < best_s:
-                        status = STATUS_SLIDING_UNDEFINED
-                        info_mode = mode_out
-                        info_surface = surface_out
-                        slide[0] = SLIDE_LEAVES_REGION
-                        t = t + s_out * h
-                        _dense_eval(F, y, s_out, xtmp)
-                        for i in range(n):
-                            y[i] = xtmp[i]
-                        break
+                                best_tr = k
+                                break
+            else:
+                (best_s, best_kind, best_idx, best_tr, best_tr2, have_dense, s_out, mode_out,
+                 surface_out) = _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv,
+                                                TC, p, samples, gtmp, gptmp, hx, hp, hs, hsp, xside, direction, tr_table,
+                                                watched, fires, surf_sign, surf_new, slope_old, slope_new)
+                if s_out < best_s:
+                    # the motion leaves the domain of one of its modes before any event: not defined
+                    status = STATUS_SLIDING_UNDEFINED
+                    info_mode = mode_out
+                    info_surface = surface_out
+                    slide[0] = SLIDE_LEAVES_REGION
+                    t = t + s_out * h
+                    _dense_eval(F, y, s_out, xtmp)
+                    for i in range(n):
+                        y[i] = xtmp[i]
+                    break
 
             if best_kind < 0:
                 # ----------------------------------------------------------- accept whole step
