@@ -536,13 +536,8 @@ class PiecewiseSystem(NamedParts):
                     raise ModelError(f"{where}: a reset map is a list of expressions, one per state, got {tr.reset!r}")
                 if len(tr.reset) != self.n:
                     raise ModelError(f"{where}: reset map has {len(tr.reset)} components, the model has {self.n} states")
-                reset = []
-                for i, e in enumerate(tr.reset):
-                    slot = f"{where} reset component {i} ({self.state_names[i]}+)"
-                    g = _sympify(e, self._symbols, slot)
-                    _check_compilable(g, variables, slot, smooth=True)
-                    reset.append(g)
-                self.resets.append(sp.Matrix(reset))
+                self.resets.append(self._per_state(tr.reset, lambda i, where=where: f"{where} reset component {i} "
+                                                                                     f"({self.state_names[i]}+)"))
             self.guards.append(_conditions(tr.guard, self._symbols, f"{where} guard"))
 
         if period is None:
@@ -580,13 +575,16 @@ class PiecewiseSystem(NamedParts):
         if len(mode.field) != len(self.state_names):
             raise ModelError(f"{where}: vector field has {len(mode.field)} components, the model has "
                              f"{len(self.state_names)} states")
+        return self._per_state(mode.field, lambda i: f"{where}, field component {i} ({self.state_names[i]}')")
+
+    def _per_state(self, values: Sequence[Expr], slot) -> sp.Matrix:
+        """One smooth, compilable expression per state (a field or a reset map); ``slot(i)`` names each."""
         variables = [*self.x, *self.p, TIME]
         components = []
-        for i, e in enumerate(mode.field):
-            slot = f"{where}, field component {i} ({self.state_names[i]}')"
-            f = _sympify(e, self._symbols, slot)
-            _check_compilable(f, variables, slot, smooth=True)
-            components.append(f)
+        for i, value in enumerate(values):
+            expr = _sympify(value, self._symbols, slot(i))
+            _check_compilable(expr, variables, slot(i), smooth=True)
+            components.append(expr)
         return sp.Matrix(components)
 
     # -- sizes and lookups ------------------------------------------------------------------

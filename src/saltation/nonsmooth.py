@@ -154,7 +154,7 @@ def expand_nonsmooth(
             parts[m.name].append((name, pattern))
 
     new_transitions = []
-    for m_name, subs in parts.items():  # across each generated surface, both ways
+    for subs in parts.values():  # across each generated surface, both ways
         for (a, pa), (b, pb) in itertools.combinations(subs, 2):
             differ = [g for g in pa if pa[g] != pb[g]]
             if len(differ) != 1:

@@ -517,8 +517,7 @@ class ShootingProblem:
             if tr.source != traj.mode1 or tr.target != traj.mode0:
                 continue
             h = flow.indicator(tr.surface, t1, x1, p)
-            hx, ht, _ = flow.indicator_gradient(tr.surface, t1, x1, p)
-            rate = abs(float(hx @ flow.vector_field(tr.source, t1, x1, p)) + ht)
+            hx, _, _ = flow.indicator_gradient(tr.surface, t1, x1, p)
             # within Newton's closing error of the state (1e-8 relative): the orbit crosses here, at the seam
             if abs(h) > 1e-8 * scale * float(np.linalg.norm(hx)) or not flow.guard_holds(k, t1, x1, p):
                 continue
@@ -526,12 +525,7 @@ class ShootingProblem:
             psi = traj.parameter_sensitivity
             if psi is not None and sensitivity >= 0:
                 psi = S @ psi + dp[:, sensitivity]
-            ev_t, ev_int, ev_xm, ev_xp, ev_S = traj.event_log
-            row = np.array([[0, k, sys_.surface_index(tr.surface), sys_.mode_index(tr.source),
-                             sys_.mode_index(tr.target)]], dtype=ev_int.dtype)
-            row[0, 0] = int(EventKind.TRANSITION)
-            log = (np.append(ev_t, t1), np.vstack([ev_int, row]), np.vstack([ev_xm, x1[None, :]]),
-                   np.vstack([ev_xp, x_plus[None, :]]), np.concatenate([ev_S, S[None, :, :]]))
+            log = _logged(traj, EventKind.TRANSITION, k, tr.surface, tr.source, tr.target, x1, x_plus, S)
             return replace(
                 traj, x1=x_plus, mode1=tr.target, event_log=log, monodromy=S @ traj.monodromy,
                 parameter_sensitivity=psi, velocity_end=flow.vector_field(tr.target, t1, x_plus, p),
@@ -565,13 +559,8 @@ class ShootingProblem:
         psi = traj.parameter_sensitivity
         if psi is not None and sensitivity >= 0:
             psi = S @ psi + w * L_p[sensitivity] / den
-        sys_ = self.system
         other = last.mode_to if traj.mode0 == last.mode_from else last.mode_from
-        ev_t, ev_int, ev_xm, ev_xp, ev_S = traj.event_log
-        row = np.array([[int(EventKind.SLIDING_END), -1, sys_.surface_index(last.surface), sys_.mode_index(other),
-                         sys_.mode_index(traj.mode0)]], dtype=ev_int.dtype)
-        log = (np.append(ev_t, t1), np.vstack([ev_int, row]), np.vstack([ev_xm, x1[None, :]]),
-               np.vstack([ev_xp, x1[None, :]]), np.concatenate([ev_S, S[None, :, :]]))
+        log = _logged(traj, EventKind.SLIDING_END, -1, last.surface, other, traj.mode0, x1, x1, S)
         return replace(traj, mode1=traj.mode0, event_log=log, monodromy=S @ traj.monodromy, sliding_at_end=False,
                        parameter_sensitivity=psi, velocity_end=f_out)
 
@@ -820,6 +809,17 @@ class ShootingProblem:
             trivial_error=trivial_error,
             problem=self,
         )
+
+
+def _logged(traj: Trajectory, kind: EventKind, transition: int, surface: str, mode_from: str, mode_to: str,
+            x_minus: np.ndarray, x_plus: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The trajectory's event log with one more event at its end (the kernel's layout)."""
+    sys_ = traj.system
+    ev_t, ev_int, ev_xm, ev_xp, ev_S = traj.event_log
+    row = np.array([[int(kind), transition, sys_.surface_index(surface), sys_.mode_index(mode_from),
+                     sys_.mode_index(mode_to)]], dtype=ev_int.dtype)
+    return (np.append(ev_t, traj.t1), np.vstack([ev_int, row]), np.vstack([ev_xm, x_minus[None, :]]),
+            np.vstack([ev_xp, x_plus[None, :]]), np.concatenate([ev_S, S[None, :, :]]))
 
 
 def find_periodic_orbit(
