@@ -491,12 +491,12 @@ class ShootingProblem:
         sys_ = self.system
         if traj.monodromy is None:
             return traj
-        events = traj.events
-        if len(events) >= 2:
-            first, last = events[0], events[-1]
+        ev_t, ev_int = traj.event_log[0], traj.event_log[1]  # the kernel's log: read without building records
+        if len(ev_t) >= 2:
             delta = 1e-7 * max(1.0, abs(traj.t1 - traj.t0))
-            if (first.kind == last.kind == EventKind.TRANSITION and first.transition == last.transition
-                    and abs(first.t - traj.t0) <= delta and abs(traj.t1 - last.t) <= delta):
+            if (ev_int[0, 0] == ev_int[-1, 0] == EventKind.TRANSITION and ev_int[0, 1] == ev_int[-1, 1]
+                    and abs(ev_t[0] - traj.t0) <= delta and abs(traj.t1 - ev_t[-1]) <= delta):
+                first = traj.events[0]
                 if sys_.resets[first.transition] is not None:
                     raise InconsistentResultError(
                         f"transition {sys_.transitions[first.transition].label!r} (a reset) happens at the start and at "
@@ -644,12 +644,12 @@ class ShootingProblem:
         """
         tol = self.tolerances or self.flow.tolerances
         n = self.system.n
-        x0 = np.asarray(u[:n], dtype=float)
-        scale = 1.0 + float(np.abs(x0).max())
-        floor = STATIONARY_FACTOR * (tol.atol + tol.rtol * scale)
-        excursion = float(np.max(traj.x_max - traj.x_min))
+        # plain floats: this runs for every orbit and branch point, on a few numbers
+        excursion = max(map(float.__sub__, traj.x_max.tolist(), traj.x_min.tolist()))
+        floor = STATIONARY_FACTOR * (tol.atol + tol.rtol * (1.0 + max(map(abs, u[:n].tolist()))))
         if excursion > floor:
             return None
+        x0 = np.asarray(u[:n], dtype=float)
         T = self.period_of(u, lam)
         where = f"at x = {np.array2string(x0, precision=10)}"
         p = self.parameters_at(lam)
