@@ -59,6 +59,9 @@ SLIDE_LEAVES_REGION = 2  # it leaves the domain of its mode INFO_FAILED_MODE (ac
 #                          surface when no other lies there), and no transition out of either mode holds there
 SLIDE_BLOCKED = 3  # the transition on INFO_FAILED_SURFACE leads to no motion the integrator defines: the field of
 #                    INFO_FAILED_MODE pushes back across that surface, or (mode -1) both new modes leave the sliding surface
+SLIDE_RESET_INTO = 4  # (not sliding) the reset of transition INFO_SLIDE + 1 leaves the state on INFO_FAILED_SURFACE
+#                       and the new field pushes it back across: no motion is defined
+TIME_UNRESOLVED = 5  # (with STATUS_CHATTERING) events closer than the resolution of the time axis at |t|, not of the motion
 INFO_INITIAL_MODE = 12
 INFO_EVENT_LOG = 13
 EVENT_LOG_INTS = 5

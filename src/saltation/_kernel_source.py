@@ -89,6 +89,7 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         SHOOT_SINGULAR,
         SLIDE_BLOCKED,
         SLIDE_LEAVES_REGION,
+        SLIDE_RESET_INTO,
         SLIDE_WIDTH,
         STATUS_CHATTERING,
         STATUS_MAX_EVENTS,
@@ -99,6 +100,7 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         STATUS_SLIDING_UNDEFINED,
         STATUS_STEP_TOO_SMALL,
         STATUS_TANGENTIAL,
+        TIME_UNRESOLVED,
         VECTOR_FIELD,
         VECTOR_FIELD_DP,
         VECTOR_FIELD_JAC,
@@ -978,9 +980,17 @@ def _refine_event(model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, s_e
     return s_e
 
 
+@njit(cache=True, inline="always")
+def _chatter_width(t, h_scale):
+    """The time below which events crowd (chattering): 1e-9 of the step ``h_scale`` (the time scale of
+    the motion) plus a few rounding units of ``t``; neither a fraction of ``|t|`` nor of the span."""
+    return 16.0 * EPS * abs(t) + 1e-9 * h_scale
+
+
 @njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
 def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_once, n_ev, chatter_ring, hx, hp, fa,
-                      fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding):
+                      fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding, h_scale, xn, fn, wn,
+                      wp):
     """Apply transition ``k`` (surface ``s``) at the event ``(t_e, x_e)`` in ``mode``: the reset
     ``xplus = g(x_e)`` with ``g_x, g_t, g_p``, the surface's gradient ``h_x, h_p``, the fields ``f-``
     (``fa``) and ``f+`` (``fplus``) and the denominator ``h_x f- + h_t`` of eq. (9), which
@@ -1030,6 +1040,32 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_on
                 crowd += 1
         if crowd >= 8:
             return STATUS_CHATTERING, mode_to, EVENT_TRANSITION, den
+    back = 0.0  # after a reset that leaves the state on the surface: the side it must go back to
+    if tr_table[k, 4] != 0 and not from_sliding and abs(model[INDICATOR](s, t_e, xplus, p)) <= 1e-12:
+        back = -1.0 if (tr_table[k, 2] > 0 or (tr_table[k, 2] == 0 and cross > 0)) else 1.0
+        rate = direction * sig_b * back
+        scale = abs(ht)
+        for i in range(n):
+            scale += abs(hx[i] * fb[i])
+        if rate <= 1e-12 * scale:
+            pushes = True
+            if rate >= -1e-12 * scale:
+                # the new field is tangent to the surface (a plastic impact, e = 0): its rate a hair
+                # along the motion decides whether it pushes the state back into the surface
+                tau = direction * (1e-6 * h_scale + 16.0 * EPS * abs(t_e))  # 1e-6 of the step, past the rounding of t
+                for i in range(n):
+                    xn[i] = xplus[i] + tau * fb[i]
+                model[VECTOR_FIELD](mode_to, t_e + tau, xn, p, fn)
+                pushes = direction * model[INDICATOR_RATE](s, t_e + tau, xn, fn, p, wn, wp) * back < 0.0
+            if pushes:
+                if n_ev >= 1 and abs(t_e - chatter_ring[(n_ev - 1) % CHATTER_WINDOW]) <= _chatter_width(t_e, h_scale):
+                    # the impact before lies below the resolution of the motion: impacts accumulate
+                    return STATUS_CHATTERING, mode_to, EVENT_TRANSITION, den
+                # the reset leaves the state on the surface, and the new field pushes it back across:
+                # no motion is defined (a ball that comes to rest on the floor needs a sliding mode)
+                slide[0] = SLIDE_RESET_INTO
+                slide[1] = k
+                return STATUS_SLIDING_UNDEFINED, mode_to, EVENT_TRANSITION, den
     if tr_table[k, 4] == 0 and direction * sig_b * cross < 0.0:
         # no jump, and the new field pushes back: Filippov sliding along the surface
         if den == sig_b or from_sliding:
@@ -1050,6 +1086,8 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_on
     h_after = model[INDICATOR](s, t_e, xplus, p)
     if slide[0] == 1 or tr_table[k, 4] == 0:
         surf_sign[s] = cross
+    elif back != 0.0:
+        surf_sign[s] = back
     elif abs(h_after) > 1e-12:
         surf_sign[s] = 1.0 if h_after > 0 else -1.0
     elif direction * sig_b != 0.0:
@@ -1664,6 +1702,7 @@ def _integrate(
     # the error control allows any step, while its exit functions vary with the forcing
     sliding_step_cap = model[FORCING_PERIOD](p) / 8.0
     chatter_ring = np.zeros(CHATTER_WINDOW)
+    h_events = 0.0  # the longest step that ended at an event: the time scale of the motion, for a message
     h_mode = np.zeros(n_modes)  # the step proposed last in each mode (0: none yet), to re-enter it with
 
     while status == STATUS_OK and (t_end - t) * direction > 0.0:
@@ -1909,14 +1948,15 @@ def _integrate(
             if status == STATUS_OK:
                 status, mode_to, kind_logged, den = _apply_transition(
                     model, best_tr, best_idx, mode, t_e, x_e, p, tr_table, direction, at_once, n_ev, chatter_ring, hx, hp,
-                    fa, fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding)
+                    fa, fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding,
+                    abs(h), xtmp, wvec, gtmp, gptmp)
                 info_mode = mode_to if from_sliding and status == STATUS_SLIDING_UNDEFINED else mode
             if status != STATUS_OK:
                 info_surface = best_idx
                 if from_sliding and status == STATUS_SLIDING_UNDEFINED:
                     slide[0] = SLIDE_BLOCKED  # (the motion's modes, surface and crossing are kept for the message)
                     t = t_e
-                if status == STATUS_CHATTERING:
+                if status == STATUS_CHATTERING or slide[0] == SLIDE_RESET_INTO:
                     t = t_e
                 break
         else:
@@ -1930,6 +1970,7 @@ def _integrate(
         # log
         ev, ev_int = _log_event(ev, ev_int, n_ev, t_e, kind_logged, best_tr, best_idx, mode_from, mode_to, x_e, xplus, S)
         chatter_ring[n_ev % CHATTER_WINDOW] = t_e
+        h_events = max(h_events, abs(h))
         last_kind = kind_logged
         n_ev += 1
         for i in range(n):
@@ -1944,7 +1985,12 @@ def _integrate(
             break
         if n_ev >= CHATTER_WINDOW:
             oldest = chatter_ring[n_ev % CHATTER_WINDOW]
-            if abs(t_e - oldest) <= 1e-9 * max(1.0, abs(t_e)) + 1e-8 * tspan:
+            # events that crowd below the resolution of the motion: 1e-9 of the step (the time scale of
+            # the motion), or a few rounding units of t (not a fraction of |t| or of the span: events
+            # well apart at t = 1e12 are no chattering)
+            if abs(t_e - oldest) <= _chatter_width(t_e, abs(h)):
+                if EPS * abs(t_e) > 1e-9 * h_events:
+                    slide[0] = TIME_UNRESOLVED  # a rounding unit of t is not small beside the motion's steps
                 status = STATUS_CHATTERING
                 info_mode = mode
                 info_surface = best_idx

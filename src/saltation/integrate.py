@@ -696,6 +696,12 @@ def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, 
     mode = system.mode_names[m] if m >= 0 else "?"
     surface = system.surface_names[k] if k >= 0 else "?"
     where = f"at t = {t:.12g}, x = {np.array2string(np.asarray(x), precision=6)}, in mode {mode!r}"
+    if status == Status.CHATTERING and int(info[kc.INFO_SLIDE]) == kc.TIME_UNRESOLVED:
+        return IntegrationError(
+            f"the time axis cannot resolve the motion {where}: switching events on surface {surface!r} closer than a "
+            f"few rounding units of t (ulp(t) = {np.spacing(abs(t)):.3g}); integrate from a smaller t0 (shift the time "
+            "origin by a multiple of the forcing period)"
+        )
     if status == Status.CHATTERING:
         recent = ", ".join(f"{e.surface}@{e.t:.6g}" for e in events[-5:])
         return ChatteringError(
@@ -705,11 +711,24 @@ def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, 
     if status == Status.MAX_EVENTS:
         return ChatteringError(f"more switching events than max_events {where} (last surface {surface!r})")
     if status == Status.STEP_TOO_SMALL:
-        return StepSizeError(f"step size fell below floating-point resolution {where}")
+        hint = ""
+        if np.spacing(abs(t)) > 1e-9:
+            hint = (f": the time axis cannot resolve the motion at this t (ulp(t) = {np.spacing(abs(t)):.3g}); integrate "
+                    "from a smaller t0 (shift the time origin by a multiple of the forcing period)")
+        return StepSizeError(f"step size fell below floating-point resolution {where}{hint}")
     if status == Status.NON_FINITE:
         return NonFiniteError(f"the vector field of mode {mode!r} returned NaN or infinity {where}")
     if status == Status.SLIDING_UNDEFINED:
         cause = int(info[kc.INFO_SLIDE])
+        if cause == kc.SLIDE_RESET_INTO:
+            k_tr = int(info[kc.INFO_SLIDE + 1])
+            tr = system.transitions[k_tr]
+            return SlidingError(
+                f"the reset of transition {k_tr} ({tr.source} -> {tr.target} on surface {surface!r}) leaves the state "
+                f"on the surface {where}, and the field of mode {tr.target!r} pushes it back across (an impact with "
+                "restitution 0 or below, or a state at rest on the surface): sliding with a reset map is not defined; "
+                "the model needs a sticking mode"
+            )
         if cause not in (kc.SLIDE_LEAVES_REGION, kc.SLIDE_BLOCKED):
             return SlidingError(
                 f"sliding on surface {surface!r} {where} is required (the target field pushes back into the surface) "
