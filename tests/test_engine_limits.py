@@ -167,3 +167,34 @@ def test_a_wall_oscillator_over_many_periods_is_no_chattering(oscillator_flow):
     k = np.arange(n_per)
     np.testing.assert_allclose(times[0::2], math.pi / 6 + 2 * math.pi * k, rtol=1e-10, atol=1e-9)
     np.testing.assert_allclose(times[1::2], 5 * math.pi / 6 + 2 * math.pi * k, rtol=1e-10, atol=1e-9)
+
+
+@pytest.mark.parametrize("t0", [1e6, 1e12, 1e15])
+@pytest.mark.parametrize("e", [0.5, 1e-3, 0.0])
+def test_impacts_at_large_times_never_tunnel(oscillator_flow, t0, e):
+    """The dropped ball from t0: where the time axis resolves the motion, the closed form (shifted by
+    t0, to the rounding of t0's grid); elsewhere a named error, never a ball below the floor."""
+    p = oscillator_flow.parameters(BALL | {"e": e})
+    t1 = math.sqrt(2.0)
+    t_zeno = t1 + 2.0 * t1 * e / (1.0 - e)
+    for span in [1.0, t1 + 0.3 * (t_zeno - t1) if e > 0 else 1.2, 10.0]:
+        try:
+            traj = oscillator_flow.run([1.0, 0.0], t0, t0 + span, p, mode0="ball")
+        except IntegrationError as err:
+            assert "'floor'" in str(err) or "time axis cannot resolve" in str(err)
+            continue
+        assert span < t_zeno
+        x_ref, impacts = _ball_closed_form(e, span)
+        tol = 64 * np.spacing(t0) * 2.0  # |x'|, |v'| <= 2 here
+        np.testing.assert_allclose(traj.x1, x_ref, rtol=1e-9, atol=tol)
+        assert traj.x1[0] >= -tol
+        assert len(traj.events) == len(impacts)
+
+
+@pytest.mark.parametrize("t0", [1e15, 1e17])
+def test_a_wall_the_time_axis_cannot_resolve_raises(oscillator_flow, t0):
+    """x'' = -x with its wall at x = 1/2, from t0 where ulp(t0) = 0.125 or 16: the crossing times cannot be
+    represented to a useful precision; the run raises instead of drifting off x = sin(t - t0)."""
+    p = oscillator_flow.parameters({"w": 1.0, "g": 0.0, "a": 0.5})
+    with pytest.raises(IntegrationError, match="time axis cannot resolve"):
+        oscillator_flow.run([0.0, 1.0], t0, t0 + 20.0, p)

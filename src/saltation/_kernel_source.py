@@ -865,7 +865,7 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surfac
     n = N_STATE or xtmp.shape[0]  # (see the engine's header)
     n_tr = tr_table.shape[0]
     pending = NONE
-    dt_nudge = direction * 1e-10 * max(1.0, abs(t))
+    dt_nudge = direction * (1e-10 + 16.0 * EPS * abs(t))  # a hair: not a fraction of |t| (1e2 at t = 1e12)
     for i in range(n):
         xtmp[i] = y[i] + dt_nudge * K[0, i]
     if at_start and slide[0] == 0:
@@ -1041,7 +1041,10 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_on
         if crowd >= 8:
             return STATUS_CHATTERING, mode_to, EVENT_TRANSITION, den
     back = 0.0  # after a reset that leaves the state on the surface: the side it must go back to
-    if tr_table[k, 4] != 0 and not from_sliding and abs(model[INDICATOR](s, t_e, xplus, p)) <= 1e-12:
+    # on the surface: to 1e-12, or to how far the motion goes in a few rounding units of t (an event state
+    # lies on or just past the surface at a time on t's grid)
+    on_tol = 1e-12 + 16.0 * EPS * abs(t_e) * (abs(den) + abs(sig_b))
+    if tr_table[k, 4] != 0 and not from_sliding and abs(model[INDICATOR](s, t_e, xplus, p)) <= on_tol:
         back = -1.0 if (tr_table[k, 2] > 0 or (tr_table[k, 2] == 0 and cross > 0)) else 1.0
         rate = direction * sig_b * back
         scale = abs(ht)
@@ -1066,6 +1069,13 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_on
                 slide[0] = SLIDE_RESET_INTO
                 slide[1] = k
                 return STATUS_SLIDING_UNDEFINED, mode_to, EVENT_TRANSITION, den
+        beyond = -back * model[INDICATOR](s, t_e, xplus, p)
+        if beyond > 1e-12 and beyond > (64.0 * EPS * abs(t_e) + 1e-9 * h_scale) * rate:
+            # the event state lies past the surface (by the time axis' resolution) farther than the motion
+            # after the reset brings it back in a few rounding units of t: a bounce too small to resolve
+            if 16.0 * EPS * abs(t_e) > 1e-9 * h_scale:
+                return STATUS_STEP_TOO_SMALL, mode_to, EVENT_TRANSITION, den
+            return STATUS_CHATTERING, mode_to, EVENT_TRANSITION, den
     if tr_table[k, 4] == 0 and direction * sig_b * cross < 0.0:
         # no jump, and the new field pushes back: Filippov sliding along the surface
         if den == sig_b or from_sliding:
@@ -1705,6 +1715,12 @@ def _integrate(
     h_events = 0.0  # the longest step that ended at an event: the time scale of the motion, for a message
     h_mode = np.zeros(n_modes)  # the step proposed last in each mode (0: none yet), to re-enter it with
 
+    t_far = max(abs(t0), abs(t_end))
+    if tspan > 0.0 and 100.0 * EPS * t_far > tspan and EPS * t_far > 1e-9:
+        # far from t = 0 (a rounding unit of t above 1e-9), a span of less than a hundred of them: the time
+        # axis cannot resolve the motion (nor the end time asked for)
+        status = STATUS_STEP_TOO_SMALL
+        info_mode = mode
     while status == STATUS_OK and (t_end - t) * direction > 0.0:
         if need_signs:
             _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_table, watched, fires, surf_old,
@@ -1956,7 +1972,7 @@ def _integrate(
                 if from_sliding and status == STATUS_SLIDING_UNDEFINED:
                     slide[0] = SLIDE_BLOCKED  # (the motion's modes, surface and crossing are kept for the message)
                     t = t_e
-                if status == STATUS_CHATTERING or slide[0] == SLIDE_RESET_INTO:
+                if status == STATUS_CHATTERING or status == STATUS_STEP_TOO_SMALL or slide[0] == SLIDE_RESET_INTO:
                     t = t_e
                 break
         else:
@@ -1979,6 +1995,14 @@ def _integrate(
             xmax[i] = max(xmax[i], x_e[i], xplus[i])
         if n_ev >= max_events:
             status = STATUS_MAX_EVENTS
+            info_mode = mode
+            info_surface = best_idx
+            t = t_e
+            break
+        if 100.0 * EPS * abs(t_e) > h_events:
+            # the time axis at t_e cannot resolve the motion: a step is no more than 100 rounding units of t,
+            # and event times (each rounded to t's grid) would be off by a sizeable part of a step
+            status = STATUS_STEP_TOO_SMALL
             info_mode = mode
             info_surface = best_idx
             t = t_e

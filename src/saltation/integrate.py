@@ -712,7 +712,7 @@ def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, 
         return ChatteringError(f"more switching events than max_events {where} (last surface {surface!r})")
     if status == Status.STEP_TOO_SMALL:
         hint = ""
-        if np.spacing(abs(t)) > 1e-9:
+        if np.spacing(abs(t)) > 1e-9 or k >= 0:  # far from t = 0, or at an event on surface k
             hint = (f": the time axis cannot resolve the motion at this t (ulp(t) = {np.spacing(abs(t)):.3g}); integrate "
                     "from a smaller t0 (shift the time origin by a multiple of the forcing period)")
         return StepSizeError(f"step size fell below floating-point resolution {where}{hint}")
