@@ -987,6 +987,55 @@ def _chatter_width(t, h_scale):
     return 16.0 * EPS * abs(t) + 1e-9 * h_scale
 
 
+@njit(cache=True)  # not inlined: called only for transitions with a reset, it keeps the integrator's loop lean
+def _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cross, den, sig_b, ht, hx, fb, n_ev,
+                   chatter_ring, slide, h_scale, xn, fn, wn, wp):
+    """After the reset of transition ``k`` on surface ``s``: where the state lies on the surface (or as far
+    past it as the motion goes in a few rounding units of t), the new field must take it back to the side
+    it came from. Returns ``(status, back)``: ``back`` that side (0: the state is off the surface), and a
+    status other than OK where the field pushes it back across (STATUS_SLIDING_UNDEFINED, cause
+    SLIDE_RESET_INTO, or STATUS_CHATTERING at the end of a Zeno accumulation) or where the bounce is too
+    small to resolve (STATUS_STEP_TOO_SMALL or STATUS_CHATTERING)."""
+    n = N_STATE or xplus.shape[0]  # (see the engine's header)
+    back = 0.0
+    # on the surface: to 1e-12, or to how far the motion goes in a few rounding units of t (an event state
+    # lies on or just past the surface at a time on t's grid)
+    on_tol = 1e-12 + 16.0 * EPS * abs(t_e) * (abs(den) + abs(sig_b))
+    if abs(model[INDICATOR](s, t_e, xplus, p)) <= on_tol:
+        back = -1.0 if (tr_table[k, 2] > 0 or (tr_table[k, 2] == 0 and cross > 0)) else 1.0
+        rate = direction * sig_b * back
+        scale = abs(ht)
+        for i in range(n):
+            scale += abs(hx[i] * fb[i])
+        if rate <= 1e-12 * scale:
+            pushes = True
+            if rate >= -1e-12 * scale:
+                # the new field is tangent to the surface (a plastic impact, e = 0): its rate a hair
+                # along the motion decides whether it pushes the state back into the surface
+                tau = direction * (1e-6 * h_scale + 16.0 * EPS * abs(t_e))  # 1e-6 of the step, past the rounding of t
+                for i in range(n):
+                    xn[i] = xplus[i] + tau * fb[i]
+                model[VECTOR_FIELD](mode_to, t_e + tau, xn, p, fn)
+                pushes = direction * model[INDICATOR_RATE](s, t_e + tau, xn, fn, p, wn, wp) * back < 0.0
+            if pushes:
+                if n_ev >= 1 and abs(t_e - chatter_ring[(n_ev - 1) % CHATTER_WINDOW]) <= _chatter_width(t_e, h_scale):
+                    # the impact before lies below the resolution of the motion: impacts accumulate
+                    return STATUS_CHATTERING, back
+                # the reset leaves the state on the surface, and the new field pushes it back across:
+                # no motion is defined (a ball that comes to rest on the floor needs a sliding mode)
+                slide[0] = SLIDE_RESET_INTO
+                slide[1] = k
+                return STATUS_SLIDING_UNDEFINED, back
+        beyond = -back * model[INDICATOR](s, t_e, xplus, p)
+        if beyond > 1e-12 and beyond > (64.0 * EPS * abs(t_e) + 1e-9 * h_scale) * rate:
+            # the event state lies past the surface (by the time axis' resolution) farther than the motion
+            # after the reset brings it back in a few rounding units of t: a bounce too small to resolve
+            if 16.0 * EPS * abs(t_e) > 1e-9 * h_scale:
+                return STATUS_STEP_TOO_SMALL, back
+            return STATUS_CHATTERING, back
+    return STATUS_OK, back
+
+
 @njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
 def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_once, n_ev, chatter_ring, hx, hp, fa,
                       fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding, h_scale, xn, fn, wn,
@@ -1041,41 +1090,11 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_on
         if crowd >= 8:
             return STATUS_CHATTERING, mode_to, EVENT_TRANSITION, den
     back = 0.0  # after a reset that leaves the state on the surface: the side it must go back to
-    # on the surface: to 1e-12, or to how far the motion goes in a few rounding units of t (an event state
-    # lies on or just past the surface at a time on t's grid)
-    on_tol = 1e-12 + 16.0 * EPS * abs(t_e) * (abs(den) + abs(sig_b))
-    if tr_table[k, 4] != 0 and not from_sliding and abs(model[INDICATOR](s, t_e, xplus, p)) <= on_tol:
-        back = -1.0 if (tr_table[k, 2] > 0 or (tr_table[k, 2] == 0 and cross > 0)) else 1.0
-        rate = direction * sig_b * back
-        scale = abs(ht)
-        for i in range(n):
-            scale += abs(hx[i] * fb[i])
-        if rate <= 1e-12 * scale:
-            pushes = True
-            if rate >= -1e-12 * scale:
-                # the new field is tangent to the surface (a plastic impact, e = 0): its rate a hair
-                # along the motion decides whether it pushes the state back into the surface
-                tau = direction * (1e-6 * h_scale + 16.0 * EPS * abs(t_e))  # 1e-6 of the step, past the rounding of t
-                for i in range(n):
-                    xn[i] = xplus[i] + tau * fb[i]
-                model[VECTOR_FIELD](mode_to, t_e + tau, xn, p, fn)
-                pushes = direction * model[INDICATOR_RATE](s, t_e + tau, xn, fn, p, wn, wp) * back < 0.0
-            if pushes:
-                if n_ev >= 1 and abs(t_e - chatter_ring[(n_ev - 1) % CHATTER_WINDOW]) <= _chatter_width(t_e, h_scale):
-                    # the impact before lies below the resolution of the motion: impacts accumulate
-                    return STATUS_CHATTERING, mode_to, EVENT_TRANSITION, den
-                # the reset leaves the state on the surface, and the new field pushes it back across:
-                # no motion is defined (a ball that comes to rest on the floor needs a sliding mode)
-                slide[0] = SLIDE_RESET_INTO
-                slide[1] = k
-                return STATUS_SLIDING_UNDEFINED, mode_to, EVENT_TRANSITION, den
-        beyond = -back * model[INDICATOR](s, t_e, xplus, p)
-        if beyond > 1e-12 and beyond > (64.0 * EPS * abs(t_e) + 1e-9 * h_scale) * rate:
-            # the event state lies past the surface (by the time axis' resolution) farther than the motion
-            # after the reset brings it back in a few rounding units of t: a bounce too small to resolve
-            if 16.0 * EPS * abs(t_e) > 1e-9 * h_scale:
-                return STATUS_STEP_TOO_SMALL, mode_to, EVENT_TRANSITION, den
-            return STATUS_CHATTERING, mode_to, EVENT_TRANSITION, den
+    if tr_table[k, 4] != 0 and not from_sliding:
+        code, back = _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cross, den, sig_b, ht,
+                                    hx, fb, n_ev, chatter_ring, slide, h_scale, xn, fn, wn, wp)
+        if code != STATUS_OK:
+            return code, mode_to, EVENT_TRANSITION, den
     if tr_table[k, 4] == 0 and direction * sig_b * cross < 0.0:
         # no jump, and the new field pushes back: Filippov sliding along the surface
         if den == sig_b or from_sliding:
