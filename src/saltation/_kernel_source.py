@@ -1021,6 +1021,10 @@ def _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cro
                 if n_ev >= 1 and abs(t_e - chatter_ring[(n_ev - 1) % CHATTER_WINDOW]) <= _chatter_width(t_e, h_scale):
                     # the impact before lies below the resolution of the motion: impacts accumulate
                     return STATUS_CHATTERING, back
+                if direction * den * back >= 0.0:
+                    # the event lies past the surface's extremum (a grazing within the step, found by the
+                    # dip search): the state's side is left to the rule after a reset
+                    return STATUS_OK, 0.0
                 # the reset leaves the state on the surface, and the new field pushes it back across:
                 # no motion is defined (a ball that comes to rest on the floor needs a sliding mode)
                 slide[0] = SLIDE_RESET_INTO
