@@ -412,13 +412,7 @@ def _read_json(path: PathType, *, bare_constants: bool = False) -> Any:
         If the file cannot be read.
     """
     fields = _Fields(path)
-    raw = Path(path).read_bytes()
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        fields.fail("", f"not a UTF-8 text file (byte {exc.start}): not a JSON file, or damaged")
-    if not text.strip():
-        fields.fail("", "the file is empty")
+    text = _read_text(path, fields, "JSON", "the file is empty")
     flags = {"bare": False, "duplicate": False}
 
     def constant(token: str) -> _Bare:
@@ -966,14 +960,19 @@ def _csv_header(header: list[str], f: _Fields) -> tuple[dict[str, int], int, int
     return col, n_state, n_mu
 
 
-def _read_csv_points(path: PathType, f: _Fields) -> list[BranchPoint]:
-    raw = Path(path).read_bytes()
+def _read_text(path: PathType, fields: _Fields, kind: str, empty: str) -> str:
+    """A file's text (UTF-8, a byte-order mark allowed), or a FileFormatError naming it."""
     try:
-        text = raw.decode("utf-8-sig")
+        text = Path(path).read_bytes().decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        f.fail("", f"not a UTF-8 text file (byte {exc.start}): not a CSV file, or damaged")
+        fields.fail("", f"not a UTF-8 text file (byte {exc.start}): not a {kind} file, or damaged")
     if not text.strip():
-        f.fail("", "the file is empty (no header)")
+        fields.fail("", empty)
+    return text
+
+
+def _read_csv_points(path: PathType, f: _Fields) -> list[BranchPoint]:
+    text = _read_text(path, f, "CSV", "the file is empty (no header)")
     reader = csv.reader(_io.StringIO(text, newline=""), strict=True)
     try:
         rows = [(reader.line_num, row) for row in reader]
