@@ -614,15 +614,41 @@ def _event_value(model, kind, idx, slide, t, x, p, gtmp, gptmp):
 
 
 @njit(cache=True)
-def _dense_event(model, kind, idx, slide, sgn, t, h, F, y, s, p, xtmp, gtmp, gptmp):
-    _dense_eval(F, y, s, xtmp)
+def _series_eval(TC, theta, out):
+    """The state of an exact step at the fraction ``theta`` of its series' step (``TC``, see
+    :func:`_exact_step`): the series itself, exact to rounding, not its degree-7 interpolant."""
+    n = out.shape[0]
+    n_terms = int(TC[MAX_TAYLOR + 1, 0])
+    for i in range(n):
+        v = 0.0
+        for k in range(n_terms - 1, 0, -1):
+            v = (v + TC[k, i]) * theta
+        out[i] = v + TC[0, i]
+
+
+@njit(cache=True)
+def _state_at(exact, TC, F, y, s, h, out):
+    """The state at the fraction ``s`` of the step ``h`` just taken: on the exact flow's own series
+    (an exact step: exact to rounding, so that event location does not depend on the tolerances),
+    else on the dense output."""
+    base = TC[MAX_TAYLOR + 3, 0]
+    if exact and base != 0.0 and TC[MAX_TAYLOR + 1, 0] > 0.0:
+        _series_eval(TC, s * h / base, out)
+    else:
+        _dense_eval(F, y, s, out)
+
+
+@njit(cache=True)
+def _dense_event(model, kind, idx, slide, sgn, t, h, F, y, s, p, xtmp, gtmp, gptmp, exact, TC):
+    """``sgn`` times an event function at the fraction ``s`` of the step ``h`` (see :func:`_state_at`)."""
+    _state_at(exact, TC, F, y, s, h, xtmp)
     return sgn * _event_value(model, kind, idx, slide, t + s * h, xtmp, p, gtmp, gptmp)
 
 
 @njit(cache=True)
-def _bracket_root(model, kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp, gtmp, gptmp):
+def _bracket_root(model, kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp, gtmp, gptmp, exact, TC):
     """Illinois root finding of ``sgn * event`` on the dense output in ``[sa, sb]`` (value > 0 at sa, <= 0 at sb)."""
-    ga = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, sa, p, xtmp, gtmp, gptmp)
+    ga = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, sa, p, xtmp, gtmp, gptmp, exact, TC)
     if ga <= 0.0:
         ga = 1e-300
     side = 0
@@ -632,7 +658,7 @@ def _bracket_root(model, kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp,
         sc = sb - gb * (sb - sa) / (gb - ga)
         if not (sa < sc < sb):
             sc = 0.5 * (sa + sb)
-        gc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, sc, p, xtmp, gtmp, gptmp)
+        gc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, sc, p, xtmp, gtmp, gptmp, exact, TC)
         if gc > 0.0:
             sa = sc
             ga = gc
@@ -651,15 +677,15 @@ def _bracket_root(model, kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp,
 
 
 @njit(cache=True)
-def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, lo, hi):
+def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, lo, hi, exact, TC):
     """Golden-section search for the minimum of ``sgn * event`` on ``[lo, hi]`` of the step; returns (s, value)."""
     invphi = 0.6180339887498949
     a = lo
     b = hi
     c = b - invphi * (b - a)
     d = a + invphi * (b - a)
-    fc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp)
-    fd = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp)
+    fc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp, exact, TC)
+    fd = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp, exact, TC)
     for _ in range(60):
         if fc <= 0.0:
             return c, fc
@@ -672,16 +698,97 @@ def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, 
             d = c
             fd = fc
             c = b - invphi * (b - a)
-            fc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp)
+            fc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp, exact, TC)
         else:
             a = c
             c = d
             fc = fd
             d = a + invphi * (b - a)
-            fd = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp)
+            fd = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp, exact, TC)
     if fc < fd:
         return c, fc
     return d, fd
+
+
+@njit(cache=True)
+def _surface_resolution(model, s, t, x, p, hx, hp):
+    """How near zero the indicator of surface ``s`` is rounding, at ``(t, x)``: 16 rounding units of
+    the terms it is made of, ``|h_x_i| max(1, |x_i|)``, ``|h_t| max(1, |t|)`` and ``|h_p_j p_j|`` (a state
+    that close is on the surface).  Not a fixed distance: a band 1e-13 wide (a stick band) is
+    resolved, and an indicator of a large state is not taken as exact."""
+    ht = model[INDICATOR_GRAD](s, t, x, p, hx, hp)
+    scale = abs(ht) * max(1.0, abs(t))
+    for i in range(x.shape[0]):
+        scale += abs(hx[i]) * max(1.0, abs(x[i]))
+    for j in range(p.shape[0]):
+        scale += abs(hp[j] * p[j])
+    return 16.0 * EPS * scale
+
+
+@njit(cache=True)
+def _surface_crossings(model, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, exact, TC, v_start, res, slope_start,
+                       v_end, slope_end, dip):
+    """Where surface ``idx``, on side ``sg`` at the step's start, is crossed within the step:
+    ``(s1, s2, s_lo, s_dip, known)``, fractions of the step (2.0: none).
+
+    ``s1`` is the first crossing, to side ``-sg``, within ``[s_lo, s_dip]``.  A step whose end lies on
+    the same side (``dip``: the slope along the motion turned within it) may hold a dip through the
+    surface: its bottom ``s_dip`` is searched for, and where it lies across, ``s1`` is the way in and
+    ``s2`` the way back, within ``[s_dip, 1]`` (whichever of the two has a transition is the event).
+    A sign change at the step's end gives ``s_dip = 1``.  A step that starts on the surface
+    (``|v_start| <= res``, its rounding: after an event) moving to side ``sg`` (or tangent to it, as where a
+    sliding motion ends) and ends across it has made an excursion: the crossing is its way back, bracketed from a point of the excursion, however short
+    (``s_lo``), not from the start, where the value is rounding; where no point of it lies beyond
+    rounding, the excursion is too shallow to resolve and the crossing is its way back all the same
+    (``known``: its side is ``-sg``, whatever the slope at the event, a rounding near the start); one
+    that ends within rounding of the surface too, still moving away from it (``slope_end``), has
+    resolved no crossing.  On an exact step the event function
+    is evaluated on the exact flow's series, so that whether a near-tangency crosses is decided to
+    rounding, at any tolerance.
+    """
+    if sg * v_end <= 0.0:
+        s_lo = 0.0
+        known = False
+        if abs(v_start) <= res and sg * slope_start >= 0.0:
+            s_top, v_top = _dip_search(model, KIND_INDICATOR, idx, slide, -sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0,
+                                       exact, TC)
+            if v_top < 0.0:
+                s_lo = s_top
+            if v_top >= -res:
+                # an excursion too shallow to resolve: if it ends within rounding of the surface, still
+                # moving away from it, nothing has been resolved; else the crossing is its way back, to
+                # side -sg
+                if abs(v_end) <= res and sg * slope_end >= 0.0:
+                    return 2.0, 2.0, 0.0, 2.0, False
+                known = True
+        s1 = _bracket_root(model, KIND_INDICATOR, idx, slide, sg, t, h, F, y, s_lo, 1.0, min(sg * v_end, -1e-300), p,
+                           xtmp, gtmp, gptmp, exact, TC)
+        return s1, 2.0, s_lo, 1.0, known
+    if not dip:
+        return 2.0, 2.0, 0.0, 2.0, False
+    smin, vmin = _dip_search(model, KIND_INDICATOR, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0, exact, TC)
+    if vmin > 0.0:
+        return 2.0, 2.0, 0.0, 2.0, False
+    s1 = _bracket_root(model, KIND_INDICATOR, idx, slide, sg, t, h, F, y, 0.0, smin, min(vmin, -1e-300), p, xtmp, gtmp,
+                       gptmp, exact, TC)
+    s2 = _bracket_root(model, KIND_INDICATOR, idx, slide, -sg, t, h, F, y, smin, 1.0, min(-sg * v_end, -1e-300), p, xtmp,
+                       gtmp, gptmp, exact, TC)
+    return s1, s2, 0.0, smin, False
+
+
+@njit(cache=True)
+def _firing_transition(model, mode, idx, cross, t_e, x_e, p, tr_table):
+    """The first transition out of ``mode`` on surface ``idx`` that fires crossing to side ``cross``
+    at ``(t_e, x_e)`` (its direction and guard hold), or -1."""
+    for k in range(tr_table.shape[0]):
+        if tr_table[k, 0] != mode or tr_table[k, 1] != idx:
+            continue
+        dk = tr_table[k, 2]
+        if dk != 0 and dk != cross:
+            continue
+        if model[GUARD](k, t_e, x_e, p):
+            return k
+    return NONE
 
 
 @njit(cache=True)
@@ -809,8 +916,8 @@ def _track_extrema(F, y, s_end, xmin, xmax, f0, f1, xtmp, direction):
 
 
 @njit(cache=True, inline="always")  # once per mode entered; its arrays are the integrator's own
-def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_table, watched, fires, surf_old, slope_old,
-                    surf_sign, fixed_sign, hx, hp, gtmp, gptmp):
+def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_table, watched, fires, surf_old, surf_res,
+                    slope_old, surf_sign, fixed_sign, hx, hp, gtmp, gptmp):
     """Entering a mode (or a sliding motion): which surfaces its transitions watch, which way each
     fires (``fires``: 1 to the negative side, 2 to the positive, 3 both), and the sign memory of each
     (value, slope along the motion and side, in the direction of travel), except the signs an event
@@ -833,6 +940,7 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
         if watched[s]:
             v = model[INDICATOR](s, t, y[:n], p)
             surf_old[s] = v
+            surf_res[s] = _surface_resolution(model, s, t, y[:n], p, hx, hp)
             sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, hx, hp, gtmp, gptmp)
             if fixed_sign[s] and last_kind == EVENT_SLIDING_END:
                 # a sliding motion has just ended on this surface, where the new field is tangent
@@ -842,7 +950,7 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
             slope_old[s] = sl
             if fixed_sign[s]:
                 continue
-            if abs(v) > 1e-12:
+            if abs(v) > surf_res[s]:
                 surf_sign[s] = 1.0 if v > 0 else -1.0
             elif sl != 0.0:
                 surf_sign[s] = 1.0 if sl > 0 else -1.0
@@ -851,11 +959,12 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
 
 
 @njit(cache=True, inline="always")  # once per mode entered; its arrays are the integrator's own
-def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surface, drift, last_kind, n_ev, tr_table,
-                  surf_old, slope_old, surf_sign, fixed_sign, xtmp):
+def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surface, drift, last_kind, jumped, n_ev,
+                  tr_table, surf_old, surf_res, slope_old, surf_sign, fixed_sign, xtmp):
     """A transition out of the mode just entered that fires at once, without a step: at the start, on a
     surface the field crosses in the transition's direction; after a transition at a corner of
-    switching surfaces, an exit that already holds.  Returns ``(transition or -1, status)``: the status
+    switching surfaces, an exit that already holds (on a surface the state lies on, to the domain's
+    tolerance, or on any after a reset, ``jumped``, which may move the state across surfaces).  Returns ``(transition or -1, status)``: the status
     is STATUS_OUTSIDE_DOMAIN when the state lies outside the mode's domain by more than rounding and no
     exit holds (the model's domains and transitions disagree).
 
@@ -869,7 +978,7 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surfac
     for i in range(n):
         xtmp[i] = y[i] + dt_nudge * K[0, i]
     if at_start and slide[0] == 0:
-        # A start on a surface (|h| <= 1e-12) with this mode's field crossing it in the direction
+        # A start on a surface (|h| within its rounding) with this mode's field crossing it in the direction
         # of one of its transitions: the transition fires at once, as if the motion had just
         # arrived (it may start a sliding motion), instead of moving on in this mode beyond its
         # surface. Its guard is taken a hair along the motion. The same where a transition has
@@ -879,7 +988,7 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surfac
             if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
                 continue
             s = tr_table[k, 1]
-            if (abs(surf_old[s]) > 1e-12 and s != on_surface) or slope_old[s] * tr_table[k, 2] <= 0.0:
+            if (abs(surf_old[s]) > surf_res[s] and s != on_surface) or slope_old[s] * tr_table[k, 2] <= 0.0:
                 continue
             if fixed_sign[s] and surf_sign[s] == tr_table[k, 2]:
                 continue  # the side an event has just put the state on (the surface just crossed)
@@ -893,12 +1002,17 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surfac
     # zero here (on the surface just crossed) counts on the side the motion goes to.
     # (after a transition, or at the start; a sliding motion ends on its surface by construction)
     if pending < 0 and slide[0] == 0 and last_kind == EVENT_TRANSITION and not model[IN_DOMAIN](mode, t + dt_nudge, xtmp, p):
+        scale = 1.0
+        for i in range(n):
+            scale = max(scale, abs(y[i]))
         for k in range(n_tr):
             if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
                 continue
             s = tr_table[k, 1]
             if fixed_sign[s] or surf_sign[s] != tr_table[k, 2]:
                 continue
+            if n_ev > 0 and not jumped and abs(surf_old[s]) > DOMAIN_TOLERANCE * scale + 2.0 * drift:
+                continue  # a surface the motion has not reached (no reset has moved the state across it)
             if model[GUARD](k, t + dt_nudge, xtmp, p):
                 pending = k
                 break
@@ -906,27 +1020,27 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surfac
         # with the motion nearly tangent to it), and the run goes on; or by more, and the model's
         # domains and transitions disagree: the run stops (STATUS_OUTSIDE_DOMAIN)
         if pending < 0 and n_ev > 0:  # (a mode given for the start is the caller's choice)
-            scale = 1.0
-            for i in range(n):
-                scale = max(scale, abs(y[i]))
             if model[DOMAIN_MARGIN](mode, t + dt_nudge, xtmp, p) < -DOMAIN_TOLERANCE * scale - 2.0 * drift:
                 return NONE, STATUS_OUTSIDE_DOMAIN
     return pending, STATUS_OK
 
 
 @njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
-def _refine_event(model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, s_e, kind, idx, sgn_ev, p, var, pidx,
-                  rtol, atol, ytmp, work, n_err, affine, taylor, gradients):
+def _refine_event(model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, s_e, kind, idx, sgn_ev, s_lo, s_hi, p, var,
+                  pidx, rtol, atol, ytmp, work, n_err, affine, taylor, gradients):
     """Refine an event bracketed at the fraction ``s_e`` of the step ``h`` from ``(t, y)`` (``ynew``: the
     state there); returns the event's fraction of the step, with ``ynew`` the state at it.
 
     Newton on the event function ``g`` (``sgn_ev`` times an indicator, or a sliding motion's exit
     function) of the stepped solution, with its exact slope along the augmented field: a correction
     far below the step is a first-order Taylor step of ``[x, Phi, psi]`` (its second-order term is
-    below rounding), a larger one a re-step from ``y``.  Then the event state is pushed, by doubling
-    nudges along the field, onto or just past the switching set, never before it (``g <= 0``).
-    ``work``, ``affine``, ``taylor`` and ``gradients`` are the integrator's work arrays, in tuples (a
-    call of more than 30 arguments is one numba cannot inline).
+    below rounding), a larger one a re-step from ``y``.  The root lies in ``[s_lo, s_hi]``, with
+    ``g(s_hi) <= 0`` on the stepped solution: a Newton step out of the bracket known so far is a
+    bisection (near a tangency Newton alone wanders off).  Then the event state is pushed, by
+    doubling nudges along the field (re-steps beyond 1e-9 of the step), onto or just past the
+    switching set, never before it (``g <= 0``) and never beyond ``s_hi``.  ``work``, ``affine``,
+    ``taylor`` and ``gradients`` are the integrator's work arrays, in tuples (a call of more than 30
+    arguments is one numba cannot inline).
     """
     W, WJ, WP, wv = work
     AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP = affine
@@ -940,14 +1054,20 @@ def _refine_event(model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, s_e
         Ksave[0, i] = K[0, i]
     s_tiny = 2.0 * EPS * max(1.0, abs(t) / max(abs(h), 1e-300))
     g_e = sgn_ev * _event_value(model, kind, idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
-    for it in range(8):
+    for it in range(64):
         if g_e == 0.0:
             break
+        if g_e > 0.0:
+            s_lo = max(s_lo, s_e)
+        else:
+            s_hi = min(s_hi, s_e)
         _aug_rhs_called(model, mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
         dg = sgn_ev * h * _slope(model, mode, slide, kind, idx, t + s_e * h, ynew[:n], Ksave[1, :n], p, hx, hp, gtmp, gptmp)
-        if dg == 0.0 or not math.isfinite(dg):
-            break
-        s_new = min(max(s_e - g_e / dg, 0.0), 1.0)
+        s_new = s_e - g_e / dg if (dg != 0.0 and math.isfinite(dg)) else -1.0
+        if not (s_lo <= s_new <= s_hi):
+            if s_hi - s_lo <= s_tiny:
+                break
+            s_new = 0.5 * (s_lo + s_hi)
         if abs(s_new - s_e) <= s_tiny:
             break
         if abs(s_new - s_e) <= 1e-9:
@@ -967,16 +1087,24 @@ def _refine_event(model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, s_e
         g_e = sgn_ev * _event_value(model, kind, idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
     # make sure the event state lies on (or just past) the switching set, never before it
     bump = 2.0 * s_tiny
-    for it in range(40):
-        if g_e <= 0.0 or s_e >= 1.0:
+    for it in range(80):
+        if g_e <= 0.0 or s_e >= s_hi:
             break
-        _aug_rhs_called(model, mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
-        ds = min(bump, 1.0 - s_e)
-        for i in range(N):
-            ynew[i] += ds * h * Ksave[1, i]
+        ds = min(bump, s_hi - s_e)
+        if ds <= 1e-9:
+            _aug_rhs_called(model, mode, slide, t + s_e * h, ynew, p, var, pidx, Ksave[1], W, WJ, WP, wv)
+            for i in range(N):
+                ynew[i] += ds * h * Ksave[1, i]
+        else:
+            for i in range(N):
+                K[0, i] = Ksave[0, i]
+            _step(model, exact, mode, slide, t, ysave, (s_e + ds) * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP,
+                  wv, n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
         s_e += ds
         bump *= 2.0
         g_e = sgn_ev * _event_value(model, kind, idx, slide, t + s_e * h, ynew[:n], p, gtmp, gptmp)
+    for i in range(N):
+        K[0, i] = Ksave[0, i]
     return s_e
 
 
@@ -1041,7 +1169,7 @@ def _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cro
 
 
 @njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
-def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_once, n_ev, chatter_ring, hx, hp, fa,
+def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, known_side, n_ev, chatter_ring, hx, hp, fa,
                       fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding, h_scale, xn, fn, wn,
                       wp):
     """Apply transition ``k`` (surface ``s``) at the event ``(t_e, x_e)`` in ``mode``: the reset
@@ -1056,7 +1184,10 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_on
 
     ``from_sliding``: the transition ends a sliding motion (``_sliding_transition``), whose field the
     caller has put in ``fa``; a new field that pushes back across this surface would call for sliding
-    on two surfaces at once, which is not defined here (STATUS_SLIDING_UNDEFINED).
+    on two surfaces at once, which is not defined here (STATUS_SLIDING_UNDEFINED).  ``known_side``:
+    the side of ``s`` the transition leads to where that is known beforehand: +-1 where it fires at
+    once, +-2 where it is the way back of an excursion too shallow to resolve (whose crossings may
+    still accumulate: chattering); 0: the side the motion crosses to, by the sign of ``h_x f- + h_t``.
     """
     n = N_STATE or fa.shape[0]  # (see the engine's header)
     kind_logged = EVENT_TRANSITION
@@ -1077,9 +1208,10 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_on
     sig_b = ht
     for i in range(n):
         sig_b += hx[i] * fb[i]
-    cross = 1.0 if direction * den > 0 else -1.0
-    if at_once:
-        cross = 1.0 if tr_table[k, 2] > 0 else -1.0  # fired at once: the side it leads to is known
+    # the side it leads to: known where it fired at once, or where it is the way back of an excursion
+    # too shallow to resolve (see _surface_crossings); else the side the motion crosses to
+    at_once = abs(known_side) == 1.0
+    cross = (1.0 if known_side > 0 else -1.0) if known_side != 0.0 else (1.0 if direction * den > 0 else -1.0)
     if den == 0.0 or not math.isfinite(den):
         return STATUS_TANGENTIAL, mode_to, EVENT_TRANSITION, den
     if not at_once and tr_table[k, 2] != 0 and direction * den * tr_table[k, 2] <= 0.0 and n_ev >= 8:
@@ -1121,7 +1253,7 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, at_on
         surf_sign[s] = cross
     elif back != 0.0:
         surf_sign[s] = back
-    elif abs(h_after) > 1e-12:
+    elif abs(h_after) > _surface_resolution(model, s, t_e, xplus, p, wn, wp):
         surf_sign[s] = 1.0 if h_after > 0 else -1.0
     elif direction * sig_b != 0.0:
         surf_sign[s] = 1.0 if direction * sig_b > 0 else -1.0
@@ -1443,16 +1575,19 @@ def _pack_result(t, y, var, xmin, xmax, K, ev, ev_int, n_ev, rec, rec_F, n_rec, 
 
 
 @njit(cache=True, inline="always")  # once per sliding step
-def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp):
+def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp,
+                        no_dip):
     """The first exit of the sliding motion within the accepted step from ``(t, y)`` to ``(t_new, ynew)``,
     where the field of side a (kind 1) or b (kind 2) turns tangent: ``(fraction of the step, kind,
-    surface, whether the dense output was built)``, the kind -1 when there is none.
+    surface, the end of its root's bracket, whether the dense output was built)``, the kind -1 when
+    there is none.
     """
     n = N_STATE or F.shape[1]
     have_dense = False
     best_s = 2.0
     best_kind = NONE
     best_idx = NONE
+    best_hi = 1.0  # where the exit function is known to be <= 0: the end of its root's bracket
     for kind in (np.int64(1), np.int64(2)):
         v1 = _event_value(model, kind, NONE, slide, t_new, ynew[:n], p, gtmp, gptmp)
         # A sliding field is often so simple that the step control allows steps over
@@ -1469,8 +1604,9 @@ def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, x
         samples[SLIDING_EXIT_SAMPLES] = v1
         for j in range(1, SLIDING_EXIT_SAMPLES):
             samples[j] = _dense_event(model, kind, NONE, slide, 1.0, t, h, F, y, j / SLIDING_EXIT_SAMPLES, p,
-                                      xtmp, gtmp, gptmp)
-        for j in range(1, SLIDING_EXIT_SAMPLES + 1):
+                                      xtmp, gtmp, gptmp, exact, TC)
+        # (inside the step only where the step's own solution has not refuted the dense output's dip)
+        for j in range(SLIDING_EXIT_SAMPLES if no_dip[no_dip.shape[0] - 3 + kind] else 1, SLIDING_EXIT_SAMPLES + 1):
             sj = j / SLIDING_EXIT_SAMPLES
             if samples[j] <= 0.0:
                 sb = sj
@@ -1478,7 +1614,7 @@ def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, x
                 break
             if j < SLIDING_EXIT_SAMPLES and samples[j] <= samples[j - 1] and samples[j] <= samples[j + 1]:
                 smin, vmin = _dip_search(model, kind, NONE, slide, 1.0, t, h, F, y, p, xtmp, gtmp, gptmp,
-                                         (j - 1) / SLIDING_EXIT_SAMPLES, (j + 1) / SLIDING_EXIT_SAMPLES)
+                                         (j - 1) / SLIDING_EXIT_SAMPLES, (j + 1) / SLIDING_EXIT_SAMPLES, exact, TC)
                 if vmin <= 0.0:
                     sb = smin
                     v1 = vmin
@@ -1487,18 +1623,20 @@ def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, x
             if not have_dense:
                 _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
                 have_dense = True
-            sr = _bracket_root(model, kind, NONE, slide, 1.0, t, h, F, y, 0.0, sb, min(v1, -1e-300), p, xtmp, gtmp, gptmp)
+            sr = _bracket_root(model, kind, NONE, slide, 1.0, t, h, F, y, 0.0, sb, min(v1, -1e-300), p, xtmp, gtmp, gptmp,
+                               exact, TC)
             if sr < best_s:
                 best_s = sr
                 best_kind = kind
                 best_idx = slide[3]
-    return best_s, best_kind, best_idx, have_dense
+                best_hi = sb
+    return best_s, best_kind, best_idx, best_hi, have_dense
 
 
 @njit(cache=True)  # a call, not inlined: a step that does not slide never comes here
 def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp,
-                    gptmp, hx, hp, hs, hsp, xside, direction, tr_table, watched, fires, surf_sign, surf_new, slope_old,
-                    slope_new):
+                    gptmp, hx, hp, hs, hsp, xside, direction, tr_table, watched, fires, surf_sign, surf_old, surf_res,
+                    surf_new, slope_old, slope_new, no_dip):
     """The first event of a sliding step from ``(t, y)`` to ``(t_new, ynew)``: an exit (kind 1 or 2,
     ``_sliding_exit_event``), or a crossing of a watched surface (kind 0) where a transition out of
     either mode holds (``_sliding_match``: ``best_tr``, ``best_tr2`` for modes a and b); and where the
@@ -1507,10 +1645,13 @@ def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp,
     surface_out)``; the watched surfaces' values and slopes at the step's end go to ``surf_new``,
     ``slope_new``, as in the step of a mode."""
     n = N_STATE or xtmp.shape[0]  # (see the engine's header)
-    best_s, best_kind, best_idx, have_dense = _sliding_exit_event(
-        model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp)
+    best_s, best_kind, best_idx, best_hi, have_dense = _sliding_exit_event(
+        model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp, gptmp, no_dip)
     best_tr = NONE
     best_tr2 = NONE
+    best_sgn = 1.0  # the event function's sign, the bracket of its root and whether it is a dip's (see _refine_event)
+    best_lo = 0.0
+    best_dip = best_hi < 1.0  # an exit inside the step: seen on the dense output only
     for s in range(watched.shape[0]):
         if not watched[s]:
             continue
@@ -1519,37 +1660,36 @@ def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp,
         sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
         slope_new[s] = sl
         sg = surf_sign[s]
-        sb = 2.0
-        if sg * v <= 0.0:
-            sb = 1.0
-        elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
-            if not have_dense:
-                _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                have_dense = True
-            smin, vmin = _dip_search(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0)
-            if vmin <= 0.0:
-                sb = smin
-        if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
-            sb = 2.0  # no transition of either mode crosses this way: nothing to locate
-        if sb <= 1.0:
-            if not have_dense:
-                _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                have_dense = True
-            gb = _dense_event(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
-            if gb > 0.0:
-                gb = -1e-300
-            sr = _bracket_root(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
-            if sr < best_s:
-                # the transitions out of the motion's modes there, each with its guard on its own side
-                # of the sliding surface
-                _dense_eval(F, y, sr, xtmp)
-                ka, kb = _sliding_match(model, slide, s, -sg, t + sr * h, xtmp, p, tr_table, hs, hsp, xside)
-                if ka >= 0 or kb >= 0:
-                    best_s = sr
-                    best_kind = KIND_INDICATOR
-                    best_idx = s
-                    best_tr = ka
-                    best_tr2 = kb
+        to_other = (fires[s] & (1 if sg > 0.0 else 2)) != 0  # a transition of either mode crosses to -sg
+        to_own = (fires[s] & (2 if sg > 0.0 else 1)) != 0
+        dip = (to_other or to_own) and not no_dip[s] and sg * slope_old[s] < 0.0 and sg * sl > 0.0
+        if not (to_other and sg * v <= 0.0) and not dip:
+            continue
+        if not have_dense:
+            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+            have_dense = True
+        s1, s2, s_lo, s_dip, known = _surface_crossings(model, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, exact, TC,
+                                                 surf_old[s], surf_res[s], slope_old[s], v, sl, dip)
+        for which in range(2):
+            sr = s1 if which == 0 else s2
+            if sr >= best_s:
+                continue
+            # the transitions out of the motion's modes there, each with its guard on its own side
+            # of the sliding surface
+            _dense_eval(F, y, sr, xtmp)
+            cross = -sg if which == 0 else sg
+            ka, kb = _sliding_match(model, slide, s, cross, t + sr * h, xtmp, p, tr_table, hs, hsp, xside)
+            if ka >= 0 or kb >= 0:
+                best_s = sr
+                best_kind = KIND_INDICATOR
+                best_idx = s
+                best_tr = ka
+                best_tr2 = kb
+                best_sgn = -cross
+                best_lo = s_lo if which == 0 else s_dip
+                best_hi = s_dip if which == 0 else 1.0
+                best_dip = s_dip < 1.0
+                break
     # a sliding motion is defined where both its modes are: where it leaves the domain of either
     s_out = 2.0
     mode_out = NONE
@@ -1561,7 +1701,8 @@ def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp,
             have_dense = True
         s_out, mode_out, surface_out = _sliding_region_end(model, slide, t, h, F, y, p, hs, hsp, xside, xtmp,
                                                            watched.shape[0])
-    return best_s, best_kind, best_idx, best_tr, best_tr2, have_dense, s_out, mode_out, surface_out
+    return (best_s, best_kind, best_idx, best_tr, best_tr2, best_sgn, best_lo, best_hi, best_dip, have_dense, s_out,
+            mode_out, surface_out)
 
 
 @njit(cache=True)
@@ -1689,12 +1830,15 @@ def _integrate(
 
     surf_sign = np.zeros(n_surfaces)
     surf_old = np.zeros(n_surfaces)
+    surf_res = np.zeros(n_surfaces)  # how near zero each indicator is rounding where the mode was entered
     slope_old = np.zeros(n_surfaces)
     watched = np.zeros(n_surfaces, dtype=np.bool_)
     fires = np.zeros(n_surfaces, dtype=np.int64)  # new signs with a transition: 1 for -1, 2 for +1, 3 both
     fixed_sign = np.zeros(n_surfaces, dtype=np.bool_)
     surf_new = np.zeros(n_surfaces)
     slope_new = np.zeros(n_surfaces)
+    # dips of the dense output the step's own solution did not confirm (surfaces, then a sliding motion's two exits)
+    no_dip = np.zeros(n_surfaces + 2, dtype=np.bool_)
 
     _aug_rhs_called(model, mode, slide, t, y, p, var, pidx, K[0], W, WJ, WP, wv)
     for i in range(n):
@@ -1727,6 +1871,7 @@ def _integrate(
     need_signs = True
     pending = NONE  # a transition to fire at once, without a step (see below)
     last_kind = EVENT_TRANSITION  # kind of the last event (the start counts as a transition)
+    last_jump = False  # whether the last event's transition had a reset (the state may jump across surfaces)
     at_start = True
     after_sliding = NONE  # the surface of the sliding motion the last event (a transition) has ended
     drift = 0.0  # how far the state lies off that surface (the integration's drift along the motion)
@@ -1747,10 +1892,10 @@ def _integrate(
     while status == STATUS_OK and (t_end - t) * direction > 0.0:
         if need_signs:
             _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_table, watched, fires, surf_old,
-                            slope_old, surf_sign, fixed_sign, hx, hp, gtmp, gptmp)
+                            surf_res, slope_old, surf_sign, fixed_sign, hx, hp, gtmp, gptmp)
             pending, status = _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start or after_sliding >= 0,
-                                            after_sliding, drift, last_kind, n_ev, tr_table, surf_old, slope_old,
-                                            surf_sign, fixed_sign, xtmp)
+                                            after_sliding, drift, last_kind, last_jump, n_ev, tr_table, surf_old, surf_res,
+                                            slope_old, surf_sign, fixed_sign, xtmp)
             at_start = False
             after_sliding = NONE
             drift = 0.0
@@ -1769,6 +1914,7 @@ def _integrate(
             best_idx = tr_table[pending, 1]
             best_tr = pending
             best_tr2 = NONE
+            best_known = False
             pending = NONE
             s_e = 0.0
             h = direction * habs
@@ -1833,6 +1979,11 @@ def _integrate(
             best_idx = NONE
             best_tr = NONE
             best_tr2 = NONE
+            best_sgn = 1.0  # the event function's sign, the bracket of its root and whether it is a dip's
+            best_lo = 0.0
+            best_hi = 1.0
+            best_dip = False
+            best_known = False  # whether the side it leads to is known (the way back of a shallow excursion)
             if slide[0] == 0:
                 for s in range(n_surfaces):
                     if not watched[s]:
@@ -1842,48 +1993,41 @@ def _integrate(
                     sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
                     slope_new[s] = sl
                     sg = surf_sign[s]
-                    sb = 2.0
-                    if sg * v <= 0.0:
-                        sb = 1.0
-                    elif sg * slope_old[s] < 0.0 and sg * sl > 0.0:
-                        if not have_dense:
-                            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                            have_dense = True
-                        smin, vmin = _dip_search(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0)
-                        if vmin <= 0.0:
-                            sb = smin
-                    if sb <= 1.0 and (fires[s] & (1 if sg > 0.0 else 2)) == 0:
-                        sb = 2.0  # no transition of this mode crosses this way: nothing to locate
-                    if sb <= 1.0:
-                        if not have_dense:
-                            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                            have_dense = True
-                        gb = _dense_event(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, sb, p, xtmp, gtmp, gptmp)
-                        if gb > 0.0:
-                            gb = -1e-300
-                        sr = _bracket_root(model, KIND_INDICATOR, s, slide, sg, t, h, F, y, 0.0, sb, gb, p, xtmp, gtmp, gptmp)
-                        if sr < best_s:
-                            # find a transition that fires at this crossing
-                            _dense_eval(F, y, sr, xtmp)
-                            cross = -sg  # new sign in the direction of travel
-                            for k in range(n_tr):
-                                if tr_table[k, 0] != mode or tr_table[k, 1] != s:
-                                    continue
-                                dk = tr_table[k, 2]
-                                if dk != 0 and dk != cross:
-                                    continue
-                                if not model[GUARD](k, t + sr * h, xtmp, p):
-                                    continue
-                                best_s = sr
-                                best_kind = KIND_INDICATOR
-                                best_idx = s
-                                best_tr = k
-                                break
+                    to_other = (fires[s] & (1 if sg > 0.0 else 2)) != 0  # a transition crosses to side -sg
+                    to_own = (fires[s] & (2 if sg > 0.0 else 1)) != 0
+                    dip = (to_other or to_own) and not no_dip[s] and sg * slope_old[s] < 0.0 and sg * sl > 0.0
+                    if not (to_other and sg * v <= 0.0) and not dip:
+                        continue
+                    if not have_dense:
+                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                        have_dense = True
+                    s1, s2, s_lo, s_dip, known = _surface_crossings(model, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, exact,
+                                                             TC, surf_old[s], surf_res[s], slope_old[s], v, sl, dip)
+                    for which in range(2):
+                        # the way in, then (where no transition fires there) the way back of a dip
+                        sr = s1 if which == 0 else s2
+                        if sr >= best_s:
+                            continue
+                        _state_at(exact, TC, F, y, sr, h, xtmp)
+                        cross = -sg if which == 0 else sg  # new side in the direction of travel
+                        k = _firing_transition(model, mode, s, cross, t + sr * h, xtmp, p, tr_table)
+                        if k >= 0:
+                            best_s = sr
+                            best_kind = KIND_INDICATOR
+                            best_idx = s
+                            best_tr = k
+                            best_sgn = -cross
+                            best_lo = s_lo if which == 0 else s_dip
+                            best_hi = s_dip if which == 0 else 1.0
+                            best_dip = s_dip < 1.0
+                            best_known = known and which == 0
+                            break
             else:
-                (best_s, best_kind, best_idx, best_tr, best_tr2, have_dense, s_out, mode_out,
-                 surface_out) = _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv,
-                                                TC, p, samples, gtmp, gptmp, hx, hp, hs, hsp, xside, direction, tr_table,
-                                                watched, fires, surf_sign, surf_new, slope_old, slope_new)
+                (best_s, best_kind, best_idx, best_tr, best_tr2, best_sgn, best_lo, best_hi, best_dip, have_dense, s_out,
+                 mode_out, surface_out) = _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ,
+                                                          WP, wv, TC, p, samples, gtmp, gptmp, hx, hp, hs, hsp, xside,
+                                                          direction, tr_table, watched, fires, surf_sign, surf_old,
+                                                          surf_res, surf_new, slope_old, slope_new, no_dip)
                 if s_out < best_s:
                     # the motion leaves the domain of one of its modes before any event: not defined
                     status = STATUS_SLIDING_UNDEFINED
@@ -1928,9 +2072,23 @@ def _integrate(
                 habs = abs(h) * fac
                 if slide[0] == 0:
                     h_mode[mode] = habs
+                no_dip[:] = False
                 continue
 
             # --------------------------------------------------------------- an event
+            if best_dip and not exact:
+                # a dip through the switching set seen on the dense output: the step's own solution must
+                # lie across at the dip's bottom too, else the two differ within the tolerance there and
+                # there is no crossing: the step is taken again, without that dip
+                second = best_lo > 0.0  # (the event is a dip's way back: its bottom starts the bracket)
+                bottom = best_lo if second else best_hi
+                _step(model, exact, mode, slide, t, y, bottom * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
+                      n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
+                g_bottom = best_sgn * _event_value(model, best_kind, best_idx, slide, t + bottom * h, ynew[:n], p, gtmp,
+                                                   gptmp)
+                if (g_bottom < 0.0) if second else (g_bottom > 0.0):
+                    no_dip[best_idx if best_kind == KIND_INDICATOR else n_surfaces - 1 + best_kind] = True
+                    continue
             # the shortened step that ends at the event must pass the error test too: a step can
             # straddle a thin layer (e.g. where a sliding motion ends) that its own estimate missed
             err_e = _step(model, exact, mode, slide, t, y, best_s * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
@@ -1942,11 +2100,11 @@ def _integrate(
             _track_extrema(F, y, best_s, xmin, xmax, K[0], K[12], xtmp, direction)
             if record:
                 rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, best_s, y[:n], F)
-            sgn_ev = surf_sign[best_idx] if best_kind == 0 else 1.0
             s_e = _refine_event(
-                model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, best_s, best_kind, best_idx, sgn_ev, p, var,
-                pidx, rtol, atol, ytmp, (W, WJ, WP, wv), n_err, (AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP), (TW, TP, TC),
-                (hx, hp, gtmp, gptmp))
+                model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, best_s, best_kind, best_idx, best_sgn, best_lo,
+                best_hi, p, var, pidx, rtol, atol, ytmp, (W, WJ, WP, wv), n_err, (AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP),
+                (TW, TP, TC), (hx, hp, gtmp, gptmp))
+            no_dip[:] = False
         t_e = t + s_e * h
         # state at the event (before it)
         for i in range(N):
@@ -1985,8 +2143,13 @@ def _integrate(
                         surf_sign[slide[3]] = side
                         fixed_sign[slide[3]] = True
             if status == STATUS_OK:
+                known_side = 0.0
+                if at_once:
+                    known_side = 1.0 if tr_table[best_tr, 2] > 0 else -1.0
+                elif best_known:
+                    known_side = -2.0 * best_sgn
                 status, mode_to, kind_logged, den = _apply_transition(
-                    model, best_tr, best_idx, mode, t_e, x_e, p, tr_table, direction, at_once, n_ev, chatter_ring, hx, hp,
+                    model, best_tr, best_idx, mode, t_e, x_e, p, tr_table, direction, known_side, n_ev, chatter_ring, hx, hp,
                     fa, fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding,
                     abs(h), xtmp, wvec, gtmp, gptmp)
                 info_mode = mode_to if from_sliding and status == STATUS_SLIDING_UNDEFINED else mode
@@ -2011,6 +2174,7 @@ def _integrate(
         chatter_ring[n_ev % CHATTER_WINDOW] = t_e
         h_events = max(h_events, abs(h))
         last_kind = kind_logged
+        last_jump = best_kind == KIND_INDICATOR and tr_table[best_tr, 4] != 0
         n_ev += 1
         for i in range(n):
             y[i] = xplus[i]
