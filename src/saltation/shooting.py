@@ -494,7 +494,9 @@ class ShootingProblem:
         ev_t, ev_int = traj.event_log[0], traj.event_log[1]  # the kernel's log: read without building records
         if len(ev_t) >= 2:
             delta = 1e-7 * max(1.0, abs(traj.t1 - traj.t0))
-            if (ev_int[0, 0] == ev_int[-1, 0] == EventKind.TRANSITION and ev_int[0, 1] == ev_int[-1, 1]
+            # (or the last event, a sliding motion's end, enters the mode the first has entered)
+            if (ev_int[0, 0] == EventKind.TRANSITION and ev_int[-1, 0] in (EventKind.TRANSITION, EventKind.SLIDING_END)
+                    and ev_int[0, 4] == ev_int[-1, 4] and (ev_int[-1, 0] != EventKind.TRANSITION or ev_int[0, 1] == ev_int[-1, 1])
                     and abs(ev_t[0] - traj.t0) <= delta and abs(traj.t1 - ev_t[-1]) <= delta):
                 first = traj.events[0]
                 if sys_.resets[first.transition] is not None:
