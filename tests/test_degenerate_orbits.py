@@ -405,6 +405,7 @@ _CROSSING, _STICKING = {"z": 0.1, "a": 1.0, "w": 1.2, "F": 0.3}, {"z": 0.1, "a":
 @example(at_event(_STICKING, 0))  # as it starts sticking
 @example(at_event(_STICKING, 1))  # as it leaves the stick
 @example(at_event({"z": 0.25, "a": 1.0, "w": 1.0, "F": 0.625}, 3))  # as it leaves the second stick
+@example(at_event({"z": 0.21875, "a": 1.0, "w": 1.890625, "F": 0.75}, 1))  # the stick's end at t0 and at t0 + T
 def test_forced_relay(case):
     """Orbits crossing v = 0 or sticking on it, against the closed-form period map from the orbit's own state."""
     params, ref, kind, t0, guess, period = case

@@ -23,7 +23,13 @@ its period; only the way back (falling) has a transition (the rising one's guard
 ``t = arccos a``.  A dip whose way in has no transition is searched for its way back.
 
 ``wall``: the forced oscillator ``x'' + 2 zeta x' + x = a cos(w t)`` whose orbit misses the wall
-``x = x_w`` of a contact spring by ``d``: no event on the exact path, and the free closed form.
+``x = x_w`` of a contact spring by ``d``: no event on the exact path, and the free closed form.  The
+same orbit reaching ``d`` above the wall: the free and the contact closed forms joined where each
+reaches ``x_w`` (brentq), and the contact pair logged at every depth the indicator resolves.
+
+``corner``: constant fields in the four quadrants of ``x = 0`` and ``y = 0``; a straight motion passes
+the corner at a distance ``d`` (or through it), and crosses the two surfaces in the order and at the
+times of the closed form.
 
 Tolerances: the exact path is exact to rounding, so the closed form is met to ``1e-9`` (the
 closed form's own ``expm`` of a matrix of norm ~2 over ~1.4 time units is exact to ~1e-14 and the
@@ -246,3 +252,126 @@ def test_narrow_stick_band_keeps_its_events():
     assert len(wide.events) == 31
     # the two models differ by eta in the band's edges: event times and states by a few eta
     assert np.abs(narrow.x1 - wide.x1).max() < 1e-9
+
+
+def _wall_pieces(t_touch: float, depth: float):
+    """The free and the contact closed forms of the wall oscillator, from the free state ``x_w + depth``
+    with ``v = 0`` at ``t_touch`` (a maximum of the free motion)."""
+    def augmented(k_c: float) -> np.ndarray:
+        M = np.zeros((5, 5))
+        M[0, 1], M[1, 0], M[1, 1], M[1, 2], M[1, 4], M[2, 3], M[3, 2] = 1.0, -1.0 - k_c, -2 * ZETA, A, k_c, -W, W
+        return M
+
+    free_M, contact_M = augmented(0.0), augmented(10.0)
+
+    def flow(M, t_a, x_a, t_b):
+        return (expm(M * (t_b - t_a)) @ [*x_a, np.cos(W * t_a), np.sin(W * t_a), 1.0])[:2]
+
+    return free_M, contact_M, flow
+
+
+@given(t_touch=st.floats(0.0, 2 * np.pi / W), depth=DEPTHS, rtol=RTOLS, exact=st.booleans())
+def test_wall_touched_by_a_hair(t_touch, depth, rtol, exact):
+    """The orbit whose free motion would reach ``depth`` above the wall: it enters the contact spring
+    where the free closed form reaches ``x_w`` (brentq), and leaves it where the contact closed form
+    returns there.  The exact path logs that pair at every depth it can resolve (``1e-12`` and deeper,
+    at any tolerance: a contact within the indicator's rounding, ``~4e-15``, may be logged or not), the
+    DOP853 path wherever the depth exceeds its tolerance; the end state is the closed form's."""
+    flow = wall_flow()
+    x_touch = np.array([1.0 + depth, 0.0])
+    assume(-x_touch[0] + A * np.cos(W * t_touch) < -0.05)
+    free_M, contact_M, piece = _wall_pieces(t_touch, depth)
+    tau = 0.6
+    xs = [piece(free_M, t_touch, x_touch, t)[0] for t in np.linspace(t_touch - tau, t_touch + tau, 201)]
+    assume(xs[0] < 1.0 - 1e-3 and max(xs[:100]) < 1.0 + depth and max(xs[101:]) < 1.0 + depth)
+    # the way in: the free motion's rise through x_w, bracketed by the last sample below the wall
+    below = max(i for i in range(101) if xs[i] < 1.0)
+    t_lo = t_touch - tau + below * (2 * tau / 200)
+    t_in = brentq(lambda t: piece(free_M, t_touch, x_touch, t)[0] - 1.0, t_lo, t_touch, xtol=1e-16, rtol=1e-15)
+    x_in = piece(free_M, t_touch, x_touch, t_in)
+    # the way out: the contact motion, which turns back sooner than the free one, falls through x_w
+    # within twice the free motion's time above it
+    span = max(t_touch - t_in, 1e-9)
+    t_hi = t_in + 2 * span
+    while piece(contact_M, t_in, x_in, t_hi)[0] >= 1.0:
+        t_hi = t_in + 2 * (t_hi - t_in)
+    t_out = brentq(lambda t: piece(contact_M, t_in, x_in, t)[0] - 1.0, t_in + span / 2, t_hi, xtol=1e-16, rtol=1e-15) \
+        if piece(contact_M, t_in, x_in, t_in + span / 2)[0] > 1.0 else t_in
+    x_out = piece(contact_M, t_in, x_in, t_out)
+    reference = piece(free_M, t_out, x_out, t_touch + tau)
+    traj = flow.run(piece(free_M, t_touch, x_touch, t_touch - tau), t_touch - tau, t_touch + tau, flow.parameters(),
+                    mode0="free", tolerances=tolerances(rtol, exact))
+    modes = [(e.mode_from, e.mode_to) for e in traj.events]
+    assert modes in ([], [("free", "contact"), ("contact", "free")])
+    assert traj.mode1 == "free"
+    if exact:
+        if depth >= 1e-12:
+            assert modes, "a contact 1e-12 deep or deeper is missed"
+        assert np.abs(traj.x1 - reference).max() < 1e-9
+    else:
+        if depth >= 10 * rtol:
+            assert modes
+        assert np.abs(traj.x1 - reference).max() < 100 * rtol
+    if modes and depth >= 1e-8:
+        # a state error e moves a crossing of x = x_w, passed at speed |v|, by e / |v|
+        err = (1e-12 if exact else 10 * rtol) / abs(x_in[1])
+        assert traj.events[0].t == pytest.approx(t_in, abs=err)
+        assert traj.events[1].t == pytest.approx(t_out, abs=err)
+
+
+QUADRANTS = {"mm": ("x < 0", "y < 0"), "pm": ("x > 0", "y < 0"), "mp": ("x < 0", "y > 0"), "pp": ("x > 0", "y > 0")}
+
+
+@functools.cache
+def corner_flow() -> Flow:
+    """Constant fields ``(ax_q, by_q)`` in the four quadrants ``q`` of ``x = 0`` and ``y = 0``: the corner
+    of two surfaces, every motion a straight line."""
+    params = {f"{c}_{q}": 1.0 for q in QUADRANTS for c in ("ax", "by")}
+    transitions = []
+    for q in QUADRANTS:
+        flip_x = ("p" if q[0] == "m" else "m") + q[1]
+        flip_y = q[0] + ("p" if q[1] == "m" else "m")
+        transitions += [Transition(q, "sx", Crossing.RISING if q[0] == "m" else Crossing.FALLING, flip_x),
+                        Transition(q, "sy", Crossing.RISING if q[1] == "m" else Crossing.FALLING, flip_y)]
+    return Flow(PiecewiseSystem(
+        name="test_corner", states=["x", "y"], parameters=params,
+        modes=[Mode(q, [f"ax_{q}", f"by_{q}"], domain=list(QUADRANTS[q])) for q in QUADRANTS],
+        surfaces={"sx": "x", "sy": "y"}, transitions=transitions))
+
+
+@given(fields=st.lists(st.floats(0.5, 2.0), min_size=8, max_size=8),
+       d=st.one_of(st.just(0.0), DEPTHS, DEPTHS.map(lambda v: -v)), rtol=RTOLS, exact=st.booleans())
+def test_corner_of_two_surfaces(fields, d, rtol, exact):
+    """A straight motion from quadrant ``mm`` that meets ``x = 0`` where ``y = d``: for ``d < 0`` it crosses
+    ``x = 0`` and then ``y = 0`` (through ``pm``), for ``d > 0`` the other way round (through ``mp``), at
+    the closed-form times; through the corner itself (``d = 0``) in either order, at one instant.  The
+    end state is the closed form's in every case (the two orders differ by ``O(|d|)``)."""
+    flow = corner_flow()
+    names = [f"{c}_{q}" for q in QUADRANTS for c in ("ax", "by")]
+    values = dict(zip(names, fields))
+    p = flow.parameters(values)
+    ax, by = (lambda q: values[f"ax_{q}"]), (lambda q: values[f"by_{q}"])
+    t_x = 1.0 / ax("mm")  # x reaches 0 from x = -1
+    x0 = np.array([-1.0, d - by("mm") * t_x])
+    if d <= 0.0:  # through pm: x = 0 at t_x, then y = 0
+        t1, t2, first = t_x, t_x - d / by("pm"), ("mm", "pm")
+        corner = np.array([ax("pm") * (t2 - t1), 0.0])
+    else:  # through mp: y = 0 first, then x = 0
+        t1 = t_x - d / by("mm")
+        t2, first = t1 + ax("mm") * (t_x - t1) / ax("mp"), ("mm", "mp")
+        corner = np.array([0.0, by("mp") * (t2 - t1)])
+    t_end = t_x + 1.0
+    reference = corner + (t_end - t2) * np.array([ax("pp"), by("pp")])
+    traj = flow.run(x0, 0.0, t_end, p, mode0="mm", tolerances=tolerances(rtol, exact))
+    modes = [(e.mode_from, e.mode_to) for e in traj.events]
+    assert len(modes) == 2 and modes[0][0] == "mm" and modes[0][1] == modes[1][0] and modes[1][1] == "pp", modes
+    assert traj.mode1 == "pp"
+    # straight lines: both paths are exact, up to the crossings' location: a crossing is located to the
+    # indicator's rounding (16 eps times its terms, |x| <= 2: 7e-15) over the speed (>= 0.5), 1.4e-14
+    # in time, which moves the end state by at most that times the fields' difference (<= 1.5)
+    assert np.abs(traj.x1 - reference).max() < 1e-13
+    if abs(d) >= 1e-12:  # resolved: the order is the closed form's, at its times
+        assert modes[0] == first
+        assert [e.t for e in traj.events] == pytest.approx([t1, t2], abs=2e-14)
+    else:
+        assert traj.events[1].t - traj.events[0].t == pytest.approx(t2 - t1, abs=2e-14)

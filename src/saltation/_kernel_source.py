@@ -1633,6 +1633,33 @@ def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, x
     return best_s, best_kind, best_idx, best_hi, have_dense
 
 
+@njit(cache=True)  # a call per watched surface and step (its 33 arguments are too many to inline)
+def _surface_step(model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, gtmp, gptmp, hx,
+                  hp, direction, fires, surf_sign, surf_old, surf_res, surf_new, slope_old, slope_new, no_dip, have_dense):
+    """Surface ``s`` over the accepted step from ``(t, y)`` to ``(t_new, ynew)``, of a mode or of a sliding
+    motion: its value and slope at the step's end (to ``surf_new``, ``slope_new``), and, where a
+    transition may fire on it (a sign change towards a side some transition crosses to, or a dip
+    either way that the step's own solution has not refuted), its crossings (``_surface_crossings``).
+    Returns ``(whether it has crossings to match, s1, s2, s_lo, s_dip, known, have_dense)``: the
+    caller matches them with the transitions of its mode (or of the sliding motion's two modes)."""
+    n = N_STATE or xtmp.shape[0]
+    v = model[INDICATOR](s, t_new, ynew[:n], p)
+    surf_new[s] = v
+    sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
+    slope_new[s] = sl
+    sg = surf_sign[s]
+    to_other = (fires[s] & (1 if sg > 0.0 else 2)) != 0  # a transition crosses to side -sg
+    to_own = (fires[s] & (2 if sg > 0.0 else 1)) != 0
+    dip = (to_other or to_own) and not no_dip[s] and sg * slope_old[s] < 0.0 and sg * sl > 0.0
+    if not (to_other and sg * v <= 0.0) and not dip:
+        return False, 2.0, 2.0, 0.0, 1.0, False, have_dense
+    if not have_dense:
+        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+    s1, s2, s_lo, s_dip, known = _surface_crossings(model, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, exact, TC,
+                                                    surf_old[s], surf_res[s], slope_old[s], v, sl, dip)
+    return True, s1, s2, s_lo, s_dip, known, True
+
+
 @njit(cache=True)  # a call, not inlined: a step that does not slide never comes here
 def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp,
                     gptmp, hx, hp, hs, hsp, xside, direction, tr_table, watched, fires, surf_sign, surf_old, surf_res,
@@ -1655,21 +1682,12 @@ def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp,
     for s in range(watched.shape[0]):
         if not watched[s]:
             continue
-        v = model[INDICATOR](s, t_new, ynew[:n], p)
-        surf_new[s] = v
-        sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
-        slope_new[s] = sl
-        sg = surf_sign[s]
-        to_other = (fires[s] & (1 if sg > 0.0 else 2)) != 0  # a transition of either mode crosses to -sg
-        to_own = (fires[s] & (2 if sg > 0.0 else 1)) != 0
-        dip = (to_other or to_own) and not no_dip[s] and sg * slope_old[s] < 0.0 and sg * sl > 0.0
-        if not (to_other and sg * v <= 0.0) and not dip:
+        crossing, s1, s2, s_lo, s_dip, known, have_dense = _surface_step(
+            model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, gtmp, gptmp, hx, hp,
+            direction, fires, surf_sign, surf_old, surf_res, surf_new, slope_old, slope_new, no_dip, have_dense)
+        if not crossing:
             continue
-        if not have_dense:
-            _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-            have_dense = True
-        s1, s2, s_lo, s_dip, known = _surface_crossings(model, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, exact, TC,
-                                                 surf_old[s], surf_res[s], slope_old[s], v, sl, dip)
+        sg = surf_sign[s]
         for which in range(2):
             sr = s1 if which == 0 else s2
             if sr >= best_s:
@@ -1988,21 +2006,13 @@ def _integrate(
                 for s in range(n_surfaces):
                     if not watched[s]:
                         continue
-                    v = model[INDICATOR](s, t_new, ynew[:n], p)
-                    surf_new[s] = v
-                    sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t_new, ynew[:n], K[12, :n], p, hx, hp, gtmp, gptmp)
-                    slope_new[s] = sl
-                    sg = surf_sign[s]
-                    to_other = (fires[s] & (1 if sg > 0.0 else 2)) != 0  # a transition crosses to side -sg
-                    to_own = (fires[s] & (2 if sg > 0.0 else 1)) != 0
-                    dip = (to_other or to_own) and not no_dip[s] and sg * slope_old[s] < 0.0 and sg * sl > 0.0
-                    if not (to_other and sg * v <= 0.0) and not dip:
+                    crossing, s1, s2, s_lo, s_dip, known, have_dense = _surface_step(
+                        model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, gtmp, gptmp,
+                        hx, hp, direction, fires, surf_sign, surf_old, surf_res, surf_new, slope_old, slope_new, no_dip,
+                        have_dense)
+                    if not crossing:
                         continue
-                    if not have_dense:
-                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                        have_dense = True
-                    s1, s2, s_lo, s_dip, known = _surface_crossings(model, s, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, exact,
-                                                             TC, surf_old[s], surf_res[s], slope_old[s], v, sl, dip)
+                    sg = surf_sign[s]
                     for which in range(2):
                         # the way in, then (where no transition fires there) the way back of a dip
                         sr = s1 if which == 0 else s2

@@ -507,6 +507,17 @@ class ShootingProblem:
                     )
                 traj = self.flow.run(traj.x0, traj.t0, traj.t1, p, mode0=first.mode_to, variational=True,
                                      sensitivity=sensitivity, tolerances=self.tolerances)  # then as below
+            elif (len(ev_t) >= 3 and ev_int[0, 0] == EventKind.SLIDING_START and ev_int[1, 0] == EventKind.SLIDING_END
+                  and ev_int[-1, 0] == EventKind.SLIDING_END and ev_int[1, 4] == ev_int[-1, 4]
+                  and abs(ev_t[0] - traj.t0) <= delta and abs(ev_t[1] - traj.t0) <= delta
+                  and abs(traj.t1 - ev_t[-1]) <= delta):
+                # a sliding motion ends at the seam (logged at t0 + T) and is met again at t0, with no length:
+                # a state on the sliding region's edge starts there a sliding motion that ends at once.  That
+                # pair is dropped from the log; its matrices (the projection onto the surface, and the
+                # identity of the exit) stay in the monodromy matrix M, whose range lies in the surface's
+                # tangent space after the sliding motion, so that they leave its multipliers as they are; the
+                # shot starts in the mode that sliding motion leaves into
+                traj = replace(traj, mode0=traj.events[1].mode_to, event_log=tuple(column[2:] for column in traj.event_log))
         if traj.sliding_at_end:
             return self._leave_sliding_at_the_end(traj, p, sensitivity)
         if traj.mode1 == traj.mode0:
