@@ -56,9 +56,9 @@ import scipy_baseline as sb  # noqa: E402
 
 from saltation import Flow, Tolerances  # noqa: E402
 from saltation.models import block_on_belt, chain, trilinear  # noqa: E402
-from saltation.paper import PaperSettings, block_on_belt_diagram, trilinear_diagram  # noqa: E402
-from saltation.shooting import find_periodic_orbit  # noqa: E402
-from saltation.sweeps import sweep  # noqa: E402
+from saltation.apps.paper import PaperSettings, block_on_belt_diagram, trilinear_diagram  # noqa: E402
+from saltation.orbits.shooting import find_periodic_orbit  # noqa: E402
+from saltation.apps.sweeps import sweep  # noqa: E402
 
 TARGETS = {
     "orbit_ms": 0.3,
@@ -321,12 +321,12 @@ def bench_loci(quick: bool) -> dict:
     """Locating special points (in period maps: the time of one located point over that of one period
     map with its monodromy) and two-parameter curves (the trilinear corner and fold curves in (omega, f0),
     scaled to 200 points)."""
-    from saltation.continuation import ContinuationSettings, continue_branch
-    from saltation.grazing import locate_grazing
-    from saltation.loci import follow_locus
+    from saltation.special_points.continuation import ContinuationSettings, continue_branch
+    from saltation.special_points.grazing import locate_grazing
+    from saltation.special_points.loci import follow_locus
     from saltation.models import impact_oscillator
-    from saltation.paper import linear_response_state
-    from saltation.shooting import ShootingProblem
+    from saltation.apps.paper import linear_response_state
+    from saltation.orbits.shooting import ShootingProblem
 
     flow = Flow(trilinear())
     p = flow.parameters({"omega": 1.0})
@@ -358,7 +358,7 @@ def _sliding_locations(quick: bool) -> dict:
     """The friction oscillator's crossing- and adding-sliding, located from a nearby orbit, in period maps of
     that model (with monodromy and a parameter sensitivity)."""
     from saltation.models import friction_oscillator
-    from saltation.sliding import locate_adding_sliding, locate_tangent_arrival, sliding_change
+    from saltation.special_points.sliding import locate_adding_sliding, locate_tangent_arrival, sliding_change
 
     out = {}
     for name, param, value, near, other in (("crossing_sliding", "v_b", 0.9, 0.91, {"F": 0.5}),

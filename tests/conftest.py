@@ -83,9 +83,9 @@ def filippov_system() -> PiecewiseSystem:
 def _models_compiled_in_parallel() -> None:
     """On an empty kernel cache, compile the models most tests share at once, one process each, instead
     of one after another as the tests first use them (models already cached are skipped)."""
-    from saltation.precompile import compile_in_parallel
+    from saltation.engine.precompile import compile_in_parallel
     from saltation.models import bouncing_ball, chain, friction_oscillator, impact_oscillator
-    from saltation.paper import smoothed_block_on_belt
+    from saltation.apps.paper import smoothed_block_on_belt
 
     compile_in_parallel(
         [trilinear(), block_on_belt(), oscillator_system(), filippov_system(), chain(1), chain(2), impact_oscillator(),
@@ -130,7 +130,7 @@ def central_difference_jacobian(fun, x0, h):
 @pytest.fixture(scope="session")
 def contact_orbit(trilinear_flow):
     """The trilinear orbit at omega = 1.0: contact with both supports, four events per period."""
-    from saltation.shooting import find_periodic_orbit
+    from saltation.orbits.shooting import find_periodic_orbit
 
     p = trilinear_flow.parameters({"omega": 1.0})
     guess = trilinear_flow.run([0.0, 0.0], 0.0, 50 * 2 * np.pi, p).x1  # transient
@@ -139,7 +139,7 @@ def contact_orbit(trilinear_flow):
 
 def stick_slip_orbit(belt_flow, eta=None):
     """The stable stick-slip cycle, from a transient started in the stick band."""
-    from saltation.shooting import find_periodic_orbit
+    from saltation.orbits.shooting import find_periodic_orbit
 
     overrides = {} if eta is None else {"eta": eta}
     p = belt_flow.parameters(overrides)
@@ -149,7 +149,7 @@ def stick_slip_orbit(belt_flow, eta=None):
 
 def unstable_orbit(belt_flow, eta=None):
     """The infinitely unstable cycle, by shooting in backward time."""
-    from saltation.shooting import find_periodic_orbit
+    from saltation.orbits.shooting import find_periodic_orbit
 
     overrides = {} if eta is None else {"eta": eta}
     return find_periodic_orbit(belt_flow, [1.0, -0.95], parameters=overrides, period=6.3, backward=True)

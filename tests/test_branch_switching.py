@@ -13,13 +13,13 @@ import pytest
 from scipy.optimize import brentq, fsolve
 
 from saltation import Flow
-from saltation.branch import SpecialPointKind
-from saltation.branch_switching import follow_period_doubled_branch
-from saltation.continuation import ContinuationSettings, continue_branch
+from saltation.branches.branch import SpecialPointKind
+from saltation.special_points.branch_switching import follow_period_doubled_branch
+from saltation.special_points.continuation import ContinuationSettings, continue_branch
 from saltation.errors import ModelError
 from saltation.models import bouncing_ball
 from saltation.models.bouncing_ball import DEFAULTS
-from saltation.shooting import ShootingProblem
+from saltation.orbits.shooting import ShootingProblem
 
 G, E, A0, W = (DEFAULTS[k] for k in ("g", "e", "A", "omega"))
 T = 2 * np.pi / W
@@ -148,7 +148,7 @@ def test_period_doubling_curve_against_closed_form(ball):
     """The period doubling continued in (A, e): Gamma = A w^2 / g at the doubling is
     sqrt((pi (1 - e) / (1 + e))^2 + (2 (1 + e^2) / (1 + e)^2)^2) (Holmes 1982; from the closed-form
     impact map's trace, tr J = -(1 + det J), det J = e^2)."""
-    from saltation.loci import follow_locus
+    from saltation.special_points.loci import follow_locus
 
     _, problem, branch = ball
     (pd,) = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.PERIOD_DOUBLING]

@@ -8,7 +8,7 @@ import pytest
 from conftest import TIGHT, central_difference_jacobian
 from saltation import Flow
 from saltation.models import chain
-from saltation.shooting import find_periodic_orbit
+from saltation.orbits.shooting import find_periodic_orbit
 
 
 @pytest.fixture(scope="module")

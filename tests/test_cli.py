@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from saltation import cli
+from saltation.apps import cli
 from saltation.errors import ConvergenceError
 from saltation.models import trilinear
 
@@ -200,12 +200,12 @@ def test_failed_computation_is_one_line_exit_1(capsys, compiled):
 
 
 def test_newton_failure_is_one_line_exit_1(capsys, compiled, monkeypatch):
-    import saltation.shooting
+    import saltation.orbits.shooting
 
     def fail(*args, **kwargs):
         raise ConvergenceError("shooting (forward time) for 'trilinear' did not converge in 30 iterations", [1.0, 2.0])
 
-    monkeypatch.setattr(saltation.shooting, "find_periodic_orbit", fail)
+    monkeypatch.setattr(saltation.orbits.shooting, "find_periodic_orbit", fail)
     code, out, err = _run(capsys, "orbit", "trilinear", "--x0", "0.5,0.5", "--json")
     assert code == 1 and out == ""
     lines = err.strip().splitlines()
@@ -252,7 +252,7 @@ def test_registry_and_helpers():
 # ---------------------------------------------------------------------------------------------
 
 def test_continue_writes_branch_that_loads_back(tmp_path, capsys):
-    from saltation import io
+    from saltation.output import io
 
     status = cli.main([
         "continue", "trilinear", "--param", "omega", "--from", "0.6", "--to", "0.8",
@@ -320,7 +320,7 @@ def test_paper_end_to_end(tmp_path, capsys):
                  "fig7_block_on_belt_diagram"):
         assert (tmp_path / f"{stem}.png").stat().st_size > 0
         assert (tmp_path / f"{stem}.pdf").stat().st_size > 0
-    from saltation import io
+    from saltation.output import io
 
     branch = io.load_branch_json(tmp_path / "trilinear_branch.json")
     assert len(branch) > 20
@@ -328,7 +328,7 @@ def test_paper_end_to_end(tmp_path, capsys):
 
 
 def test_sweep_end_to_end(tmp_path, capsys):
-    from saltation.sweeps import SweepResult
+    from saltation.apps.sweeps import SweepResult
 
     status = cli.main([
         "sweep", "trilinear", "--param", "omega", "--from", "0.6", "--to", "0.7", "--num", "3",
@@ -348,7 +348,7 @@ def test_sweep_map_on_a_dask_scheduler_equals_the_local_map(tmp_path, capsys):
     """--param2 ... gives the period map; --scheduler runs it on a Dask cluster, with the same cells."""
     import distributed
 
-    from saltation.sweeps import PeriodMap
+    from saltation.apps.sweeps import PeriodMap
 
     args = ["sweep", "bouncing_ball", "--param", "A", "--from", "0.33", "--to", "0.39", "--num", "3",
             "--param2", "e", "--from2", "0.45", "--to2", "0.55", "--num2", "2", "--max-period", "4",

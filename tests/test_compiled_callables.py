@@ -9,10 +9,10 @@ import pytest
 from numba import njit
 
 from saltation import Crossing, Flow, Transition
-from saltation.compiled import CompiledSystem
+from saltation.engine.compiled import CompiledSystem
 from saltation.errors import ModelError
 from saltation.models import trilinear
-from saltation.shooting import ShootingProblem, find_periodic_orbit
+from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
 
 # parameters: m c k x_c k_f c_f f0 omega; modes: 0 contact_1, 1 contact_2, 2 free
 # surfaces: 0 h1a = x - x_c, 1 h1b = k_f (x - x_c) + c_f v, 2 h2a = x + x_c, 3 h2b = k_f (x + x_c) + c_f v

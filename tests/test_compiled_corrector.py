@@ -13,8 +13,8 @@ import pytest
 
 from conftest import TIGHT, central_difference_jacobian
 from saltation import ConvergenceError, InitialModeError
-from saltation.continuation import ContinuationSettings, Corrector
-from saltation.shooting import ShootingProblem
+from saltation.special_points.continuation import ContinuationSettings, Corrector
+from saltation.orbits.shooting import ShootingProblem
 
 SETTINGS = ContinuationSettings()
 
@@ -157,7 +157,7 @@ def test_singular_bordered_matrix_is_left_to_the_python_iteration(trilinear_flow
     """A zero pseudo-arclength normal makes the bordered matrix singular: the kernel's solve reports it
     (no step is taken), and the shooting problem's compiled corrector declines (returns None), so the
     Python iteration explains it."""
-    from saltation._contract import SHOOT_SINGULAR
+    from saltation.engine._contract import SHOOT_SINGULAR
 
     p = trilinear_flow.parameters({"omega": 1.0})
     lam = trilinear_flow.system.parameter_index("omega")

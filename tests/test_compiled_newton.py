@@ -1,6 +1,6 @@
 """Shooting for forced systems iterates Newton in the compiled kernel (Flow.compiled_newton).
 
-Reference: the same damped Newton iteration in Python (saltation.shooting.newton),
+Reference: the same damped Newton iteration in Python (saltation.orbits.shooting.newton),
 which the solver falls back to whenever the compiled iteration fails.
 """
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from saltation import ConvergenceError
-from saltation.shooting import ShootingProblem, find_periodic_orbit
+from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
 
 
 @pytest.fixture

@@ -9,14 +9,14 @@ from scipy.linalg import expm
 from scipy.optimize import brentq, fsolve
 
 from saltation import Flow
-from saltation.bifurcations import classify_nonsmooth
-from saltation.branch import SpecialPointKind
-from saltation.continuation import Continuation, ContinuationSettings, continue_branch
+from saltation.special_points.detection import classify_nonsmooth
+from saltation.branches.branch import SpecialPointKind
+from saltation.special_points.continuation import Continuation, ContinuationSettings, continue_branch
 from saltation.models import block_on_belt, trilinear
 from saltation.models.block_on_belt import DEFAULTS as BELT
 from saltation.models.trilinear import DEFAULTS as TRI
-from saltation.paper import PaperSettings, block_on_belt_diagram, linear_response_state
-from saltation.shooting import EquilibriumProblem, ShootingProblem
+from saltation.apps.paper import PaperSettings, block_on_belt_diagram, linear_response_state
+from saltation.orbits.shooting import EquilibriumProblem, ShootingProblem
 
 M, C, K, F0, XC, CF = (TRI[k] for k in ("m", "c", "k", "f0", "x_c", "c_f"))
 A_FREE = np.array([[0.0, 1.0], [-K / M, -C / M]])
@@ -366,7 +366,7 @@ def test_stick_slip_fold_stable_side_limit(belt_diagram, belt_flow):
     into the stick band turns tangent: its saltation matrix is O(1/sqrt(d))), so its limit at the fold is
     unbounded. Checked on orbits at d = 1e-5 and 1e-4 with the period map's Jacobian by central
     differences (no saltation matrices)."""
-    from saltation.shooting import find_periodic_orbit
+    from saltation.orbits.shooting import find_periodic_orbit
 
     (fold,) = [sp for sp in belt_diagram.special_points if sp.kind is SpecialPointKind.DISCONTINUOUS_FOLD]
     assert fold.limits.startswith("extrapolated (unbounded")
@@ -397,8 +397,8 @@ def test_continue_orbit_is_the_explicit_path(trilinear_flow):
     from dataclasses import replace
 
     from saltation import ContinuationSettings, continue_orbit, find_periodic_orbit
-    from saltation.continuation import continue_branch
-    from saltation.paper import linear_response_state
+    from saltation.special_points.continuation import continue_branch
+    from saltation.apps.paper import linear_response_state
     from saltation.models.trilinear import DEFAULTS
 
     x0 = linear_response_state(dict(DEFAULTS, omega=0.6))

@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from saltation.integrate import Tolerances
+from saltation.engine.flow import Tolerances
 from saltation.models.trilinear import DEFAULTS as TRI
-from saltation.paper import linear_response_state
+from saltation.apps.paper import linear_response_state
 
 M, C, K, F0, XC, CF = (TRI[k] for k in ("m", "c", "k", "f0", "x_c", "c_f"))
 

@@ -7,7 +7,7 @@ import pytest
 
 from saltation import Flow
 from saltation.models import trilinear
-from saltation.paper import linear_response_state
+from saltation.apps.paper import linear_response_state
 
 
 @pytest.mark.parametrize("backward", [False, True])

@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 
 from saltation import Crossing, Flow, Mode, PiecewiseSystem, Tolerances, Transition
-from saltation.codegen import (
+from saltation.engine.codegen import (
     SPECIALIZED_DIMENSIONS,
     engine_dimension,
     engine_source,
     model_source,
 )
 from saltation.models import block_on_belt, trilinear
-from saltation.paper import block_on_belt_diagram, trilinear_diagram
+from saltation.apps.paper import block_on_belt_diagram, trilinear_diagram
 
 REFERENCE = json.loads((Path(__file__).parent / "data" / "engine_reference.json").read_text())
 

@@ -17,7 +17,7 @@ from saltation import (
     Tolerances,
     Transition,
 )
-from saltation.shooting import find_periodic_orbit
+from saltation.orbits.shooting import find_periodic_orbit
 
 RISING, FALLING = Crossing.RISING, Crossing.FALLING
 

@@ -156,7 +156,7 @@ def test_indicator_rates_against_central_differences():
     every step: against central differences of ``h`` along ``(1, f)`` in ``(t, x)``, for a moving
     surface (``h_t != 0``) and a state-only one. The model functions run as plain Python here."""
     from saltation import Crossing, Mode, PiecewiseSystem, Transition
-    from saltation.codegen import model_source
+    from saltation.engine.codegen import model_source
 
     system = PiecewiseSystem(
         name="test_moving_wall",
@@ -188,8 +188,8 @@ def test_transitions_that_differ_only_in_their_guard_have_their_own_identity():
     source, surface, direction and target (the same label) but other guards and resets. Detectors compare
     event sequences by identity, so an orbit that switches from one to the other is seen to change."""
     from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition
-    from saltation.corrector import canonical_events
-    from saltation.shooting import event_ids, event_labels
+    from saltation.branches.corrector import canonical_events
+    from saltation.orbits.shooting import event_ids, event_labels
 
     system = PiecewiseSystem(
         name="two_restitutions",

@@ -1,7 +1,7 @@
 """Exact flows of affine modes: detection, and agreement with the general integrator.
 
 Every mode of both paper models is affine, so by default their integration
-steps with the exact flow (saltation.affine).  References here: the DOP853 path
+steps with the exact flow (saltation.engine.affine).  References here: the DOP853 path
 of the same kernel at tight tolerances (``exact_affine=False``), closed-form
 solutions of linear oscillators, and central differences of the flow.
 """
@@ -13,10 +13,10 @@ import pytest
 import scipy.linalg
 import sympy as sp
 
-from saltation._contract import AFFINE_PARTS, AFFINE_PARTS_DP
+from saltation.engine._contract import AFFINE_PARTS, AFFINE_PARTS_DP
 from saltation import Tolerances
-from saltation.affine import affine_form
-from saltation.model import TIME
+from saltation.engine.affine import affine_form
+from saltation.model.system import TIME
 from saltation.models import block_on_belt, trilinear
 
 from conftest import TIGHT, central_difference_jacobian
@@ -222,7 +222,7 @@ def test_extrema_agree_forward_and_backward(trilinear_flow, contact_orbit, exact
 def test_phase_shifted_forcing_with_sliding(filippov_flow, name):
     """Forcing q sin(omega t + phi) in an affine mode, and sliding in between: the exact path's
     state, monodromy and sensitivities to the forcing's phase, frequency and amplitude vs DOP853."""
-    from saltation.affine import affine_form as form_of
+    from saltation.engine.affine import affine_form as form_of
 
     system = filippov_flow.system
     below = form_of(system.fields[system.mode_index("below")], system.x, TIME)

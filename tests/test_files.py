@@ -27,8 +27,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from saltation import cli, io, plotting
-from saltation.branch import (
+from saltation.apps import cli
+from saltation.output import io, plotting
+from saltation.branches.branch import (
     Branch,
     BranchKind,
     BranchPoint,
@@ -37,8 +38,8 @@ from saltation.branch import (
     StopReason,
 )
 from saltation.errors import SaltationError
-from saltation.io import FileFormatError
-from saltation.sweeps import PeriodMap, SweepResult, SweepStart
+from saltation.output.io import FileFormatError
+from saltation.apps.sweeps import PeriodMap, SweepResult, SweepStart
 
 INF = complex(math.inf, 0.0)
 
@@ -332,7 +333,7 @@ def test_round_trip_of_every_file_kind(tmp_path, monkeypatch):
     assert leftovers(tmp_path) == []
 
 
-# files as the previous version wrote them (saltation.io before the side file recorded its number of rows)
+# files as the previous version wrote them (saltation.output.io before the side file recorded its number of rows)
 OLD_CSV = (
     "parameter,period,amplitude,half_peak_to_peak,stable,event_labels,step,iterations,state_0,state_1,mu0_re,mu0_im,"
     "mu0_abs,mu1_re,mu1_im,mu1_abs\r\n"
@@ -340,7 +341,7 @@ OLD_CSV = (
     "-0.25,0.5590169943749475\r\n"
     "0.75,nan,1.5,1.25,false,,0.02,0,0.125,-1.75,inf,0.0,inf,1.0,0.0,1.0\r\n"
 )
-OLD_META = """{"format": "saltation.branch", "version": 1, "model": "trilinear", "parameter_name": "omega",
+OLD_META = """{"format": "saltation.branches.branch", "version": 1, "model": "trilinear", "parameter_name": "omega",
  "kind": "periodic", "backward": true, "autonomous": false, "label": "old branch", "stop_reason": "min_step",
  "stop_reasons": [null], "fixed_parameters": {"omega": 0.5, "f0": 0.2},
  "special_points": [{"kind": "discontinuous_fold", "parameter": 0.625, "bracket": [0.6, 0.65], "accuracy": 0.05,
@@ -495,9 +496,9 @@ BRANCH_EDITS = [
      "expected a 2 x 2 matrix (the state has 2 components), got 3 x 3"),
     (_set("special_points", 1, "crossing_point", [1.0]), "special_points[1].crossing_point", "expected a complex"),
     (_set("special_points", 2, "note", None), "special_points[2].note", "expected a string, got null"),
-    (_set("format", "saltation.diagram"), "format", "expected format 'saltation.branch', found \"saltation.diagram\""),
-    (_del("format"), "format", "missing: not a saltation.branch file"),
-    (_set("version", 2), "version", "unsupported saltation.branch version 2 (this library reads 1)"),
+    (_set("format", "saltation.apps.diagram"), "format", "expected format 'saltation.branches.branch', found \"saltation.apps.diagram\""),
+    (_del("format"), "format", "missing: not a saltation.branches.branch file"),
+    (_set("version", 2), "version", "unsupported saltation.branches.branch version 2 (this library reads 1)"),
 ]
 
 
@@ -544,8 +545,8 @@ def test_hand_edited_diagram_and_records_are_refused_naming_the_field(tmp_path):
     d["branches"] = {}
     path.write_text(json.dumps(d))
     refused(io.load_diagram_json, path, "branches", "expected a list")
-    path.write_text(json.dumps({"format": "saltation.branch", "version": 1}))
-    refused(io.load_diagram_json, path, "format", "expected format 'saltation.diagram'")
+    path.write_text(json.dumps({"format": "saltation.branches.branch", "version": 1}))
+    refused(io.load_diagram_json, path, "format", "expected format 'saltation.apps.diagram'")
 
     (path,) = WRITERS["special_points"](tmp_path)
     records = json.loads(path.read_text())
@@ -720,7 +721,7 @@ COMMANDS = {
 @pytest.fixture
 def no_computation(monkeypatch):
     """Any computation fails the test: a bad --out must be refused before it."""
-    from saltation import paper
+    from saltation.apps import paper
 
     def computed(*args, **kwargs):
         raise AssertionError("computed before checking --out")

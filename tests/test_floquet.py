@@ -17,7 +17,7 @@ import pytest
 from scipy.linalg import expm
 
 from saltation import EventKind
-from saltation.shooting import EquilibriumProblem, find_periodic_orbit
+from saltation.orbits.shooting import EquilibriumProblem, find_periodic_orbit
 
 from conftest import stick_slip_orbit, unstable_orbit
 
@@ -167,7 +167,7 @@ def test_equilibrium_is_not_eq18_as_printed(belt_flow):
 def test_eigenvalues_against_numpy_and_invariants():
     """floquet.eigenvalues calls dgeev directly: the same spectrum as numpy.linalg.eigvals, conjugate
     pairs and real eigenvalues kept exactly, and trace and determinant reproduced."""
-    from saltation.floquet import eigenvalues
+    from saltation.orbits.floquet import eigenvalues
 
     rng = np.random.default_rng(7)
     for n in (1, 2, 3, 6):
@@ -184,7 +184,7 @@ def test_eigenvalues_against_numpy_and_invariants():
 
 
 def test_eigenvalues_of_a_non_finite_matrix_raise():
-    from saltation.floquet import eigenvalues
+    from saltation.orbits.floquet import eigenvalues
 
     with pytest.raises(np.linalg.LinAlgError, match="infs or NaNs"):
         eigenvalues(np.array([[1.0, np.nan], [0.0, 1.0]]))

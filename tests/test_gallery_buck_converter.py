@@ -31,10 +31,10 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 
 from saltation import Flow
-from saltation.branch import SpecialPointKind
-from saltation.continuation import ContinuationSettings, continue_branch
+from saltation.branches.branch import SpecialPointKind
+from saltation.special_points.continuation import ContinuationSettings, continue_branch
 from saltation.models.buck_converter import DEFAULTS, buck_converter
-from saltation.shooting import ShootingProblem, find_periodic_orbit
+from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
 
 R, L, C, V_REF, GAIN, V_L, V_U, T = (DEFAULTS[k] for k in ("R", "L", "C", "V_ref", "a", "V_L", "V_U", "T"))
 A = np.array([[0.0, -T / L], [T / C, -T / (R * C)]])

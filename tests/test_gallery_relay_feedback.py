@@ -28,10 +28,10 @@ from scipy.linalg import expm
 from scipy.optimize import brentq, fsolve
 
 from saltation import Flow, Tolerances
-from saltation.branch import SpecialPointKind
-from saltation.continuation import ContinuationSettings, continue_branch
+from saltation.branches.branch import SpecialPointKind
+from saltation.special_points.continuation import ContinuationSettings, continue_branch
 from saltation.models.relay_feedback import DEFAULTS, relay_feedback
-from saltation.shooting import ShootingProblem, find_periodic_orbit
+from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
 
 ZETA, W, LAM, SIGMA = (DEFAULTS[k] for k in ("zeta", "w", "lam", "sigma"))
 C = np.array([1.0, 0.0, 0.0])

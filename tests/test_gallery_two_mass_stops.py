@@ -52,10 +52,10 @@ from scipy.linalg import expm
 from scipy.optimize import brentq, fsolve
 
 from saltation import Flow
-from saltation.branch import SpecialPointKind
-from saltation.continuation import ContinuationSettings, continue_branch
+from saltation.branches.branch import SpecialPointKind
+from saltation.special_points.continuation import ContinuationSettings, continue_branch
 from saltation.models.two_mass_stops import DEFAULTS, two_mass_stops
-from saltation.shooting import ShootingProblem, find_periodic_orbit
+from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
 
 M1, M2, K1, K2, C1, C2, F_DEF, W, D1, D2, KS1, CS1, KS2, CS2 = (
     DEFAULTS[k] for k in ("m1", "m2", "k1", "k2", "c1", "c2", "F", "omega", "d1", "d2", "k_s1", "c_s1", "k_s2", "c_s2"))

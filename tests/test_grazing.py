@@ -18,13 +18,13 @@ from scipy.linalg import expm
 from scipy.optimize import brentq, fsolve
 
 from saltation import Flow
-from saltation.branch import SpecialPointKind
-from saltation.continuation import ContinuationSettings, continue_branch
+from saltation.branches.branch import SpecialPointKind
+from saltation.special_points.continuation import ContinuationSettings, continue_branch
 from saltation.errors import ModelError
-from saltation.grazing import growth_exponent, locate_grazing
+from saltation.special_points.grazing import growth_exponent, locate_grazing
 from saltation.models import impact_oscillator
 from saltation.models.impact_oscillator import DEFAULTS
-from saltation.shooting import ShootingProblem, find_periodic_orbit
+from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
 
 ZETA, W, R = DEFAULTS["zeta"], DEFAULTS["omega"], DEFAULTS["r"]
 T = 2 * np.pi / W

@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from saltation.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind, StopReason
-from saltation.io import (
+from saltation.branches.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind, StopReason
+from saltation.output.io import (
     csv_metadata_path,
     load_branch_csv,
     load_branch_json,
@@ -239,9 +239,9 @@ def test_diagram_json_round_trip(tmp_path):
 def test_load_rejects_other_formats(tmp_path):
     path = tmp_path / "x.json"
     path.write_text(json.dumps({"format": "something else", "version": 1}))
-    with pytest.raises(ValueError, match="saltation.branch"):
+    with pytest.raises(ValueError, match="saltation.branches.branch"):
         load_branch_json(path)
-    path.write_text(json.dumps({"format": "saltation.branch", "version": 99}))
+    path.write_text(json.dumps({"format": "saltation.branches.branch", "version": 99}))
     with pytest.raises(ValueError, match="version 99"):
         load_branch_json(path)
 

@@ -1,5 +1,5 @@
 """The kernel cache: what a compiled module is keyed on, and what happens when the cache is damaged or
-cannot be written (see the "Kernel cache" section of the README and :mod:`saltation.codegen`).
+cannot be written (see the "Kernel cache" section of the README and :mod:`saltation.engine.codegen`).
 
 Every test works in a fresh cache folder of its own (``SALTATION_CACHE_DIR`` in ``tmp_path``); the
 2-state engine stays loaded in the process (or is copied, for the tests that start a new process), so
@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 
 from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition, codegen
-from saltation.codegen import KernelCacheError
-from saltation.shooting import find_periodic_orbit
+from saltation.engine.codegen import KernelCacheError
+from saltation.orbits.shooting import find_periodic_orbit
 
 ZETA, OMEGA = 0.05, 1.3
 
@@ -190,7 +190,7 @@ def test_the_module_name_changes_with_everything_compiled():
         codegen._versions = versions
     # the same name in a fresh interpreter, whatever its hash seed
     script = (
-        f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); from saltation import codegen; "
+        f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); from saltation.engine import codegen; "
         "from test_kernel_cache import forced_oscillator; print(codegen._model_module(forced_oscillator())[0])"
     )
     for seed in ("0", "12345"):

@@ -1,25 +1,81 @@
-"""The package's layers: no import cycles, and each layer depends only on the layers below it."""
+"""The package's layers: one folder each, no import cycles, each depending only on the layers before it.
+
+The order is model -> engine -> orbits -> branches -> special_points -> output -> apps; ``errors`` and
+``summary`` import nothing of the package, and ``models`` (the shipped models) only the model layer.
+Imports are read from the source (``ast``), at any depth of a file, so a function-level import
+counts as much as one at the top.
+"""
 
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
+import warnings
 from pathlib import Path
+
+import pytest
 
 import saltation
 
 ROOT = Path(saltation.__file__).parent
+LAYERS = ["model", "engine", "orbits", "branches", "special_points", "output", "apps"]
+FOUNDATION = {"errors", "summary", "_moved"}  # import nothing of the package's layers
+
+
+def _place(module: str) -> str:
+    """``saltation.engine.flow`` -> ``engine``; ``saltation.errors`` -> ``errors``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
 
 
 def _imports() -> dict[str, set[str]]:
-    """Module -> the package modules it imports (relative imports, at any depth of the file)."""
+    """Module (dotted, below ``saltation``) -> the package modules it imports."""
     deps: dict[str, set[str]] = {}
-    for f in ROOT.glob("*.py"):
-        names = set()
+    for f in ROOT.rglob("*.py"):
+        name = ".".join(("saltation", *f.relative_to(ROOT).with_suffix("").parts)).removesuffix(".__init__")
+        found = set()
         for node in ast.walk(ast.parse(f.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.level == 1:
-                names.update([node.module.split(".")[0]] if node.module else [a.name for a in node.names])
-        deps[f.stem] = names
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("saltation"):
+                found.add(node.module)
+            elif isinstance(node, ast.Import):
+                found.update(a.name for a in node.names if a.name.startswith("saltation"))
+            elif isinstance(node, ast.ImportFrom) and node.level:
+                found.add(name.rsplit(".", node.level - (f.stem == "__init__"))[0] + (f".{node.module}" if node.module else ""))
+        deps[name] = found
     return deps
+
+
+def test_every_module_lives_in_a_layer_folder():
+    loose = sorted(f.stem for f in ROOT.glob("*.py") if f.stem not in FOUNDATION | {"__init__", "__main__"})
+    assert loose == []
+    assert sorted(p.name for p in ROOT.iterdir() if p.is_dir() and (p / "__init__.py").exists()) == sorted(
+        [*LAYERS, "models"])
+
+
+def test_layers_depend_only_on_layers_before_them():
+    order = {layer: i for i, layer in enumerate(LAYERS)}
+    upward = []
+    for module, deps in _imports().items():
+        here = _place(module)
+        for dep in deps:
+            there = _place(dep)
+            if here in FOUNDATION:
+                if there in order:
+                    upward.append((module, dep))
+            elif here == "models":
+                if there in order and there != "model":
+                    upward.append((module, dep))
+            elif here in order and there in order and order[there] > order[here]:
+                upward.append((module, dep))
+    assert upward == []
+
+
+def test_the_engine_knows_nothing_of_orbits_and_the_continuation_engine_no_detector():
+    deps = _imports()
+    assert all(_place(d) in ("model", "engine", "errors", "summary") for d in deps["saltation.engine.codegen"])
+    assert deps["saltation.engine._contract"] == set()  # copied verbatim into every generated module
+    assert not any(d.startswith("saltation.special_points") for d in deps["saltation.branches.continuation"])
 
 
 def test_no_import_cycles():
@@ -31,26 +87,43 @@ def test_no_import_cycles():
                 return True
         return False
 
-    cycles = [(a, b) for a in sorted(deps) for b in sorted(deps[a]) if b in deps and reaches(b, a, set())]
+    cycles = [(a, b) for a in sorted(deps) for b in sorted(deps[a]) if b in deps and b != a and reaches(b, a, set())]
     assert cycles == []
 
 
-def test_layers_depend_only_on_layers_below():
-    deps = _imports()
-    below_the_flow = {"codegen", "compiled", "model", "affine", "errors", "_contract"}
-    assert deps["codegen"] <= below_the_flow  # code generation knows nothing of integration
-    assert "shooting" not in deps["integrate"] and "continuation" not in deps["integrate"]
-    assert "continuation" not in deps["corrector"] and "continuation" not in deps["bifurcations"]
-    assert deps["_contract"] == set()  # copied verbatim into every generated module
+def test_import_saltation_leaves_matplotlib_out():
+    code = "import sys, saltation; print('matplotlib' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip() == "False"
+
+
+@pytest.mark.parametrize("old, new", [("saltation.integrate", "saltation.engine.flow"),
+                                      ("saltation.shooting", "saltation.orbits.shooting"),
+                                      ("saltation.continuation", "saltation.special_points.continuation"),
+                                      ("saltation.bifurcations", "saltation.special_points.detection")])
+def test_the_flat_layouts_paths_still_import_with_a_warning(old, new):
+    import importlib
+
+    sys.modules.pop(old, None)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        module = importlib.import_module(old)
+    assert module is importlib.import_module(new)
+    assert module.__spec__.name == new
+    assert any(issubclass(w.category, DeprecationWarning) and new in str(w.message) for w in caught)
+
+
+def test_the_old_continuation_path_keeps_its_special_points():
+    """``saltation.continuation.Continuation`` detected special points: at its old path it still does."""
+    from saltation.branches.continuation import Continuation as Engine
+    from saltation.special_points.continuation import Continuation
+    from saltation.special_points.detection import SpecialPointDetector
+
+    assert issubclass(Continuation, Engine)
+    assert Continuation.__init__.__kwdefaults__["detector"] is SpecialPointDetector
+    assert Engine.__init__.__kwdefaults__["detector"] is None
 
 
 def test_no_top_level_name_hides_a_module():
-    """``import saltation.X as m`` must give the module X, not a function exported under the same name."""
-    import importlib
-
-    modules = {f.stem for f in ROOT.glob("*.py") if not f.stem.startswith("_")}
-    hidden = sorted(name for name in saltation.__all__ if name in modules)
+    """``import saltation.X as m`` must give the package X, not a function exported under the same name."""
+    hidden = sorted(name for name in saltation.__all__ if name in [*LAYERS, "models", "errors", "summary"])
     assert hidden == []
-    for name in modules:
-        importlib.import_module(f"saltation.{name}")
-        assert type(getattr(saltation, name)).__name__ == "module", name

@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 
 from saltation import Flow, cli
-from saltation.branch import SpecialPointKind
-from saltation.continuation import ContinuationSettings, continue_branch
-from saltation.integrate import Tolerances
-from saltation.loci import follow_locus
+from saltation.branches.branch import SpecialPointKind
+from saltation.special_points.continuation import ContinuationSettings, continue_branch
+from saltation.engine.flow import Tolerances
+from saltation.special_points.loci import follow_locus
 from saltation.models import impact_oscillator
 from saltation.models.impact_oscillator import DEFAULTS as IMPACT
 from saltation.models.trilinear import DEFAULTS as TRI
-from saltation.paper import linear_response_state
-from saltation.shooting import ShootingProblem
+from saltation.apps.paper import linear_response_state
+from saltation.orbits.shooting import ShootingProblem
 
 M, C, K, XC = (TRI[k] for k in ("m", "c", "k", "x_c"))
 F0_RANGE = (0.05, 0.4)

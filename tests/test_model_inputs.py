@@ -147,7 +147,7 @@ def test_a_definition_sympy_cannot_finish_is_refused_in_bounded_time(monkeypatch
     here a parse that sleeps, so that no runaway thread is left behind in the test process)."""
     import time
 
-    import saltation.model as model
+    import saltation.model.system as model
 
     real = model.sp.sympify
 

@@ -25,9 +25,9 @@ from saltation import (
     Transition,
     find_periodic_orbit,
 )
-from saltation.floquet import autonomous_multipliers
+from saltation.orbits.floquet import autonomous_multipliers
 from saltation.models import block_on_belt, trilinear
-from saltation.shooting import TRIVIAL_MULTIPLIER_ACCURACY, newton
+from saltation.orbits.shooting import TRIVIAL_MULTIPLIER_ACCURACY, newton
 
 
 def vdp_friction() -> PiecewiseSystem:
@@ -186,7 +186,7 @@ def test_backward_multipliers_zero_to_the_monodromy_accuracy_are_infinite():
 
 
 def test_every_fold_of_the_paper_diagram_has_a_multiplier_at_one():
-    from saltation.paper import trilinear_diagram
+    from saltation.apps.paper import trilinear_diagram
 
     for sp in trilinear_diagram().special_points:
         if sp.kind.value == "fold":
@@ -199,7 +199,7 @@ def test_trivial_multiplier_accuracy_is_what_the_issue_promised():
 
 
 def test_a_forced_model_has_no_equilibria():
-    from saltation.shooting import EquilibriumProblem
+    from saltation.orbits.shooting import EquilibriumProblem
 
     with pytest.raises(ModelError, match="forced"):
         EquilibriumProblem(Flow(trilinear()), "free")

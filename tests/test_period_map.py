@@ -14,7 +14,7 @@ import pytest
 from saltation import ModelError
 from saltation.models import bouncing_ball, friction_oscillator
 from saltation.models.bouncing_ball import DEFAULTS
-from saltation.sweeps import PeriodMap, attractor_period, period_map, sweep
+from saltation.apps.sweeps import PeriodMap, attractor_period, period_map, sweep
 
 from test_branch_switching import impact_map  # the closed-form impact map (restitution e an argument)
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from saltation.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind
-from saltation.plotting import (
+from saltation.branches.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind
+from saltation.output.plotting import (
     SPECIAL_POINT_MARKERS,
     CurveStyle,
     PhaseCurve,

@@ -1,4 +1,4 @@
-"""The smoothed models of saltation.regularize, and the paper's smoothing claim."""
+"""The smoothed models of saltation.model.regularize, and the paper's smoothing claim."""
 
 from __future__ import annotations
 
@@ -11,9 +11,9 @@ import sympy as sp
 from saltation import Flow
 from saltation.errors import ModelError
 from saltation.models import block_on_belt, impact_oscillator
-from saltation.paper import PaperSettings, smoothing_study, stable_stick_slip_cycle
-from saltation.regularize import regularize
-from saltation.shooting import find_periodic_orbit
+from saltation.apps.paper import PaperSettings, smoothing_study, stable_stick_slip_cycle
+from saltation.model.regularize import regularize
+from saltation.orbits.shooting import find_periodic_orbit
 
 
 def sigma(c, eps):

@@ -57,7 +57,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from saltation import Crossing, EventKind, Flow, Mode, PiecewiseSystem, SlidingError, Tolerances, Transition
-from saltation.shooting import find_periodic_orbit
+from saltation.orbits.shooting import find_periodic_orbit
 
 from conftest import TIGHT, central_difference_jacobian
 

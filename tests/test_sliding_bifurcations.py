@@ -28,12 +28,12 @@ import pytest
 from scipy.optimize import brentq, fsolve
 
 from saltation import Flow
-from saltation.branch import SpecialPointKind
-from saltation.continuation import ContinuationSettings, continue_branch
-from saltation.loci import follow_locus
+from saltation.branches.branch import SpecialPointKind
+from saltation.special_points.continuation import ContinuationSettings, continue_branch
+from saltation.special_points.loci import follow_locus
 from saltation.models import friction_oscillator
 from saltation.models.friction_oscillator import DEFAULTS
-from saltation.shooting import ShootingProblem
+from saltation.orbits.shooting import ShootingProblem
 
 ZETA, F, AF, W = (DEFAULTS[k] for k in ("zeta", "F", "a", "omega"))
 T = 2 * np.pi / W

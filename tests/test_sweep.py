@@ -1,4 +1,4 @@
-"""Brute-force diagrams (saltation.sweeps) against closed forms and periodic orbits."""
+"""Brute-force diagrams (saltation.apps.sweeps) against closed forms and periodic orbits."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from saltation import ModelError, Tolerances
 from saltation.models import block_on_belt, trilinear
-from saltation.sweeps import SweepResult, sweep
+from saltation.apps.sweeps import SweepResult, sweep
 
 M, C, K, F0 = 1.0, 0.05, 1.0, 0.2  # Appendix A
 
@@ -49,7 +49,7 @@ def test_poincare_points_are_the_harmonic_response(no_contact_sweep):
 
 
 def test_poincare_points_are_the_periodic_orbit(trilinear_flow, no_contact_sweep):
-    from saltation.shooting import find_periodic_orbit
+    from saltation.orbits.shooting import find_periodic_orbit
 
     for i in (0, 4):
         w = NO_CONTACT[i]
@@ -149,7 +149,7 @@ def test_workers_started_by_spawn_load_the_kernels_from_disk(monkeypatch, no_con
     """Where fork is not available, fresh worker processes re-load the compiled kernels from the cache."""
     import multiprocessing
 
-    import saltation.sweeps as sweep_module
+    import saltation.apps.sweeps as sweep_module
 
     monkeypatch.setattr(sweep_module, "_context", lambda: multiprocessing.get_context("spawn"))
     res = sweep(trilinear(), "omega", NO_CONTACT, periods=5, transient=300, x0=harmonic_state(0.6), workers=2)

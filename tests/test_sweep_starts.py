@@ -1,4 +1,4 @@
-"""Where each value of a brute-force sweep starts (saltation.sweeps.SweepStart), against shooting and closed forms.
+"""Where each value of a brute-force sweep starts (saltation.apps.sweeps.SweepStart), against shooting and closed forms.
 
 The block on a belt (Leine & Van Campen, Fig. 7) has a stable stick-slip cycle from small v_dr up to its
 fold at v_dr ~= 1.098 and, beyond it, only the equilibrium x = F_slip / k.  A sweep whose values each start
@@ -16,8 +16,8 @@ from scipy.linalg import expm
 
 from saltation import ModelError
 from saltation.models import SHIPPED, block_on_belt, trilinear
-from saltation.shooting import find_periodic_orbit
-from saltation.sweeps import PeriodMap, SweepResult, SweepStart, period_map, sweep
+from saltation.orbits.shooting import find_periodic_orbit
+from saltation.apps.sweeps import PeriodMap, SweepResult, SweepStart, period_map, sweep
 
 #: Below the fold: the stable stick-slip cycle.  Above it (1.2, 1.6): only the equilibrium.
 BELOW_FOLD = (0.2, 0.45, 0.7, 0.95, 1.05, 1.09)
@@ -192,7 +192,7 @@ def test_bad_starts_are_refused_naming_the_problem():
 def test_command_line_sweep_starts_each_value_from_its_own_start(tmp_path, capsys, belt_flow):
     """``saltation sweep block_on_belt`` by default starts every value from the model's start at that
     value: the stick-slip cycle below the fold (its maxima those of shooting), the equilibrium above."""
-    from saltation import cli
+    from saltation.apps import cli
 
     base = ["sweep", "block_on_belt", "--param", "v_dr", "--from", "0.3", "--to", "1.2", "--num", "4",
             "--periods", "20", "--transient", "100", "--workers", "1"]

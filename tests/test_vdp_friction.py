@@ -40,7 +40,7 @@ from saltation import (
     continue_orbit,
     find_periodic_orbit,
 )
-from saltation.branch import SpecialPointKind, StopReason
+from saltation.branches.branch import SpecialPointKind, StopReason
 
 #: saltation's default integration tolerance per step (``Tolerances().rtol``)
 RTOL = 1e-10

@@ -3,7 +3,7 @@
 Each shipped model of the gallery gets one figure, computed from scratch by
 the library in the working tree (``PYTHONPATH=src``; the repository's ``src``
 is put first on ``sys.path`` in any case) and drawn with
-:mod:`saltation.plotting` on matplotlib ``Figure`` objects (no pyplot state).
+:mod:`saltation.output.plotting` on matplotlib ``Figure`` objects (no pyplot state).
 Nothing is checked in: the PNGs exist only in memory and in the built site.
 
 * ``on_pre_build`` computes the figures, each in its own Python process (two
@@ -71,10 +71,10 @@ def figure_impact_oscillator():
     import numpy as np
 
     from saltation import ContinuationSettings, Flow, ShootingProblem, continue_branch
-    from saltation.loci import follow_locus
+    from saltation.special_points.loci import follow_locus
     from saltation.models import impact_oscillator
     from saltation.models.impact_oscillator import DEFAULTS
-    from saltation.plotting import plot_response
+    from saltation.output.plotting import plot_response
 
     zeta, w = DEFAULTS["zeta"], DEFAULTS["omega"]
     d = (1 - w**2) ** 2 + (2 * zeta * w) ** 2
@@ -103,11 +103,11 @@ def figure_bouncing_ball():
     import numpy as np
 
     from saltation import ContinuationSettings, Flow, ShootingProblem, continue_branch
-    from saltation.branch_switching import follow_period_doubled_branch
-    from saltation.loci import follow_locus
+    from saltation.special_points.branch_switching import follow_period_doubled_branch
+    from saltation.special_points.loci import follow_locus
     from saltation.models import bouncing_ball
     from saltation.models.bouncing_ball import DEFAULTS
-    from saltation.plotting import plot_response
+    from saltation.output.plotting import plot_response
 
     g, e, a0, w = (DEFAULTS[k] for k in ("g", "e", "A", "omega"))
     period = 2 * np.pi / w
@@ -144,7 +144,7 @@ def figure_friction_oscillator():
     from saltation import ContinuationSettings, Flow, ShootingProblem, continue_branch
     from saltation.models import friction_oscillator
     from saltation.models.friction_oscillator import DEFAULTS
-    from saltation.plotting import PhaseCurve, plot_phase_plane, plot_response
+    from saltation.output.plotting import PhaseCurve, plot_phase_plane, plot_response
 
     zeta, friction, a, w = (DEFAULTS[k] for k in ("zeta", "F", "a", "omega"))
     d = (1 - w**2) ** 2 + (2 * zeta * w) ** 2
@@ -180,7 +180,7 @@ def figure_relay_feedback():
 
     from saltation import ContinuationSettings, Flow, ShootingProblem, continue_branch, find_periodic_orbit
     from saltation.models import relay_feedback
-    from saltation.plotting import PhaseCurve, plot_phase_plane, plot_response
+    from saltation.output.plotting import PhaseCurve, plot_phase_plane, plot_response
 
     flow = Flow(relay_feedback())
     orbit = find_periodic_orbit(flow, [0.5, -4.0, -1.5], period=7.0)
@@ -210,7 +210,7 @@ def figure_buck_converter():
     """Period-1 orbits over the input voltage E: border collision at saturation and period doubling."""
     from saltation import ContinuationSettings, Flow, ShootingProblem, continue_branch, find_periodic_orbit
     from saltation.models import buck_converter
-    from saltation.plotting import plot_multipliers, plot_response
+    from saltation.output.plotting import plot_multipliers, plot_response
 
     flow = Flow(buck_converter())
     start = find_periodic_orbit(flow, [0.6, 12.0, 0.2], parameters={"E": 20.0}, period=1.0)
@@ -231,7 +231,7 @@ def figure_two_mass_stops():
 
     from saltation import ContinuationSettings, Flow, ShootingProblem, continue_branch, find_periodic_orbit
     from saltation.models.two_mass_stops import DEFAULTS, two_mass_stops
-    from saltation.plotting import plot_response
+    from saltation.output.plotting import plot_response
 
     m1, m2, k1, k2, c1, c2, w = (DEFAULTS[k] for k in ("m1", "m2", "k1", "k2", "c1", "c2", "omega"))
     mass, stiffness = np.diag([m1, m2]), np.array([[k1 + k2, -k2], [-k2, k2]])

@@ -1,7 +1,7 @@
 """Griffe extension for the API reference: Sphinx roles in docstrings become links.
 
 saltation's docstrings are numpy style and cross-reference with Sphinx roles
-(``:class:`Flow```, ``:func:`~saltation.shooting.find_periodic_orbit```).
+(``:class:`Flow```, ``:func:`~saltation.orbits.shooting.find_periodic_orbit```).
 mkdocstrings does not read roles, so this extension rewrites each one, once
 the package is loaded, into an *optional* autorefs link: a link where the
 object is rendered in the reference, plain code where it is not (a private
@@ -38,7 +38,7 @@ def _canonical(obj) -> str | None:
 def _resolve(collection, where, name: str) -> str | None:
     """The full path of ``name`` as written in a docstring of ``where``: absolute, a member of an
     enclosing scope, or a name imported there."""
-    if name.split(".")[0] in collection.members:  # absolute: saltation.integrate.Flow
+    if name.split(".")[0] in collection.members:  # absolute: saltation.engine.flow.Flow
         found = _lookup(collection, name)
         return _canonical(found) if found is not None else None
     head, _, rest = name.partition(".")

@@ -7,11 +7,21 @@ The everyday names are here: define a model (:class:`PiecewiseSystem`,
 :class:`ShootingProblem` with :func:`continue_branch`) and read its special
 points (:class:`Branch`, :class:`SpecialPoint`, :class:`SpecialPointKind`);
 brute-force diagrams with :func:`sweep` and :func:`period_map`.
+
+The package is one folder per layer, each depending only on the ones before it:
+``model`` -> ``engine`` -> ``orbits`` -> ``branches`` -> ``special_points`` -> ``output`` -> ``apps``
+(with ``models``, the shipped models, and ``errors`` and ``summary``, which import nothing of the
+package).  The flat layout's import paths (``saltation.integrate``, ``saltation.shooting``, ...) work
+for one more release, with a ``DeprecationWarning``.
 """
 
-from .branch import Branch, SpecialPoint, SpecialPointKind
-from .continuation import ContinuationSettings, continue_branch, continue_orbit
-from .errors import (
+from saltation import _moved
+
+_moved.install()
+
+from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind
+from saltation.special_points.continuation import ContinuationSettings, continue_branch, continue_orbit
+from saltation.errors import (
     ChatteringError,
     ConvergenceError,
     InconsistentResultError,
@@ -25,10 +35,10 @@ from .errors import (
     StationaryStateError,
     StepSizeError,
 )
-from .integrate import EventKind, Flow, Status, SwitchingEvent, Tolerances, Trajectory, simulate
-from .model import Crossing, Mode, PiecewiseSystem, Transition
-from .shooting import PeriodicOrbit, ShootingProblem, find_periodic_orbit
-from .sweeps import SweepStart, period_map, sweep
+from saltation.engine.flow import EventKind, Flow, Status, SwitchingEvent, Tolerances, Trajectory, simulate
+from saltation.model.system import Crossing, Mode, PiecewiseSystem, Transition
+from saltation.orbits.shooting import PeriodicOrbit, ShootingProblem, find_periodic_orbit
+from saltation.apps.sweeps import SweepStart, period_map, sweep
 
 __version__ = "0.1.0"
 

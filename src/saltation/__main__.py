@@ -1,7 +1,7 @@
-"""``python -m saltation``: the command line interface (see :mod:`saltation.cli`)."""
+"""``python -m saltation``: the command line interface (see :mod:`saltation.apps.cli`)."""
 
 import sys
 
-from .cli import main
+from saltation.apps.cli import main
 
 sys.exit(main())

@@ -1,7 +1,7 @@
 """Short Markdown summaries of the objects a user meets, for Jupyter and for printing.
 
-:class:`~saltation.model.PiecewiseSystem`, :class:`~saltation.shooting.PeriodicOrbit`,
-:class:`~saltation.branch.Branch` and :class:`~saltation.branch.SpecialPoint` show
+:class:`~saltation.model.system.PiecewiseSystem`, :class:`~saltation.orbits.shooting.PeriodicOrbit`,
+:class:`~saltation.branches.branch.Branch` and :class:`~saltation.branches.branch.SpecialPoint` show
 these in a notebook (their ``_repr_markdown_``); ``summary(obj)`` gives the same
 text anywhere.
 """

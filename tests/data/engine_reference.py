@@ -18,7 +18,7 @@ import numpy as np
 
 from saltation import Flow, Tolerances
 from saltation.models import block_on_belt, trilinear
-from saltation.paper import block_on_belt_diagram, trilinear_diagram
+from saltation.apps.paper import block_on_belt_diagram, trilinear_diagram
 
 RUNS = [  # model, parameters, initial state, span, tolerances (None: the defaults)
     ("trilinear", {"omega": 1.3}, [1.5, 0.3], 6.0, None),

@@ -1,0 +1,74 @@
+"""The import paths of the flat layout (release 0.1), kept working for one release.
+
+The modules moved into one folder per layer (see the package's docstring).  ``import
+saltation.integrate`` and ``from saltation.shooting import find_periodic_orbit`` still work: a finder
+on ``sys.meta_path`` gives the module at its new path under the old name, with a
+``DeprecationWarning`` that names the new path.  ``saltation.model`` is now a package; its old
+names are forwarded by its own ``__getattr__``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.abc
+import importlib.machinery
+import sys
+import warnings
+
+#: old module -> the module that replaces it
+MOVED = {
+    "saltation.nonsmooth": "saltation.model.nonsmooth",
+    "saltation.regularize": "saltation.model.regularize",
+    "saltation._contract": "saltation.engine._contract",
+    "saltation.affine": "saltation.engine.affine",
+    "saltation.codegen": "saltation.engine.codegen",
+    "saltation.compiled": "saltation.engine.compiled",
+    "saltation.integrate": "saltation.engine.flow",
+    "saltation.precompile": "saltation.engine.precompile",
+    "saltation.floquet": "saltation.orbits.floquet",
+    "saltation.shooting": "saltation.orbits.shooting",
+    "saltation.boundary": "saltation.orbits.boundary",
+    "saltation.branch": "saltation.branches.branch",
+    "saltation.corrector": "saltation.branches.corrector",
+    "saltation.continuation": "saltation.special_points.continuation",
+    "saltation.bifurcations": "saltation.special_points.detection",
+    "saltation.grazing": "saltation.special_points.grazing",
+    "saltation.sliding": "saltation.special_points.sliding",
+    "saltation.loci": "saltation.special_points.loci",
+    "saltation.branch_switching": "saltation.special_points.branch_switching",
+    "saltation.plotting": "saltation.output.plotting",
+    "saltation.io": "saltation.output.io",
+    "saltation.cli": "saltation.apps.cli",
+    "saltation.paper": "saltation.apps.paper",
+    "saltation.sweeps": "saltation.apps.sweeps",
+    "saltation.diagram": "saltation.apps.diagram",
+}
+
+
+class _Alias(importlib.abc.Loader):
+    def __init__(self, target: str):
+        self.target = target
+
+    def create_module(self, spec):
+        warnings.warn(f"{spec.name} has moved to {self.target}; the old path goes in the next release",
+                      DeprecationWarning, stacklevel=2)
+        module = importlib.import_module(self.target)
+        self.spec = module.__spec__  # the import machinery sets the alias's spec on it: put back below
+        return module
+
+    def exec_module(self, module) -> None:
+        module.__spec__ = self.spec
+
+
+class _MovedFinder(importlib.abc.MetaPathFinder):
+    def find_spec(self, fullname, path=None, target=None):
+        new = MOVED.get(fullname)
+        if new is None:
+            return None
+        return importlib.machinery.ModuleSpec(fullname, _Alias(new))
+
+
+def install() -> None:
+    """Put the finder on ``sys.meta_path`` (once)."""
+    if not any(isinstance(f, _MovedFinder) for f in sys.meta_path):
+        sys.meta_path.append(_MovedFinder())

@@ -1,0 +1,278 @@
+"""Results of continuation: branches of solutions and their special points."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from saltation.orbits.floquet import is_stable
+
+
+class SpecialPointKind(enum.Enum):
+    """Kinds of special points; the value is the name used in files and on the command line."""
+
+    FOLD = "fold"
+    PERIOD_DOUBLING = "period_doubling"
+    NEIMARK_SACKER = "neimark_sacker"
+    HOPF = "hopf"
+    DISCONTINUOUS_FOLD = "discontinuous_fold"
+    DISCONTINUOUS_FLIP = "discontinuous_flip"
+    DISCONTINUOUS_NEIMARK_SACKER = "discontinuous_neimark_sacker"
+    NONSMOOTH_NO_CROSSING = "nonsmooth_no_crossing"
+    GRAZING = "grazing"
+    GRAZING_SLIDING = "grazing_sliding"
+    CROSSING_SLIDING = "crossing_sliding"
+    SWITCHING_SLIDING = "switching_sliding"
+    ADDING_SLIDING = "adding_sliding"
+    #: the orbits of a branch shrink onto an equilibrium: located where their excursion extrapolates to zero
+    CYCLE_COLLAPSE = "cycle_collapse"
+
+    @property
+    def is_nonsmooth(self) -> bool:
+        return self in NONSMOOTH_KINDS
+
+
+NONSMOOTH_KINDS = frozenset(
+    {
+        SpecialPointKind.DISCONTINUOUS_FOLD,
+        SpecialPointKind.DISCONTINUOUS_FLIP,
+        SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER,
+        SpecialPointKind.NONSMOOTH_NO_CROSSING,
+        SpecialPointKind.GRAZING,
+        SpecialPointKind.GRAZING_SLIDING,
+        SpecialPointKind.CROSSING_SLIDING,
+        SpecialPointKind.SWITCHING_SLIDING,
+        SpecialPointKind.ADDING_SLIDING,
+    }
+)
+
+
+class StopReason(enum.Enum):
+    """Why a continuation run stopped; the value is the message."""
+
+    PARAMETER_BOUND = "reached a parameter bound"
+    MAX_POINTS = "reached the maximum number of points"
+    MIN_STEP = "the corrector failed at the minimum step size"
+    CLOSED_LOOP = "the branch closed on itself"
+    USER = "stopped by the user"
+    CYCLE_COLLAPSE = "the cycle collapsed onto an equilibrium"
+
+
+class BranchKind(enum.Enum):
+    PERIODIC = "periodic"
+    EQUILIBRIUM = "equilibrium"
+
+
+@dataclass(frozen=True)
+class BranchPoint:
+    """One point of a branch.
+
+    Attributes
+    ----------
+    parameter : float
+        Value of the continuation parameter.
+    state : ndarray, shape (n,)
+        Initial state of the periodic orbit (or the equilibrium).
+    period : float
+        Period (``nan`` for equilibria).
+    amplitude : float
+        ``max |x_1|`` over the period (the equilibrium's ``|x_1|``).
+    half_peak_to_peak : float
+        ``(max x_1 - min x_1) / 2`` (0 for equilibria).
+    multipliers : ndarray, complex
+        Forward-time Floquet multipliers (eigenvalues for equilibria).
+    stable : bool
+    event_labels : tuple of str
+        The orbit's event sequence (labels of the transitions met).
+    step : float
+        Arclength step that led to the point.
+    iterations : int
+        Newton iterations of the corrector.
+    """
+
+    parameter: float
+    state: np.ndarray
+    period: float
+    amplitude: float
+    half_peak_to_peak: float
+    multipliers: np.ndarray
+    stable: bool
+    event_labels: tuple[str, ...]
+    step: float = 0.0
+    iterations: int = 0
+
+
+@dataclass(frozen=True)
+class SpecialPoint:
+    """A located special point of a branch.
+
+    Attributes
+    ----------
+    kind : SpecialPointKind
+    parameter : float
+        Located parameter value.
+    bracket : (float, float)
+        Parameter values on either side between which it was located.
+    accuracy : float
+        Width of the final bracket (how precisely it is located).
+    index : int
+        The point lies between branch points ``index`` and ``index + 1``.
+    state, period, amplitude :
+        The solution at the special point.
+    multipliers : ndarray or None
+        Multipliers at a smooth special point.
+    multipliers_minus, multipliers_plus : ndarray or None
+        One-sided multipliers at a non-smooth point (eigenvalues of M- and M+).
+    monodromy_minus, monodromy_plus : ndarray or None
+        One-sided monodromy matrices (forward time where finite).
+    crossing_q : float or None
+        Where the set-valued multipliers ``eig((1-q) M- + q M+)`` cross the unit circle.
+    crossing_point : complex or None
+        The multiplier on the unit circle at ``crossing_q``.
+    event_labels_minus, event_labels_plus : tuple of str
+        Event sequences (labels) on either side.
+    multipliers_accuracy : float
+        How well the multipliers (one-sided or not) are known: an estimate of
+        the error of their matrices (``nan`` when unknown).
+    limits : str
+        How the one-sided multipliers were obtained: ``"exact"`` (limits at
+        the boundary orbit, closed-form saltation matrices at the corner),
+        ``"nearest_saltation"`` (limits at the boundary orbit with the
+        saltation matrices of the nearest orbit), ``"nearest_orbits"`` (the
+        monodromies of the two orbits bracketing the point), ``"extrapolated"``
+        (the limit along the branch, its square-root behaviour extrapolated),
+        ``"grazing"``, or ``""``.
+    note : str
+    touch_surface, touch_mode : str
+        Where the orbit meets a switching surface at a grazing or a sliding
+        bifurcation: the surface, and the mode whose field is tangent to it
+        there (empty otherwise).
+    touch_time : float
+        The instant of that touch (``nan`` otherwise).
+    """
+
+    kind: SpecialPointKind
+    parameter: float
+    bracket: tuple[float, float]
+    accuracy: float
+    index: int
+    state: np.ndarray
+    period: float
+    amplitude: float
+    multipliers: np.ndarray | None = None
+    multipliers_minus: np.ndarray | None = None
+    multipliers_plus: np.ndarray | None = None
+    monodromy_minus: np.ndarray | None = None
+    monodromy_plus: np.ndarray | None = None
+    crossing_q: float | None = None
+    crossing_point: complex | None = None
+    event_labels_minus: tuple[str, ...] = ()
+    event_labels_plus: tuple[str, ...] = ()
+    note: str = ""
+    multipliers_accuracy: float = float("nan")
+    limits: str = ""
+    touch_surface: str = ""
+    touch_mode: str = ""
+    touch_time: float = float("nan")
+
+    def _repr_markdown_(self) -> str:
+        """A summary for Jupyter (:mod:`saltation.summary`)."""
+        from saltation.summary import special_point_summary
+
+        return special_point_summary(self)
+
+
+@dataclass
+class Branch:
+    """A branch of periodic orbits or equilibria, as columns per point plus special points.
+
+    Attributes
+    ----------
+    model : str
+        Name of the model.
+    parameter_name : str
+        The continuation parameter.
+    kind : BranchKind
+    backward : bool
+        Whether its orbits were computed by backward-time shooting.
+    points : list of BranchPoint
+    special_points : list of SpecialPoint
+    stop_reason : StopReason or None
+        Why the (first) run stopped.
+    stop_reasons : list
+        Why each further run (other directions) stopped.
+    fixed_parameters : dict
+        Values of every parameter (the continuation parameter at the start point).
+    label : str
+        A name for plots ("stable periodic", "equilibrium", ...).
+    """
+
+    model: str
+    parameter_name: str
+    kind: BranchKind
+    backward: bool = False
+    points: list[BranchPoint] = field(default_factory=list)
+    special_points: list[SpecialPoint] = field(default_factory=list)
+    stop_reason: StopReason | None = None
+    stop_reasons: list[StopReason | None] = field(default_factory=list)
+    fixed_parameters: dict[str, float] = field(default_factory=dict)
+    label: str = ""
+    autonomous: bool = False
+
+    def _repr_markdown_(self) -> str:
+        """A summary for Jupyter (:mod:`saltation.summary`)."""
+        from saltation.summary import branch_summary
+
+        return branch_summary(self)
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    # columns
+    @property
+    def parameter(self) -> np.ndarray:
+        return np.array([p.parameter for p in self.points])
+
+    @property
+    def amplitude(self) -> np.ndarray:
+        return np.array([p.amplitude for p in self.points])
+
+    @property
+    def half_peak_to_peak(self) -> np.ndarray:
+        return np.array([p.half_peak_to_peak for p in self.points])
+
+    @property
+    def period(self) -> np.ndarray:
+        return np.array([p.period for p in self.points])
+
+    @property
+    def stable(self) -> np.ndarray:
+        return np.array([p.stable for p in self.points], dtype=bool)
+
+    @property
+    def states(self) -> np.ndarray:
+        return np.array([p.state for p in self.points])
+
+    @property
+    def multipliers(self) -> np.ndarray:
+        """Multipliers per point, shape (m, n), complex."""
+        return np.array([p.multipliers for p in self.points])
+
+    def check_stability_flags(self) -> bool:
+        """Whether every stored stability flag agrees with the stored multipliers."""
+        if self.kind is BranchKind.EQUILIBRIUM:
+            return all(p.stable == bool(np.all(np.real(p.multipliers) < 0)) for p in self.points)
+        return all(p.stable == is_stable(p.multipliers, autonomous=self.autonomous) for p in self.points)
+
+    def extend(self, other: Branch) -> None:
+        """Prepend a run of the same branch in the other direction from the same start point."""
+        m = len(other.points)
+        self.points = list(reversed(other.points[1:])) + self.points
+        moved = [_reindex(sp, m - 2 - sp.index) for sp in other.special_points]
+        self.special_points = moved + [_reindex(sp, sp.index + m - 1) for sp in self.special_points]
+
+
+def _reindex(sp: SpecialPoint, index: int) -> SpecialPoint:
+    return replace(sp, index=index)

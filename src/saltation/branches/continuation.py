@@ -1,0 +1,400 @@
+"""Pseudo-arclength continuation of solutions of ``r(u, lam) = 0``.
+
+One engine for every problem of the small protocol of
+:mod:`saltation.orbits.shooting` (periodic orbits by forward or backward shooting,
+equilibria): ``evaluate(u, lam) -> Evaluation``, ``describe``, ``accept``.
+
+* Predictor: the unit tangent ``t`` of the branch in ``z = (u, lam)``,
+  ``z_pred = z + ds t``.
+* Corrector: Newton on the bordered system ``r(z) = 0``,
+  ``t . (z - z_pred) = 0``.
+* Step control: the step grows after quick convergence and is halved when
+  the corrector fails or the tangent turns by more than ``max_angle`` --
+  except across a corner of the branch (the orbit's event sequence changes),
+  where the tangent genuinely jumps and the step is accepted.
+* After every step, a detector handed in from outside (the special-point layer's
+  :class:`~saltation.special_points.detection.SpecialPointDetector`, see
+  :mod:`saltation.special_points.continuation`) looks for special points between the last two
+  points and locates them; where the corrector fails, it may carry the branch past the failure
+  (a grazing).  Without one, the engine follows the branch and finds no special point.
+* A run stops when the branch closes: a step passes the first point again
+  in the same direction, or a special point is located a second time from
+  the same side (a loop that the run entered away from its start).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, replace
+from typing import Protocol
+
+import numpy as np
+
+from saltation.branches.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind, StopReason
+from saltation.branches.corrector import Corrector, Solution, canonical_events
+from saltation.errors import SaltationError
+from saltation.orbits.shooting import EquilibriumProblem, ShootingProblem
+
+
+class Detector(Protocol):
+    """What the engine asks of a special-point detector."""
+
+    def check(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
+        """The special points between consecutive branch points ``a`` (point ``index``) and ``b``."""
+
+    def past_failure(self, prev: Solution) -> tuple[Solution, SpecialPoint] | None:
+        """Where the corrector failed beyond ``prev``: the first solution past the special point that
+        stopped it and that point, or None."""
+
+
+#: ``detector(problem, corrector, branch) -> Detector``: how the engine makes its detector.
+DetectorFactory = Callable[..., Detector]
+
+
+@dataclass(frozen=True, kw_only=True)
+class ContinuationSettings:
+    """Options of a continuation run (keyword-only, so a typo is an error).
+
+    Attributes
+    ----------
+    ds : float
+        Initial arclength step.
+    ds_min, ds_max : float
+        Step bounds; the run stops when the corrector fails at ``ds_min``.
+    max_points : int
+        Largest number of points of a run.
+    bounds : (float, float)
+        Interval of the continuation parameter.
+    tol : float
+        Newton tolerance on the residual.
+    max_newton : int
+        Corrector iterations before a step counts as failed.
+    max_angle : float
+        Largest angle (radians) between consecutive tangents in a smooth stretch.
+    detect : bool
+        Look for and locate special points.
+    locate_tol : float
+        Distance in ``(u, lam)`` to which special points are located.
+    max_correction : float
+        A corrector step longer than this (relative to ``1 + |z|``) counts as divergence.
+    """
+
+    ds: float = 0.02
+    ds_min: float = 1e-6
+    ds_max: float = 0.05
+    max_points: int = 400
+    bounds: tuple[float, float] = (-math.inf, math.inf)
+    tol: float = 1e-10
+    max_newton: int = 7
+    max_angle: float = 0.3
+    detect: bool = True
+    locate_tol: float = 1e-9
+    max_correction: float = 0.2
+
+    def __post_init__(self):
+        if not 0 < self.ds_min <= self.ds <= self.ds_max:
+            raise ValueError(f"need 0 < ds_min <= ds <= ds_max, got {self.ds_min}, {self.ds}, {self.ds_max}")
+        lo, hi = self.bounds
+        if not lo < hi:
+            raise ValueError(f"parameter bounds must satisfy lower < upper, got {self.bounds}")
+
+
+class Continuation:
+    """Pseudo-arclength continuation of one branch in one direction.
+
+    Parameters
+    ----------
+    problem : ShootingProblem or EquilibriumProblem
+        The problem, with its continuation parameter set.
+    settings : ContinuationSettings
+    detector : callable, optional
+        ``detector(problem, corrector, branch)`` makes the :class:`Detector` used when
+        ``settings.detect``; None (the default) finds no special points.
+
+    Examples
+    --------
+    Iterate step by step::
+
+        cont = Continuation(problem, ContinuationSettings(ds=0.01))
+        for point in cont.run(u0, lam0, direction=+1):
+            print(point.parameter, point.amplitude)
+        branch = cont.branch
+    """
+
+    def __init__(self, problem, settings: ContinuationSettings | None = None, *,
+                 detector: DetectorFactory | None = None):
+        if getattr(problem, "lam_index", -1) < 0:
+            raise SaltationError("the problem needs a continuation parameter (continuation_parameter=...)")
+        self.problem = problem
+        self.settings = settings or ContinuationSettings()
+        self.corrector = Corrector(problem, self.settings)
+        self.branch = Branch(
+            model=problem.system.name,
+            parameter_name=problem.lam_name,
+            kind=BranchKind.EQUILIBRIUM if isinstance(problem, EquilibriumProblem) else BranchKind.PERIODIC,
+            backward=bool(getattr(problem, "backward", False)),
+            fixed_parameters=dict(zip(problem.system.parameter_names, map(float, problem.p))),
+            autonomous=bool(problem.system.is_autonomous),
+        )
+        self.solutions: list[Solution] = []
+        self.last_failure: np.ndarray | None = None
+        self.detector_factory = detector
+
+    # ---------------------------------------------------------------------------------
+    def run(self, u0: np.ndarray, lam0: float, *, direction: int = 1) -> Iterator[BranchPoint]:
+        """Yield branch points, starting with the corrected start point."""
+
+        s = self.settings
+        lo, hi = s.bounds
+        if not lo <= lam0 <= hi:
+            raise SaltationError(f"start value {lam0} of {self.problem.lam_name!r} lies outside the bounds {s.bounds}")
+        self.problem.accept(np.asarray(u0, float), lam0)
+        sol = self.corrector.solve_fixed(np.asarray(u0, dtype=float), float(lam0))
+        e_lam = np.zeros(len(sol.z))
+        e_lam[-1] = 1.0 if direction >= 0 else -1.0
+        sol.tangent = self.corrector.tangent(sol, e_lam)
+        self._accept(sol)
+        yield self.branch.points[-1]
+
+        detector = (self.detector_factory(self.problem, self.corrector, self.branch)
+                    if s.detect and self.detector_factory is not None else None)
+        ds = s.ds
+        while True:
+            if len(self.branch.points) >= s.max_points:
+                self.branch.stop_reason = StopReason.MAX_POINTS
+                return
+            prev = self.solutions[-1]
+            new = None
+            while ds >= s.ds_min:
+                z_pred = self._predict(ds)
+                if z_pred[-1] > hi or z_pred[-1] < lo:
+                    # land exactly on the bound
+                    bound = hi if z_pred[-1] > hi else lo
+                    frac = (bound - prev.z[-1]) / (z_pred[-1] - prev.z[-1])
+                    if frac * ds < s.ds_min:
+                        self.branch.stop_reason = StopReason.PARAMETER_BOUND
+                        return
+                    try:
+                        cand = self.corrector.solve_fixed(prev.u + frac * ds * prev.tangent[:-1], bound)
+                    except SaltationError:
+                        ds *= 0.5
+                        continue
+                    cand.tangent = self.corrector.tangent(cand, prev.tangent)
+                    cand.step = frac * ds
+                    new = cand
+                    break
+                try:
+                    cand = self.corrector.solve_bordered(z_pred, prev.tangent)
+                except SaltationError:
+                    self.last_failure = z_pred
+                    ds *= 0.5
+                    continue
+                cand.tangent = self.corrector.tangent(cand, prev.tangent)
+                cand.step = ds
+                angle = math.acos(max(-1.0, min(1.0, float(cand.tangent @ prev.tangent))))
+                corner = canonical_events(cand.summary.event_ids) != canonical_events(prev.summary.event_ids)
+                if angle > s.max_angle and not corner and ds > 2 * s.ds_min:
+                    ds *= 0.5
+                    continue
+                if corner and ds > 4 * s.ds_min and angle > s.max_angle and cand.iterations > 4:
+                    ds *= 0.5
+                    continue
+                new = cand
+                break
+            jumped = None
+            if new is None and detector is not None:
+                jumped = detector.past_failure(prev)
+                if jumped is not None:
+                    new, grazing = jumped
+            if new is None:
+                collapse = self._collapse(strict=False)
+                if collapse is not None:
+                    self.branch.special_points.append(collapse)
+                    self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
+                    return
+                self.branch.stop_reason = StopReason.MIN_STEP
+                return
+            self._accept(new)
+            closed = self._passes_start(prev, new)
+            if jumped is not None:
+                self.branch.special_points.append(replace(grazing, index=len(self.branch.points) - 2))
+                ds = s.ds
+            elif detector is not None:
+                for sp in detector.check(self.solutions[-2], self.solutions[-1], len(self.branch.points) - 2):
+                    if any(_same_special_point(sp, old) for old in self.branch.special_points):
+                        closed = True  # met again, from the same side: the branch has come round a loop
+                    else:
+                        self.branch.special_points.append(sp)
+            collapse = self._collapse(strict=True)
+            if collapse is not None:
+                self.branch.special_points.append(collapse)
+            yield self.branch.points[-1]
+            if collapse is not None:
+                self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
+                return
+            if closed:
+                self.branch.stop_reason = StopReason.CLOSED_LOOP
+                return
+            if new.lam >= hi or new.lam <= lo:
+                self.branch.stop_reason = StopReason.PARAMETER_BOUND
+                return
+            if new.iterations <= 3:
+                ds = min(ds * 1.5, s.ds_max)
+            elif new.iterations >= 6:
+                ds = max(ds * 0.5, s.ds_min)
+
+    def _collapse(self, *, strict: bool) -> SpecialPoint | None:
+        """The cycle collapse ahead of the last three orbits of an autonomous branch, or None.
+
+        Where the orbits shrink onto an equilibrium their excursion ``e`` (see
+        :class:`~saltation.orbits.shooting.SolutionSummary`) tends to zero.  With the last three points
+        shrinking, ``e`` is extrapolated linearly in the parameter from the last two; if it reaches
+        zero within 1.5 steps ahead (4 when the corrector has failed: ``strict`` False), the branch
+        ends there.  The accuracy is the distance between that extrapolation and the one from the
+        two points before, which tend to the limit together.
+        """
+        prob = self.problem
+        if not isinstance(prob, ShootingProblem) or not prob.autonomous or len(self.solutions) < 3:
+            return None
+        sols = self.solutions[-3:]
+        e = [float(s.summary.excursion) for s in sols]
+        lam = [s.lam for s in sols]
+        if not (np.all(np.isfinite(e)) and e[0] > e[1] > e[2] > 0.0) or lam[2] == lam[1] or lam[1] == lam[0]:
+            return None
+
+        def zero_of(i: int, j: int) -> float:
+            return lam[j] - e[j] * (lam[j] - lam[i]) / (e[j] - e[i])
+
+        limit, before = zero_of(1, 2), zero_of(0, 1)
+        step = lam[2] - lam[1]
+        ahead = (limit - lam[2]) / step
+        if not 0.0 <= ahead <= (1.5 if strict else 4.0):
+            return None
+        accuracy = abs(limit - before)
+        last = sols[-1]
+        traj = last.evaluation.trajectory
+        return SpecialPoint(
+            kind=SpecialPointKind.CYCLE_COLLAPSE,
+            parameter=float(limit),
+            bracket=(float(limit - accuracy), float(limit + accuracy)),
+            accuracy=float(accuracy),
+            index=len(self.branch.points) - 1,
+            state=0.5 * (traj.x_max + traj.x_min),
+            period=last.summary.period,
+            amplitude=0.0,
+            note=(f"the orbits shrink onto an equilibrium: excursions {e[0]:.3g}, {e[1]:.3g}, {e[2]:.3g} at "
+                  f"{prob.lam_name} = {lam[0]:.6g}, {lam[1]:.6g}, {lam[2]:.6g} extrapolate to zero at "
+                  f"{limit:.10g} (within {accuracy:.1e}); the state is the centre of the last orbit"),
+        )
+
+    def _predict(self, ds: float) -> np.ndarray:
+        """Predictor along the last tangent, with the curvature of the last step where the branch is smooth.
+
+        The second-order term ``ds^2 / 2 (t_k - t_{k-1}) / ds_{k-1}`` leaves a
+        predictor error of ``O(ds^3)``, so that the corrector usually converges
+        with one Newton step; across a corner (a change of the event sequence)
+        the tangents differ by a jump, not by curvature, and it is left out.
+        """
+        prev = self.solutions[-1]
+        z = prev.z + ds * prev.tangent
+        if len(self.solutions) >= 2 and prev.step > 0.0:
+            before = self.solutions[-2]
+            if canonical_events(before.summary.event_ids) == canonical_events(prev.summary.event_ids):
+                z = z + (0.5 * ds * ds / prev.step) * (prev.tangent - before.tangent)
+        return z
+
+    def _passes_start(self, prev: Solution, new: Solution) -> bool:
+        """Whether the step from ``prev`` to ``new`` passes the run's first point again, in the same direction."""
+        if len(self.solutions) < 4:
+            return False
+        start = self.solutions[0]
+        step = new.z - prev.z
+        length = float(np.linalg.norm(step))
+        if length == 0.0 or step @ start.tangent <= 0.0:
+            return False
+        along = float(np.clip((start.z - prev.z) @ step / length**2, 0.0, 1.0))
+        gap = float(np.linalg.norm(prev.z + along * step - start.z))
+        return 0.0 < along < 1.0 and gap <= 0.05 * length
+
+    def _accept(self, sol: Solution) -> None:
+        self.problem.accept(sol.u, sol.lam)
+        self.solutions.append(sol)
+        sm = sol.summary
+        self.branch.points.append(
+            BranchPoint(
+                parameter=sol.lam,
+                state=sm.state,
+                period=sm.period,
+                amplitude=sm.amplitude,
+                half_peak_to_peak=sm.half_peak_to_peak,
+                multipliers=sm.multipliers,
+                stable=sm.stable,
+                event_labels=sm.event_labels,
+                step=sol.step,
+                iterations=sol.iterations,
+            )
+        )
+
+
+def _same_special_point(a, b, rtol: float = 1e-6) -> bool:
+    """The same special point located twice: kind, sides, parameter and state agree."""
+    return (
+        a.kind is b.kind
+        and a.event_labels_minus == b.event_labels_minus
+        and a.event_labels_plus == b.event_labels_plus
+        and abs(a.parameter - b.parameter) <= rtol * (1.0 + abs(b.parameter))
+        and float(np.linalg.norm(np.asarray(a.state) - np.asarray(b.state))) <= rtol * (1.0 + float(np.linalg.norm(b.state)))
+    )
+
+
+def continue_branch(
+    problem,
+    u0: np.ndarray,
+    lam0: float | None = None,
+    *,
+    settings: ContinuationSettings | None = None,
+    directions: tuple[int, ...] = (1, -1),
+    label: str = "",
+    progress=None,
+    detector: DetectorFactory | None = None,
+) -> Branch:
+    """Follow a branch from a start point in one or both directions and return it.
+
+    Parameters
+    ----------
+    problem : ShootingProblem or EquilibriumProblem
+    u0 : ndarray
+        Guess of the unknowns at the start (see ``problem.pack``).
+    lam0 : float, optional
+        Start value of the parameter (the problem's value by default).
+    directions : tuple of int
+        +1 (increasing parameter first), -1, or both.
+    progress : callable, optional
+        Called with each new BranchPoint.
+    detector : callable, optional
+        Makes the special-point detector (see :class:`Continuation`); None finds none.
+        :func:`saltation.continue_branch` hands in the special-point layer's.
+    """
+    lam0 = problem.lam0() if lam0 is None else float(lam0)
+    branch: Branch | None = None
+    for d in directions:
+        cont = Continuation(problem, settings, detector=detector)
+        for point in cont.run(np.asarray(u0, dtype=float), lam0, direction=d):
+            if progress is not None:
+                progress(point)
+        if branch is None:
+            branch = cont.branch
+        else:
+            branch.extend(cont.branch)
+            branch.stop_reasons.append(cont.branch.stop_reason)
+    if branch is None:
+        raise SaltationError("no continuation direction given")
+    branch.label = label
+    return branch
+
+
+__all__ = [
+    "Continuation", "ContinuationSettings", "Corrector", "Detector", "DetectorFactory", "Solution", "canonical_events",
+    "continue_branch",
+]

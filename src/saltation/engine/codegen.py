@@ -1,0 +1,836 @@
+"""Code generation: the compiled engine, and a :class:`~saltation.model.system.PiecewiseSystem`'s functions.
+
+Two kinds of generated module, each written once to the kernel cache
+directory and imported; numba compiles them with ``cache=True``, so each
+compiles once per machine:
+
+* the **engine** (the integrator template ``_kernel_source.py``), one per
+  state dimension up to 4 (``N_STATE`` a compile-time constant) and one for
+  every larger dimension; it takes the model as a tuple of first-class
+  functions, so it does not depend on the model and is compiled once, not
+  once per model (about a minute, the first time a dimension is used);
+* the **model functions**: the model's exact derivatives printed as Python
+  source (with common subexpressions eliminated), each compiled eagerly with
+  its signature from the contract (``_contract.py``); a new or changed model
+  compiles only these (seconds).
+
+The kernel cache
+----------------
+The folder is ``$SALTATION_CACHE_DIR`` if set, otherwise
+``$XDG_CACHE_HOME/saltation`` (``~/.cache/saltation``); numba keeps the
+compiled code in its ``__pycache__`` (or under ``$NUMBA_CACHE_DIR`` if set).
+
+*Keys.*  A module is named after a hash of its own generated source text
+(``<model name>_<hash>.py``, ``engine_n<N>_<hash>.py``), together with the
+versions of numba and Python.  The source holds the contract and everything
+compiled: fields and their derivatives, surfaces, transitions with their
+guards and resets, the modes' domains (the initial-mode rule), the forcing
+period and its derivatives, the order of states and parameters.  Two models
+therefore share a module exactly when they compile to the same code, whatever
+the model's own fingerprint leaves out, and a change to the generators (this
+module, ``affine.py``, ``model.py``) that changes the code changes the name.
+A model's source is generated once per system object in a process (about 0.2 s;
+about 1.3 s for a 32-state chain).
+
+*Checks.*  Before a module is imported, the file must be exactly the source it
+is named after (a truncated or altered module is rewritten), and each of
+numba's index and data files for it must consist of whole pickles (checked
+without running them; damaged ones are removed, so numba compiles again).  A
+module that still fails to import from what was cached is rebuilt from scratch
+once.  Every file saltation writes goes through a temporary file renamed over
+the target, so a crash leaves the old file or the whole new one.  What cannot
+be rebuilt raises :class:`KernelCacheError` naming the folder to delete.
+
+*Read-only caches.*  If the folder (or numba's folder for it) cannot be
+written, the process says so once on standard error and uses a private
+per-user folder in the temporary directory (:func:`fallback_directory`)
+instead; modules already compiled in the read-only folder are copied there,
+not recompiled.  If that cannot be used either, :class:`KernelCacheError` says
+why.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import importlib.util
+import os
+import pickletools
+import stat
+import sys
+import tempfile
+import threading
+import uuid
+import weakref
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+import sympy as sp
+from sympy.printing.pycode import PythonCodePrinter
+
+from saltation.engine._contract import MODEL_FUNCTIONS, MODEL_SIGNATURES
+from saltation.engine.affine import affine_form
+from saltation.errors import SaltationError
+from saltation.model.system import TIME, PiecewiseSystem
+
+_TEMPLATE = Path(__file__).with_name("_kernel_source.py")
+_CONTRACT = Path(__file__).with_name("_contract.py")
+_LOADED: dict[str, ModuleType] = {}
+_IMPORT_LOCK = threading.RLock()  # threads that build flows at once import each module once
+
+
+def _dop853_tableau() -> dict[str, np.ndarray]:
+    """The Dormand-Prince 8(5,3) tableau of scipy's DOP853 (imported only when a kernel is generated)."""
+    from scipy.integrate._ivp import dop853_coefficients as dop853
+
+    return {name: np.asarray(getattr(dop853, name), dtype=float) for name in ("A", "B", "C", "E3", "E5", "D")}
+
+
+class _Printer(PythonCodePrinter):
+    def __init__(self, names: dict[sp.Symbol, str]):
+        super().__init__({"standard": "python3", "fully_qualified_modules": True})
+        self._names = names
+
+    def _print_Symbol(self, expr):
+        return self._names.get(expr, super()._print_Symbol(expr))
+
+    def _print_Float(self, expr):
+        return repr(float(expr))
+
+    def _print_Integer(self, expr):
+        return repr(float(expr))
+
+
+def _rate_symbol(i: int) -> sp.Symbol:
+    """Component ``i`` of the velocity ``f`` an indicator's rate is taken along (printed ``f[i]``)."""
+    return sp.Symbol(f"_rate_f{i}")
+
+
+@dataclass(frozen=True)
+class _Assignment:
+    target: str
+    expr: sp.Expr
+
+
+class _Emitter:
+    """Prints blocks of assignments with common subexpressions eliminated."""
+
+    def __init__(self, system: PiecewiseSystem):
+        names = {s: f"x[{i}]" for i, s in enumerate(system.x)}
+        names |= {s: f"p[{i}]" for i, s in enumerate(system.p)}
+        names[TIME] = "t"
+        names |= {_rate_symbol(i): f"f[{i}]" for i in range(system.n)}
+        self.printer = _Printer(names)
+
+    def block(self, assignments: list[_Assignment], indent: str, result: sp.Expr | None = None) -> list[str]:
+        exprs = [a.expr for a in assignments] + ([result] if result is not None else [])
+        if not exprs:
+            return []
+        repl, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("_c"), optimizations=None)
+        lines = [f"{indent}{self.printer.doprint(sym)} = {self.printer.doprint(val)}" for sym, val in repl]
+        for a, e in zip(assignments, reduced):
+            lines.append(f"{indent}{a.target} = {self.printer.doprint(e)}")
+        if result is not None:
+            lines.append(f"{indent}return {self.printer.doprint(reduced[-1])}")
+        return lines
+
+
+def _decorator(name: str) -> str:
+    """A model function is compiled with its signature from the contract (eagerly), so the engine can
+    take it as a first-class function."""
+    return f"@njit(MODEL_SIGNATURES[{name!r}], cache=True)"
+
+
+def _dispatch(name: str, args: str, index: str, cases: list[tuple[int, list[str]]], default: str) -> list[str]:
+    lines = [_decorator(name), f"def {name}({args}):"]
+    for k, body in cases:
+        if not body:
+            continue
+        lines.append(f"    if {index} == {k}:")
+        lines.extend(body)
+        if not body[-1].lstrip().startswith("return"):
+            lines.append("        return " + ("" if default == "None" else default))
+    lines.append(f"    return {default}" if default != "None" else "    return")
+    return lines
+
+
+def _mode_dispatch(
+    name: str, args: str, em: _Emitter, cases: list[tuple[int, list[_Assignment]]], zero: list[str]
+) -> list[str]:
+    """A function of ``mode`` that writes arrays: ``zero`` (lines that clear them) once, then the
+    assignments every mode of ``cases`` shares (the same target and expression) once, then each
+    mode's own.  Modes usually differ in a few entries (a contact force in one equation), so the
+    generated code grows with the model's distinct expressions, not with their number times the
+    number of modes."""
+    lines = [_decorator(name), f"def {name}({args}):"]
+    if not cases:
+        return lines + ["    return"]
+    per_mode = [{a.target: a.expr for a in assigns} for _, assigns in cases]
+    shared = [a for a in cases[0][1] if all(d.get(a.target) == a.expr for d in per_mode[1:])] if len(cases) > 1 else []
+    shared_targets = {a.target for a in shared}
+    lines += [f"    {z}" for z in zero] + em.block(shared, "    ")
+    for k, assigns in cases:
+        own = [a for a in assigns if a.target not in shared_targets]
+        if own:
+            lines.append(f"    if mode == {k}:")
+            lines += em.block(own, "        ")
+            lines.append("        return")
+    lines.append("    return")
+    return lines
+
+
+def _matrix_assignments(target: str, M: sp.Matrix, lead: str = "") -> list[_Assignment]:
+    """``target[lead i, j] = M[i, j]`` for the nonzero entries (``lead`` indexes a stack of matrices)."""
+    out = []
+    for i in range(M.rows):
+        for j in range(M.cols):
+            if M[i, j] != 0:
+                out.append(_Assignment(f"{target}[{lead}{i}, {j}]", M[i, j]))
+    return out
+
+
+def generate_source(system: PiecewiseSystem) -> str:
+    """The Python source of the compiled model functions (without the integrator)."""
+    em = _Emitter(system)
+    x, p = system.x, system.p
+    ind = "        "
+    src: list[str] = [
+        f"# Generated by saltation.engine.codegen for model {system.name!r}. Do not edit.",
+        "import math",
+        "import numpy as np",
+        "from numba import njit",
+        "",
+    ]
+
+    modes = range(len(system.modes))
+    # f, f_x, f_p
+    src += _mode_dispatch(
+        "vector_field", "mode, t, x, p, out", em,
+        [(m, [_Assignment(f"out[{i}]", e) for i, e in enumerate(system.fields[m])]) for m in modes], [],
+    )
+    jac_cases = []
+    dp_cases = []
+    for m in modes:
+        f = system.fields[m]
+        jac_cases.append((m, _matrix_assignments("out", f.jacobian(x))))
+        fp = f.jacobian(p) if system.n_params else sp.zeros(system.n, 0)
+        dp_cases.append((m, _matrix_assignments("out", fp)))
+    src += _mode_dispatch("vector_field_jac", "mode, t, x, p, out", em, jac_cases, ["out[:, :] = 0.0"])
+    src += _mode_dispatch("vector_field_dp", "mode, t, x, p, out", em, dp_cases, ["out[:, :] = 0.0"])
+
+    # indicators
+    surfaces = range(len(system.surface_names))
+    src += _dispatch(
+        "indicator", "surface, t, x, p", "surface",
+        [(s, em.block([], ind, result=system.indicators[s])) for s in surfaces],
+        "0.0",
+    )
+    grad_cases = []
+    for s in surfaces:
+        d = system.surface_derivatives(s)
+        body = [f"{ind}hx[:] = 0.0", f"{ind}hp[:] = 0.0"]
+        assigns = [_Assignment(f"hx[{i}]", d.h_x[0, i]) for i in range(system.n) if d.h_x[0, i] != 0]
+        assigns += [_Assignment(f"hp[{j}]", d.h_p[0, j]) for j in range(system.n_params) if d.h_p[0, j] != 0]
+        body += em.block(assigns, ind, result=d.h_t)
+        grad_cases.append((s, body))
+    src += _dispatch("indicator_grad", "surface, t, x, p, hx, hp", "surface", grad_cases, "0.0")
+    # h_t + h_x f: the rate of an indicator along a velocity f (event detection, every step)
+    rate_cases = []
+    for s in surfaces:
+        d = system.surface_derivatives(s)
+        rate = d.h_t + sum((d.h_x[0, i] * _rate_symbol(i) for i in range(system.n)), sp.Integer(0))
+        rate_cases.append((s, em.block([], ind, result=rate)))
+    # (hx, hp: work arrays for an indicator_rate built on indicator_grad, as CompiledSystem's; unused here)
+    src += _dispatch("indicator_rate", "surface, t, x, f, p, hx, hp", "surface", rate_cases, "0.0")
+
+    # Lie derivatives h_x f + h_t (with gradients) for the pairs used by transitions (sliding)
+    pairs = sorted(
+        {(system.mode_index(tr.source), system.surface_index(tr.surface)) for tr in system.transitions}
+        | {(system.mode_index(tr.target), system.surface_index(tr.surface)) for tr in system.transitions}
+    )
+    lie_lines = [_decorator("lie_derivative"), "def lie_derivative(mode, surface, t, x, p, gx, gp):", "    gx[:] = 0.0", "    gp[:] = 0.0"]
+    for m, s in pairs:
+        sigma = system.lie_derivative(m, s)
+        gx = sp.Matrix([sigma]).jacobian(x)
+        gp = sp.Matrix([sigma]).jacobian(p) if system.n_params else sp.zeros(1, 0)
+        assigns = [_Assignment(f"gx[{i}]", gx[0, i]) for i in range(system.n) if gx[0, i] != 0]
+        assigns += [_Assignment(f"gp[{j}]", gp[0, j]) for j in range(system.n_params) if gp[0, j] != 0]
+        lie_lines.append(f"    if mode == {m} and surface == {s}:")
+        lie_lines += em.block(assigns, ind, result=sigma)
+    lie_lines.append("    return 0.0")
+    src += lie_lines
+    lie_t = [_decorator("lie_derivative_dt"), "def lie_derivative_dt(mode, surface, t, x, p):"]
+    for m, s in pairs:
+        dsigma = sp.diff(system.lie_derivative(m, s), TIME)
+        if dsigma != 0:
+            lie_t.append(f"    if mode == {m} and surface == {s}:")
+            lie_t += em.block([], ind, result=dsigma)
+    lie_t.append("    return 0.0")
+    src += lie_t
+
+    # resets
+    reset_cases = []
+    rjac_cases = []
+    for k, g in enumerate(system.resets):
+        if g is None:
+            continue
+        reset_cases.append((k, em.block([_Assignment(f"out[{i}]", e) for i, e in enumerate(g)], ind)))
+        gx = g.jacobian(x)
+        gt = sp.diff(g, TIME)
+        gp = g.jacobian(p) if system.n_params else sp.zeros(system.n, 0)
+        assigns = _matrix_assignments("gx", gx) + [_Assignment(f"gt[{i}]", gt[i]) for i in range(system.n) if gt[i] != 0]
+        assigns += _matrix_assignments("gp", gp)
+        rjac_cases.append((k, [f"{ind}gx[:, :] = 0.0", f"{ind}gt[:] = 0.0", f"{ind}gp[:, :] = 0.0"] + em.block(assigns, ind)))
+    src += _dispatch("reset_map", "k, t, x, p, out", "k", reset_cases, "None")
+    src += _dispatch("reset_jac", "k, t, x, p, gx, gt, gp", "k", rjac_cases, "None")
+
+    src += _affine_source(system, em)
+
+    # guards of transitions, domains of modes (the initial-mode rule)
+    src += _dispatch("guard", "k, t, x, p", "k", _condition_cases(em, system.guards, ind), "True")
+    src += _dispatch("in_domain", "mode, t, x, p", "mode", _condition_cases(em, system.domains, ind), "True")
+    src += _dispatch("domain_margin", "mode, t, x, p", "mode", _margin_cases(em, system.domains, ind), "math.inf")
+    src += [
+        _decorator("initial_mode"),
+        "def initial_mode(t, x, p):",
+        f"    for m in range({len(system.modes)}):",
+        "        if in_domain(m, t, x, p):",
+        "            return m",
+        "    return -1",
+    ]
+    src += _period_source(system, em)
+    src.append("MODEL = (" + ", ".join(MODEL_FUNCTIONS) + ", affine_modes)  # the engine's first argument")
+    return "\n".join(src) + "\n"
+
+
+def _period_source(system: PiecewiseSystem, em: _Emitter) -> list[str]:
+    """``forcing_period(p)`` and its derivative ``forcing_period_dp(p, k)`` (0 for autonomous models)."""
+    period = system.period_expr if system.period_expr is not None else sp.Integer(0)
+    src = [_decorator("forcing_period"), "def forcing_period(p):"] + em.block([], "    ", result=period)
+    src += [_decorator("forcing_period_dp"), "def forcing_period_dp(p, k):"]
+    for k, pk in enumerate(system.p):
+        d = sp.diff(period, pk)
+        if d != 0:
+            src.append(f"    if k == {k}:")
+            src += em.block([], "        ", result=d)
+    src.append("    return 0.0")
+    return src
+
+
+def _affine_source(system: PiecewiseSystem, em: _Emitter) -> list[str]:
+    """``affine_modes`` and the parts ``A, B, (omega, phase)`` of affine modes with their parameter derivatives."""
+    forms = [affine_form(f, system.x, TIME) for f in system.fields]
+    src = [f"affine_modes = np.array({[f is not None for f in forms]!r}, dtype=np.bool_)"]
+    cases, dp_cases = [], []
+    for m, form in enumerate(forms):
+        if form is None:
+            continue
+        assigns = _matrix_assignments("A", form.A) + _matrix_assignments("B", form.B)
+        assigns += [_Assignment(f"w[{i}]", e) for i, e in enumerate((form.omega, form.phase)) if e != 0]
+        cases.append((m, assigns))
+        dp_assigns = []
+        for k, pk in enumerate(system.p):
+            dp_assigns += _matrix_assignments("Ap", form.A.diff(pk), f"{k}, ") + _matrix_assignments("Bp", form.B.diff(pk), f"{k}, ")
+            dp_assigns += [
+                _Assignment(f"wp[{k}, {i}]", sp.diff(e, pk)) for i, e in enumerate((form.omega, form.phase)) if sp.diff(e, pk) != 0
+            ]
+        dp_cases.append((m, dp_assigns))
+    src += _mode_dispatch("affine_parts", "mode, p, A, B, w", em, cases, ["A[:, :] = 0.0", "B[:, :] = 0.0", "w[:] = 0.0"])
+    src += _mode_dispatch(
+        "affine_parts_dp", "mode, p, Ap, Bp, wp", em, dp_cases, ["Ap[:, :, :] = 0.0", "Bp[:, :, :] = 0.0", "wp[:, :] = 0.0"]
+    )
+    return src
+
+
+def _condition_cases(em: _Emitter, condition_lists, ind: str) -> list[tuple[int, list[str]]]:
+    """Dispatch cases returning whether every condition ``expr > 0`` (or ``>= 0``) holds."""
+    cases = []
+    for k, conds in enumerate(condition_lists):
+        if not conds:
+            continue
+        body = []
+        for c in conds:
+            op = ">" if c.strict else ">="
+            body.append(f"{ind}if not ({em.printer.doprint(c.expr)} {op} 0.0):")
+            body.append(f"{ind}    return False")
+        body.append(f"{ind}return True")
+        cases.append((k, body))
+    return cases
+
+
+def _margin_cases(em: _Emitter, condition_lists, ind: str) -> list[tuple[int, list[str]]]:
+    """Dispatch cases returning the smallest ``expr`` of a mode's conditions ``expr > 0`` (negative:
+    how far the state lies outside the domain)."""
+    cases = []
+    for k, conds in enumerate(condition_lists):
+        if conds:
+            body = [f"{ind}m = math.inf"]
+            for c in conds:
+                body += [f"{ind}v = {em.printer.doprint(c.expr)}", f"{ind}if v < m:", f"{ind}    m = v"]
+            cases.append((k, body + [f"{ind}return m"]))
+    return cases
+
+
+def transition_table(system: PiecewiseSystem) -> np.ndarray:
+    """Integer table of transitions: source, surface, direction, target, has_reset."""
+    rows = [
+        (
+            system.mode_index(tr.source),
+            system.surface_index(tr.surface),
+            int(tr.direction),
+            system.mode_index(tr.target),
+            int(system.resets[k] is not None),
+        )
+        for k, tr in enumerate(system.transitions)
+    ]
+    return np.array(rows, dtype=np.int64).reshape(len(rows), 5)
+
+
+SPECIALIZED_DIMENSIONS = range(1, 5)
+"""State dimensions with an engine of their own, where ``N_STATE`` is a compile-time constant (loops
+over the state of known length: about 3x fewer cycles per step for small systems).  Every other
+dimension shares the engine compiled with ``N_STATE = 0``."""
+
+
+def engine_dimension(n: int) -> int:
+    """The ``N_STATE`` of the engine that integrates models of ``n`` states (0: the shared engine)."""
+    return n if n in SPECIALIZED_DIMENSIONS else 0
+
+
+def engine_source(n_state: int) -> str:
+    """The engine's module: the contract, ``N_STATE``, the DOP853 tableau, then the integrator template."""
+    head = [
+        f"# Generated by saltation.engine.codegen: the engine for N_STATE = {n_state}. Do not edit.",
+        _CONTRACT.read_text(),
+        f"N_STATE = {n_state}  # 0: any state dimension, taken from the arrays",
+        "import numpy as np",
+    ]
+    head += [f"RK_{name} = np.array({arr.tolist()!r})" for name, arr in _dop853_tableau().items()]
+    return "\n".join(head) + "\n\n" + _model_from_addresses_source() + "\n\n" + _TEMPLATE.read_text()
+
+
+def _model_from_addresses_source() -> str:
+    """``model_from_addresses(addresses, affine_modes)``: the engine's model tuple, in the contract's
+    order, built from the addresses of the model's functions (see :func:`model_addresses`)."""
+    lines = ["from numba import njit", ""]
+    lines += [f"_FUNCTION_TYPE_{k} = MODEL_TYPE.types[{k}]" for k in range(len(MODEL_FUNCTIONS))]
+    lines += [
+        "",
+        "",
+        "@njit(cache=True)",
+        "def model_from_addresses(a, affine_modes):",
+        '    """The model tuple (``MODEL_TYPE``) from the addresses of its functions, two per row."""',
+        "    return (",
+    ]
+    lines += [f"        _function_at(_FUNCTION_TYPE_{k}, a[{k}, 0], a[{k}, 1]),  # {name}" for k, name in enumerate(MODEL_FUNCTIONS)]
+    lines += ["        affine_modes,", "    )", ""]
+    return "\n".join(lines)
+
+
+def model_addresses(model: tuple) -> np.ndarray:
+    """The addresses the engine takes for a model tuple's functions: per function (in the contract's
+    order) its C wrapper and its numba entry point, from numba's own helpers for first-class functions.
+    They stay valid while the functions live (:class:`~saltation.engine.flow.Flow` keeps them)."""
+    from numba.experimental.function_type import _get_jit_address, _get_wrapper_address
+
+    rows = [
+        (_get_wrapper_address(f, sig), _get_jit_address(f, sig))
+        for f, sig in zip(model[: len(MODEL_FUNCTIONS)], MODEL_SIGNATURES.values())
+    ]
+    addresses = np.array(rows, dtype=np.int64)
+    if (addresses <= 0).any():
+        raise RuntimeError("a model function has no compiled entry point for its signature in the contract")
+    return addresses
+
+
+def model_source(system: PiecewiseSystem) -> str:
+    """The module of a model's compiled functions: the contract (their signatures), then the functions."""
+    return _CONTRACT.read_text() + "\n\n" + generate_source(system)
+
+
+# -- the kernel cache ---------------------------------------------------------------------------------
+
+
+class KernelCacheError(SaltationError, RuntimeError):
+    """The kernel cache cannot be used: it cannot be written, or an entry cannot be rebuilt.
+
+    The message names the folder concerned and what to do (make it writable, free space, delete it, or
+    point ``SALTATION_CACHE_DIR`` elsewhere).
+    """
+
+
+def cache_directory() -> Path:
+    """The configured kernel cache folder: ``$SALTATION_CACHE_DIR`` if set, otherwise
+    ``$XDG_CACHE_HOME/saltation`` (``~/.cache/saltation``), as an absolute path.
+
+    It is used if it can be written; otherwise :func:`active_cache_directory` falls back to
+    :func:`fallback_directory`.
+    """
+    env = os.environ.get("SALTATION_CACHE_DIR")
+    if env:
+        return Path(os.path.abspath(os.path.expanduser(env)))
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(os.path.abspath(base)) / "saltation"
+
+
+def fallback_directory() -> Path:
+    """The per-user folder used when :func:`cache_directory` cannot be written:
+    ``saltation-<user id>`` in the temporary folder (``/tmp``), private to the user."""
+    uid = os.getuid() if hasattr(os, "getuid") else os.environ.get("USERNAME", "user")
+    return Path(tempfile.gettempdir()) / f"saltation-{uid}"
+
+
+_ACTIVE: dict[str, Path] = {}  # configured folder -> the folder used (itself, or the fallback)
+_NOTICES: set[str] = set()  # messages already printed by this process
+
+
+def _notice(message: str) -> None:
+    """Print ``message`` on standard error, once per process."""
+    if message not in _NOTICES:
+        _NOTICES.add(message)
+        print(f"saltation: {message}", file=sys.stderr, flush=True)
+
+
+def _numba_cache_dir(directory: Path) -> Path:
+    """Where numba keeps the compiled code of the modules in ``directory``: ``__pycache__`` beside them,
+    or under ``$NUMBA_CACHE_DIR`` if that is set (numba's own choice of location)."""
+    from numba.core import config
+
+    if config.CACHE_DIR:
+        from numba.core.caching import _CacheLocator
+
+        return Path(config.CACHE_DIR) / _CacheLocator.get_suitable_cache_subpath(str(directory / "module.py"))
+    return directory / "__pycache__"
+
+
+def _write_problem(directory: Path) -> str | None:
+    """Why modules cannot be written to ``directory`` and compiled there (``None``: they can).
+
+    Creates the folder and numba's folder for it if needed, and writes a temporary file in each (the
+    test numba makes before it caches anything)."""
+    for folder in (directory, _numba_cache_dir(directory)):
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            tempfile.TemporaryFile(dir=folder).close()
+        except OSError as exc:
+            return f"{folder}: {type(exc).__name__}: {exc.strerror or exc}"
+    return None
+
+
+def _private_problem(directory: Path) -> str | None:
+    """Why the fallback folder may not be used (``None``: it may): it must be a real folder of this user
+    that no one else can write, since the modules in it are imported."""
+    try:
+        directory.mkdir(mode=0o700, parents=True, exist_ok=True)
+        st = os.lstat(directory)
+    except OSError as exc:
+        return f"{type(exc).__name__}: {exc.strerror or exc}"
+    if not stat.S_ISDIR(st.st_mode):
+        return "it is not a folder (a symbolic link or a file)"
+    if hasattr(os, "getuid") and (st.st_uid != os.getuid() or st.st_mode & 0o022):
+        return "it belongs to another user or others can write to it"
+    return _write_problem(directory)
+
+
+def active_cache_directory() -> Path:
+    """The kernel cache folder this process uses.
+
+    :func:`cache_directory` if modules can be written to it (and numba's cache beside them);
+    otherwise :func:`fallback_directory`, saying so once on standard error (modules already compiled
+    in the configured folder are copied from it, not recompiled).
+
+    Raises
+    ------
+    KernelCacheError
+        If neither folder can be used.
+    """
+    primary = cache_directory()
+    with _IMPORT_LOCK:
+        if str(primary) in _ACTIVE:
+            return _ACTIVE[str(primary)]
+        problem = _write_problem(primary)
+        if problem is None:
+            active = primary
+        else:
+            active = fallback_directory()
+            other = _private_problem(active)
+            if other is not None:
+                raise KernelCacheError(
+                    f"the kernel cache {primary} cannot be written ({problem}), nor the fallback {active} ({other}); "
+                    "make one of them writable, or set SALTATION_CACHE_DIR to a writable folder"
+                )
+            _notice(
+                f"the kernel cache {primary} cannot be written ({problem}); using {active} instead (modules "
+                f"compiled in {primary} are copied from it). Make {primary} writable or set SALTATION_CACHE_DIR "
+                "to a writable folder to keep compiled modules there."
+            )
+        _ACTIVE[str(primary)] = active
+        return active
+
+
+def _versions() -> str:
+    """What a compiled module depends on besides its source: numba's and Python's versions."""
+    import numba
+
+    return f"numba {numba.__version__}; {sys.implementation.cache_tag} {sys.version_info[:3]}; {sys.platform}"
+
+
+def _digest(*texts: str) -> str:
+    return hashlib.sha256("\0".join(texts).encode()).hexdigest()[:20]
+
+
+_ENGINES: dict[int, tuple[str, str]] = {}  # N_STATE -> (stem, source) in this process
+_MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # system -> (stem, source)
+
+
+def _engine_module(n_state: int) -> tuple[str, str]:
+    """The engine's module name (``engine_n<N>_<hash of its source and versions>``) and its source."""
+    with _IMPORT_LOCK:
+        if n_state not in _ENGINES:
+            source = engine_source(n_state)
+            _ENGINES[n_state] = (f"engine_n{n_state}_{_digest(source, _versions())}", source)
+        return _ENGINES[n_state]
+
+
+def _model_module(system: PiecewiseSystem) -> tuple[str, str]:
+    """A model's module name (``<model name>_<hash of its source and versions>``) and its source.
+
+    The name hashes the generated source itself, so two models share a module exactly when everything
+    compiled into it is the same (fields, surfaces, transitions, guards, resets, domains, the period and
+    its derivatives, the order of states and parameters, the contract, the code that generates it).
+    The source is generated once per system object in a process."""
+    with _IMPORT_LOCK:
+        try:
+            hit = _MODELS.get(system)
+        except TypeError:  # an object that cannot be a weak key: generate each time
+            hit = None
+        if hit is None:
+            source = model_source(system)
+            hit = (f"{system.name}_{_digest(source, _versions())}", source)
+            try:
+                _MODELS[system] = hit
+            except TypeError:
+                pass
+        return hit
+
+
+def _engine_path(n_state: int) -> Path:
+    """Where the engine of a dimension lives in the active cache folder."""
+    return active_cache_directory() / f"{_engine_module(n_state)[0]}.py"
+
+
+def _model_path(system: PiecewiseSystem) -> Path:
+    """Where a model's functions live in the active cache folder."""
+    return active_cache_directory() / f"{_model_module(system)[0]}.py"
+
+
+def _numba_files(numba_dir: Path, stem: str) -> list[Path]:
+    """numba's index (``.nbi``) and data (``.nbc``) files of the module ``stem``."""
+    files = [*numba_dir.glob(f"{stem}.*.nbi"), *numba_dir.glob(f"{stem}.*.nbc")]
+    files += [*numba_dir.glob(f"*-{stem}.*.nbi"), *numba_dir.glob(f"*-{stem}.*.nbc")]  # (library caches)
+    return sorted(set(files))
+
+
+def _cached(stem: str, function: str) -> bool:
+    """Whether numba's on-disk cache holds ``function`` of the module ``stem`` (in the active folder, or
+    in the configured one it would be copied from)."""
+    folders = {active_cache_directory(), cache_directory()}
+    return any(any(_numba_cache_dir(d).glob(f"{stem}.{function}-*.nbi")) for d in folders)
+
+
+def is_engine_compiled(n: int) -> bool:
+    """Whether the engine that integrates models of ``n`` states is compiled on this machine."""
+    stem = _engine_module(engine_dimension(n))[0]
+    return _cached(stem, "integrate_kernel") and _cached(stem, "correct_periodic")
+
+
+def is_compiled(system: PiecewiseSystem) -> bool:
+    """Whether numba's on-disk cache already holds the engine for this model and the model's functions."""
+    from saltation.engine.compiled import CompiledSystem
+
+    if isinstance(system, CompiledSystem):
+        return False  # its functions are compiled in each process
+    return is_engine_compiled(system.n) and _cached(_model_module(system)[0], "vector_field")
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file renamed over it, so that a crash leaves
+    either the old file or the whole new one, never a part."""
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+def _intact(path: Path, pickles: int) -> bool:
+    """Whether ``path`` holds ``pickles`` whole pickles and nothing else (read without running them)."""
+    try:
+        with open(path, "rb") as fh:
+            for _ in range(pickles):
+                for _op in pickletools.genops(fh):
+                    pass
+            return fh.read(1) == b""
+    except Exception:  # noqa: BLE001 (a damaged pickle raises anything: ValueError, EOFError, ...)
+        return False
+
+
+def _remove(files: list[Path]) -> None:
+    for f in files:
+        with contextlib.suppress(FileNotFoundError):
+            f.unlink()
+
+
+def _seed(stem: str, data: bytes, directory: Path) -> bool:
+    """Copy the module ``stem`` and numba's files for it from the configured cache folder to ``directory``
+    (the fallback), if the configured folder holds it intact.  Whether it did."""
+    primary = cache_directory()
+    if primary == directory:
+        return False
+    try:
+        if (primary / f"{stem}.py").read_bytes() != data:
+            return False
+        files = _numba_files(_numba_cache_dir(primary), stem)
+        contents = [(f.name, f.read_bytes()) for f in files]
+    except OSError:
+        return False
+    target = _numba_cache_dir(directory)
+    for name, content in contents:
+        _write_atomic(target / name, content)
+    _write_atomic(directory / f"{stem}.py", data)
+    return True
+
+
+def _prepare(directory: Path, stem: str, source: str, what: str) -> bool:
+    """Make ``directory/<stem>.py`` hold exactly ``source`` and numba's files for it whole (a damaged
+    module is rewritten; damaged numba files are removed, so numba compiles those functions again).
+    Whether anything compiled before is there to be loaded."""
+    path = directory / f"{stem}.py"
+    data = source.encode()
+    try:
+        current = path.read_bytes()
+    except FileNotFoundError:
+        current = None
+    if current != data and not (current is None and _seed(stem, data, directory)):
+        if current is not None:
+            _notice(f"the cached module of {what} {path} was damaged (it is not the source it is named after); "
+                    "rewriting it")
+        _remove(list((directory / "__pycache__").glob(f"{stem}.*.pyc")))  # Python's own bytecode of it
+        _write_atomic(path, data)
+    numba_dir = _numba_cache_dir(directory)
+    files = _numba_files(numba_dir, stem)
+    damaged = [f for f in files if not _intact(f, 2 if f.suffix == ".nbi" else 1)]
+    if damaged:
+        names = ", ".join(f.name for f in damaged[:2]) + (f" and {len(damaged) - 2} more" if len(damaged) > 2 else "")
+        _notice(f"numba's cache of {what} in {numba_dir} was damaged ({names}); compiling it again")
+        _remove(damaged)  # (numba compiles what has no index, or whose index names a missing data file)
+    return current == data or len(files) > len(damaged)
+
+
+def _execute(path: Path, modname: str) -> ModuleType:
+    """Import the module at ``path`` under ``modname`` (numba compiles, or loads from its cache, the
+    functions compiled eagerly)."""
+    spec = importlib.util.spec_from_file_location(modname, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[modname] = module  # numba finds a module's globals by its name when it loads its cache
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        sys.modules.pop(modname, None)
+        raise
+    return module
+
+
+def _environment_failure(exc: BaseException) -> bool:
+    """Whether ``exc`` is the file system's (a folder numba or saltation cannot write, a full disk)
+    rather than a fault of the generated code."""
+    return isinstance(exc, OSError) or (isinstance(exc, RuntimeError) and "no locator" in str(exc))
+
+
+def _load(stem: str, source: str, modname: str, what: str) -> ModuleType:
+    """Import the generated module ``stem`` (``source``) from the active cache folder, once per process.
+
+    A module or numba cache file that is damaged is rebuilt; a module that does not load from what
+    was cached (a damaged file that still looked whole) is rebuilt from scratch, once.
+
+    Raises
+    ------
+    KernelCacheError
+        If the folder cannot be written, or the module cannot be rebuilt in it.
+    """
+    with _IMPORT_LOCK:
+        if modname in _LOADED:
+            return _LOADED[modname]
+        directory = active_cache_directory()
+        path = directory / f"{stem}.py"
+        delete = f"delete the folder {directory} (it only holds compiled code) and run again"
+        try:
+            prior = _prepare(directory, stem, source, what)
+        except OSError as exc:
+            raise KernelCacheError(f"cannot read or write {what} in the kernel cache {directory} "
+                                   f"({type(exc).__name__}: {exc}); free space or make it writable, or {delete}") from exc
+        try:
+            module = _execute(path, modname)
+        except Exception as exc:
+            if not prior:  # a fresh build failed: the cache did not cause it
+                if _environment_failure(exc):
+                    raise KernelCacheError(f"cannot compile {what} in the kernel cache {directory} "
+                                           f"({type(exc).__name__}: {exc}); make it writable, or {delete}") from exc
+                raise
+            _notice(f"{what} did not load from the kernel cache {directory} ({type(exc).__name__}: "
+                    f"{' '.join(str(exc).split())[:200]}); compiling it again")
+            try:
+                numba_dir = _numba_cache_dir(directory)
+                _remove(_numba_files(numba_dir, stem) + list((directory / "__pycache__").glob(f"{stem}.*.pyc")))
+                _write_atomic(path, source.encode())
+                module = _execute(path, modname)
+            except Exception as again:
+                if _environment_failure(again) or _environment_failure(exc):
+                    raise KernelCacheError(f"{what} cannot be rebuilt in the kernel cache {directory} "
+                                           f"({type(again).__name__}: {again}); {delete}") from again
+                raise
+        _LOADED[modname] = module
+        return module
+
+
+def load_engine(n: int) -> ModuleType:
+    """Import the engine that integrates models of ``n`` states, compiling it first if this machine has
+    not yet (once; it says so on standard error, since it takes a while)."""
+    n_state = engine_dimension(n)
+    stem, source = _engine_module(n_state)
+    modname = f"_saltation_engine_{stem}"
+    if modname not in _LOADED and not is_engine_compiled(n):
+        which = f"{n_state}-state models" if n_state else f"models of {min(SPECIALIZED_DIMENSIONS.stop, n)} or more states"
+        print(
+            f"saltation: compiling the integrator for {which}, once for this machine (about a minute; "
+            f"cached in {active_cache_directory()})",
+            file=sys.stderr, flush=True,
+        )
+    return _load(stem, source, modname, f"the integrator for N_STATE = {n_state}")
+
+
+_LOADED_COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # CompiledSystem -> model tuple
+
+
+def load_model_functions(system: PiecewiseSystem) -> tuple:
+    """The model tuple the engine takes (see the contract): the model's compiled functions and which
+    modes are affine, generated, written and compiled if needed (cached per machine)."""
+    from saltation.engine.compiled import CompiledSystem, build_model_functions
+
+    if isinstance(system, CompiledSystem):
+        with _IMPORT_LOCK:  # (kept per object: an id in a key could be reused by a later object)
+            if system not in _LOADED_COMPILED:
+                _LOADED_COMPILED[system] = build_model_functions(system)
+            return _LOADED_COMPILED[system]
+    stem, source = _model_module(system)
+    return _load(stem, source, f"_saltation_model_{stem}", f"the functions of model {system.name!r}").MODEL

@@ -1,0 +1,257 @@
+"""Floquet multipliers, from the monodromy matrix, and set-valued multipliers at non-smooth points."""
+
+from __future__ import annotations
+
+import cmath
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import lapack
+
+
+def multipliers_from_monodromy(monodromy: np.ndarray, *, backward: bool = False) -> np.ndarray:
+    """Forward-time Floquet multipliers, sorted by decreasing magnitude.
+
+    Parameters
+    ----------
+    monodromy : ndarray, shape (n, n)
+        Fundamental solution matrix over one period in the direction of integration.
+    backward : bool
+        Whether the monodromy was computed in backward time; the forward
+        multipliers are then the reciprocals of its eigenvalues, and a zero
+        backward multiplier becomes an infinite forward one (an infinitely
+        unstable orbit).
+    """
+    mu = eigenvalues(monodromy)
+    if backward:
+        mu = reciprocal(mu)
+    return sort_multipliers(mu)
+
+
+@dataclass(frozen=True)
+class AutonomousMultipliers:
+    """Floquet multipliers of an autonomous orbit, the trivial direction deflated.
+
+    Attributes
+    ----------
+    multipliers : ndarray, complex
+        Forward-time multipliers, sorted as :func:`sort_multipliers`: the
+        trivial one (``n.T M n`` along the unit velocity ``n``) and the
+        eigenvalues of the return map's derivative on the section normal to the flow.
+    trivial_error : float
+        ``|M n - n|``: how far the monodromy is from mapping the flow direction
+        to itself (0 for an exact monodromy of a closed orbit).  It bounds the
+        trivial multiplier's distance from 1 and is the accuracy figure of the
+        monodromy matrix.
+    """
+
+    multipliers: np.ndarray
+    trivial_error: float
+
+
+def autonomous_multipliers(monodromy: np.ndarray, velocity: np.ndarray, *, backward: bool = False) -> AutonomousMultipliers:
+    """Multipliers of an autonomous orbit with the trivial direction deflated.
+
+    The monodromy ``M`` of a closed orbit maps the velocity ``f(x0)`` to itself.
+    In an orthonormal basis ``[n, Q]`` with ``n = f / |f|``, ``Q.T M Q`` is the
+    derivative of the return map on the section through ``x0`` normal to the
+    flow (the projection along ``f`` of ``M`` onto that section), whose
+    eigenvalues are the nontrivial multipliers; the trivial one is
+    ``n.T M n``.  A fold of a two-state orbit then reports ``1`` and ``1``
+    (not the pair ``1 +- i sqrt(err)`` that the double eigenvalue of the full
+    matrix gives under rounding).
+
+    Parameters
+    ----------
+    monodromy : ndarray, shape (n, n)
+        In the direction of integration.
+    velocity : ndarray, shape (n,)
+        The vector field at the orbit's state (the sliding field on a sliding motion).
+    backward : bool
+        Reciprocal multipliers (see :func:`multipliers_from_monodromy`); a backward
+        multiplier not above ``max(1e-13, trivial_error)`` in magnitude, zero to the
+        monodromy's accuracy, becomes an infinite forward one.
+
+    Raises
+    ------
+    ValueError
+        If the velocity is zero (a stationary state has no flow direction).
+    """
+    M = np.asarray(monodromy, dtype=float)
+    f = np.asarray(velocity, dtype=float)
+    norm = float(np.linalg.norm(f))
+    if not norm > 0.0 or not math.isfinite(norm):
+        raise ValueError("the velocity is zero or not finite: no flow direction to deflate")
+    n_dir = f / norm
+    # Householder reflection: an orthonormal basis whose first vector is n_dir
+    v = n_dir.copy()
+    v[0] += math.copysign(1.0, v[0] if v[0] != 0.0 else 1.0)
+    H = np.eye(len(f)) - 2.0 * np.outer(v, v) / float(v @ v)
+    Q = H[:, 1:]
+    Mn = M @ n_dir
+    trivial = float(n_dir @ Mn)
+    error = float(np.linalg.norm(Mn - n_dir))
+    mu = np.append(complex(trivial), eigenvalues(Q.T @ M @ Q)) if len(f) > 1 else np.array([complex(trivial)])
+    if backward:  # a backward multiplier within the monodromy's accuracy of zero is an infinite forward one
+        mu = reciprocal(mu, zero=max(1e-13, error))
+    return AutonomousMultipliers(sort_multipliers(mu), error)
+
+
+def eigenvalues(matrix: np.ndarray) -> np.ndarray:
+    """Eigenvalues of a real square matrix, complex.
+
+    LAPACK's ``dgeev`` (what :func:`numpy.linalg.eigvals` calls) through
+    :mod:`scipy.linalg.lapack`, without numpy's per-call dispatch, which costs
+    several times the work for the small matrices of a monodromy.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the matrix is not finite or the QR algorithm does not converge.
+    """
+    a = np.asarray(matrix, dtype=float)
+    if not np.isfinite(a).all():
+        raise np.linalg.LinAlgError("matrix contains infs or NaNs: no eigenvalues")
+    wr, wi, _, _, info = lapack.dgeev(a, compute_vl=0, compute_vr=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"eigenvalues did not converge (LAPACK dgeev info = {info})")
+    mu = np.empty(wr.shape, dtype=complex)
+    mu.real = wr
+    mu.imag = wi
+    return mu
+
+
+def reciprocal(mu: np.ndarray, *, zero: float = 1e-13) -> np.ndarray:
+    """``1 / mu`` with multipliers below ``zero`` in magnitude mapped to infinity."""
+    out = np.empty_like(mu, dtype=complex)
+    for i, m in enumerate(mu):
+        out[i] = complex(np.inf, 0.0) if abs(m) <= zero else 1.0 / m
+    return out
+
+
+def sort_multipliers(mu: np.ndarray) -> np.ndarray:
+    """Sort by decreasing magnitude, then by argument (deterministic order)."""
+    values = np.asarray(mu, dtype=complex).tolist()  # a plain sort: numpy's lexsort costs more for a few values
+    return np.array(sorted(values, key=lambda z: (-abs(z), -cmath.phase(z))), dtype=complex)
+
+
+def trivial_multiplier_error(mu: np.ndarray) -> float:
+    """Distance from 1 of the multiplier closest to 1 (the trivial one of an autonomous orbit)."""
+    finite = mu[np.isfinite(mu)]
+    return float(np.min(np.abs(finite - 1.0))) if finite.size else np.inf
+
+
+def is_stable(mu: np.ndarray, *, autonomous: bool, tol: float = 1e-6) -> bool:
+    """All multipliers inside the unit circle (the trivial one excepted for autonomous orbits)."""
+    mu = np.asarray(mu, dtype=complex)
+    keep = np.abs(mu) < 1.0 + tol
+    if autonomous and mu.size:
+        keep[int(np.argmin(np.where(np.isfinite(mu), np.abs(mu - 1.0), np.inf)))] = True  # the trivial one
+    return bool(np.all(keep))
+
+
+@dataclass(frozen=True)
+class SetValuedMultipliers:
+    """Eigenvalue paths of ``(1 - q) M- + q M+`` for ``q`` in ``[0, 1]``.
+
+    Attributes
+    ----------
+    q : ndarray, shape (m,)
+    paths : ndarray, shape (m, n), complex
+        Multipliers at each ``q`` (continuous paths, matched by proximity).
+    """
+
+    q: np.ndarray
+    paths: np.ndarray
+
+
+def set_valued_multipliers(
+    m_minus: np.ndarray, m_plus: np.ndarray, *, num: int = 401, backward: bool = False
+) -> SetValuedMultipliers:
+    """Set-valued Floquet multipliers at a non-smooth point (convex hull of ``M-`` and ``M+``).
+
+    For backward-time monodromies the convex combination is formed in
+    backward time and the paths are mapped to forward-time multipliers.
+    """
+    q = np.linspace(0.0, 1.0, num)
+    n = m_minus.shape[0]
+    hull = (1.0 - q)[:, None, None] * m_minus + q[:, None, None] * m_plus
+    eigenvalues = np.linalg.eigvals(hull).astype(complex)  # one stacked call
+    paths = np.empty((num, n), dtype=complex)
+    prev = None
+    for k in range(num):
+        mu = sort_multipliers(eigenvalues[k]) if prev is None else _match(prev, eigenvalues[k])
+        paths[k] = mu
+        prev = mu
+    if backward:
+        paths = np.array([reciprocal(row) for row in paths])
+    return SetValuedMultipliers(q=q, paths=paths)
+
+
+def _match(prev: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """Reorder ``new`` to follow ``prev`` (greedy nearest neighbour)."""
+    out = np.empty_like(prev)
+    left = list(range(len(new)))
+    for i, m in enumerate(prev):
+        j = min(left, key=lambda jj: abs(new[jj] - m))
+        out[i] = new[j]
+        left.remove(j)
+    return out
+
+
+def product_eigenvalues(factors: Sequence[np.ndarray]) -> np.ndarray:
+    """Eigenvalues of ``factors[-1] @ ... @ factors[0]``, from the factors (periodic Schur decomposition).
+
+    Parameters
+    ----------
+    factors : sequence of ndarray, shape (n, n)
+        The factors in the order they act (the first acts first).
+
+    Returns
+    -------
+    ndarray, complex, shape (n,)
+    """
+    mats = [np.asarray(a, dtype=float) for a in factors]
+    n = mats[0].shape[0]
+    if n == 0:
+        return np.zeros(0, dtype=complex)
+    if n == 1:
+        return np.array([complex(np.prod([a[0, 0] for a in mats]))])
+    if len(mats) == 1:
+        return np.linalg.eigvals(mats[0]).astype(complex)
+    from slycot import mb03vd, mb03wd  # SLICOT: the reduction to periodic Hessenberg form, then the QZ-like sweep
+
+    p = len(mats)
+    # SLICOT's convention is H = H_1 H_2 ... H_p: the factor acting last comes first
+    stack = np.asfortranarray(np.stack(mats[::-1], axis=2))
+    reduced, _ = mb03vd(n, 1, n, stack)
+    h = np.array(reduced, order="F")
+    for j in range(p):  # below the Hessenberg (first) and triangular (others) parts lie the reflectors
+        h[:, :, j] = np.triu(h[:, :, j], -1 if j == 0 else 0)
+    t, _, w = mb03wd("S", "N", n, 1, n, 1, n, h, np.zeros((n, n, p), order="F"))
+    w = np.asarray(w, dtype=complex)
+    # A 2x2 block of the first factor's quasi-triangular form whose eigenvalues are real (MB03WD leaves
+    # such a block unsplit when its iteration stalls) has them from the formed 2x2 product, which loses
+    # the small one to eps times the large one.  The small one is taken instead from the determinant,
+    # a product of the blocks' determinants (each well computed): det(B) / (the large one).
+    k = 0
+    while k < n - 1:
+        if t[k + 1, k, 0] != 0.0:
+            pair = w[k:k + 2]
+            if pair[0].imag == 0.0 and pair[1].imag == 0.0:
+                det = 1.0
+                for j in range(p):
+                    block = t[k:k + 2, k:k + 2, j]
+                    det *= block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0]
+                big = k if abs(pair[0]) >= abs(pair[1]) else k + 1
+                if w[big] != 0.0:
+                    w[2 * k + 1 - big] = det / w[big].real
+            k += 2
+        else:  # a 1x1 block: the product of the factors' diagonal entries (MB03WD's own value of it is
+            # scaled and loses digits)
+            w[k] = np.prod(t[k, k, :])
+            k += 1
+    if k == n - 1:
+        w[k] = np.prod(t[k, k, :])
+    return np.asarray(w, dtype=complex)

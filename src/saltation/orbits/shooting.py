@@ -1,0 +1,1236 @@
+"""Periodic solutions by shooting, and equilibria, as problems ``r(u, lambda) = 0``.
+
+A shooting problem exposes the residual of the period map and its exact
+Jacobian (the monodromy matrix, with every saltation matrix applied) through
+the small protocol that :mod:`saltation.branches.continuation` uses:
+``evaluate(u, lam) -> Evaluation(residual, jac_u, jac_lam, ...)``.
+
+* Forced systems: ``u = x0``, period ``T`` fixed by the forcing,
+  ``r = phi(t0 + s T; t0, x0) - x0`` with ``s = +1`` (forward) or ``-1``
+  (backward time).
+* Autonomous systems: ``u = (x0, T)``, the same residual closed by the phase
+  condition ``f(x_ref) . (x0 - x_ref) = 0``.
+
+Degenerate cases, each with its rule (see the orbits page of the user guide):
+
+* the guess lies on (or next to) a switching surface: the shooting state is
+  moved along the guess's own trajectory to the middle of its longest stretch
+  between events, so that the section (the phase condition) is transverse to
+  the flow and away from every surface;
+* a shot that ends on a surface, in the mode the transition out of it leads
+  away from the start mode, gets that transition applied at the end of the
+  period (its reset and saltation matrix): every event is logged once per period;
+* a state that does not move over the period (an equilibrium, a
+  pseudo-equilibrium, a period shrunk to zero) raises
+  :class:`~saltation.errors.StationaryStateError`;
+* an autonomous orbit whose monodromy does not map the flow direction to itself
+  (trivial multiplier off by more than :data:`TRIVIAL_MULTIPLIER_ACCURACY`)
+  raises :class:`~saltation.errors.InconsistentResultError`;
+* forced systems integrate from ``t0`` reduced modulo the forcing period,
+  autonomous ones from ``t = 0``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from saltation.errors import (
+    ConvergenceError,
+    InconsistentResultError,
+    IntegrationError,
+    ModelError,
+    NoOrbitNearGuessError,
+    SaltationError,
+    StationaryStateError,
+)
+from saltation.orbits.floquet import (
+    autonomous_multipliers,
+    is_stable,
+    multipliers_from_monodromy,
+    product_eigenvalues,
+    reciprocal,
+    sort_multipliers,
+)
+from saltation.engine.flow import EventKind, Flow, SwitchingEvent, Tolerances, Trajectory
+
+#: The largest error of an autonomous orbit's trivial multiplier (``|M n - n|``, see
+#: :func:`saltation.orbits.floquet.autonomous_multipliers`) that a converged orbit may have.
+TRIVIAL_MULTIPLIER_ACCURACY = 1e-6
+#: An event closer than this fraction of the period to the start of the shooting interval moves the
+#: shooting state of a guess (or of a branch's orbit) to the middle of its longest stretch between events.
+SEAM_MARGIN = 0.02
+#: A state whose excursion over the period is below this many times the integration tolerance does not move.
+STATIONARY_FACTOR = 100.0
+#: Newton steps of an autonomous orbit that make the period longer than this many times its guess are
+#: shortened (as steps that do not reduce the residual): a period near zero can throw the next iterate far away.
+PERIOD_GROWTH = 100.0
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Residual and Jacobians of a problem at ``(u, lam)``."""
+
+    residual: np.ndarray
+    jac_u: np.ndarray
+    jac_lam: np.ndarray | None
+    trajectory: Trajectory | None = None
+
+
+@dataclass(frozen=True)
+class SolutionSummary:
+    """What a branch records of a solved point."""
+
+    state: np.ndarray
+    period: float
+    amplitude: float
+    half_peak_to_peak: float
+    multipliers: np.ndarray
+    stable: bool
+    event_labels: tuple[str, ...]
+    monodromy: np.ndarray | None = None
+    #: the event sequence by identity (see :func:`event_ids`): what detectors compare
+    event_ids: tuple[tuple[int, int, int], ...] = ()
+    #: autonomous orbits: ``|M n - n|`` along the flow direction ``n``, the monodromy's accuracy figure
+    trivial_error: float = float("nan")
+    #: ``max_i (max x_i - min x_i)`` over the period: how far the orbit moves (0 for an equilibrium)
+    excursion: float = float("nan")
+
+
+def orbit_events(traj: Trajectory) -> list:
+    """The events of a periodic orbit's trajectory, as the orbit's cycle of events.
+
+    An orbit that is sliding at ``t0`` starts its sliding motion there (an
+    event at ``t0``) and ends the period on it: that is one sliding motion cut
+    by the section ``t = t0``, counted once (by its arrival at the end), so
+    that the sequence of an orbit does not change as its events pass ``t0``.
+    """
+    events = traj.events
+    if (events and events[0].kind == EventKind.SLIDING_START and events[0].t == traj.t0 and traj.sliding_at_end
+            and any(e.kind == EventKind.SLIDING_START and e.surface == events[0].surface for e in events[1:])):
+        return events[1:]
+    return events
+
+
+def event_ids(traj: Trajectory) -> tuple[tuple[int, int, int], ...]:
+    """The orbit's events by identity: ``(kind, transition index, mode entered)`` each.
+
+    Two transitions that differ only in their guard (or reset) have the same
+    label but not the same index; a sliding motion's end is told by the mode
+    it leaves into.  Detectors of non-smooth points compare these.
+    """
+    names = traj.system.mode_names
+    return tuple((int(e.kind), int(e.transition), names.index(e.mode_to)) for e in orbit_events(traj))
+
+
+def event_labels(traj: Trajectory) -> tuple[str, ...]:
+    """Readable labels of a trajectory's events (see :func:`orbit_events`): the transition, or the sliding
+    motion started or ended."""
+    sys_ = traj.system
+    labels = []
+    for e in orbit_events(traj):
+        if e.kind == EventKind.TRANSITION:
+            labels.append(sys_.transitions[e.transition].label)
+        elif e.kind == EventKind.SLIDING_START:
+            labels.append(f"slide on {e.surface} ({e.mode_from}|{e.mode_to})")
+        else:
+            labels.append(f"leave {e.surface} sliding -> {e.mode_to}")
+    return tuple(labels)
+
+
+@dataclass(frozen=True)
+class PeriodicOrbit:
+    """A periodic solution found by shooting.
+
+    Attributes
+    ----------
+    state0 : ndarray, shape (n,)
+        State at ``t0`` on the orbit.
+    period : float
+    t0 : float
+    backward : bool
+        Whether the orbit was computed in backward time.
+    parameters : ndarray
+        Parameter values.
+    monodromy : ndarray, shape (n, n)
+        Monodromy in the direction of integration.
+    multipliers : ndarray, complex
+        Forward-time Floquet multipliers (``inf`` for an infinitely unstable direction).
+    trajectory : Trajectory
+        One period, with its events.
+    converged : bool
+    iterations : int
+    residual_norm : float
+    residuals : list of float
+        Newton residual history.
+    trivial_error : float
+        Autonomous orbits: ``|M n - n|`` along the unit velocity ``n`` (see
+        :func:`saltation.orbits.floquet.autonomous_multipliers`), at most
+        :data:`TRIVIAL_MULTIPLIER_ACCURACY`; ``nan`` for forced orbits.  By multiple shooting, the
+        largest ``|Phi_i f(x_i) - f(x_(i+1))| / |f(x_(i+1))|`` over the segments.
+    segments : int
+        The number of shooting segments (1: single shooting).
+    nodes : ndarray, shape (segments, n), or None
+        The segments' initial states (multiple shooting); the first is ``state0``.
+    """
+
+    system_name: str
+    state0: np.ndarray
+    period: float
+    t0: float
+    backward: bool
+    autonomous: bool
+    parameters: np.ndarray
+    monodromy: np.ndarray
+    multipliers: np.ndarray
+    trajectory: Trajectory
+    converged: bool
+    iterations: int
+    residual_norm: float
+    residuals: list[float] = field(default_factory=list)
+    trivial_error: float = float("nan")
+    #: the shooting problem that found it (its flow, tolerances and section): what
+    #: :func:`saltation.special_points.continuation.continue_orbit` follows
+    problem: ShootingProblem | None = field(default=None, repr=False, compare=False)
+    #: the number of shooting segments (1: single shooting), and their initial states (multiple shooting)
+    segments: int = 1
+    nodes: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def amplitude(self) -> float:
+        """``max |x_1|`` over the period."""
+        return float(max(abs(self.trajectory.x_max[0]), abs(self.trajectory.x_min[0])))
+
+    @property
+    def half_peak_to_peak(self) -> float:
+        """``(max x_1 - min x_1) / 2`` over the period."""
+        return float(0.5 * (self.trajectory.x_max[0] - self.trajectory.x_min[0]))
+
+    @property
+    def backward_multipliers(self) -> np.ndarray:
+        """Eigenvalues of the monodromy in the direction of integration."""
+        return np.linalg.eigvals(self.monodromy)
+
+    @property
+    def stable(self) -> bool:
+        return is_stable(self.multipliers, autonomous=self.autonomous)
+
+    @property
+    def trivial_multiplier_error(self) -> float:
+        """How far the trivial multiplier can be from 1 (autonomous orbits): ``|M n - n|``, an accuracy figure."""
+        return self.trivial_error
+
+    @property
+    def events(self) -> list[SwitchingEvent]:
+        """The events of one period (as :attr:`Trajectory.events`)."""
+        return self.trajectory.events
+
+    @property
+    def event_labels(self) -> tuple[str, ...]:
+        """Readable labels of the orbit's cycle of events (see :func:`event_labels`)."""
+        return event_labels(self.trajectory)
+
+    def _repr_markdown_(self) -> str:
+        """A summary for Jupyter (:mod:`saltation.summary`)."""
+        from saltation.summary import orbit_summary
+
+        return orbit_summary(self)
+
+
+def newton(
+    fun, u0: np.ndarray, *, tol: float = 1e-10, max_iter: int = 30, what: str = "Newton", damped: bool = False
+) -> tuple[np.ndarray, list[float], object]:
+    """Newton's method on ``fun(u) -> (r, J, extra)``.
+
+    Converged when ``|r| <= tol * (1 + |u|)``.  With ``damped``, a step is
+    halved (up to 8 times) until the residual decreases.
+
+    Raises
+    ------
+    ConvergenceError
+        With the residual history, after ``max_iter`` iterations or when the
+        Jacobian is singular.
+    """
+    u = np.array(u0, dtype=float)
+    history: list[float] = []
+    r, J, extra = fun(u)
+    for it in range(max_iter + 1):
+        rn = float(np.linalg.norm(r))
+        history.append(rn)
+        if not np.isfinite(rn):
+            raise ConvergenceError(f"{what}: residual is not finite at iteration {it}", history)
+        if rn <= tol * (1.0 + float(np.linalg.norm(u))):
+            return u, history, extra
+        if it == max_iter:
+            break
+        try:
+            du = np.linalg.solve(J, -r)
+        except np.linalg.LinAlgError:
+            raise ConvergenceError(f"{what}: singular Jacobian at iteration {it}", history) from None
+        trial = None
+        for _ in range(9 if damped else 1):
+            try:
+                trial = fun(u + du)
+            except SaltationError:
+                trial = None
+            if trial is not None and (not damped or np.linalg.norm(trial[0]) < rn):
+                break
+            du = 0.5 * du
+            trial = None
+        if trial is None:
+            raise ConvergenceError(f"{what}: no step reduces the residual at iteration {it}", history)
+        u = u + du
+        r, J, extra = trial
+    raise ConvergenceError(f"{what} did not converge in {max_iter} iterations", history)
+
+
+class ShootingProblem:
+    """Periodic orbits of a model by single shooting.
+
+    Parameters
+    ----------
+    flow : Flow
+        The compiled flow of the model.
+    parameters : mapping or ndarray, optional
+        Parameter values (defaults of the model otherwise).
+    continuation_parameter : str, optional
+        Name of the parameter ``lam`` for :meth:`evaluate` (continuation).
+    backward : bool
+        Shoot in backward time (infinitely unstable orbits).
+    t0 : float
+        Initial time (forced systems: the phase of the forcing).
+    tolerances : Tolerances, optional
+    periods : int
+        Forced systems: the number of forcing periods the orbit takes to
+        close (2 for the branch born at a period doubling).  Such problems
+        iterate Newton in Python rather than in the compiled kernel.
+    """
+
+    def __init__(
+        self,
+        flow: Flow,
+        parameters: Mapping[str, float] | np.ndarray | None = None,
+        *,
+        continuation_parameter: str | None = None,
+        backward: bool = False,
+        t0: float = 0.0,
+        tolerances: Tolerances | None = None,
+        periods: int = 1,
+    ):
+        if int(periods) != periods or periods < 1:
+            raise ModelError(f"periods must be a positive integer, got {periods!r}")
+        if periods != 1 and flow.system.is_autonomous:
+            raise ModelError(f"model {flow.system.name!r} is autonomous: its period is an unknown, not a number of periods")
+        self.periods = int(periods)
+        self.flow = flow
+        self.system = flow.system
+        self.p = flow.parameters(parameters)
+        self.lam_index = -1 if continuation_parameter is None else self.system.parameter_index(continuation_parameter)
+        self.lam_name = continuation_parameter
+        self.backward = bool(backward)
+        self.sign = -1.0 if backward else 1.0
+        self.tolerances = tolerances
+        self.autonomous = self.system.is_autonomous
+        t0 = float(t0)
+        if not math.isfinite(t0):
+            raise ModelError(f"t0 must be finite, got {t0}")
+        # an autonomous field does not depend on time: integrate from 0; a forced one from the phase of the
+        # forcing at t0 (a time of 1e12 keeps only 4 decimals: the orbit there is the orbit at t0 mod T)
+        self.t0 = 0.0 if self.autonomous else math.fmod(t0, self.system.forcing_period(self.p))
+        self.x_ref: np.ndarray | None = None
+        self.f_ref: np.ndarray | None = None
+
+    # -- the protocol used by continuation ----------------------------------------------
+    @property
+    def dimension(self) -> int:
+        """Number of unknowns ``u``."""
+        return self.system.n + (1 if self.autonomous else 0)
+
+    def parameters_at(self, lam: float | None) -> np.ndarray:
+        p = self.p.copy()
+        if lam is not None:
+            if self.lam_index < 0:
+                raise ModelError("this problem has no continuation parameter")
+            p[self.lam_index] = lam
+        return p
+
+    def lam0(self) -> float:
+        if self.lam_index < 0:
+            raise ModelError("this problem has no continuation parameter")
+        return float(self.p[self.lam_index])
+
+    def pack(self, state0: Sequence[float], period: float | None = None) -> np.ndarray:
+        """Unknowns ``u`` from an initial state (and period, autonomous systems)."""
+        x0 = np.asarray(state0, dtype=float)
+        if x0.shape != (self.system.n,):
+            raise ModelError(f"initial state must have {self.system.n} components {list(self.system.state_names)}")
+        if not self.autonomous:
+            return x0.copy()
+        if period is None or not period > 0:
+            raise ModelError(f"model {self.system.name!r} is autonomous: give a positive period guess")
+        return np.append(x0, float(period))
+
+    def set_phase_reference(self, u: np.ndarray, lam: float | None = None) -> None:
+        """Anchor the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` at ``u``."""
+        x = u[: self.system.n]
+        p = self.parameters_at(lam)
+        mode = self.flow.initial_mode(x, p, self.t0)
+        f = self.flow.vector_field(mode, self.t0, x, p)
+        norm = np.linalg.norm(f)
+        if not norm > 0:
+            raise StationaryStateError(
+                f"the state x = {x.tolist()} is an equilibrium of mode {self.system.mode_names[mode]!r} of "
+                f"{self.system.name!r} (its vector field vanishes there): no phase condition, not a periodic orbit", x)
+        self.x_ref = x.copy()
+        self.f_ref = f / norm
+
+    def start_off_surfaces(self, u: np.ndarray, lam: float | None = None) -> np.ndarray:
+        """An autonomous guess whose state lies away from every switching surface.
+
+        When the guess's state lies on a surface or next to one (the flow reaches it within
+        :data:`SEAM_MARGIN` of the period, either way in time), the state is moved along the guess's
+        own trajectory to the middle of its longest stretch between events that is not a sliding
+        motion.  The phase condition anchored there is transverse to the flow and away from the
+        surfaces, so Newton does not put the shooting state on a surface.  Otherwise, or when the
+        guess cannot be integrated (Newton then reports why), ``u`` is returned as it is.
+        """
+        if not self.autonomous:
+            return u
+        n = self.system.n
+        x0, T = np.asarray(u[:n], dtype=float), float(u[n])
+        if not (T > 0 and math.isfinite(T)):
+            return u
+        p = self.parameters_at(lam)
+        try:
+            traj = self.flow.run(x0, self.t0, self.t0 + self.sign * T, p, tolerances=self.tolerances)
+        except SaltationError:
+            return u
+        times = [abs(e.t - self.t0) for e in traj.events]
+        margin = SEAM_MARGIN * T
+        if not times or (min(times[0], T - times[-1]) >= margin and self._time_to_surfaces(x0, p) >= margin):
+            return u
+        best, t_mid, sliding = 0.0, None, False
+        for k, (a, b) in enumerate(zip([0.0, *times], [*times, T])):
+            if k > 0:
+                sliding = traj.events[k - 1].kind == EventKind.SLIDING_START
+            if not sliding and b - a > best:
+                best, t_mid = b - a, 0.5 * (a + b)
+        if t_mid is None or best < 2.0 * margin:
+            return u
+        try:
+            x_mid = self.flow.run(x0, self.t0, self.t0 + self.sign * t_mid, p, tolerances=self.tolerances).x1
+        except SaltationError:
+            return u
+        return np.append(x_mid, T)
+
+    def _time_to_surfaces(self, x: np.ndarray, p: np.ndarray) -> float:
+        """The least time ``|h| / |dh/dt|`` in which the flow at ``x`` reaches a switching surface (linearised)."""
+        flow, t = self.flow, self.t0
+        f = flow.vector_field(flow.initial_mode(x, p, t), t, x, p)
+        least = math.inf
+        for k in range(len(self.system.surface_names)):
+            h = abs(flow.indicator(k, t, x, p))
+            hx, ht, _ = flow.indicator_gradient(k, t, x, p)
+            rate = abs(float(hx @ f) + ht)
+            least = min(least, 0.0 if h == 0.0 else (h / rate if rate > 0.0 else math.inf))
+        return least
+
+    def period_of(self, u: np.ndarray, lam: float | None = None) -> float:
+        return float(u[-1]) if self.autonomous else self.periods * self.system.forcing_period(self.parameters_at(lam))
+
+    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
+        """Residual ``r(u, lam)`` and its exact Jacobians."""
+        n = self.system.n
+        p = self.parameters_at(lam)
+        x0 = np.ascontiguousarray(u[:n])
+        T = self.period_of(u, lam)
+        if not T > 0:
+            raise IntegrationError(f"shooting period must be positive, got {T}")
+        pidx = self.lam_index if (need_lam and lam is not None) else -1
+        traj = self.flow.run(
+            x0, self.t0, self.t0 + self.sign * T, p, variational=True, sensitivity=pidx, tolerances=self.tolerances
+        )
+        traj = self.close_period(traj, p, pidx)
+        M = traj.monodromy
+        jl = None
+        if not self.autonomous:
+            r = traj.x1 - x0
+            J = M - np.eye(n)
+            if pidx >= 0:
+                jl = traj.parameter_sensitivity.copy()
+                dT = self.periods * self.system.period_derivative(p, pidx)
+                if dT:  # the period moves with the parameter: the end point moves along the flow
+                    jl += (self.sign * dT) * traj.velocity_end
+            return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
+        if self.x_ref is None:
+            self.set_phase_reference(u, lam)
+        r = np.empty(n + 1)
+        r[:n] = traj.x1 - x0
+        r[n] = self.f_ref @ (x0 - self.x_ref)
+        J = np.zeros((n + 1, n + 1))
+        J[:n, :n] = M
+        J[:n, :n] -= np.eye(n)
+        J[:n, n] = self.sign * traj.velocity_end
+        J[n, :n] = self.f_ref
+        if pidx >= 0:
+            jl = np.zeros(n + 1)
+            jl[:n] = traj.parameter_sensitivity
+        return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
+
+    def close_period(self, traj: Trajectory, p: np.ndarray, sensitivity: int = -1) -> Trajectory:
+        """The shot with the crossing at the seam ``t0 = t0 + T`` counted once, as the orbit crosses there.
+
+        A shooting state on a switching surface (wherever the phase condition, or a forced orbit's
+        ``t0``, put it) meets the crossing at both ends of the interval, and the engine, which fires
+        an event once the indicator has changed sign, may log it at the start, at the end, at
+        both or at neither, as rounding falls:
+
+        * at both (the first and the last event are the same transition, within ``1e-7 T`` of the
+          ends): the shot is run again from the start in the mode that crossing enters, so that it
+          is logged at most at the end (a reset there is ambiguous: InconsistentResultError), and
+          then as below;
+        * at neither (the shot starts in mode ``a`` with no event and ends, within rounding, on the
+          surface of a transition from its final mode ``b`` back to ``a``): that transition is
+          applied at the end (reset, saltation matrix of eq. 9, parameter sensitivity) and logged.
+
+        Any other shot is returned as it is.
+
+        Raises
+        ------
+        InconsistentResultError
+            For a reset (an impact) exactly at the seam, logged at both ends.
+        """
+        sys_ = self.system
+        if traj.monodromy is None:
+            return traj
+        ev_t, ev_int = traj.event_log[0], traj.event_log[1]  # the kernel's log: read without building records
+        if len(ev_t) >= 2:
+            delta = 1e-7 * max(1.0, abs(traj.t1 - traj.t0))
+            # (or the last event, a sliding motion's end, enters the mode the first has entered)
+            if (ev_int[0, 0] == EventKind.TRANSITION and ev_int[-1, 0] in (EventKind.TRANSITION, EventKind.SLIDING_END)
+                    and ev_int[0, 4] == ev_int[-1, 4] and (ev_int[-1, 0] != EventKind.TRANSITION or ev_int[0, 1] == ev_int[-1, 1])
+                    and abs(ev_t[0] - traj.t0) <= delta and abs(traj.t1 - ev_t[-1]) <= delta):
+                first = traj.events[0]
+                if sys_.resets[first.transition] is not None:
+                    raise InconsistentResultError(
+                        f"transition {sys_.transitions[first.transition].label!r} (a reset) happens at the start and at "
+                        f"the end of the shooting interval of {sys_.name!r}, at t = {traj.t0:.12g}: the state there is "
+                        "ambiguous (before or after the reset); shoot from another t0"
+                    )
+                traj = self.flow.run(traj.x0, traj.t0, traj.t1, p, mode0=first.mode_to, variational=True,
+                                     sensitivity=sensitivity, tolerances=self.tolerances)  # then as below
+            elif (len(ev_t) >= 3 and ev_int[0, 0] == EventKind.SLIDING_START and ev_int[1, 0] == EventKind.SLIDING_END
+                  and ev_int[-1, 0] == EventKind.SLIDING_END and ev_int[1, 4] == ev_int[-1, 4]
+                  and abs(ev_t[0] - traj.t0) <= delta and abs(ev_t[1] - traj.t0) <= delta
+                  and abs(traj.t1 - ev_t[-1]) <= delta):
+                # a sliding motion ends at the seam (logged at t0 + T) and is met again at t0, with no length:
+                # a state on the sliding region's edge starts there a sliding motion that ends at once.  That
+                # pair is dropped from the log; its matrices (the projection onto the surface, and the
+                # identity of the exit) stay in the monodromy matrix M, whose range lies in the surface's
+                # tangent space after the sliding motion, so that they leave its multipliers as they are; the
+                # shot starts in the mode that sliding motion leaves into
+                traj = replace(traj, mode0=traj.events[1].mode_to, event_log=tuple(column[2:] for column in traj.event_log))
+        if traj.sliding_at_end:
+            return self._leave_sliding_at_the_end(traj, p, sensitivity)
+        if traj.mode1 == traj.mode0:
+            return traj
+        if traj.events and traj.events[0].t == traj.t0:
+            return traj  # the start fired its own event: the shot starts after it
+        flow, t1, x1 = self.flow, traj.t1, traj.x1
+        scale = 1.0 + float(np.abs(x1).max())
+        for k, tr in enumerate(sys_.transitions):
+            if tr.source != traj.mode1 or tr.target != traj.mode0:
+                continue
+            h = flow.indicator(tr.surface, t1, x1, p)
+            hx, _, _ = flow.indicator_gradient(tr.surface, t1, x1, p)
+            # within Newton's closing error of the state (1e-8 relative): the orbit crosses here, at the seam
+            if abs(h) > 1e-8 * scale * float(np.linalg.norm(hx)) or not flow.guard_holds(k, t1, x1, p):
+                continue
+            x_plus, S, dp = flow.transition_jump(k, t1, x1, p)
+            psi = traj.parameter_sensitivity
+            if psi is not None and sensitivity >= 0:
+                psi = S @ psi + dp[:, sensitivity]
+            log = _logged(traj, EventKind.TRANSITION, k, tr.surface, tr.source, tr.target, x1, x_plus, S)
+            return replace(
+                traj, x1=x_plus, mode1=tr.target, event_log=log, monodromy=S @ traj.monodromy,
+                parameter_sensitivity=psi, velocity_end=flow.vector_field(tr.target, t1, x_plus, p),
+            )
+        return traj
+
+    def _leave_sliding_at_the_end(self, traj: Trajectory, p: np.ndarray, sensitivity: int) -> Trajectory:
+        """A shot that starts off a sliding motion, in one of its modes, and ends on it where that mode's
+        field turns tangent to the surface: the orbit leaves the sliding motion at the seam.  Its end is
+        applied and logged at ``t0 + T``, with the saltation matrix the engine uses at a sliding exit
+        (eq. 9 with the exit side's Lie derivative ``L = h_x f + h_t`` as the event function and the
+        sliding field before it)."""
+        starts = [e for e in traj.events if e.kind == EventKind.SLIDING_START]
+        if not starts or (traj.events[0].kind == EventKind.SLIDING_START and traj.events[0].t == traj.t0):
+            return traj
+        last = starts[-1]
+        if traj.mode0 not in (last.mode_from, last.mode_to):
+            return traj
+        flow, t1, x1 = self.flow, traj.t1, traj.x1
+        L, L_x, L_p, L_t = flow.lie_derivative(traj.mode0, last.surface, t1, x1, p)
+        scale = 1.0 + float(np.abs(x1).max())
+        if abs(L) > 1e-8 * scale * float(np.linalg.norm(L_x)):
+            return traj
+        f_slide = traj.velocity_end
+        f_out = flow.vector_field(traj.mode0, t1, x1, p)
+        den = float(L_x @ f_slide) + L_t
+        if den == 0.0:
+            return traj
+        w = f_out - f_slide
+        S = np.eye(self.system.n) + np.outer(w, L_x) / den
+        psi = traj.parameter_sensitivity
+        if psi is not None and sensitivity >= 0:
+            psi = S @ psi + w * L_p[sensitivity] / den
+        other = last.mode_to if traj.mode0 == last.mode_from else last.mode_from
+        log = _logged(traj, EventKind.SLIDING_END, -1, last.surface, other, traj.mode0, x1, x1, S)
+        return replace(traj, mode1=traj.mode0, event_log=log, monodromy=S @ traj.monodromy, sliding_at_end=False,
+                       parameter_sensitivity=psi, velocity_end=f_out)
+
+    def correct(
+        self, z_pred: np.ndarray, normal: np.ndarray, *, tol: float, max_newton: int, max_correction: float
+    ) -> tuple[np.ndarray, Evaluation, int] | None:
+        """The corrector of pseudo-arclength continuation, iterated in the compiled kernel.
+
+        Solves ``r(u, lam) = 0``, ``normal . (z - z_pred) = 0`` for
+        ``z = (u, lam)`` by the Newton iteration of
+        :meth:`saltation.branches.continuation.Corrector.solve_bordered`.  Returns the
+        solution, its evaluation and the number of iterations, or None when
+        the kernel cannot run it (then iterate in Python).
+
+        Raises
+        ------
+        ConvergenceError
+            If Newton does not converge.
+        """
+        if self.lam_index < 0 or self.periods != 1:
+            return None  # the kernel's corrector closes orbits after one forcing period
+        phase = None
+        if self.autonomous:
+            if self.x_ref is None:
+                self.set_phase_reference(z_pred[:-1], float(z_pred[-1]))
+            phase = (self.x_ref, self.f_ref)
+        found = self.flow.compiled_newton(
+            z_pred, normal, self.p, t0=self.t0, sign=self.sign, lam_index=self.lam_index, span=0.0, phase=phase,
+            tol=tol, max_iter=max_newton, max_correction=max_correction, damped=False, tolerances=self.tolerances,
+        )
+        if found is None or found.unsupported:
+            return None  # iterate in Python
+        n, z = self.system.n, found.z
+        p_end = self.p.copy()
+        p_end[self.lam_index] = z[-1]
+        traj = self.flow.shot_trajectory(found, z[:n].copy(), self.t0, p_end, self.lam_index)  # a failed shot raises
+        if self.close_period(traj, p_end) is not traj:
+            return None  # an event at the end of the period, which the kernel's iteration does not apply
+        if not found.converged:
+            raise ConvergenceError("corrector did not converge", found.history)
+        m, jac = len(z) - 1, found.jacobian
+        ev = Evaluation(residual=jac[:, 0].copy(), jac_u=jac[:, 1 : 1 + m].copy(), jac_lam=jac[:, 1 + m].copy(),
+                        trajectory=traj)
+        return z, ev, found.iterations
+
+    def verify(self, u: np.ndarray, lam: float | None, traj: Trajectory) -> tuple[np.ndarray, float]:
+        """The forward-time multipliers of a solved point and its trivial multiplier's error, once the
+        point is known to be a periodic orbit.
+
+        Raises
+        ------
+        StationaryStateError
+            If the state does not move over the period (see :meth:`stationary_reason`).
+        InconsistentResultError
+            If an autonomous orbit's monodromy does not map the flow direction to itself within
+            :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
+        """
+        reason = self.stationary_reason(u, lam, traj)
+        if reason is not None:
+            raise StationaryStateError(reason, u[: self.system.n], self.period_of(u, lam))
+        if not self.autonomous:
+            return multipliers_from_monodromy(traj.monodromy, backward=self.backward), float("nan")
+        found = autonomous_multipliers(traj.monodromy, traj.velocity_end, backward=self.backward)
+        if not found.trivial_error <= TRIVIAL_MULTIPLIER_ACCURACY:
+            x0 = np.array2string(np.asarray(u[: self.system.n]), precision=8)
+            raise InconsistentResultError(
+                f"the orbit of {self.system.name!r} from x0 = {x0} (period {self.period_of(u, lam):.10g}) does not "
+                f"map its own flow direction to itself: |M n - n| = {found.trivial_error:.2e} > "
+                f"{TRIVIAL_MULTIPLIER_ACCURACY:g}, so its trivial multiplier is not 1 and its monodromy is wrong "
+                "(an event missing from it, or too loose integration tolerances)"
+            )
+        return found.multipliers, found.trivial_error
+
+    def stationary_reason(self, u: np.ndarray, lam: float | None, traj: Trajectory) -> str | None:
+        """Why a solved point is not a periodic orbit, or None: its state does not move over the period.
+
+        The excursion ``max_i (max x_i - min x_i)`` over the period is compared with
+        :data:`STATIONARY_FACTOR` times the integration tolerance at the state's scale.  Below it, the
+        point is an equilibrium of a mode, a pseudo-equilibrium (a point of a sliding or sticking set
+        where the sliding motion stops), or a period shrunk to zero.
+        """
+        tol = self.tolerances or self.flow.tolerances
+        n = self.system.n
+        # plain floats: this runs for every orbit and branch point, on a few numbers
+        excursion = max(map(float.__sub__, traj.x_max.tolist(), traj.x_min.tolist()))
+        floor = STATIONARY_FACTOR * (tol.atol + tol.rtol * (1.0 + max(map(abs, u[:n].tolist()))))
+        if excursion > floor:
+            return None
+        x0 = np.asarray(u[:n], dtype=float)
+        T = self.period_of(u, lam)
+        where = f"at x = {np.array2string(x0, precision=10)}"
+        p = self.parameters_at(lam)
+        sliding = traj.sliding_at_end or any(e.kind != EventKind.TRANSITION for e in traj.events)
+        speed = float(np.linalg.norm(traj.velocity_end))
+        if sliding and speed <= floor:
+            surfaces = sorted({e.surface for e in traj.events if e.kind == EventKind.SLIDING_START})
+            on = f" on surface {surfaces[0]!r}" if surfaces else ""
+            return (f"shooting for {self.system.name!r} converged to a pseudo-equilibrium{on} {where}: a point of a "
+                    f"sliding or sticking set where the motion stops (it moves by {excursion:.1e} over the period "
+                    f"{T:.6g}), not a periodic orbit")
+        f = self.flow.vector_field(traj.mode0, self.t0, x0, p)
+        if float(np.linalg.norm(f)) <= floor:
+            return (f"shooting for {self.system.name!r} converged to an equilibrium of mode {traj.mode0!r} {where} "
+                    f"(|f| = {float(np.linalg.norm(f)):.1e}; it moves by {excursion:.1e} over the period {T:.6g}), "
+                    "not a periodic orbit")
+        return (f"shooting for {self.system.name!r} converged to the period T = {T:.3e} {where}, over which the "
+                f"state moves by {excursion:.1e} only (|f| = {float(np.linalg.norm(f)):.3g}): it does not return by "
+                "its own motion; not a periodic orbit, nor an equilibrium; give a better period guess")
+
+    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+        """Summary of a solved point for a branch (multipliers, amplitude, events).
+
+        Raises
+        ------
+        StationaryStateError, InconsistentResultError
+            As :meth:`verify`: such a point is not accepted on a branch.
+        """
+        traj = ev.trajectory
+        mu, trivial_error = self.verify(u, lam, traj)
+        return SolutionSummary(
+            state=np.array(u[: self.system.n]),
+            period=self.period_of(u, lam),
+            amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
+            half_peak_to_peak=float(0.5 * (traj.x_max[0] - traj.x_min[0])),
+            multipliers=mu,
+            stable=is_stable(mu, autonomous=self.autonomous),
+            event_labels=event_labels(traj),
+            monodromy=traj.monodromy,
+            event_ids=event_ids(traj),
+            trivial_error=trivial_error,
+            excursion=float(np.max(traj.x_max - traj.x_min)),
+        )
+
+    def accept(self, u: np.ndarray, lam: float | None) -> None:
+        """Called by continuation at every accepted point: re-anchor the phase condition."""
+        if self.autonomous:
+            self.set_phase_reference(u, lam)
+
+    # -- solving ------------------------------------------------------------------------
+    def solve(self, u0: np.ndarray, lam: float | None = None, *, tol: float = 1e-10, max_iter: int = 30) -> PeriodicOrbit:
+        """Newton on the period map from the guess ``u0``.
+
+        Raises
+        ------
+        ConvergenceError
+            With the residual history when Newton fails.
+        StationaryStateError
+            When it converges to a state that does not move (an equilibrium, a pseudo-equilibrium, a
+            period shrunk to zero).
+        InconsistentResultError
+            When an autonomous orbit's trivial multiplier is not 1 within :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
+        """
+        u0 = np.asarray(u0, dtype=float)
+        if self.autonomous:
+            u0 = self.start_off_surfaces(u0, lam)
+            self.set_phase_reference(u0, lam)
+        else:
+            # the period is fixed: the whole iteration runs in the compiled kernel
+            p = self.parameters_at(lam)
+            T = self.period_of(u0, lam)
+            found = self.flow.compiled_newton(
+                u0, None, p, t0=self.t0, sign=self.sign, lam_index=-1, span=T, phase=None, tol=tol, max_iter=max_iter,
+                max_correction=0.0, damped=True, tolerances=self.tolerances,
+            ) if T > 0 else None
+            if found is not None and found.converged:  # otherwise the Python iteration explains the failure
+                x = found.z.copy()
+                traj = self.flow.shot_trajectory(found, x, self.t0, p, -1)
+                if self.close_period(traj, p) is traj:  # else an event at the end: iterate in Python
+                    return self.orbit(x, lam, traj, found.history, period=T, parameters=p)
+
+        longest = PERIOD_GROWTH * float(u0[-1]) if self.autonomous else math.inf
+
+        def fun(u):
+            if self.autonomous and not u[-1] <= longest:  # a Newton step that throws the period far away
+                raise ConvergenceError(f"the period {u[-1]:.3g} exceeds {PERIOD_GROWTH:g} times its guess")
+            ev = self.evaluate(u, lam, need_lam=False)
+            return ev.residual, ev.jac_u, ev
+
+        direction = "backward" if self.backward else "forward"
+        try:
+            u, history, ev = newton(
+                fun, u0, tol=tol, max_iter=max_iter, what=f"shooting ({direction} time) for {self.system.name!r}",
+                damped=True,
+            )
+        except ConvergenceError as exc:
+            rest = self.comes_to_rest(u0, lam)
+            if rest is not None:
+                message = str(exc).split(" (residual history")[0]
+                raise NoOrbitNearGuessError(f"{message}; {rest[1]}", exc.residuals, rest[0], float(u0[-1])) from exc
+            raise
+        return self.orbit(u, lam, ev.trajectory, history)
+
+    def comes_to_rest(self, u: np.ndarray, lam: float | None = None, periods: int = 100) -> tuple[np.ndarray, str] | None:
+        """Where the flow from an autonomous guess comes to rest within ``periods`` guessed periods, or None.
+
+        A guess near no periodic orbit often lies in the basin of a stationary state: a sticking
+        set (a sliding motion that stops, a pseudo-equilibrium) or an equilibrium.  That is the
+        explanation a failed shooting gives.
+        """
+        if not self.autonomous:
+            return None
+        n = self.system.n
+        x0, T = np.asarray(u[:n], dtype=float), float(u[n])
+        if not (T > 0 and math.isfinite(T)):
+            return None
+        p = self.parameters_at(lam)
+        try:
+            traj = self.flow.run(x0, self.t0, self.t0 + self.sign * periods * T, p, tolerances=self.tolerances)
+        except SaltationError:
+            return None
+        tol = self.tolerances or self.flow.tolerances
+        floor = STATIONARY_FACTOR * (tol.atol + tol.rtol * (1.0 + float(np.abs(traj.x1).max())))
+        if not float(np.linalg.norm(traj.velocity_end)) <= floor:
+            return None
+        where = np.array2string(traj.x1, precision=10)
+        if traj.sliding_at_end:
+            return traj.x1, (f"no periodic orbit near the guess: the flow from it comes to rest at a "
+                             f"pseudo-equilibrium x = {where} (a sliding or sticking set where the motion stops)")
+        return traj.x1, f"no periodic orbit near the guess: the flow from it comes to rest at an equilibrium x = {where}"
+
+    def orbit(
+        self, u: np.ndarray, lam: float | None, trajectory: Trajectory, history: Sequence[float], *,
+        period: float | None = None, parameters: np.ndarray | None = None,
+    ) -> PeriodicOrbit:
+        """Package a solved point ``u`` and its trajectory over one period as a :class:`PeriodicOrbit`.
+
+        ``period`` and ``parameters`` (at ``lam``) when the caller has them already.
+        """
+        M = trajectory.monodromy
+        mu, trivial_error = self.verify(u, lam, trajectory)
+        return PeriodicOrbit(
+            system_name=self.system.name,
+            state0=np.array(u[: self.system.n]),
+            period=self.period_of(u, lam) if period is None else period,
+            t0=self.t0,
+            backward=self.backward,
+            autonomous=self.autonomous,
+            parameters=self.parameters_at(lam) if parameters is None else parameters,
+            monodromy=M,
+            multipliers=mu,
+            trajectory=trajectory,
+            converged=True,
+            iterations=max(len(history) - 1, 0),
+            residual_norm=float(history[-1]),
+            residuals=list(history),
+            trivial_error=trivial_error,
+            problem=self,
+        )
+
+
+def _logged(traj: Trajectory, kind: EventKind, transition: int, surface: str, mode_from: str, mode_to: str,
+            x_minus: np.ndarray, x_plus: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The trajectory's event log with one more event at its end (the kernel's layout)."""
+    sys_ = traj.system
+    ev_t, ev_int, ev_xm, ev_xp, ev_S = traj.event_log
+    row = np.array([[int(kind), transition, sys_.surface_index(surface), sys_.mode_index(mode_from),
+                     sys_.mode_index(mode_to)]], dtype=ev_int.dtype)
+    return (np.append(ev_t, traj.t1), np.vstack([ev_int, row]), np.vstack([ev_xm, x_minus[None, :]]),
+            np.vstack([ev_xp, x_plus[None, :]]), np.concatenate([ev_S, S[None, :, :]]))
+
+
+def find_periodic_orbit(
+    flow: Flow,
+    state0: Sequence[float],
+    *,
+    parameters: Mapping[str, float] | None = None,
+    period: float | None = None,
+    backward: bool = False,
+    t0: float = 0.0,
+    tol: float = 1e-10,
+    max_iter: int = 30,
+    tolerances: Tolerances | None = None,
+    segments: int = 1,
+) -> PeriodicOrbit:
+    """Find one periodic orbit by shooting from a guess.
+
+    Parameters
+    ----------
+    flow : Flow
+    state0 : array_like
+        Guess of the state at ``t0``.
+    parameters : mapping, optional
+        Parameter overrides.
+    period : float, optional
+        Period guess of an autonomous system.  A forced system's period is its
+        forcing period; a ``period`` given for it must equal that.
+    backward : bool
+        Shoot in backward time.
+    t0 : float
+        Initial time (forced systems: the phase of the forcing; reduced modulo
+        the forcing period before integrating).
+    tol : float
+        Newton tolerance: converged when ``|r| <= tol (1 + |u|)``.
+    max_iter : int
+        Largest number of Newton iterations.
+    tolerances : Tolerances, optional
+        Integration tolerances (the flow's by default).
+    segments : int
+        Shooting segments: 1 is single shooting; ``m > 1`` is multiple shooting
+        (:class:`MultipleShootingProblem`), for strongly unstable orbits, long periods and large
+        models.  ``state0`` is then either one state (the nodes are taken from its trajectory, which
+        on a strongly unstable orbit drifts away within the period) or a guess of every node, shape
+        ``(m, n)``, at ``t0 + i T / m``.
+
+    Returns
+    -------
+    PeriodicOrbit
+        With its forward-time multipliers; for autonomous orbits the trivial
+        direction is deflated (:func:`saltation.orbits.floquet.autonomous_multipliers`).
+
+    Raises
+    ------
+    ModelError
+        A ``period`` that contradicts the forcing period, a state of the wrong size.
+    ConvergenceError
+        Newton did not converge (with its residual history).
+    StationaryStateError
+        Shooting converged to a state that does not move: an equilibrium, a
+        pseudo-equilibrium, or a period shrunk to zero.
+    InconsistentResultError
+        An autonomous orbit whose trivial multiplier is not 1 to
+        :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
+    """
+    prob = ShootingProblem(flow, parameters, backward=backward, t0=t0, tolerances=tolerances)
+    if not prob.autonomous and period is not None:
+        forced = prob.period_of(prob.pack(state0))
+        if not abs(float(period) - forced) <= 1e-12 * forced:
+            raise ModelError(
+                f"model {flow.system.name!r} is forced: its period is the forcing period {forced:.10g} at these "
+                f"parameters, not the period {period!r} given (omit period, or change the forcing parameters)"
+            )
+    guess = np.asarray(state0, dtype=float)
+    if segments == 1 or guess.ndim == 1:
+        if segments == 1:
+            return prob.solve(prob.pack(state0, period), tol=tol, max_iter=max_iter)
+        multiple = MultipleShootingProblem(prob, segments)
+        u0 = prob.start_off_surfaces(prob.pack(state0, period))
+        return multiple.solve(multiple.pack(u0), tol=tol, max_iter=max_iter)
+    multiple = MultipleShootingProblem(prob, segments)
+    if guess.shape != (multiple.segments, flow.system.n):
+        raise ModelError(f"a guess of every node of {segments} segments has shape ({segments}, {flow.system.n}), "
+                         f"got {guess.shape}")
+    prob.pack(guess[0], period)  # checks the period guess of an autonomous model
+    U0 = guess.ravel()
+    return multiple.solve(np.append(U0, float(period)) if prob.autonomous else U0, tol=tol, max_iter=max_iter)
+
+
+# -- multiple shooting ---------------------------------------------------------------------
+class MultipleShootingProblem:
+    """A periodic orbit of a :class:`~saltation.orbits.shooting.ShootingProblem` by ``segments`` segments.
+
+    Single shooting solves ``phi_T(x0) - x0 = 0`` with the monodromy ``M - I`` as its Jacobian.  On an
+    orbit with a multiplier of ``1e10`` an error of one rounding unit in ``x0`` grows to ``1e-6`` over
+    the period: Newton cannot bring the residual below that, and fails even from the exact state.
+    Multiple shooting cuts the period into ``m`` segments of ``T / m`` with nodes ``x_1 .. x_m`` and
+    solves
+
+        phi_{T/m}(x_i, t_i) - x_{i+1} = 0,   i = 1 .. m   (x_{m+1} = x_1),
+
+    (and, for an autonomous orbit, the phase condition ``f_ref . (x_1 - x_ref) = 0`` with the period
+    ``T`` an unknown), a block-cyclic system whose blocks are the segments' transfer matrices ``Phi_i``
+    (each jumped by the saltation matrix of eq. (9) at its events).  The growth over one segment is only
+    the ``m``-th root of the period's.
+
+    The monodromy is the product ``M = Phi_m ... Phi_1``.  Its eigenvalues are taken from the factors,
+    without forming the product, by the periodic Schur decomposition (SLICOT's MB03VD and MB03WD, through
+    slycot): the small multipliers of an orbit with a large one keep their accuracy, which ``eig`` of the
+    assembled product loses (to about ``eps |M|``).  For an autonomous orbit each factor is first
+    restricted to the normal of the flow at its nodes, ``Q_{i+1}^T Phi_i Q_i``: since ``Phi_i f(x_i) =
+    f(x_{i+1})``, this leaves the nontrivial multipliers, and the trivial one is the product of the
+    factors' gains along the flow.
+
+    References
+    ----------
+    Bojanczyk, Golub and Van Dooren (1992), "The periodic Schur decomposition: algorithms and
+    applications", Proc. SPIE 1770.  Stoer and Bulirsch, *Introduction to Numerical Analysis*,
+    section 7.3.5 (multiple shooting).
+
+    The unknowns are ``U = (x_1, ..., x_m[, T])``; the problem's time direction, ``t0``, tolerances
+    and parameters are kept.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    segments : int
+        The number of segments ``m`` (at least 1; 1 is single shooting written as this problem).
+    """
+
+    def __init__(self, problem: ShootingProblem, segments: int):
+        if isinstance(segments, bool) or int(segments) != segments or segments < 1:
+            raise ModelError(f"segments must be a positive integer, got {segments!r}")
+        if problem.periods != 1:
+            raise ModelError("multiple shooting of an orbit of several forcing periods: give segments for one period")
+        self.problem = problem
+        self.segments = int(segments)
+        self.n = problem.system.n
+
+    @property
+    def dimension(self) -> int:
+        return self.segments * self.n + (1 if self.problem.autonomous else 0)
+
+    def period_of(self, U: np.ndarray, lam: float | None = None) -> float:
+        return float(U[-1]) if self.problem.autonomous else self.problem.period_of(U[: self.n], lam)
+
+    def _times(self, T: float) -> np.ndarray:
+        prob = self.problem
+        return prob.t0 + prob.sign * T * np.arange(self.segments + 1) / self.segments
+
+    def pack(self, u: np.ndarray, lam: float | None = None) -> np.ndarray:
+        """Nodes from a single-shooting guess ``u = (x0[, T])``: the guess's own trajectory at ``t_i``."""
+        prob = self.problem
+        T = prob.period_of(u, lam)
+        p = prob.parameters_at(lam)
+        times = self._times(T)
+        nodes = [np.asarray(u[: self.n], dtype=float)]
+        mode = None
+        for i in range(self.segments - 1):
+            traj = prob.flow.run(nodes[-1], times[i], times[i + 1], p, mode0=mode, tolerances=prob.tolerances)
+            nodes.append(traj.x1)
+            mode = traj.mode1
+        U = np.concatenate(nodes)
+        return np.append(U, T) if prob.autonomous else U
+
+    def shoot(self, U: np.ndarray, lam: float | None = None) -> list[Trajectory]:
+        """The segments from the nodes of ``U``, each with its transfer matrix; each starts in the mode
+        its predecessor ends in (the first in the mode of its state)."""
+        prob, n = self.problem, self.n
+        T = self.period_of(U, lam)
+        if not (T > 0 and math.isfinite(T)):
+            raise ConvergenceError(f"the period must be positive and finite, got {T}")
+        p = prob.parameters_at(lam)
+        times = self._times(T)
+        segs: list[Trajectory] = []
+        mode = None
+        for i in range(self.segments):
+            x = np.ascontiguousarray(U[i * n:(i + 1) * n])
+            traj = prob.flow.run(x, times[i], times[i + 1], p, mode0=mode, variational=True, tolerances=prob.tolerances)
+            segs.append(traj)
+            mode = traj.mode1
+        return segs
+
+    def residual(self, U: np.ndarray, lam: float | None = None) -> tuple[np.ndarray, np.ndarray, list[Trajectory]]:
+        """``(r, J, segments)``: the matching equations (and phase condition) and their exact Jacobian."""
+        prob, n, m = self.problem, self.n, self.segments
+        segs = self.shoot(U, lam)
+        dim = self.dimension
+        r = np.zeros(dim)
+        J = np.zeros((dim, dim))
+        for i, seg in enumerate(segs):
+            j = (i + 1) % m
+            rows = slice(i * n, (i + 1) * n)
+            r[rows] = seg.x1 - U[j * n:(j + 1) * n]
+            J[rows, i * n:(i + 1) * n] += seg.monodromy
+            J[rows, j * n:(j + 1) * n] -= np.eye(n)
+            if prob.autonomous:
+                J[rows, -1] = (prob.sign / m) * seg.velocity_end
+        if prob.autonomous:
+            if prob.x_ref is None:
+                prob.set_phase_reference(U[:n], lam)
+            r[-1] = prob.f_ref @ (U[:n] - prob.x_ref)
+            J[-1, :n] = prob.f_ref
+        return r, J, segs
+
+    def solve(self, U0: np.ndarray, lam: float | None = None, *, tol: float = 1e-10, max_iter: int = 30) -> PeriodicOrbit:
+        """Newton on the matching equations from the nodes ``U0`` (see :meth:`pack`)."""
+        prob = self.problem
+        U0 = np.asarray(U0, dtype=float)
+        if prob.autonomous:
+            prob.set_phase_reference(U0[: self.n], lam)
+
+        def fun(U):
+            r, J, segs = self.residual(U, lam)
+            return r, J, segs
+
+        direction = "backward" if prob.backward else "forward"
+        U, history, segs = newton(
+            fun, U0, tol=tol, max_iter=max_iter, damped=True,
+            what=f"multiple shooting ({self.segments} segments, {direction} time) for {prob.system.name!r}",
+        )
+        return self.orbit(U, lam, segs, history)
+
+    def multipliers(self, U: np.ndarray, lam: float | None, segs: list[Trajectory]) -> tuple[np.ndarray, float]:
+        """Forward-time multipliers from the segments' transfer matrices, and (autonomous orbits) the
+        largest relative error of ``Phi_i f(x_i) = f(x_{i+1})``, the trivial direction's consistency."""
+        prob, n = self.problem, self.n
+        factors = [seg.monodromy for seg in segs]
+        if not prob.autonomous:
+            mu = product_eigenvalues(factors)
+            return sort_multipliers(reciprocal(mu) if prob.backward else mu), float("nan")
+        p = prob.parameters_at(lam)
+        velocities = [prob.flow.vector_field(seg.mode0, seg.t0, seg.x0, p) for seg in segs]
+        bases, normals = [], []
+        for f in velocities:
+            norm = float(np.linalg.norm(f))
+            if not norm > 0:
+                raise StationaryStateError(f"a node of the orbit of {prob.system.name!r} is an equilibrium", U[:n])
+            q, _ = np.linalg.qr(np.column_stack([f / norm, np.eye(n)]))
+            normals.append(f / norm)
+            bases.append(q[:, 1:n])
+        m = self.segments
+        reduced, gain, error = [], 1.0, 0.0
+        for i, seg in enumerate(segs):
+            j = (i + 1) % m
+            image = seg.monodromy @ velocities[i]
+            error = max(error, float(np.linalg.norm(image - velocities[j]) / np.linalg.norm(velocities[j])))
+            gain *= float(normals[j] @ seg.monodromy @ normals[i])
+            reduced.append(bases[j].T @ seg.monodromy @ bases[i])
+        nontrivial = product_eigenvalues(reduced) if n > 1 else np.zeros(0, dtype=complex)
+        mu = np.append(nontrivial, gain).astype(complex)
+        return sort_multipliers(reciprocal(mu) if prob.backward else mu), error
+
+    def orbit(self, U: np.ndarray, lam: float | None, segs: list[Trajectory], history: Sequence[float]) -> PeriodicOrbit:
+        """The solved nodes as a :class:`PeriodicOrbit`, its trajectory the segments joined."""
+        prob, n = self.problem, self.n
+        trajectory = join(segs)
+        T = self.period_of(U, lam)
+        u_single = np.append(U[:n], T) if prob.autonomous else U[:n]
+        reason = prob.stationary_reason(u_single, lam, trajectory)
+        if reason is not None:
+            raise StationaryStateError(reason, U[:n], T)
+        mu, trivial_error = self.multipliers(U, lam, segs)
+        if prob.autonomous and not trivial_error <= TRIVIAL_MULTIPLIER_ACCURACY:
+            raise InconsistentResultError(
+                f"the orbit of {prob.system.name!r} by multiple shooting does not map its own flow direction from "
+                f"node to node: |Phi_i f_i - f_(i+1)| / |f_(i+1)| = {trivial_error:.2e} > {TRIVIAL_MULTIPLIER_ACCURACY:g}"
+            )
+        return PeriodicOrbit(
+            system_name=prob.system.name, state0=np.array(U[:n]), period=T, t0=prob.t0, backward=prob.backward,
+            autonomous=prob.autonomous, parameters=prob.parameters_at(lam), monodromy=trajectory.monodromy,
+            multipliers=mu, trajectory=trajectory, converged=True, iterations=max(len(history) - 1, 0),
+            residual_norm=float(history[-1]), residuals=list(history), trivial_error=trivial_error, problem=prob,
+            segments=self.segments, nodes=np.array(U[: self.segments * n]).reshape(self.segments, n),
+        )
+
+
+def join(segs: Sequence[Trajectory]) -> Trajectory:
+    """One trajectory from consecutive segments: their events in order, the product of their transfer
+    matrices as its monodromy (assembled: its eigenvalues are not the multipliers' best values)."""
+    first, last = segs[0], segs[-1]
+    logs = [seg.event_log for seg in segs]
+    event_log = tuple(np.concatenate([log[k] for log in logs]) for k in range(len(first.event_log)))
+    M = first.monodromy
+    for seg in segs[1:]:
+        M = seg.monodromy @ M
+    return replace(
+        first, t1=last.t1, x1=last.x1, mode1=last.mode1, event_log=event_log, monodromy=M,
+        parameter_sensitivity=None, x_min=np.min([s.x_min for s in segs], axis=0),
+        x_max=np.max([s.x_max for s in segs], axis=0), sliding_at_end=last.sliding_at_end,
+        velocity_end=last.velocity_end, n_steps=sum(s.n_steps for s in segs),
+        n_rejected=sum(s.n_rejected for s in segs), _steps=None,
+    )
+
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """An equilibrium of one mode, with the eigenvalues of ``f_x`` there."""
+
+    mode: str
+    state: np.ndarray
+    parameters: np.ndarray
+    eigenvalues: np.ndarray
+    residuals: list[float]
+
+    @property
+    def stable(self) -> bool:
+        return bool(np.all(self.eigenvalues.real < 0))
+
+
+class EquilibriumProblem:
+    """Equilibria ``f(x, p) = 0`` of one mode (autonomous systems), in the continuation protocol."""
+
+    def __init__(
+        self,
+        flow: Flow,
+        mode: str | int,
+        parameters: Mapping[str, float] | np.ndarray | None = None,
+        *,
+        continuation_parameter: str | None = None,
+    ):
+        self.flow = flow
+        self.system = flow.system
+        if not self.system.is_autonomous:
+            raise ModelError(f"model {self.system.name!r} is forced (its fields depend on time): it has no "
+                             "equilibria; its stationary responses are periodic orbits (ShootingProblem)")
+        self.mode = self.system.mode_index(mode)
+        self.p = flow.parameters(parameters)
+        self.lam_index = -1 if continuation_parameter is None else self.system.parameter_index(continuation_parameter)
+        self.lam_name = continuation_parameter
+        self.autonomous = True
+        self.backward = False
+
+    @property
+    def dimension(self) -> int:
+        return self.system.n
+
+    def parameters_at(self, lam: float | None) -> np.ndarray:
+        p = self.p.copy()
+        if lam is not None:
+            p[self.lam_index] = lam
+        return p
+
+    def lam0(self) -> float:
+        return float(self.p[self.lam_index])
+
+    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
+        p = self.parameters_at(lam)
+        x = np.asarray(u, dtype=float)
+        f = self.flow.vector_field(self.mode, 0.0, x, p)
+        J = self.flow.vector_field_jacobian(self.mode, 0.0, x, p)
+        jl = None
+        if need_lam and lam is not None:
+            jl = self.flow.vector_field_parameters(self.mode, 0.0, x, p)[:, self.lam_index].copy()
+        return Evaluation(residual=f, jac_u=J, jac_lam=jl)
+
+    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+        eig = np.linalg.eigvals(ev.jac_u).astype(complex)
+        eig = eig[np.lexsort((-eig.imag, -eig.real))]
+        return SolutionSummary(
+            state=np.array(u),
+            period=float("nan"),
+            amplitude=float(abs(u[0])),
+            half_peak_to_peak=0.0,
+            multipliers=eig,
+            stable=bool(np.all(eig.real < 0)),
+            event_labels=(),
+        )
+
+    def accept(self, u: np.ndarray, lam: float | None) -> None:
+        """Nothing to re-anchor for equilibria."""
+
+    def solve(self, x0: Sequence[float], lam: float | None = None, *, tol: float = 1e-12, max_iter: int = 30) -> Equilibrium:
+        def fun(u):
+            ev = self.evaluate(u, lam, need_lam=False)
+            return ev.residual, ev.jac_u, ev
+
+        mname = self.system.mode_names[self.mode]
+        x, history, ev = newton(fun, np.asarray(x0, dtype=float), tol=tol, max_iter=max_iter, what=f"equilibrium of mode {mname!r}")
+        return Equilibrium(
+            mode=mname,
+            state=x,
+            parameters=self.parameters_at(lam),
+            eigenvalues=np.linalg.eigvals(ev.jac_u),
+            residuals=history,
+        )

@@ -1,0 +1,1216 @@
+"""Export and reload of branches and special points (JSON and CSV), and the file writing of the library.
+
+Formats
+-------
+Branch JSON (``save_branch_json``)
+    One object with ``"format": "saltation.branches.branch"`` and ``"version": 1``, the branch's
+    metadata, its points and its special points. It holds everything a :class:`Branch`
+    holds, so ``load_branch_json(save_branch_json(b))`` gives back an equal branch.
+Diagram JSON (``save_diagram_json``)
+    ``"format": "saltation.apps.diagram"``: a list of branch objects as above.
+Branch CSV (``save_branch_csv``)
+    One row per branch point with the columns ``parameter, period, amplitude,
+    half_peak_to_peak, stable, event_labels, step, iterations, state_0 .. state_{n-1}`` and, per
+    multiplier ``i``, ``mu{i}_re, mu{i}_im, mu{i}_abs``. Events are joined with ``";"``;
+    ``stable`` is ``true``/``false``. The CSV holds the points only: the branch's metadata and
+    its special points go to a side file ``<stem>.meta.json`` (the branch JSON without its
+    points, with ``"n_points"``, the number of rows of the CSV), which ``load_branch_csv`` reads
+    when it is present.
+Special-point records (``special_point_record``, ``save_special_points_json``)
+    The public summary of a located special point, a flat JSON object per point.
+
+Numbers are written at full precision (Python's shortest round-trip ``repr``), so a round
+trip is lossless. JSON has no infinity or NaN: a non-finite real is written as the string
+``"inf"``, ``"-inf"`` or ``"nan"``; a complex number is a pair ``[re, im]`` and an infinite
+multiplier (the point at infinity, stored as ``complex(inf, 0)``) is the string ``"inf"``.
+In CSV, non-finite values are written ``inf``, ``-inf`` and ``nan``, which Python's
+``float`` reads back.
+
+Guarantees
+----------
+Writing
+    Every file the library writes (these formats, :func:`write_json`, sweeps, maps, figures)
+    goes through :func:`write_atomically`: it is written to a temporary file in the same folder
+    and then renamed over the target, so a reader sees the old file or the whole new one, never
+    a part. On any failure (an exception while encoding, a full disk) the temporary file is
+    removed and the old file, if any, is untouched.
+Reading
+    Every loader checks what it reads and raises :class:`FileFormatError` (a ``ValueError``)
+    naming the file and the field, e.g. ``branch.json: points[3].stable: expected true or false,
+    got "false"``: for a file that is not complete JSON (truncated), a missing field, a value of
+    the wrong type (a boolean must be a JSON boolean, a number a JSON number or one of the
+    strings above), a list of the wrong length, a CSV row with the wrong number of fields, a CSV
+    that ends inside a row, or a CSV with fewer or more rows than its side file records.
+    A missing or unreadable file raises the usual ``OSError``.
+"""
+
+from __future__ import annotations
+
+import csv
+import io as _io
+import json
+import math
+import os
+import secrets
+import stat
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from os import PathLike
+from pathlib import Path
+from typing import Any, NoReturn, TypeVar
+
+import numpy as np
+
+from saltation.branches.branch import (
+    Branch,
+    BranchKind,
+    BranchPoint,
+    SpecialPoint,
+    SpecialPointKind,
+    StopReason,
+)
+from saltation.errors import SaltationError
+
+__all__ = [
+    "FileFormatError",
+    "branch_from_dict",
+    "branch_to_dict",
+    "csv_metadata_path",
+    "load_branch_csv",
+    "load_branch_json",
+    "load_branch_points_csv",
+    "load_diagram_json",
+    "load_special_points_json",
+    "save_branch_csv",
+    "save_branch_json",
+    "save_diagram_json",
+    "save_special_points_json",
+    "special_point_record",
+    "write_atomically",
+    "write_json",
+]
+
+BRANCH_FORMAT = "saltation.branches.branch"
+DIAGRAM_FORMAT = "saltation.apps.diagram"
+FORMAT_VERSION = 1
+EVENT_SEPARATOR = ";"
+
+PathType = str | PathLike[str]
+T = TypeVar("T")
+
+
+class FileFormatError(SaltationError, ValueError):
+    """A file (or a record) is not what its loader reads.
+
+    Truncated, not JSON or CSV, a missing field, a value of the wrong type or a list of the wrong
+    length.  The message is ``SOURCE: FIELD: PROBLEM`` (``SOURCE: PROBLEM`` for the file as a whole).
+
+    Attributes
+    ----------
+    source : str
+        The file (as given to the loader), or a description of the record (``"branch record"``).
+    field : str
+        The field, e.g. ``"points[3].stable"``, ``"line 12 (point 10), column stable"``; empty when the
+        problem is the file as a whole (truncated JSON, an empty file).
+    problem : str
+        What is wrong with it.
+    """
+
+    def __init__(self, source: str, field: str, problem: str):
+        self.source, self.field, self.problem = str(source), field, problem
+        super().__init__(f"{self.source}: {field}: {problem}" if field else f"{self.source}: {problem}")
+
+
+# ---------------------------------------------------------------------------
+# writing files: atomically
+# ---------------------------------------------------------------------------
+
+#: Bytes per ``os.write`` call.
+_CHUNK = 1 << 16
+
+
+def _with_name(exc: OSError, path: Path) -> OSError:
+    """``exc`` naming ``path`` (an ``os.write`` error names no file)."""
+    if exc.errno is None or exc.filename is not None:
+        return exc
+    return OSError(exc.errno, exc.strerror, str(path))  # the errno's subclass (PermissionError, ...)
+
+
+def _stage(path: Path, data: bytes) -> str:
+    """Write ``data`` to a new temporary file next to ``path`` (flushed to disk); its name."""
+    stem = path.name[:200]
+    for _ in range(100):
+        tmp = os.path.join(path.parent, f".{stem}.{secrets.token_hex(4)}.tmp")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise _with_name(exc, path) from None
+        break
+    else:  # pragma: no cover (a hundred random names taken)
+        raise FileExistsError(f"no free temporary name next to {path}")
+    try:
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view[:_CHUNK]) :]
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        try:  # keep the permissions of the file replaced (a new file has the umask's)
+            os.chmod(tmp, stat.S_IMODE(os.stat(path).st_mode))
+        except OSError:
+            pass
+    except BaseException as exc:
+        _remove(tmp)
+        if isinstance(exc, OSError):
+            raise _with_name(exc, path) from None
+        raise
+    return tmp
+
+
+def _remove(tmp: str) -> None:
+    try:
+        os.unlink(tmp)
+    except OSError:
+        pass
+
+
+def write_atomically(files: Mapping[PathType, bytes | str]) -> list[Path]:
+    """Write files so that each is either the whole new content or untouched; every writer of the library uses it.
+
+    Each content goes to a temporary file in its target's folder (created if missing), flushed to
+    disk; once all of them are written, each is renamed over its target (``os.replace``, atomic).
+    A symbolic link is followed: the file it points to is replaced.
+
+    Parameters
+    ----------
+    files : mapping of path to bytes or str
+        The files and their contents (a ``str`` is written as UTF-8).
+
+    Returns
+    -------
+    list of Path
+        The files written, in the order given.
+
+    Raises
+    ------
+    OSError
+        If a folder cannot be created or a file cannot be written (a full disk, no permission),
+        naming the file. No temporary file is left behind, and no file given is changed (unless
+        the failure is in the renaming itself, after some were replaced).
+    """
+    targets = [(Path(p), c.encode("utf-8") if isinstance(c, str) else bytes(c)) for p, c in files.items()]
+    staged: list[tuple[str, Path]] = []
+    try:
+        for path, data in targets:
+            real = Path(os.path.realpath(path)) if path.is_symlink() else path
+            real.parent.mkdir(parents=True, exist_ok=True)
+            staged.append((_stage(real, data), real))
+        while staged:
+            tmp, real = staged[0]
+            try:
+                os.replace(tmp, real)
+            except OSError as exc:
+                raise _with_name(exc, real) from None
+            staged.pop(0)
+    finally:
+        for tmp, _ in staged:
+            _remove(tmp)
+    return [path for path, _ in targets]
+
+
+def write_json(obj: Any, path: PathType, *, allow_nan: bool = True) -> Path:
+    """Write ``obj`` as indented JSON with a final newline (atomically, creating the folder).
+
+    Every JSON file the library writes goes through here (and :func:`write_atomically`).
+
+    Parameters
+    ----------
+    obj : JSON-serialisable object
+    path : str or path-like
+    allow_nan : bool
+        False refuses NaN and infinities (the branch formats encode them as strings first).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    ValueError
+        If ``obj`` holds a non-finite number and ``allow_nan`` is False (no file is touched).
+    OSError
+        If the file cannot be written (see :func:`write_atomically`).
+    """
+    text = json.dumps(obj, indent=1, allow_nan=allow_nan) + "\n"
+    return write_atomically({Path(path): text})[0]
+
+
+def _write_json(obj: Any, path: PathType) -> Path:
+    return write_json(obj, path, allow_nan=False)
+
+
+# ---------------------------------------------------------------------------
+# reading files: every value checked, every failure naming the file and the field
+# ---------------------------------------------------------------------------
+
+_MISSING: Any = object()
+_NON_FINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
+
+
+class _Bare:
+    """A number of a JSON file that is no finite double: a bare ``NaN``/``Infinity``/``-Infinity`` (not
+    JSON), or a literal too large for a double (``1e400``, read as an infinity)."""
+
+    def __init__(self, token: str, value: float | None = None):
+        self.token = token
+        self.value = {"NaN": math.nan, "Infinity": math.inf, "-Infinity": -math.inf}[token] if value is None else value
+        self.problem = (f'{token} is not JSON: a non-finite number is written "nan", "inf" or "-inf"' if value is None
+                        else f'{token} is too large for a double (an infinity is written "inf" or "-inf")')
+
+
+class _Object(dict):
+    """A JSON object whose text repeats a key (the last one would silently win)."""
+
+    duplicate: str = ""
+
+
+def _sub(where: str, key: str) -> str:
+    return f"{where}.{key}" if where else key
+
+
+def _item(where: str, i: int) -> str:
+    return f"{where}[{i}]"
+
+
+def _show(v: Any) -> str:
+    """A value as the file spells it, shortened."""
+    if isinstance(v, _Bare):
+        return v.token
+    try:
+        text = json.dumps(v, allow_nan=True)
+    except (TypeError, ValueError):
+        text = repr(v)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+class _Fields:
+    """Reads the values of a decoded document, failing with :class:`FileFormatError` naming the field."""
+
+    def __init__(self, source: PathType | str):
+        self.source = str(source)
+
+    def fail(self, field: str, problem: str) -> NoReturn:
+        raise FileFormatError(self.source, field, problem)
+
+    # -- containers ----------------------------------------------------------------------------
+    def obj(self, v: Any, field: str) -> dict[str, Any]:
+        if not isinstance(v, dict):
+            self.fail(field, f"expected an object {{...}}, got {_show(v)}")
+        return v
+
+    def list(self, v: Any, field: str, length: int | None = None) -> list[Any]:
+        if not isinstance(v, list):
+            self.fail(field, f"expected a list [...], got {_show(v)}")
+        if length is not None and len(v) != length:
+            self.fail(field, f"expected {length} entries, got {len(v)}")
+        return v
+
+    def take(self, d: Mapping[str, Any], where: str, key: str, decode: Callable[[Any, str], T],
+             default: Any = _MISSING) -> T:
+        """``decode(d[key])``, the field named ``where.key``; ``default`` if the key is absent (else a failure)."""
+        field = _sub(where, key)
+        if key not in d:
+            if default is _MISSING:
+                self.fail(field, "missing")
+            return default
+        return decode(d[key], field)
+
+    # -- scalars --------------------------------------------------------------------------------
+    def string(self, v: Any, field: str) -> str:
+        if not isinstance(v, str):
+            self.fail(field, f"expected a string, got {_show(v)}")
+        return v
+
+    def boolean(self, v: Any, field: str) -> bool:
+        if not isinstance(v, (bool, np.bool_)):
+            self.fail(field, f"expected true or false, got {_show(v)}")
+        return bool(v)
+
+    def integer(self, v: Any, field: str, minimum: int | None = None, maximum: int | None = None) -> int:
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
+            self.fail(field, f"expected an integer, got {_show(v)}")
+        if (minimum is not None and v < minimum) or (maximum is not None and v > maximum):
+            bounds = f"at least {minimum}" if maximum is None else f"from {minimum} to {maximum}"
+            self.fail(field, f"expected an integer {bounds}, got {_show(int(v))}")
+        return int(v)
+
+    def real(self, v: Any, field: str, *, finite: bool = False) -> float:
+        if isinstance(v, _Bare):
+            x = v.value
+        elif isinstance(v, str) and v in _NON_FINITE:
+            x = _NON_FINITE[v]
+        elif isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
+            self.fail(field, f'expected a number (or "inf", "-inf", "nan"), got {_show(v)}')
+        else:
+            try:
+                x = float(v)
+            except OverflowError:  # an integer beyond the doubles
+                self.fail(field, f'{_show(v)} is too large for a double (an infinity is written "inf" or "-inf")')
+        if finite and not math.isfinite(x):
+            self.fail(field, f"expected a finite number, got {_show(v)}")
+        return x
+
+    def complex(self, v: Any, field: str) -> complex:
+        if v == "inf":
+            return complex(math.inf, 0.0)
+        if not isinstance(v, list) or len(v) != 2:
+            self.fail(field, f'expected a complex number [re, im] (or "inf"), got {_show(v)}')
+        return complex(self.real(v[0], _item(field, 0)), self.real(v[1], _item(field, 1)))
+
+    def choice(self, v: Any, field: str, choices: Mapping[str, T]) -> T:
+        if not isinstance(v, str) or v not in choices:
+            self.fail(field, f"expected one of {', '.join(json.dumps(c) for c in choices)}, got {_show(v)}")
+        return choices[v]
+
+    # -- arrays -----------------------------------------------------------------------------------
+    def strings(self, v: Any, field: str) -> tuple[str, ...]:
+        return tuple(self.string(s, _item(field, i)) for i, s in enumerate(self.list(v, field)))
+
+    def reals(self, v: Any, field: str, length: int | None = None, *, finite: bool = False) -> np.ndarray:
+        items = self.list(v, field, length)
+        return np.array([self.real(x, _item(field, i), finite=finite) for i, x in enumerate(items)], dtype=float)
+
+    def complexes(self, v: Any, field: str, length: int | None = None) -> np.ndarray:
+        items = self.list(v, field, length)
+        return np.array([self.complex(z, _item(field, i)) for i, z in enumerate(items)], dtype=complex)
+
+    def square(self, v: Any, field: str) -> np.ndarray:
+        """A square matrix: a list of ``k`` rows of ``k`` numbers."""
+        rows = self.list(v, field)
+        return np.array([self.reals(r, _item(field, i), len(rows)) for i, r in enumerate(rows)], dtype=float).reshape(
+            len(rows), len(rows))
+
+    @staticmethod
+    def nullable(decode: Callable[[Any, str], T]) -> Callable[[Any, str], T | None]:
+        return lambda v, field: None if v is None else decode(v, field)
+
+
+def _read_json(path: PathType, *, bare_constants: bool = False) -> Any:
+    """The JSON document in ``path``.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is empty, not UTF-8, not complete JSON, repeats a key of an object, or (unless
+        ``bare_constants``) holds a bare ``NaN``/``Infinity`` (not JSON: the formats write
+        ``"nan"``, ``"inf"``) or a number too large for a double (``1e400``); the field is named
+        where it can be.
+    OSError
+        If the file cannot be read.
+    """
+    fields = _Fields(path)
+    text = _read_text(path, fields, "JSON", "the file is empty")
+    flags = {"bare": False, "duplicate": False}
+
+    def constant(token: str) -> _Bare:
+        flags["bare"] = True
+        return _Bare(token)
+
+    def number(token: str) -> float | _Bare:
+        x = float(token)
+        if math.isfinite(x):
+            return x
+        flags["bare"] = True
+        return _Bare(token, x)
+
+    def pairs(items: list[tuple[str, Any]]) -> dict[str, Any]:
+        d = dict(items)
+        if len(d) == len(items):
+            return d
+        flagged, seen = _Object(items), set()
+        for key, _ in items:
+            if key in seen:
+                flagged.duplicate = key
+                break
+            seen.add(key)
+        flags["duplicate"] = True
+        return flagged
+
+    try:
+        doc = json.loads(text, parse_constant=constant, parse_float=number, object_pairs_hook=pairs)
+    except json.JSONDecodeError as exc:
+        fields.fail("", f"not valid JSON at line {exc.lineno} column {exc.colno}: {exc.msg} (the file is truncated or "
+                    "damaged)")
+    except RecursionError:
+        fields.fail("", "not valid JSON: nested too deeply")
+    if not (flags["bare"] or flags["duplicate"]):
+        return doc
+
+    def walk(v: Any, field: str) -> Any:
+        if isinstance(v, _Bare):
+            if not bare_constants:
+                fields.fail(field or "(top level)", v.problem)
+            return v.value
+        if isinstance(v, dict):
+            if getattr(v, "duplicate", ""):
+                fields.fail(field or "(top level)", f"the key {json.dumps(v.duplicate)} appears more than once")
+            return {k: walk(x, _sub(field, k)) for k, x in v.items()}
+        if isinstance(v, list):
+            return [walk(x, _item(field, i)) for i, x in enumerate(v)]
+        return v
+
+    return walk(doc, "")
+
+
+def _check_format(d: Any, expected: str, fields: _Fields, where: str = "") -> dict[str, Any]:
+    """``d`` as an object of format ``expected``, version :data:`FORMAT_VERSION`."""
+    d = fields.obj(d, where or "(top level)")
+    fmt = d.get("format", _MISSING)
+    if fmt is _MISSING:
+        fields.fail(_sub(where, "format"), f"missing: not a {expected} file")
+    if fmt != expected:
+        fields.fail(_sub(where, "format"), f"expected format {expected!r}, found {_show(fmt)}")
+    version = d.get("version", _MISSING)
+    if version is _MISSING:
+        fields.fail(_sub(where, "version"), "missing")
+    if version != FORMAT_VERSION or isinstance(version, bool):
+        fields.fail(_sub(where, "version"), f"unsupported {expected} version {_show(version)} (this library reads "
+                    f"{FORMAT_VERSION})")
+    return d
+
+
+# ---------------------------------------------------------------------------
+# scalar and array encoding
+# ---------------------------------------------------------------------------
+
+
+def _enc_float(x: float) -> float | str:
+    """A real number for JSON: the float itself, or ``"inf"``, ``"-inf"``, ``"nan"``."""
+    x = float(x)
+    if math.isfinite(x):
+        return x
+    if math.isnan(x):
+        return "nan"
+    return "inf" if x > 0 else "-inf"
+
+
+def _enc_complex(z: complex) -> list[float | str] | str:
+    """A complex number as ``[re, im]``; an infinite one as ``"inf"``."""
+    z = complex(z)
+    if math.isinf(z.real) or math.isinf(z.imag):
+        return "inf"
+    return [_enc_float(z.real), _enc_float(z.imag)]
+
+
+def _enc_complex_array(a: np.ndarray | None) -> list[Any] | None:
+    if a is None:
+        return None
+    return [_enc_complex(z) for z in np.asarray(a, dtype=complex).ravel()]
+
+
+def _enc_real_array(a: np.ndarray | None) -> list[Any] | None:
+    """A real array of any shape as nested lists of encoded floats."""
+    if a is None:
+        return None
+    a = np.asarray(a, dtype=float)
+    if a.ndim == 0:
+        return _enc_float(a)  # type: ignore[return-value]
+    return [_enc_real_array(row) for row in a]  # type: ignore[misc]
+
+
+# ---------------------------------------------------------------------------
+# dataclasses <-> plain dicts
+# ---------------------------------------------------------------------------
+
+
+def _point_to_dict(p: BranchPoint) -> dict[str, Any]:
+    return {
+        "parameter": _enc_float(p.parameter),
+        "state": _enc_real_array(p.state),
+        "period": _enc_float(p.period),
+        "amplitude": _enc_float(p.amplitude),
+        "half_peak_to_peak": _enc_float(p.half_peak_to_peak),
+        "multipliers": _enc_complex_array(p.multipliers),
+        "stable": bool(p.stable),
+        "event_labels": list(p.event_labels),
+        "step": _enc_float(p.step),
+        "iterations": int(p.iterations),
+    }
+
+
+def _point_from_dict(v: Any, f: _Fields, where: str) -> BranchPoint:
+    d = f.obj(v, where)
+    real, finite = f.real, (lambda x, field: f.real(x, field, finite=True))
+    events_key = "event_labels" if "event_labels" in d or "events" not in d else "events"  # "events": before 2026-11-24
+    return BranchPoint(
+        parameter=f.take(d, where, "parameter", finite),
+        state=f.take(d, where, "state", lambda x, field: f.reals(x, field, finite=True)),
+        period=f.take(d, where, "period", real),
+        amplitude=f.take(d, where, "amplitude", real),
+        half_peak_to_peak=f.take(d, where, "half_peak_to_peak", real),
+        multipliers=f.take(d, where, "multipliers", f.complexes),
+        stable=f.take(d, where, "stable", f.boolean),
+        event_labels=f.take(d, where, events_key, f.strings),
+        step=f.take(d, where, "step", real),
+        iterations=f.take(d, where, "iterations", lambda x, field: f.integer(x, field, minimum=0)),
+    )
+
+
+def _check_points(points: Sequence[BranchPoint], f: _Fields, name: Callable[[int], str]) -> None:
+    """Every point has as many states and multipliers as the first (``name(k)`` names point ``k``)."""
+    if not points:
+        return
+    n_state, n_mu = len(points[0].state), len(points[0].multipliers)
+    for k, p in enumerate(points):
+        for attr, n in (("state", n_state), ("multipliers", n_mu)):
+            if len(getattr(p, attr)) != n:
+                f.fail(_sub(name(k), attr), f"has {len(getattr(p, attr))} entries; {_sub(name(0), attr)} has {n}")
+
+
+def _special_point_to_dict(sp: SpecialPoint) -> dict[str, Any]:
+    return {
+        "kind": sp.kind.value,
+        "parameter": _enc_float(sp.parameter),
+        "bracket": [_enc_float(b) for b in sp.bracket],
+        "accuracy": _enc_float(sp.accuracy),
+        "index": int(sp.index),
+        "state": _enc_real_array(sp.state),
+        "period": _enc_float(sp.period),
+        "amplitude": _enc_float(sp.amplitude),
+        "multipliers": _enc_complex_array(sp.multipliers),
+        "multipliers_minus": _enc_complex_array(sp.multipliers_minus),
+        "multipliers_plus": _enc_complex_array(sp.multipliers_plus),
+        "monodromy_minus": _enc_real_array(sp.monodromy_minus),
+        "monodromy_plus": _enc_real_array(sp.monodromy_plus),
+        "crossing_q": None if sp.crossing_q is None else _enc_float(sp.crossing_q),
+        "crossing_point": None if sp.crossing_point is None else _enc_complex(sp.crossing_point),
+        "event_labels_minus": list(sp.event_labels_minus),
+        "event_labels_plus": list(sp.event_labels_plus),
+        "note": sp.note,
+        "multipliers_accuracy": _enc_float(sp.multipliers_accuracy),
+        "limits": sp.limits,
+        "touch_surface": sp.touch_surface,
+        "touch_mode": sp.touch_mode,
+        "touch_time": _enc_float(sp.touch_time),
+    }
+
+
+_KINDS = {k.value: k for k in SpecialPointKind}
+
+
+def _special_point_from_dict(v: Any, f: _Fields, where: str) -> SpecialPoint:
+    d = f.obj(v, where)
+    real, opt = f.real, f.nullable
+    state = f.take(d, where, "state", opt(lambda x, field: f.reals(x, field)))
+    n = None if state is None else len(state)
+
+    def square(x: Any, field: str) -> np.ndarray:
+        m = f.square(x, field)
+        if n is not None and m.shape[0] != n:
+            f.fail(field, f"expected a {n} x {n} matrix (the state has {n} components), got {m.shape[0]} x {m.shape[0]}")
+        return m
+
+    def events(key: str, old: str) -> tuple[str, ...]:  # "events_minus", "events_plus": files before 2026-11-24
+        return f.take(d, where, key if key in d or old not in d else old, f.strings, ())
+
+    return SpecialPoint(
+        kind=f.take(d, where, "kind", lambda x, field: f.choice(x, field, _KINDS)),
+        parameter=f.take(d, where, "parameter", real),
+        bracket=tuple(float(b) for b in f.take(d, where, "bracket", lambda x, field: f.reals(x, field, 2))),  # type: ignore[arg-type]
+        accuracy=f.take(d, where, "accuracy", real),
+        index=f.take(d, where, "index", f.integer),
+        state=state,
+        period=f.take(d, where, "period", real),
+        amplitude=f.take(d, where, "amplitude", real),
+        multipliers=f.take(d, where, "multipliers", opt(f.complexes), None),
+        multipliers_minus=f.take(d, where, "multipliers_minus", opt(f.complexes), None),
+        multipliers_plus=f.take(d, where, "multipliers_plus", opt(f.complexes), None),
+        monodromy_minus=f.take(d, where, "monodromy_minus", opt(square), None),
+        monodromy_plus=f.take(d, where, "monodromy_plus", opt(square), None),
+        crossing_q=f.take(d, where, "crossing_q", opt(real), None),
+        crossing_point=f.take(d, where, "crossing_point", opt(f.complex), None),
+        event_labels_minus=events("event_labels_minus", "events_minus"),
+        event_labels_plus=events("event_labels_plus", "events_plus"),
+        note=f.take(d, where, "note", f.string, ""),
+        multipliers_accuracy=f.take(d, where, "multipliers_accuracy", real, math.nan),
+        limits=f.take(d, where, "limits", f.string, ""),
+        touch_surface=f.take(d, where, "touch_surface", f.string, ""),
+        touch_mode=f.take(d, where, "touch_mode", f.string, ""),
+        touch_time=f.take(d, where, "touch_time", real, math.nan),
+    )
+
+
+def _enc_stop(reason: StopReason | None) -> str | None:
+    """A stop reason by its (lower-case) name; its value is a sentence that may be reworded."""
+    return None if reason is None else reason.name.lower()
+
+
+_STOPS = {r.name.lower(): r for r in StopReason}
+_BRANCH_KINDS = {k.value: k for k in BranchKind}
+
+
+def _metadata_to_dict(branch: Branch) -> dict[str, Any]:
+    return {
+        "format": BRANCH_FORMAT,
+        "version": FORMAT_VERSION,
+        "model": branch.model,
+        "parameter_name": branch.parameter_name,
+        "kind": branch.kind.value,
+        "backward": bool(branch.backward),
+        "autonomous": bool(branch.autonomous),
+        "label": branch.label,
+        "stop_reason": _enc_stop(branch.stop_reason),
+        "stop_reasons": [_enc_stop(r) for r in branch.stop_reasons],
+        "fixed_parameters": {str(k): _enc_float(v) for k, v in branch.fixed_parameters.items()},
+        "special_points": [_special_point_to_dict(sp) for sp in branch.special_points],
+    }
+
+
+def branch_to_dict(branch: Branch) -> dict[str, Any]:
+    """The branch as a JSON-ready dict (the content of a branch JSON file).
+
+    Parameters
+    ----------
+    branch : Branch
+
+    Returns
+    -------
+    dict
+        Metadata, ``points`` and ``special_points``, encoded as described in the module
+        docstring (no bare infinities or NaNs, complex numbers as ``[re, im]``).
+    """
+    d = _metadata_to_dict(branch)
+    d["points"] = [_point_to_dict(p) for p in branch.points]
+    return d
+
+
+def _branch_from_dict(v: Any, f: _Fields, where: str = "", points: list[BranchPoint] | None = None) -> Branch:
+    d = _check_format(v, BRANCH_FORMAT, f, where)
+    stop = f.nullable(lambda x, field: f.choice(x, field, _STOPS))
+    if points is None:
+        if "points" not in d:
+            hint = " (a CSV's side file? read the CSV with load_branch_csv)" if "n_points" in d else ""
+            f.fail(_sub(where, "points"), "missing" + hint)
+        items = f.list(d["points"], _sub(where, "points"))
+        points = [_point_from_dict(p, f, _item(_sub(where, "points"), k)) for k, p in enumerate(items)]
+        _check_points(points, f, lambda k: _item(_sub(where, "points"), k))
+    fixed = f.take(d, where, "fixed_parameters", f.obj, {})
+    specials = f.take(d, where, "special_points", f.list, [])
+    reasons = f.take(d, where, "stop_reasons", f.list, [])
+    return Branch(
+        model=f.take(d, where, "model", f.string),
+        parameter_name=f.take(d, where, "parameter_name", f.string),
+        kind=f.take(d, where, "kind", lambda x, field: f.choice(x, field, _BRANCH_KINDS)),
+        backward=f.take(d, where, "backward", f.boolean, False),
+        points=points,
+        special_points=[_special_point_from_dict(s, f, _item(_sub(where, "special_points"), k))
+                        for k, s in enumerate(specials)],
+        stop_reason=f.take(d, where, "stop_reason", stop, None),
+        stop_reasons=[stop(r, _item(_sub(where, "stop_reasons"), k)) for k, r in enumerate(reasons)],
+        fixed_parameters={k: f.real(x, _sub(_sub(where, "fixed_parameters"), k)) for k, x in fixed.items()},
+        label=f.take(d, where, "label", f.string, ""),
+        autonomous=f.take(d, where, "autonomous", f.boolean, False),
+    )
+
+
+def branch_from_dict(d: dict[str, Any], *, points: list[BranchPoint] | None = None,
+                     source: str = "branch record") -> Branch:
+    """Rebuild a :class:`Branch` from :func:`branch_to_dict` output, checking every field.
+
+    Parameters
+    ----------
+    d : dict
+        Branch dict; its ``points`` entry is used unless ``points`` is given.
+    points : list of BranchPoint, optional
+        Points read elsewhere (from a CSV file).
+    source : str
+        What ``d`` was read from, for the messages (a file name).
+
+    Returns
+    -------
+    Branch
+
+    Raises
+    ------
+    FileFormatError
+        If ``d`` is not a branch of a supported version, or a field is missing, of the wrong type
+        or of the wrong length; the message names ``source`` and the field.
+    """
+    return _branch_from_dict(d, _Fields(source), "", points)
+
+
+# ---------------------------------------------------------------------------
+# branch JSON and diagram JSON
+# ---------------------------------------------------------------------------
+
+
+def save_branch_json(branch: Branch, path: PathType) -> Path:
+    """Write a branch, with its special points, to a JSON file (atomically: see :func:`write_atomically`).
+
+    Parameters
+    ----------
+    branch : Branch
+    path : str or path-like
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    return _write_json(branch_to_dict(branch), path)
+
+
+def load_branch_json(path: PathType) -> Branch:
+    """Read a branch written by :func:`save_branch_json`.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    Branch
+
+    Raises
+    ------
+    FileFormatError
+        If the file is not a complete branch file of a supported version: the message names the
+        file and the field (a ``ValueError``).
+    OSError
+        If the file cannot be read.
+    """
+    return _branch_from_dict(_read_json(path), _Fields(path))
+
+
+def save_diagram_json(branches: Iterable[Branch], path: PathType) -> Path:
+    """Write several branches (a bifurcation diagram) to one JSON file (atomically).
+
+    Parameters
+    ----------
+    branches : iterable of Branch
+    path : str or path-like
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    obj = {
+        "format": DIAGRAM_FORMAT,
+        "version": FORMAT_VERSION,
+        "branches": [branch_to_dict(b) for b in branches],
+    }
+    return _write_json(obj, path)
+
+
+def load_diagram_json(path: PathType) -> list[Branch]:
+    """Read the branches written by :func:`save_diagram_json`.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    list of Branch
+
+    Raises
+    ------
+    FileFormatError
+        As :func:`load_branch_json`; fields are named ``branches[k].points[j].stable`` and the like.
+    OSError
+        If the file cannot be read.
+    """
+    f = _Fields(path)
+    d = _check_format(_read_json(path), DIAGRAM_FORMAT, f)
+    items = f.take(d, "", "branches", f.list)
+    return [_branch_from_dict(b, f, _item("branches", k)) for k, b in enumerate(items)]
+
+
+# ---------------------------------------------------------------------------
+# branch CSV
+# ---------------------------------------------------------------------------
+
+#: The columns of a branch CSV before the states and multipliers (``events`` in files before 2026-11-24).
+_CSV_COLUMNS = ("parameter", "period", "amplitude", "half_peak_to_peak", "stable", "event_labels", "step", "iterations")
+
+
+def csv_metadata_path(path: PathType) -> Path:
+    """The side file holding a CSV branch's metadata and special points: ``<stem>.meta.json``."""
+    path = Path(path)
+    return path.with_name(path.stem + ".meta.json")
+
+
+def _csv_float(x: float) -> str:
+    return repr(float(x))
+
+
+def _csv_text(branch: Branch) -> str:
+    """The CSV of the branch's points (checked before anything is written)."""
+    n_state = len(branch.points[0].state) if branch.points else 0
+    n_mu = len(branch.points[0].multipliers) if branch.points else 0
+    for k, p in enumerate(branch.points):
+        if len(p.state) != n_state or len(p.multipliers) != n_mu:
+            raise ValueError(
+                f"point {k} has {len(p.state)} states and {len(p.multipliers)} multipliers; "
+                f"point 0 has {n_state} and {n_mu}"
+            )
+        bad = [e for e in p.event_labels if EVENT_SEPARATOR in e]
+        if bad:
+            raise ValueError(f"point {k}: event label {bad[0]!r} contains the separator {EVENT_SEPARATOR!r}")
+    header = list(_CSV_COLUMNS) + [f"state_{i}" for i in range(n_state)]
+    for i in range(n_mu):
+        header += [f"mu{i}_re", f"mu{i}_im", f"mu{i}_abs"]
+    buffer = _io.StringIO(newline="")
+    writer = csv.writer(buffer)
+    writer.writerow(header)
+    for p in branch.points:
+        row = [
+            _csv_float(p.parameter),
+            _csv_float(p.period),
+            _csv_float(p.amplitude),
+            _csv_float(p.half_peak_to_peak),
+            "true" if p.stable else "false",
+            EVENT_SEPARATOR.join(p.event_labels),
+            _csv_float(p.step),
+            str(int(p.iterations)),
+        ]
+        row += [_csv_float(x) for x in p.state]
+        for z in np.asarray(p.multipliers, dtype=complex):
+            row += [_csv_float(z.real), _csv_float(z.imag), _csv_float(abs(z))]
+        writer.writerow(row)
+    return buffer.getvalue()
+
+
+def save_branch_csv(branch: Branch, path: PathType, *, metadata: bool = True) -> Path:
+    """Write a branch's points to CSV, one row per point (atomically: see :func:`write_atomically`).
+
+    Parameters
+    ----------
+    branch : Branch
+        All points must have the same number of states and of multipliers.
+    path : str or path-like
+        The CSV file.
+    metadata : bool
+        Also write the branch's metadata and special points to ``<stem>.meta.json``
+        (see :func:`csv_metadata_path`), with the number of rows of the CSV (``"n_points"``),
+        so that :func:`load_branch_csv` restores the whole branch and detects a truncated CSV.
+        Both files are written before either replaces an old one.
+
+    Returns
+    -------
+    Path
+        The CSV file written.
+
+    Raises
+    ------
+    ValueError
+        If the points differ in their number of states or multipliers, or an event label
+        contains the separator ``";"``; no file is touched.
+    OSError
+        If a file cannot be written; the old files are untouched.
+    """
+    path = Path(path)
+    files: dict[Path, str] = {path: _csv_text(branch)}
+    if metadata:
+        meta = _metadata_to_dict(branch)
+        meta["n_points"] = len(branch.points)
+        files[csv_metadata_path(path)] = json.dumps(meta, indent=1, allow_nan=False) + "\n"
+    write_atomically(files)
+    return path
+
+
+def _parse_bool(s: str) -> bool:
+    v = s.strip().lower()
+    if v in ("true", "1"):
+        return True
+    if v in ("false", "0"):
+        return False
+    raise ValueError(f"not a boolean: {s!r}")
+
+
+def _csv_header(header: list[str], f: _Fields) -> tuple[dict[str, int], int, int]:
+    """The columns of a branch CSV by name, the number of states and of multipliers."""
+    col: dict[str, int] = {}
+    for j, name in enumerate(header):
+        if name in col:
+            f.fail("line 1 (header)", f"the column {name!r} appears twice")
+        col[name] = j
+    if "event_labels" not in col and "events" in col:
+        col["event_labels"] = col.pop("events")
+    for name in _CSV_COLUMNS:
+        if name not in col:
+            f.fail("line 1 (header)", f"missing the column {name!r}")
+    known = set(_CSV_COLUMNS)
+    n_state = sum(1 for h in col if h.startswith("state_"))
+    n_mu = sum(1 for h in col if h.startswith("mu") and h.endswith("_re"))
+    known |= {f"state_{i}" for i in range(n_state)}
+    known |= {f"mu{i}_{part}" for i in range(n_mu) for part in ("re", "im", "abs")}
+    for name in col:
+        if name not in known:
+            f.fail("line 1 (header)", f"unexpected column {name!r} (the columns are {', '.join(_CSV_COLUMNS)}, "
+                   f"state_0 .. state_{{n-1}}, mu{{i}}_re, mu{{i}}_im, mu{{i}}_abs)")
+    for i in range(n_mu):
+        for part in ("re", "im"):
+            if f"mu{i}_{part}" not in col:
+                f.fail("line 1 (header)", f"missing the column 'mu{i}_{part}'")
+    return col, n_state, n_mu
+
+
+def _read_text(path: PathType, fields: _Fields, kind: str, empty: str) -> str:
+    """A file's text (UTF-8, a byte-order mark allowed), or a FileFormatError naming it."""
+    try:
+        text = Path(path).read_bytes().decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        fields.fail("", f"not a UTF-8 text file (byte {exc.start}): not a {kind} file, or damaged")
+    if not text.strip():
+        fields.fail("", empty)
+    return text
+
+
+def _read_csv_points(path: PathType, f: _Fields) -> list[BranchPoint]:
+    text = _read_text(path, f, "CSV", "the file is empty (no header)")
+    reader = csv.reader(_io.StringIO(text, newline=""), strict=True)
+    try:
+        rows = [(reader.line_num, row) for row in reader]
+    except csv.Error as exc:
+        f.fail(f"line {reader.line_num + 1}", f"not valid CSV: {exc}")
+    if not text.endswith(("\n", "\r")):
+        f.fail(f"line {rows[-1][0]}", "the file ends inside this row (no line end after it): truncated")
+    (_, header), body = rows[0], [(line, row) for line, row in rows[1:] if row]
+    col, n_state, n_mu = _csv_header(header, f)
+    return [_csv_point(row, f"line {line} (point {k})", col, n_state, n_mu, f) for k, (line, row) in enumerate(body)]
+
+
+def _csv_point(row: list[str], here: str, col: Mapping[str, int], n_state: int, n_mu: int, f: _Fields) -> BranchPoint:
+    """The branch point of one CSV row (``here`` names it)."""
+    if len(row) != len(col):
+        f.fail(here, f"has {len(row)} fields; the header has {len(col)} (truncated or hand-edited?)")
+
+    def cell(name: str, convert: Callable[[str], T], what: str) -> T:
+        s = row[col[name]]
+        try:
+            if not s.strip():
+                raise ValueError
+            return convert(s)
+        except ValueError:
+            f.fail(f"{here}, column {name}", f"expected {what}, got {s!r}")
+
+    def real(name: str, finite: bool = False) -> float:
+        x = cell(name, float, "a number (or inf, -inf, nan)")
+        if finite and not math.isfinite(x):
+            f.fail(f"{here}, column {name}", f"expected a finite number, got {row[col[name]]!r}")
+        return x
+
+    def count(s: str) -> int:
+        n = int(s)
+        if n < 0:
+            raise ValueError
+        return n
+
+    for i in range(n_mu):  # redundant, but a number
+        if f"mu{i}_abs" in col:
+            real(f"mu{i}_abs")
+    events = row[col["event_labels"]]
+    return BranchPoint(
+        parameter=real("parameter", finite=True),
+        state=np.array([real(f"state_{i}", finite=True) for i in range(n_state)], dtype=float),
+        period=real("period"),
+        amplitude=real("amplitude"),
+        half_peak_to_peak=real("half_peak_to_peak"),
+        multipliers=np.array([complex(real(f"mu{i}_re"), real(f"mu{i}_im")) for i in range(n_mu)], dtype=complex),
+        stable=cell("stable", _parse_bool, "true or false"),
+        event_labels=tuple(events.split(EVENT_SEPARATOR)) if events else (),
+        step=real("step"),
+        iterations=cell("iterations", count, "a non-negative integer"),
+    )
+
+
+def load_branch_points_csv(path: PathType) -> list[BranchPoint]:
+    """Read the points of a branch CSV written by :func:`save_branch_csv`.
+
+    The ``mu{i}_abs`` columns are redundant (they must be numbers, but are not used); multipliers
+    are rebuilt from the real and imaginary parts.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    list of BranchPoint
+
+    Raises
+    ------
+    FileFormatError
+        If the file is empty, a column is missing, repeated or unknown, a row has the wrong number
+        of fields or a field the wrong type (naming the line, the point and the column), or the
+        file ends inside a row (truncated). Without the side file a CSV cut exactly at the end of
+        a row cannot be told from a shorter branch: :func:`load_branch_csv` checks the count.
+    OSError
+        If the file cannot be read.
+    """
+    return _read_csv_points(path, _Fields(path))
+
+
+def load_branch_csv(
+    path: PathType,
+    *,
+    model: str = "",
+    parameter_name: str = "parameter",
+    kind: BranchKind = BranchKind.PERIODIC,
+) -> Branch:
+    """Read a branch from CSV (points) and its side file ``<stem>.meta.json`` (the rest).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file written by :func:`save_branch_csv`.
+    model, parameter_name, kind :
+        Used only when the side file is absent; the branch then has no special points.
+
+    Returns
+    -------
+    Branch
+
+    Raises
+    ------
+    FileFormatError
+        As :func:`load_branch_points_csv` for the CSV and :func:`load_branch_json` for the side
+        file, and if the CSV has another number of rows than the side file records (side files
+        written by earlier versions record none).
+    OSError
+        If a file cannot be read.
+    """
+    f = _Fields(path)
+    points = _read_csv_points(path, f)
+    meta = csv_metadata_path(path)
+    if not meta.exists():
+        return Branch(model=model, parameter_name=parameter_name, kind=kind, points=points)
+    d = _read_json(meta)
+    mf = _Fields(meta)
+    branch = _branch_from_dict(d, mf, "", points)
+    n = mf.take(d, "", "n_points", lambda x, field: mf.integer(x, field, minimum=0), None)
+    if n is not None and n != len(points):
+        f.fail("", f"has {len(points)} rows of points; its side file {meta} records {n} (the CSV is truncated, or "
+               "the two files come from different saves)")
+    return branch
+
+
+# ---------------------------------------------------------------------------
+# public special-point records
+# ---------------------------------------------------------------------------
+
+
+def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[str, Any]:
+    """The public record of a special point, as written to ``special_points.json``.
+
+    Parameters
+    ----------
+    sp : SpecialPoint
+    model : str
+        Name of the model.
+    parameter : str
+        Name of the continuation parameter.
+
+    Returns
+    -------
+    dict
+        Keys ``model``, ``kind`` (the kind's value, e.g. ``"discontinuous_fold"``),
+        ``parameter`` (the parameter's name), ``value`` (its located value), ``amplitude``;
+        then ``multipliers`` for a smooth point, or ``multipliers_minus``,
+        ``multipliers_plus`` and ``crossing_q`` for a non-smooth one; then ``bracket``,
+        ``accuracy``, ``crossing_point``, ``note``, ``multipliers_accuracy`` (an estimate of the
+        multipliers' error) and ``limits`` (how the one-sided multipliers were obtained:
+        ``"exact"``, ``"nearest_saltation"``, ``"nearest_orbits"``); for a grazing or a sliding
+        bifurcation also ``touch_surface``, ``touch_mode`` and ``touch_time`` (where the orbit meets
+        the surface, and whose field is tangent there). Multipliers are ``[re, im]`` pairs, an
+        infinite one the string ``"inf"``; absent values are ``null``.
+    """
+    rec: dict[str, Any] = {
+        "model": model,
+        "kind": sp.kind.value,
+        "parameter": parameter,
+        "value": _enc_float(sp.parameter),
+        "amplitude": _enc_float(sp.amplitude),
+    }
+    if sp.kind.is_nonsmooth:
+        rec["multipliers_minus"] = _enc_complex_array(sp.multipliers_minus)
+        rec["multipliers_plus"] = _enc_complex_array(sp.multipliers_plus)
+        rec["crossing_q"] = None if sp.crossing_q is None else _enc_float(sp.crossing_q)
+    else:
+        rec["multipliers"] = _enc_complex_array(sp.multipliers)
+    rec["bracket"] = [_enc_float(b) for b in sp.bracket]
+    rec["accuracy"] = _enc_float(sp.accuracy)
+    rec["crossing_point"] = None if sp.crossing_point is None else _enc_complex(sp.crossing_point)
+    rec["note"] = sp.note
+    rec["multipliers_accuracy"] = _enc_float(sp.multipliers_accuracy)
+    rec["limits"] = sp.limits
+    if sp.touch_surface:
+        rec["touch_surface"] = sp.touch_surface
+        rec["touch_mode"] = sp.touch_mode
+        rec["touch_time"] = _enc_float(sp.touch_time)
+    return rec
+
+
+def save_special_points_json(records: Iterable[dict[str, Any]], path: PathType) -> Path:
+    """Write special-point records (from :func:`special_point_record`) as a JSON array (atomically).
+
+    Parameters
+    ----------
+    records : iterable of dict
+    path : str or path-like
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    return _write_json(list(records), path)
+
+
+def _check_record(v: Any, f: _Fields, where: str) -> dict[str, Any]:
+    """A special-point record, every field it has checked; returned as read."""
+    d = f.obj(v, where)
+    opt = f.nullable
+    for key, decode in (("model", f.string), ("kind", lambda x, field: f.choice(x, field, _KINDS)),
+                        ("parameter", f.string), ("value", f.real)):
+        f.take(d, where, key, decode)
+    optional: dict[str, Callable[[Any, str], Any]] = {
+        "amplitude": f.real, "multipliers": opt(f.complexes), "multipliers_minus": opt(f.complexes),
+        "multipliers_plus": opt(f.complexes), "crossing_q": opt(f.real),
+        "bracket": lambda x, field: f.reals(x, field, 2), "accuracy": f.real, "crossing_point": opt(f.complex),
+        "note": f.string, "multipliers_accuracy": f.real, "limits": f.string, "touch_surface": f.string,
+        "touch_mode": f.string, "touch_time": f.real,
+    }
+    for key, decode in optional.items():
+        f.take(d, where, key, decode, None)
+    return d
+
+
+def load_special_points_json(path: PathType) -> list[dict[str, Any]]:
+    """Read the records written by :func:`save_special_points_json` (as plain dicts, as written).
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    list of dict
+
+    Raises
+    ------
+    FileFormatError
+        If the file is not a complete JSON array of records, a record lacks ``model``, ``kind``,
+        ``parameter`` or ``value``, or a field has the wrong type (naming the file and the field,
+        e.g. ``[2].bracket``).
+    OSError
+        If the file cannot be read.
+    """
+    f = _Fields(path)
+    items = f.list(_read_json(path), "(top level)")
+    return [_check_record(r, f, f"[{k}]") for k, r in enumerate(items)]

@@ -1,0 +1,113 @@
+"""Continuation with special points: the engine of :mod:`saltation.branches.continuation` handed the
+detector of :mod:`saltation.special_points.detection`.
+
+These are the everyday entry points (:func:`saltation.continue_orbit`,
+:func:`saltation.continue_branch`): every step is checked for folds, period doublings, Neimark-Sacker
+and Hopf points, changes of the event sequence (corners, grazings, the sliding bifurcations, with
+their set-valued multipliers) and cycle collapses, each located and recorded in the branch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from saltation.branches import continuation as engine
+from saltation.branches.branch import Branch
+from saltation.branches.continuation import ContinuationSettings, Corrector, Solution, canonical_events
+from saltation.errors import ModelError
+from saltation.orbits.shooting import PeriodicOrbit, ShootingProblem
+from saltation.special_points.detection import SpecialPointDetector
+
+
+class Continuation(engine.Continuation):
+    """:class:`saltation.branches.continuation.Continuation` with the special-point detector
+    (:class:`~saltation.special_points.detection.SpecialPointDetector`) unless another is given."""
+
+    def __init__(self, problem, settings: ContinuationSettings | None = None, *,
+                 detector: engine.DetectorFactory | None = SpecialPointDetector):
+        super().__init__(problem, settings, detector=detector)
+
+
+def continue_branch(
+    problem,
+    u0: np.ndarray,
+    lam0: float | None = None,
+    *,
+    settings: ContinuationSettings | None = None,
+    directions: tuple[int, ...] = (1, -1),
+    label: str = "",
+    progress=None,
+    detector: engine.DetectorFactory | None = SpecialPointDetector,
+) -> Branch:
+    """Follow a branch from a start point in one or both directions, with its special points.
+
+    As :func:`saltation.branches.continuation.continue_branch`, with the special-point detector
+    by default (``settings.detect = False`` or ``detector=None`` turn it off).
+
+    Parameters
+    ----------
+    problem : ShootingProblem or EquilibriumProblem
+    u0 : ndarray
+        Guess of the unknowns at the start (see ``problem.pack``).
+    lam0 : float, optional
+        Start value of the parameter (the problem's value by default).
+    directions : tuple of int
+        +1 (increasing parameter first), -1, or both.
+    progress : callable, optional
+        Called with each new BranchPoint.
+    """
+    return engine.continue_branch(problem, u0, lam0, settings=settings, directions=directions, label=label,
+                                  progress=progress, detector=detector)
+
+
+def continue_orbit(
+    orbit: PeriodicOrbit,
+    parameter: str,
+    *,
+    bounds: tuple[float, float],
+    directions: tuple[int, ...] = (1, -1),
+    settings: ContinuationSettings | None = None,
+) -> Branch:
+    """Follow the branch of a periodic orbit in one parameter, with its special points.
+
+    The direct path from :func:`saltation.orbits.shooting.find_periodic_orbit` to a
+    branch: the orbit's own flow, parameter values, time direction, section
+    and tolerances are kept.
+
+    Parameters
+    ----------
+    orbit : PeriodicOrbit
+        A periodic orbit found by shooting.
+    parameter : str
+        The continuation parameter.
+    bounds : (float, float)
+        Its interval.
+    directions : tuple of int
+        ``(1, -1)``: both ways from the orbit; ``(1,)`` or ``(-1,)``: one.
+    settings : ContinuationSettings, optional
+        Step sizes and tolerances (``bounds`` overrides theirs).
+
+    Raises
+    ------
+    ModelError
+        For an unknown parameter, or an orbit that does not know its problem.
+    """
+    base = orbit.problem
+    if base is None:
+        raise ModelError("this orbit does not know the problem that found it: build a ShootingProblem instead")
+    system = base.system
+    system.parameter_index(parameter)  # names the parameter in its error
+    values = dict(zip(system.parameter_names, map(float, orbit.parameters)))
+    problem = ShootingProblem(base.flow, values, continuation_parameter=parameter, backward=orbit.backward,
+                              t0=orbit.t0, tolerances=base.tolerances, periods=base.periods)
+    settings = replace(settings or ContinuationSettings(), bounds=tuple(bounds))
+    u0 = problem.pack(orbit.state0, orbit.period if orbit.autonomous else None)
+    return continue_branch(problem, u0, values[parameter], settings=settings, directions=directions)
+
+
+__all__ = [
+    "Continuation", "ContinuationSettings", "Corrector", "Solution", "canonical_events", "continue_branch",
+    "continue_orbit",
+]

@@ -1,0 +1,738 @@
+"""Detection, location and classification of special points along a branch.
+
+Smooth special points are found by test functions and located by the
+Illinois method along the secant between two branch points:
+
+* fold (turning point): the parameter component of the tangent changes sign;
+* period doubling: a real multiplier passes -1 (``prod(mu + 1)`` changes sign);
+* Neimark-Sacker: a complex pair leaves the unit circle;
+* Hopf (equilibria): a complex pair of eigenvalues crosses the imaginary axis.
+
+*Discontinuous* (non-smooth) points are where the orbit's event sequence
+changes.  They are located by bisection along the secant to ``locate_tol``;
+the monodromies on both sides, ``M-`` and ``M+``, give the set-valued
+Floquet multipliers, the eigenvalues of ``(1 - q) M- + q M+`` for ``q`` in
+``[0, 1]``.  Where that set crosses the unit circle the point is a
+discontinuous fold (through +1), flip (through -1) or Neimark-Sacker (a
+complex pair); if it stays on one side it is a jump without crossing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from saltation.orbits.boundary import one_sided_limits, saltation_at_corner, zero_length_segments
+from saltation.branches.branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
+from saltation.branches.corrector import Corrector, Solution, canonical_events
+from saltation.errors import SaltationError
+from saltation.orbits.floquet import multipliers_from_monodromy, set_valued_multipliers
+from saltation.special_points.grazing import grazing_candidates, locate_grazing
+from saltation.engine.flow import EventKind
+from saltation.orbits.shooting import ShootingProblem
+from saltation.special_points.sliding import locate_adding_sliding, locate_tangent_arrival, sliding_change
+
+
+@dataclass(frozen=True)
+class SetValuedCrossing:
+    """How the set-valued multipliers of a non-smooth point meet the unit circle."""
+
+    kind: SpecialPointKind
+    q: float | None
+    point: complex | None
+
+
+def classify_nonsmooth(
+    m_minus: np.ndarray | None,
+    m_plus: np.ndarray | None,
+    *,
+    backward: bool = False,
+    autonomous: bool = False,
+    mu_minus: np.ndarray | None = None,
+    mu_plus: np.ndarray | None = None,
+    num: int = 801,
+) -> SetValuedCrossing:
+    """Classify a non-smooth point from its one-sided monodromies.
+
+    The eigenvalue paths of ``(1 - q) M- + q M+`` are followed for ``q`` in
+    ``[0, 1]``; the first non-trivial path whose magnitude passes 1 decides
+    the kind.  Monodromies computed in backward time are combined in backward
+    time (their eigenvalues are reciprocals of the forward multipliers, and
+    the unit circle, +1 and -1 are the same).  When one side is infinitely
+    unstable (a forward multiplier is infinite; ``M`` is then not available
+    in forward time), the jump runs along the real axis from the finite
+    multiplier to infinity and crosses at ``q = 0``.
+    """
+    if m_minus is None or m_plus is None:
+        fin = mu_minus if m_minus is not None else mu_plus
+        inf_side = mu_plus if m_minus is not None else mu_minus
+        if fin is None or inf_side is None:
+            raise SaltationError("a non-smooth point needs both one-sided monodromies or multipliers")
+        if any(np.isinf(np.abs(inf_side))):
+            finite_partner = [m for m in fin if abs(m - 1.0) > 1e-6 or not autonomous]
+            m = finite_partner[0] if finite_partner else fin[-1]
+            if abs(m.imag) < 1e-9 and m.real >= 0:
+                return SetValuedCrossing(SpecialPointKind.DISCONTINUOUS_FOLD, 0.0, complex(1.0, 0.0))
+            if abs(m.imag) < 1e-9:
+                return SetValuedCrossing(SpecialPointKind.DISCONTINUOUS_FLIP, 0.0, complex(-1.0, 0.0))
+            return SetValuedCrossing(SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER, 0.0, m / abs(m))
+        raise SaltationError("one-sided monodromy missing for a finite jump")
+    sv = set_valued_multipliers(m_minus, m_plus, num=num, backward=False)
+    paths = sv.paths
+    mags = np.abs(paths)
+    n = paths.shape[1]
+    trivial = -1
+    if autonomous:
+        dev = np.max(np.abs(paths - 1.0), axis=0)
+        trivial = int(np.argmin(dev)) if np.min(dev) < 1e-5 else -1
+    best = None
+    for i in range(n):
+        if i == trivial:
+            continue
+        g = mags[:, i] - 1.0
+        g = np.where(np.isfinite(g), g, 1e300)
+        sign_change = np.nonzero(np.sign(g[:-1]) * np.sign(g[1:]) <= 0)[0]
+        if sign_change.size == 0:
+            continue
+        k = int(sign_change[0])
+        if g[k] == g[k + 1]:
+            qc = float(sv.q[k])
+        else:
+            qc = float(sv.q[k] + (sv.q[k + 1] - sv.q[k]) * g[k] / (g[k] - g[k + 1]))
+        qc, point = _refine_crossing(m_minus, m_plus, paths[k, i], qc, float(sv.q[k]), float(sv.q[k + 1]))
+        if best is None or qc < best[0]:
+            best = (qc, point)
+    if best is None:
+        return SetValuedCrossing(SpecialPointKind.NONSMOOTH_NO_CROSSING, None, None)
+    qc, point = best
+    if backward:
+        point = 1.0 / point
+    if abs(point.imag) > 1e-6:
+        kind = SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER
+    elif point.real > 0:
+        kind = SpecialPointKind.DISCONTINUOUS_FOLD
+    else:
+        kind = SpecialPointKind.DISCONTINUOUS_FLIP
+    return SetValuedCrossing(kind, qc, complex(point))
+
+
+def _refine_crossing(m_minus, m_plus, guide: complex, q0: float, qa: float, qb: float) -> tuple[float, complex]:
+    """Refine the crossing ``|mu(q)| = 1`` of the eigenvalue path near ``guide`` by bisection."""
+
+    def mu_at(q: float, near: complex) -> complex:
+        ev = np.linalg.eigvals((1.0 - q) * m_minus + q * m_plus)
+        return complex(ev[np.argmin(np.abs(ev - near))])
+
+    ma = mu_at(qa, guide)
+    ga = abs(ma) - 1.0
+    near = ma
+    for _ in range(60):
+        qm = 0.5 * (qa + qb)
+        mm = mu_at(qm, near)
+        gm = abs(mm) - 1.0
+        if np.sign(gm) == np.sign(ga) and gm != 0.0:
+            qa, ga, near = qm, gm, mm
+        else:
+            qb = qm
+            near = mm
+        if qb - qa < 1e-13:
+            break
+    q = 0.5 * (qa + qb)
+    return q, mu_at(q, near)
+
+
+class SpecialPointDetector:
+    """Looks for special points between consecutive branch points and locates them."""
+
+    def __init__(self, problem, corrector: Corrector, branch: Branch):
+        self.problem = problem
+        self.corrector = corrector
+        self.branch = branch
+        self.tol = corrector.settings.locate_tol
+        self.equilibrium = branch.kind is BranchKind.EQUILIBRIUM
+        self.autonomous = branch.autonomous and not self.equilibrium
+
+    def past_failure(self, prev: Solution) -> tuple[Solution, SpecialPoint] | None:
+        """Past a grazing that stopped the corrector: ``(first solution beyond, grazing special point)`` or None.
+
+        Near a grazing the branch on the crossing side leaves the grazing orbit
+        with a tangent of unbounded slope (its monodromy grows like
+        ``1/sqrt(d)``), and pseudo-arclength steps from the side that misses
+        the surface fail.  When the last orbit nearly touches a surface that
+        a transition of its mode would cross, the grazing orbit is located by
+        its defining system (:mod:`saltation.special_points.grazing`), and the branch is
+        restarted just beyond it, at growing distances, from the grazing
+        orbit's state.
+        """
+        prob = self.problem
+        if not isinstance(prob, ShootingProblem) or prob.autonomous or prob.backward or prob.periods != 1:
+            return None
+        flow, p = prob.flow, prob.parameters_at(prev.lam)
+        T = prob.period_of(prev.u, prev.lam)
+        try:
+            traj = flow.run(prev.u, prob.t0, prob.t0 + T, p, dense=True, tolerances=prob.tolerances)
+        except SaltationError:
+            return None
+        direction = 1.0 if prev.tangent[-1] >= 0 else -1.0
+        s = self.corrector.settings
+        for transition, t_guess in grazing_candidates(flow, traj, p):
+            try:
+                orbit = locate_grazing(
+                    flow, prev.u, prev.lam, prob.lam_name, transition, t_guess, parameters=p, t0=prob.t0,
+                    tolerances=prob.tolerances,
+                )
+            except SaltationError:
+                continue
+            ahead = (orbit.parameter - prev.lam) * direction
+            if not -1e-9 <= ahead <= 4.0 * s.ds_max:
+                continue
+            z_graze = np.append(orbit.state0, orbit.parameter)
+            for delta in (1e-6, 1e-5, 1e-4, 1e-3, 1e-2):
+                lam = orbit.parameter + direction * delta * max(1.0, abs(orbit.parameter))
+                if not s.bounds[0] <= lam <= s.bounds[1]:
+                    break
+                try:
+                    start = prob.solve(orbit.state0, lam)
+                    cand = self.corrector.solve_fixed(start.state0, lam)
+                except SaltationError:
+                    continue
+                if len(cand.summary.event_labels) == len(prev.summary.event_labels):
+                    continue  # the same side again: not across the grazing
+                away = cand.z - z_graze
+                cand.tangent = self.corrector.tangent(cand, away / np.linalg.norm(away))
+                cand.step = float(np.linalg.norm(away))
+                special = grazing_point(prob, prev, cand, len(self.branch.points) - 1)
+                if special is None:
+                    continue
+                return cand, special
+        return None
+
+    # -- detection ------------------------------------------------------------------------
+    def check(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
+        """The special points between two consecutive branch points, in branch order.
+
+        Where the event sequence changes, the non-smooth point is located first; the smooth test
+        functions are then evaluated on each smooth piece of the step (from ``a`` to the located
+        point's near side, from its far side to ``b``), so that a fold or a multiplier crossing in the
+        same step as the change is found too.
+        """
+        if canonical_events(a.summary.event_ids) != canonical_events(b.summary.event_ids):
+            lo, hi = self._bisect_event_change(a, b)
+            corner = self.nonsmooth_point(lo, hi, index, far=(a, b))
+            before = self._smooth_points(a, lo, index) if lo is not a else []
+            after = self._smooth_points(hi, b, index) if hi is not b else []
+            return [*before, corner, *after]
+        return self._smooth_points(a, b, index)
+
+    def _smooth_points(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
+        """Smooth special points between two solutions with the same event sequence (test functions)."""
+        found = []
+        secant = _unit(b.z - a.z)
+        # a point's test values are kept for the next pair: both secants point along the branch,
+        # so the tangent (fold test) is oriented alike
+        fold = _remembered("fold", lambda s: self._oriented_tangent(s, secant)[-1])
+        if _crosses(fold(a), fold(b)):
+            found.append(self.locate_smooth(a, b, index, SpecialPointKind.FOLD, fold))
+        if self.equilibrium:
+            hopf = _remembered("hopf", _hopf_test)
+            if _crosses(hopf(a), hopf(b)):
+                found.append(self.locate_smooth(a, b, index, SpecialPointKind.HOPF, hopf))
+            return [sp for sp in found if sp is not None]
+        for kind, test in ((SpecialPointKind.PERIOD_DOUBLING, _flip_test), (SpecialPointKind.NEIMARK_SACKER, _ns_test)):
+            g = _remembered(kind.value, lambda s, test=test: test(_nontrivial(s, self.autonomous)))
+            if _crosses(g(a), g(b)):
+                found.append(self.locate_smooth(a, b, index, kind, g))
+        return [sp for sp in found if sp is not None]
+
+    def _oriented_tangent(self, sol: Solution, direction: np.ndarray) -> np.ndarray:
+        """The unit tangent at ``sol`` oriented along ``direction`` (the one continuation computed, if any)."""
+        if sol.tangent is None:
+            return self.corrector.tangent(sol, direction)
+        return sol.tangent if sol.tangent @ direction >= 0.0 else -sol.tangent
+
+    # -- location along the secant ----------------------------------------------------------
+    def on_secant(self, a: Solution, b: Solution, sigma: float) -> Solution:
+        d = b.z - a.z
+        return self.corrector.solve_bordered(a.z + sigma * d, _unit(d))
+
+    def locate_smooth(
+        self, a: Solution, b: Solution, index: int, kind: SpecialPointKind, test: Callable[[Solution], float]
+    ) -> SpecialPoint | None:
+        """Illinois iteration on a continuous test function along the secant from ``a`` to ``b``.
+
+        A fold or period doubling is reported only if the located orbit has a (nontrivial)
+        multiplier at +1 or -1 (an equilibrium's fold an eigenvalue at 0) within the point's
+        ``multipliers_accuracy``: how much the multipliers change across the final bracket plus
+        the error of the monodromy matrices.  A turning point without it is no fold (a corner
+        of the branch that the event sequence does not show, or an orbit the integration cannot
+        resolve), and None is returned.
+        """
+        sa, sb = 0.0, 1.0
+        ga, gb = test(a), test(b)
+        lo, hi = a, b
+        side = 0
+        for _ in range(80):
+            if np.linalg.norm(hi.z - lo.z) <= self.tol:
+                break
+            sm = sb - gb * (sb - sa) / (gb - ga) if gb != ga else 0.5 * (sa + sb)
+            if not (sa < sm < sb) or (sb - sa) < 1e-14:
+                sm = 0.5 * (sa + sb)
+            try:
+                mid = self.on_secant(a, b, sm)
+            except SaltationError:
+                break
+            gm = test(mid)
+            if gm == 0.0:
+                lo = hi = mid
+                break
+            if np.sign(gm) == np.sign(ga):
+                sa, ga, lo = sm, gm, mid
+                if side == -1:
+                    gb *= 0.5
+                side = -1
+            else:
+                sb, gb, hi = sm, gm, mid
+                if side == 1:
+                    ga *= 0.5
+                side = 1
+        best = lo if abs(test(lo)) <= abs(test(hi)) else hi
+        bracket = (min(lo.lam, hi.lam), max(lo.lam, hi.lam))
+        multipliers_accuracy = float("nan")
+        target = _CRITICAL_MULTIPLIER.get((kind, self.equilibrium))
+        if target is not None:
+            near = [_nearest(_nontrivial(s, self.autonomous), target) for s in (lo, hi, best)]
+            multipliers_accuracy = abs(near[0] - near[1]) + max(self._matrix_error(lo), self._matrix_error(hi))
+            if not abs(near[2] - target) <= multipliers_accuracy:
+                return None
+        return SpecialPoint(
+            kind=kind,
+            parameter=best.lam,
+            bracket=bracket,
+            accuracy=float(np.linalg.norm(hi.z - lo.z)),
+            index=index,
+            state=best.summary.state,
+            period=best.summary.period,
+            amplitude=best.summary.amplitude,
+            multipliers=best.summary.multipliers,
+            multipliers_accuracy=multipliers_accuracy,
+        )
+
+    def _matrix_error(self, sol: Solution) -> float:
+        """An error estimate of the multipliers' matrix at a solution: for autonomous orbits
+        ``|M n - n|`` (the trivial multiplier's error), for forced ones the flow's error estimate
+        relative to the state, times ``|M|``; rounding for an equilibrium's Jacobian."""
+        ev = sol.evaluation
+        if self.equilibrium:
+            return 1e-12 * (1.0 + float(np.linalg.norm(ev.jac_u)))
+        if self.autonomous:
+            return float(sol.summary.trivial_error)
+        traj = ev.trajectory
+        flow = self.problem.flow
+        relative = flow.integration_error(traj, self.problem.tolerances) / (1.0 + float(np.abs(traj.x1).max()))
+        return relative * (1.0 + float(np.linalg.norm(traj.monodromy)))
+
+    def locate_nonsmooth(self, a: Solution, b: Solution, index: int) -> SpecialPoint:
+        """Bisection along the secant on the event sequence, then set-valued multipliers."""
+        lo, hi = self._bisect_event_change(a, b)
+        return self.nonsmooth_point(lo, hi, index, far=(a, b))
+
+    def _bisect_event_change(self, a: Solution, b: Solution) -> tuple[Solution, Solution]:
+        """The two solutions, with ``a``'s event sequence and without it, that bracket where it changes
+        (bisection along the secant, down to the location tolerance)."""
+        seq_a = canonical_events(a.summary.event_ids)
+        lo, hi = a, b
+        sa, sb = 0.0, 1.0
+        for _ in range(80):
+            if np.linalg.norm(hi.z - lo.z) <= self.tol:
+                break
+            sm = 0.5 * (sa + sb)
+            try:
+                mid = self.on_secant(a, b, sm)
+            except SaltationError:
+                break
+            if canonical_events(mid.summary.event_ids) == seq_a:
+                sa, lo = sm, mid
+            else:
+                sb, hi = sm, mid
+        return lo, hi
+
+    def nonsmooth_point(
+        self, lo: Solution, hi: Solution, index: int, note: str = "", *, far: tuple[Solution, Solution] | None = None
+    ) -> SpecialPoint:
+        """Special point record from the two one-sided solutions around a non-smooth point.
+
+        Where the two sides differ by segments of zero length (a corner
+        collision), ``M-`` and ``M+`` are the exact limits at the boundary
+        orbit (:mod:`saltation.orbits.boundary`), and the point is placed at the
+        boundary orbit used.  Otherwise they are the monodromies of ``lo`` and
+        ``hi``.  ``far`` are the branch points beyond ``lo`` and ``hi`` (on the
+        same sides), used to estimate how well the multipliers are known.
+        """
+        bracket = (min(lo.lam, hi.lam), max(lo.lam, hi.lam))
+        accuracy = float(np.linalg.norm(hi.z - lo.z))
+        if self.equilibrium:
+            crossing = SetValuedCrossing(SpecialPointKind.NONSMOOTH_NO_CROSSING, None, None)
+            return special_point_between(
+                lo, hi, crossing, index=index, bracket=bracket, accuracy=accuracy,
+                monodromy_plus=hi.summary.monodromy, note=note,
+            )
+        limits = self._limits(lo, hi, far)
+        if limits is None:
+            for locate in (grazing_point, sliding_bifurcation_point):
+                found = locate(self.problem, lo, hi, index)
+                if found is not None:
+                    return found
+            m_lo, m_hi = lo.summary.monodromy, hi.summary.monodromy
+            mu_lo, mu_hi = lo.summary.multipliers, hi.summary.multipliers
+            how, mu_accuracy, at = "nearest_orbits", _sqrt_extrapolated_error(lo, hi, far), None
+        else:
+            m_lo, m_hi, how, mu_accuracy, at = limits
+            mu_lo = multipliers_from_monodromy(m_lo, backward=self.branch.backward)
+            mu_hi = multipliers_from_monodromy(m_hi, backward=self.branch.backward)
+        crossing = classify_nonsmooth(
+            m_lo, m_hi, backward=self.branch.backward, autonomous=self.autonomous, mu_minus=mu_lo, mu_plus=mu_hi,
+        )
+        sp = special_point_between(
+            lo, hi, crossing, index=index, bracket=bracket, accuracy=accuracy, monodromy_plus=m_hi, note=note,
+        )
+        return replace(
+            sp, parameter=sp.parameter if at is None else at.lam,
+            state=sp.state if at is None else at.summary.state,
+            period=sp.period if at is None else at.summary.period,
+            amplitude=sp.amplitude if at is None else at.summary.amplitude,
+            multipliers_minus=mu_lo, multipliers_plus=mu_hi, monodromy_minus=m_lo,
+            multipliers_accuracy=mu_accuracy, limits=how,
+        )
+
+    def _limits(self, lo: Solution, hi: Solution, far: tuple[Solution, Solution] | None):
+        """Exact one-sided monodromies ``(M_lo, M_hi, how, accuracy, boundary solution)``, or None."""
+        flow = getattr(self.problem, "flow", None)
+        sides = _sides(lo, hi)
+        if flow is None or sides is None:
+            return None
+        lo_fewer, without, with_, traj_wo, traj_w = sides
+        try:
+            lim = one_sided_limits(
+                flow, traj_wo, traj_w, self.problem.parameters_at(without.lam),
+                tolerances=getattr(self.problem, "tolerances", None),
+            )
+        except SaltationError:
+            return None
+        if lim is None:
+            return None
+        # the limits are exact at ``without``, within the bracket of the true boundary: over that width
+        # they move by about its length times |dM/dlam|, estimated on the side without the segments
+        width = abs(hi.lam - lo.lam)
+        rate = 0.0
+        if far is not None:
+            other = far[0] if lo_fewer else far[1]
+            if other.summary.monodromy is not None and other.lam != without.lam:
+                rate = float(np.linalg.norm(other.summary.monodromy - lim.monodromy_without)) / abs(other.lam - without.lam)
+        scale = max(1.0, float(np.linalg.norm(lim.monodromy_with)))
+        mu_accuracy = width * rate + 1e-13 * scale
+        how = "exact" if lim.exact else "nearest_saltation"
+        if not lim.exact:
+            mu_accuracy += float(np.linalg.norm(traj_w.monodromy - lim.monodromy_with))
+        m_lo, m_hi = (lim.monodromy_without, lim.monodromy_with) if lo_fewer else (lim.monodromy_with, lim.monodromy_without)
+        return m_lo, m_hi, how, mu_accuracy, without
+
+
+def special_point_between(
+    lo: Solution,
+    hi: Solution,
+    crossing: SetValuedCrossing,
+    *,
+    index: int,
+    bracket: tuple[float, float],
+    accuracy: float,
+    monodromy_plus: np.ndarray | None,
+    note: str = "",
+) -> SpecialPoint:
+    """The record of a non-smooth point from the solutions on its two sides (``lo`` on the side of point ``index``)."""
+    return SpecialPoint(
+        kind=crossing.kind,
+        parameter=0.5 * (lo.lam + hi.lam),
+        bracket=bracket,
+        accuracy=accuracy,
+        index=index,
+        state=lo.summary.state,
+        period=lo.summary.period,
+        amplitude=lo.summary.amplitude,
+        multipliers_minus=lo.summary.multipliers,
+        multipliers_plus=hi.summary.multipliers,
+        monodromy_minus=lo.summary.monodromy,
+        monodromy_plus=monodromy_plus,
+        crossing_q=crossing.q,
+        crossing_point=crossing.point,
+        event_labels_minus=lo.summary.event_labels,
+        event_labels_plus=hi.summary.event_labels,
+        note=note,
+    )
+
+
+def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoint | None:
+    """The record of a crossing-, switching- or adding-sliding between two branch points, located by
+    its defining system (:mod:`saltation.special_points.sliding`).
+
+    Its one-sided multipliers are those of the two bracketing orbits (the
+    extra segment shrinks linearly or like a square root), and their
+    difference is the stated accuracy bound.
+    """
+    flow = getattr(problem, "flow", None)
+    sides = _sides(lo, hi)
+    if flow is None or sides is None or problem.backward or getattr(problem, "periods", 1) != 1:
+        return None
+    lo_fewer, without, with_, traj_wo, traj_w = sides
+    change = sliding_change(flow, traj_wo, traj_w, problem.parameters_at(with_.lam), problem.parameters_at(without.lam))
+    if change is None:
+        return None
+    n = problem.system.n
+    options = {"parameters": problem.parameters_at(without.lam), "t0": problem.t0, "tolerances": problem.tolerances}
+    try:
+        if change.kind is SpecialPointKind.ADDING_SLIDING:
+            found = locate_adding_sliding(flow, without.u[:n], without.lam, problem.lam_name, change.t_guess,
+                                          change.mode, change.surface, change.side, **options)
+        else:
+            period = problem.period_of(without.u, without.lam) if problem.system.is_autonomous else None
+            found = locate_tangent_arrival(flow, without.u[:n], without.lam, problem.lam_name, change.index,
+                                           change.mode, change.side, period=period, **options)
+    except SaltationError:
+        return None
+    width = abs(hi.lam - lo.lam)
+    if found.kind is not change.kind \
+            or abs(found.parameter - 0.5 * (lo.lam + hi.lam)) > width + 1e-9 * (1.0 + abs(found.parameter)):
+        return None
+    traj = found.trajectory
+    where = {
+        SpecialPointKind.CROSSING_SLIDING: "arrives at the surface where the field of {m!r} is tangent to it, "
+                                           "visible from that side (the orbit of that field leaves the surface)",
+        SpecialPointKind.SWITCHING_SLIDING: "arrives at the surface where the field of {m!r} is tangent to it, "
+                                            "invisible from that side (the orbit of that field returns to it)",
+        SpecialPointKind.ADDING_SLIDING: "slides through a point where the field of {m!r} has a cubic tangency "
+                                         "with the surface (the sliding motion touches the boundary of its region)",
+    }[found.kind].format(m=found.mode)
+    return SpecialPoint(
+        kind=found.kind,
+        parameter=found.parameter,
+        bracket=(found.parameter - found.accuracy, found.parameter + found.accuracy),
+        accuracy=found.accuracy,
+        index=index,
+        state=found.state0,
+        period=found.trajectory.t1 - found.trajectory.t0,
+        amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
+        multipliers_minus=lo.summary.multipliers,
+        multipliers_plus=hi.summary.multipliers,
+        monodromy_minus=lo.summary.monodromy,
+        monodromy_plus=hi.summary.monodromy,
+        event_labels_minus=lo.summary.event_labels,
+        event_labels_plus=hi.summary.event_labels,
+        note=(f"the orbit {where} (surface {change.surface!r}, t = {found.t_touch:.10g}, d2h/dt2 there "
+              f"{found.curvature:.3g}){'' if change.count == 1 else f', at {change.count} points of the orbit at once'}; "
+              f"the side with the extra events is {'plus' if lo_fewer else 'minus'}"),
+        multipliers_accuracy=float(np.linalg.norm(hi.summary.monodromy - lo.summary.monodromy)),
+        limits="nearest_orbits",
+        touch_surface=change.surface,
+        touch_mode=found.mode,
+        touch_time=found.t_touch,
+    )
+
+
+def _sides(lo: Solution, hi: Solution):
+    """``(lo has fewer events, side without the extra events, side with them, their trajectories)``, or None."""
+    lo_fewer = len(lo.summary.event_labels) <= len(hi.summary.event_labels)
+    without, with_ = (lo, hi) if lo_fewer else (hi, lo)
+    traj_wo, traj_w = without.evaluation.trajectory, with_.evaluation.trajectory
+    if traj_wo is None or traj_w is None:
+        return None
+    return lo_fewer, without, with_, traj_wo, traj_w
+
+
+def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoint | None:
+    """The record of a grazing between two branch points, located by its defining system.
+
+    ``lo`` (the side of point ``index``) and ``hi`` differ by events on a
+    surface that the orbit on one side misses: the grazing orbit is located
+    from the orbit that misses it (:func:`saltation.special_points.grazing.locate_grazing`).
+    Its monodromy is the limit on that side.  On the crossing side the limit
+    is the grazing orbit with the crossing's saltation matrices inserted at
+    the instant of tangency when they stay bounded (a continuous field), and
+    unbounded otherwise (an impact: ``S = O(1/v)``): the largest multiplier
+    there is reported as ``inf``, the others are those of the nearest orbit.
+    Returns None when the change is not a grazing (or the problem is not a
+    forward-time shooting problem).
+    """
+    flow = getattr(problem, "flow", None)
+    sides = _sides(lo, hi)
+    if flow is None or sides is None or problem.backward or getattr(problem, "periods", 1) != 1:
+        return None  # (the defining systems close orbits after one forcing period)
+    lo_fewer, without, with_, traj_wo, traj_w = sides
+    span = abs(traj_wo.t1 - traj_wo.t0)
+    groups = zero_length_segments(traj_wo.events, traj_w.events, time_tol=1e-3 * span)
+    if not groups:
+        return None
+    first = traj_w.events[groups[0][0]]
+    try:
+        orbit = locate_grazing(
+            flow, without.u[: problem.system.n], without.lam, problem.lam_name, first.transition, first.t,
+            parameters=problem.parameters_at(without.lam), t0=problem.t0, tolerances=problem.tolerances,
+            period=problem.period_of(without.u, without.lam) if problem.system.is_autonomous else None,
+        )
+    except SaltationError:
+        return None
+    width = abs(hi.lam - lo.lam)
+    if abs(orbit.parameter - 0.5 * (lo.lam + hi.lam)) > width + 1e-9 * (1.0 + abs(orbit.parameter)):
+        return None  # a grazing elsewhere: not the change between these points
+    p = problem.parameters_at(orbit.parameter)
+    group = [traj_w.events[i] for i in groups[0]]
+    sliding = any(e.kind != EventKind.TRANSITION for e in group)
+    P = None if sliding else saltation_at_corner(problem.system, [e.transition for e in group], orbit.t_graze, orbit.x_graze, p)
+    m_without = orbit.monodromy
+    mu_without = multipliers_from_monodromy(m_without)
+    if sliding:
+        # the orbit grazes the boundary of a sliding region: the sliding segment's saltation matrices are
+        # 0/0 at the tangency; those of the nearest orbit with the segment stand in for their limit
+        P = np.eye(problem.system.n)
+        for e in group:
+            P = e.saltation @ P
+        phi = orbit.fundamental_to_graze
+        m_with = m_without @ np.linalg.solve(phi, P @ phi)
+        mu_with = multipliers_from_monodromy(m_with)
+        bounded = ("a sliding segment: the limit uses the saltation matrices of the nearest orbit that slides "
+                   f"(multipliers known to about {np.linalg.norm(with_.summary.monodromy - m_with):.1e})")
+    elif P is not None and np.linalg.norm(P) < 1e8:
+        phi = orbit.fundamental_to_graze
+        m_with = m_without @ np.linalg.solve(phi, P @ phi)
+        mu_with = multipliers_from_monodromy(m_with)
+        bounded = "bounded: the crossing's saltation matrices at the tangency are finite"
+    else:
+        m_with = None
+        nearest = np.asarray(with_.summary.multipliers, dtype=complex)
+        keep = np.argsort(np.abs(nearest))[:-1]
+        mu_with = np.concatenate([[complex(np.inf, 0.0)], nearest[keep]])
+        bounded = ("unbounded: the crossing's saltation matrix grows like 1/sqrt(distance); the largest "
+                   "multiplier on that side is infinite in the limit, the others are those of the nearest orbit")
+    side = "plus" if lo_fewer else "minus"
+    surface = problem.system.transitions[orbit.transition].surface
+    m_lo, m_hi = (m_without, m_with) if lo_fewer else (m_with, m_without)
+    mu_lo, mu_hi = (mu_without, mu_with) if lo_fewer else (mu_with, mu_without)
+    traj = orbit.trajectory
+    return SpecialPoint(
+        kind=SpecialPointKind.GRAZING_SLIDING if sliding else SpecialPointKind.GRAZING,
+        parameter=orbit.parameter,
+        bracket=(orbit.parameter - orbit.accuracy, orbit.parameter + orbit.accuracy),
+        accuracy=orbit.accuracy,
+        index=index,
+        state=orbit.state0,
+        period=orbit.period,
+        amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
+        multipliers_minus=mu_lo,
+        multipliers_plus=mu_hi,
+        monodromy_minus=m_lo,
+        monodromy_plus=m_hi,
+        event_labels_minus=lo.summary.event_labels,
+        event_labels_plus=hi.summary.event_labels,
+        note=f"grazing of surface {surface!r} at t = {orbit.t_graze:.10g}; the side with the crossing is '{side}', {bounded}",
+        # the grazing orbit is exact to the located parameter; the finite multipliers of an unbounded side
+        # are those of the nearest orbit, of unknown accuracy
+        multipliers_accuracy=(
+            float("nan") if m_with is None
+            else float(np.linalg.norm(with_.summary.monodromy - m_with)) if sliding
+            else orbit.accuracy * float(np.linalg.norm(m_without)) + 1e-13
+        ),
+        limits="nearest_saltation" if sliding else "grazing",
+        touch_surface=surface,
+        touch_mode=problem.system.transitions[orbit.transition].source,
+        touch_time=orbit.t_graze,
+    )
+
+
+def _sqrt_extrapolated_error(lo: Solution, hi: Solution, far: tuple[Solution, Solution] | None) -> float:
+    """Error estimate of the monodromies of the two bracketing orbits as one-sided limits.
+
+    On a side whose monodromy moves like the square root of the distance to
+    the boundary, ``M(d) = M(0) + C sqrt(d)``: ``C`` from the bracket end and
+    the branch point beyond it, the error ``C sqrt(d)`` at the bracket end.
+    """
+    if far is None:
+        return float("nan")
+    mid = 0.5 * (lo.lam + hi.lam)
+    worst = 0.0
+    for near, other in ((lo, far[0]), (hi, far[1])):
+        d_near, d_far = abs(near.lam - mid), abs(other.lam - mid)
+        if near.summary.monodromy is None or other.summary.monodromy is None or d_far <= d_near:
+            return float("nan")  # no second point on that side: the error is not known
+        c = float(np.linalg.norm(other.summary.monodromy - near.summary.monodromy)) / (np.sqrt(d_far) - np.sqrt(d_near))
+        worst = max(worst, c * np.sqrt(d_near))
+    return worst
+
+
+def _remembered(name: str, test: Callable[[Solution], float]) -> Callable[[Solution], float]:
+    """``test``, evaluated once per solution (the value is kept in ``solution.tests``)."""
+
+    def value(sol: Solution) -> float:
+        if name not in sol.tests:
+            sol.tests[name] = test(sol)
+        return sol.tests[name]
+
+    return value
+
+
+#: The multiplier (eigenvalue, for equilibria) a smooth special point must have, by kind and
+#: whether the branch is of equilibria.
+_CRITICAL_MULTIPLIER = {
+    (SpecialPointKind.FOLD, False): 1.0,
+    (SpecialPointKind.PERIOD_DOUBLING, False): -1.0,
+    (SpecialPointKind.FOLD, True): 0.0,
+}
+
+
+def _nearest(mu: np.ndarray, target: float) -> complex:
+    """The multiplier nearest ``target`` (``inf`` when there is none)."""
+    mu = np.asarray(mu, dtype=complex)
+    mu = mu[np.isfinite(mu)]
+    return complex(mu[int(np.argmin(np.abs(mu - target)))]) if mu.size else complex(np.inf)
+
+
+def _crosses(ga: float, gb: float) -> bool:
+    """A test function changes sign from ``a`` to ``b`` (a zero at ``b`` counts, a zero at ``a`` or nan not)."""
+    return (ga < 0.0 <= gb) or (ga > 0.0 >= gb)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
+
+
+def _nontrivial(sol: Solution, autonomous: bool) -> np.ndarray:
+    """Multipliers without the trivial one (closest to 1) of an autonomous orbit."""
+    mu = np.asarray(sol.summary.multipliers, dtype=complex)
+    if autonomous and mu.size:
+        finite = np.where(np.isfinite(mu), np.abs(mu - 1.0), np.inf)
+        keep = np.ones(mu.size, dtype=bool)
+        keep[int(np.argmin(finite))] = False
+        mu = mu[keep]
+    return mu
+
+
+def _flip_test(mu: np.ndarray) -> float:
+    """``prod(mu + 1)`` over the finite multipliers (changes sign at period doubling)."""
+    mu = mu[np.isfinite(mu)]
+    return float(np.real(np.prod(mu + 1.0)))
+
+
+def _ns_test(mu: np.ndarray) -> float:
+    """``|mu| - 1`` of the largest complex multiplier (nan when there is none: never a crossing)."""
+    cplx = mu[np.isfinite(mu) & (np.abs(mu.imag) > 1e-8)]
+    if cplx.size == 0:
+        return float("nan")
+    return float(np.max(np.abs(cplx)) - 1.0)
+
+
+def _hopf_test(sol: Solution) -> float:
+    """Largest real part among complex eigenvalues of an equilibrium (nan when there is none)."""
+    ev = np.asarray(sol.summary.multipliers, dtype=complex)
+    cplx = ev[np.abs(ev.imag) > 1e-10]
+    if cplx.size == 0:
+        return float("nan")
+    return float(np.max(cplx.real))

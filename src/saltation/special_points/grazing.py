@@ -1,0 +1,456 @@
+"""Grazing bifurcations of periodic orbits: location by their defining system.
+
+An orbit grazes a switching surface when it becomes tangent to it: at one
+instant ``t_g``, ``h(t_g, x(t_g)) = 0`` and ``dh/dt = h_x f + h_t = 0``, with
+``d2h/dt2 != 0``.  On one side of a grazing the orbit misses the surface, on
+the other it crosses it (an impact, a contact).  Near grazing, the crossing
+side's monodromy grows like ``1/sqrt(d)`` in the distance ``d`` to the
+grazing (Nordmark's square-root map: the saltation matrix of an impact is
+``O(1/v)`` in the impact velocity ``v ~ sqrt(d)``), so no convex combination
+of two finite matrices describes the jump of the multipliers.
+
+The defining system, for a forced system with ``z = (x0, lam)`` (an
+autonomous one adds the period to the unknowns and a phase condition):
+
+* periodicity ``x(t0 + T; x0, lam) - x0 = 0`` (``n`` equations), of the
+  *virtual* orbit that passes the grazed surface as if it were not there
+  (its transitions disabled, :meth:`saltation.engine.flow.Flow.run`);
+* tangency ``G(x0, lam) = h(t_g, x(t_g)) = 0``, where ``t_g`` is the local
+  extremum of ``h`` along the orbit (``dh/dt = 0``).
+
+By the envelope theorem ``dG/dx0 = h_x Phi(t_g, t0)`` and
+``dG/dlam = h_x psi(t_g) + h_lam``, so Newton's method runs with exact
+Jacobians and converges quadratically.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.optimize import brentq
+
+from saltation.errors import ConvergenceError, ModelError
+from saltation.engine.flow import Flow, Trajectory
+
+
+def location_tolerances(flow: Flow, tolerances=None):
+    """The integration tolerances of a special point's defining system: those given, at most
+    ``rtol = 1e-12``, ``atol = 1e-14`` (a location costs a few tens of period maps; tight tolerances keep
+    the integration error below the location's target where DOP853 steps)."""
+    tol = tolerances or flow.tolerances
+    return replace(tol, rtol=min(tol.rtol, 1e-12), atol=min(tol.atol, 1e-14))
+
+
+@dataclass(frozen=True)
+class GrazingOrbit:
+    """A located grazing periodic orbit.
+
+    Attributes
+    ----------
+    parameter : float
+        The value of the continuation parameter at grazing.
+    state0 : ndarray, shape (n,)
+        The orbit's state at ``t0``.
+    period : float
+    t_graze : float
+        The instant of tangency.
+    x_graze : ndarray, shape (n,)
+        The state at tangency (on the surface).
+    transition : int
+        The transition whose surface is grazed.
+    monodromy : ndarray, shape (n, n)
+        Monodromy of the grazing orbit itself: the limit on the side without
+        the crossing (forward time).
+    fundamental_to_graze : ndarray, shape (n, n)
+        ``Phi(t_g, t0)`` along the grazing orbit.
+    trajectory : Trajectory
+        One period of the grazing orbit (with the grazed transition disabled).
+    accuracy : float
+        The Newton correction of the parameter that would follow the last
+        iterate: an estimate of its error.
+    residuals : list of float
+        Newton residual history.
+    """
+
+    parameter: float
+    state0: np.ndarray
+    period: float
+    t_graze: float
+    x_graze: np.ndarray
+    transition: int
+    monodromy: np.ndarray
+    fundamental_to_graze: np.ndarray
+    trajectory: Trajectory
+    accuracy: float
+    residuals: list[float]
+
+
+def indicator_rate(flow: Flow, surface: int, traj: Trajectory, p: np.ndarray) -> float:
+    """``dh/dt = h_x f + h_t`` of a surface at the end of a trajectory (in forward time)."""
+    hx, ht, _ = flow.indicator_gradient(surface, traj.t1, traj.x1, p)
+    return float(hx @ traj.velocity_end + ht)
+
+
+def tangency_time(
+    flow: Flow, x0: np.ndarray, t0: float, p: np.ndarray, surface: int, t_guess: float, span: float, *,
+    mode0: int | str | None = None, disabled: Sequence[int] = (), tolerances=None,
+) -> float | None:
+    """The extremum of ``h`` along the orbit from ``(t0, x0)`` nearest ``t_guess``: a root of ``dh/dt``.
+
+    Searches ``t_guess +- delta`` for a sign change of the rate, ``delta``
+    growing to ``span / 4``; None when there is none.
+    """
+    def rate(t: float) -> float:
+        traj = flow.run(x0, t0, t, p, mode0=mode0, disabled=disabled, tolerances=tolerances)
+        return indicator_rate(flow, surface, traj, p)
+
+    lo_limit, hi_limit = t0, t0 + span
+    delta = 1e-6 * span
+    while delta <= 0.25 * span:
+        a, b = max(lo_limit, t_guess - delta), min(hi_limit, t_guess + delta)
+        if b > a:
+            ra, rb = rate(a), rate(b)
+            if ra == 0.0:
+                return a
+            if rb == 0.0:
+                return b
+            if ra * rb < 0.0:
+                return float(brentq(rate, a, b, xtol=1e-15 * max(1.0, abs(a)), rtol=1e-15, maxiter=200))
+        delta *= 4.0
+    return None
+
+
+@dataclass(frozen=True)
+class GrazingSystem:
+    """The defining system of a grazing at ``(x0, p)`` and its exact derivatives.
+
+    ``residual = (x(t0 + T) - x0, h(t_g, x(t_g)))``; ``jac_x`` its derivative
+    in ``x0`` (``(n + 1, n)``), ``jac_p`` in the requested parameters
+    (``(n + 1, k)``), by the envelope theorem for the tangency row.
+    """
+
+    residual: np.ndarray
+    jac_x: np.ndarray
+    jac_p: np.ndarray
+    t_graze: float
+    x_graze: np.ndarray
+    period: float
+    monodromy: np.ndarray
+    fundamental_to_graze: np.ndarray
+    trajectory: Trajectory
+    jac_period: np.ndarray
+
+
+def grazing_system(
+    flow: Flow, x0: np.ndarray, p: np.ndarray, transition: int, t_guess: float, params: Sequence[int], *,
+    t0: float = 0.0, tolerances=None, history: list[float] | None = None, also_disabled: Sequence[int] = (),
+    period: float | None = None,
+) -> GrazingSystem:
+    """Evaluate the defining system of a grazing of a periodic orbit (see the module docstring).
+
+    ``also_disabled``: further transitions the virtual orbit passes (surfaces
+    it touches at the same time, such as the other support of a symmetric orbit).
+    ``period``: the period of an autonomous orbit (an unknown of its defining
+    system, whose column ``d residual / dT = (f(x(T)), 0)`` is ``jac_period``).
+
+    Raises
+    ------
+    ModelError
+        For an autonomous model without ``period``.
+    ConvergenceError
+        If no tangency is found near ``t_guess``.
+    """
+    system = flow.system
+    if system.is_autonomous and period is None:
+        raise ModelError(f"model {system.name!r} is autonomous: its grazing system needs the period")
+    surface = system.surface_index(system.transitions[transition].surface)
+    n = system.n
+    disabled = (int(transition), *map(int, also_disabled))
+    T = float(period) if system.is_autonomous else system.forcing_period(p)
+    runs = [flow.run(x0, t0, t0 + T, p, variational=True, sensitivity=j, disabled=disabled, tolerances=tolerances)
+            for j in params]
+    full = runs[0]
+    t_g = tangency_time(flow, x0, t0, p, surface, t_guess, T, mode0=full.mode0, disabled=disabled, tolerances=tolerances)
+    if t_g is None:
+        raise ConvergenceError(f"grazing of surface {system.surface_names[surface]!r}: no tangency near t = {t_guess:.6g}",
+                               history or [])
+    parts = [flow.run(x0, t0, t_g, p, variational=True, sensitivity=j, mode0=full.mode0, disabled=disabled,
+                      tolerances=tolerances) for j in params]
+    part = parts[0]
+    hx, _, hp = flow.indicator_gradient(surface, t_g, part.x1, p)
+    residual = np.append(full.x1 - x0, flow.indicator(surface, t_g, part.x1, p))
+    jac_x = np.vstack([full.monodromy - np.eye(n), hx @ part.monodromy])
+    jac_p = np.empty((n + 1, len(params)))
+    for c, (j, run, to_g) in enumerate(zip(params, runs, parts)):
+        jac_p[:n, c] = run.parameter_sensitivity + system.period_derivative(p, j) * run.velocity_end
+        jac_p[n, c] = hx @ to_g.parameter_sensitivity + hp[j]
+    return GrazingSystem(
+        residual=residual, jac_x=jac_x, jac_p=jac_p, t_graze=t_g, x_graze=part.x1, period=T,
+        monodromy=full.monodromy, fundamental_to_graze=part.monodromy, trajectory=full,
+        jac_period=np.append(full.velocity_end, 0.0),
+    )
+
+
+def locate_grazing(
+    flow: Flow,
+    x0: Sequence[float],
+    lam: float,
+    lam_name: str,
+    transition: int,
+    t_guess: float,
+    *,
+    parameters=None,
+    t0: float = 0.0,
+    tol: float = 1e-12,
+    max_iter: int = 20,
+    tolerances=None,
+    period: float | None = None,
+) -> GrazingOrbit:
+    """Locate a grazing periodic orbit by Newton's method on its defining system.
+
+    Parameters
+    ----------
+    flow : Flow
+    x0 : array_like, shape (n,)
+        Guess of the orbit's state at ``t0`` (a nearby orbit that misses the surface).
+    lam : float
+        Guess of the parameter value.
+    lam_name : str
+        The parameter that moves.
+    transition : int
+        The transition whose surface the orbit grazes (disabled along the way).
+    t_guess : float
+        Guess of the instant of tangency.
+    period : float, optional
+        Autonomous models: the guess of the period, then an unknown too, with
+        the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` anchored at the guess.
+
+    Raises
+    ------
+    ConvergenceError
+        If Newton's method does not converge (with the residual history).
+    ModelError
+        For an autonomous model without a period guess.
+    """
+    system = flow.system
+    tolerances = location_tolerances(flow, tolerances)
+    j = system.parameter_index(lam_name)
+    p = flow.parameters(parameters).copy()
+    n = system.n
+    autonomous = system.is_autonomous
+    if autonomous and period is None:
+        raise ModelError(f"model {system.name!r} is autonomous: give the period guess to locate its grazing")
+    x_ref = np.asarray(x0, dtype=float).copy()
+    p[j] = float(lam)
+    if autonomous:
+        f_ref = flow.vector_field(flow.initial_mode(x_ref, p, t0), t0, x_ref, p)
+        f_ref = f_ref / np.linalg.norm(f_ref)
+        z = np.concatenate([x_ref, [float(period), float(lam)]])
+    else:
+        z = np.append(x_ref, float(lam))
+    history: list[float] = []
+    t_g = float(t_guess)
+    for it in range(max_iter + 1):
+        p[j] = z[-1]
+        gs = grazing_system(flow, z[:n], p, transition, t_g, (j,), t0=t0, tolerances=tolerances, history=history,
+                            period=z[n] if autonomous else None)
+        t_g = gs.t_graze
+        if autonomous:  # unknowns (x0, T, lam): the phase condition closes the system
+            J = np.zeros((n + 2, n + 2))
+            J[: n + 1, :n] = gs.jac_x
+            J[: n + 1, n] = gs.jac_period
+            J[: n + 1, n + 1] = gs.jac_p[:, 0]
+            J[n + 1, :n] = f_ref
+            residual = np.append(gs.residual, f_ref @ (z[:n] - x_ref))
+        else:
+            J = np.column_stack([gs.jac_x, gs.jac_p[:, 0]])
+            residual = gs.residual
+        rn = float(np.linalg.norm(residual))
+        history.append(rn)
+        try:
+            dz = np.linalg.solve(J, -residual)
+        except np.linalg.LinAlgError:
+            raise ConvergenceError("grazing: singular Jacobian of the defining system", history) from None
+        if rn <= tol * (1.0 + float(np.linalg.norm(z))):
+            # the Newton correction that would follow, plus the integration error carried to the parameter
+            # through the inverse Jacobian, estimate the error that is left
+            carried = float(np.abs(np.linalg.inv(J)[-1]).sum()) * flow.integration_error(gs.trajectory, tolerances)
+            return GrazingOrbit(
+                parameter=float(z[-1]), state0=z[:n].copy(), period=gs.period, t_graze=t_g,
+                x_graze=gs.x_graze.copy(), transition=int(transition), monodromy=gs.monodromy.copy(),
+                fundamental_to_graze=gs.fundamental_to_graze.copy(), trajectory=gs.trajectory,
+                accuracy=abs(float(dz[-1])) + carried + 4e-16 * max(1.0, abs(float(z[-1]))), residuals=history,
+            )
+        if it == max_iter:
+            break
+        z = z + dz
+    surface = system.transitions[transition].surface
+    raise ConvergenceError(f"grazing of surface {surface!r} did not converge in {max_iter} iterations", history)
+
+
+@dataclass(frozen=True)
+class TangentialReturn:
+    """A periodic orbit that returns to a surface tangentially and enters its transition there.
+
+    Attributes
+    ----------
+    parameter : float
+    state : ndarray, shape (n,)
+        The touching point (on the surface).
+    period : float
+        Time from the touching point around the orbit back to it.
+    transition : int
+        The transition entered at the touch (into a stick phase, for example).
+    accuracy : float
+        Estimate of the error of ``parameter`` (the Newton correction that would follow).
+    residuals : list of float
+    """
+
+    parameter: float
+    state: np.ndarray
+    period: float
+    transition: int
+    accuracy: float
+    residuals: list[float]
+
+
+def locate_tangential_return(
+    flow: Flow,
+    x_touch: Sequence[float],
+    lam: float,
+    lam_name: str,
+    transition: int,
+    period: float,
+    *,
+    parameters=None,
+    tol: float = 1e-12,
+    max_iter: int = 30,
+    fd_step: float = 1e-7,
+    tolerances=None,
+) -> TangentialReturn:
+    """Locate an orbit whose return to a surface is tangential, for an autonomous model.
+
+    The defining system of the fold of a stick-slip cycle (the slip arc that
+    leaves the stick band returns to it tangentially).  The unknowns are the
+    touching point ``x_g``, kept on the surface (coordinates ``y`` in the
+    surface's tangent plane at the guess, projected back onto the surface
+    along ``h_x``), and the parameter.  From ``x_g``, in the target mode of
+    ``transition``, the orbit is integrated (that transition disabled) until
+    its indicator reaches its next extremum, at ``t_r``; the equations are
+    ``x(t_r) - x_g = 0``.  Newton's method with a Jacobian by central
+    differences (the extremum time moves with the unknowns).
+
+    Raises
+    ------
+    ConvergenceError
+        If Newton's method does not converge or no return is found.
+    """
+    system = flow.system
+    tolerances = location_tolerances(flow, tolerances)
+    tr = system.transitions[transition]
+    surface = system.surface_index(tr.surface)
+    j = system.parameter_index(lam_name)
+    p = flow.parameters(parameters).copy()
+    n = system.n
+    disabled = (int(transition),)
+    history: list[float] = []
+    base = np.asarray(x_touch, dtype=float)
+    hx0, _, _ = flow.indicator_gradient(surface, 0.0, base, p)
+    tangent = np.linalg.svd(hx0.reshape(1, -1))[2][1:].T  # (n, n-1): an orthonormal basis of the tangent plane
+    t_r = float(period)
+
+    def touch_point(w: np.ndarray, q: np.ndarray) -> np.ndarray:
+        x = base + tangent @ w[:-1]
+        for _ in range(8):  # onto the surface, along its gradient
+            h = flow.indicator(surface, 0.0, x, q)
+            hx, _, _ = flow.indicator_gradient(surface, 0.0, x, q)
+            x = x - h * hx / (hx @ hx)
+            if abs(h) <= 1e-15 * (1.0 + float(np.linalg.norm(x))):
+                break
+        return x
+
+    def residual(w: np.ndarray, t_guess: float) -> tuple[np.ndarray, float, np.ndarray]:
+        q = p.copy()
+        q[j] = w[-1]
+        x = touch_point(w, q)
+        found = tangency_time(flow, x, 0.0, q, surface, t_guess, 1.5 * t_guess, mode0=tr.target, disabled=disabled,
+                              tolerances=tolerances)
+        if found is None:
+            raise ConvergenceError(f"tangential return to surface {tr.surface!r}: no return found", history)
+        end = flow.run(x, 0.0, found, q, mode0=tr.target, disabled=disabled, tolerances=tolerances)
+        return end.x1 - x, found, x
+
+    w = np.append(np.zeros(n - 1), float(lam))
+    for it in range(max_iter + 1):
+        r, t_r, x = residual(w, t_r)
+        rn = float(np.linalg.norm(r))
+        history.append(rn)
+        J = np.empty((n, n))
+        for i in range(n):
+            step = fd_step * max(1.0, abs(w[i]))
+            e = np.zeros(n)
+            e[i] = step
+            J[:, i] = (residual(w + e, t_r)[0] - residual(w - e, t_r)[0]) / (2 * step)
+        try:
+            dw = np.linalg.solve(J, -r)
+        except np.linalg.LinAlgError:
+            raise ConvergenceError("tangential return: singular Jacobian", history) from None
+        if rn <= tol * (1.0 + float(np.linalg.norm(x))):
+            q = p.copy()
+            q[j] = w[-1]
+            orbit = flow.run(x, 0.0, t_r, q, mode0=tr.target, disabled=disabled, tolerances=tolerances)
+            carried = float(np.abs(np.linalg.inv(J)[-1]).sum()) * flow.integration_error(orbit, tolerances)
+            return TangentialReturn(
+                parameter=float(w[-1]), state=x, period=t_r, transition=int(transition),
+                accuracy=abs(float(dw[-1])) + carried + 4e-16 * max(1.0, abs(float(w[-1]))), residuals=history,
+            )
+        if it == max_iter:
+            break
+        w = w + dw
+    raise ConvergenceError(f"tangential return to surface {tr.surface!r} did not converge", history)
+
+
+def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_gap: float = 1e-2) -> list[tuple[int, float]]:
+    """Transitions whose surface the orbit nearly touches without crossing: ``(transition, time)`` pairs.
+
+    Along a period of ``traj`` (computed with ``dense=True``), an indicator of
+    a transition of the current mode that comes within ``relative_gap`` of
+    zero (relative to its range over the period) at a local extremum, from
+    the side it would cross from, is a candidate for grazing.
+    """
+    system = flow.system
+    t, x = traj.sample(16)
+    events = traj.events
+    modes = np.full(t.shape, system.mode_index(traj.mode0))
+    for e in events:
+        after = (t > e.t) if traj.t1 >= traj.t0 else (t < e.t)
+        modes[after] = system.mode_index(e.mode_to)
+    found = []
+    for k, tr in enumerate(system.transitions):
+        s = system.surface_index(tr.surface)
+        h = np.array([flow.indicator(s, ti, xi, p) for ti, xi in zip(t, x)])
+        rng = float(h.max() - h.min())
+        if rng == 0.0:
+            continue
+        src = system.mode_index(tr.source)
+        sign = int(tr.direction)  # it fires when h becomes of this sign
+        for i in range(1, len(t) - 1):
+            if modes[i] != src:
+                continue
+            extremum = (h[i] >= h[i - 1] and h[i] >= h[i + 1]) if sign >= 0 else (h[i] <= h[i - 1] and h[i] <= h[i + 1])
+            approaching_from_other_side = h[i] * sign < 0 if sign != 0 else True
+            if extremum and approaching_from_other_side and abs(h[i]) <= relative_gap * rng:
+                if not found or found[-1][0] != k or abs(found[-1][1] - t[i]) > 1e-6 * max(1.0, abs(t[i])):
+                    found.append((k, float(t[i])))
+    return found
+
+
+def growth_exponent(distances: np.ndarray, magnitudes: np.ndarray) -> float:
+    """The exponent ``a`` of ``y ~ d^a``, fitted in log-log (-1/2 for the period map near a grazing)."""
+    slope, _ = np.polyfit(np.log(np.asarray(distances, float)), np.log(np.asarray(magnitudes, float)), 1)
+    return float(slope)
+
+
+__all__ = ["location_tolerances", "GrazingOrbit", "GrazingSystem", "grazing_system", "TangentialReturn", "locate_tangential_return", "grazing_candidates", "indicator_rate", "locate_grazing", "growth_exponent", "tangency_time"]

@@ -1,0 +1,436 @@
+"""Sliding bifurcations of periodic orbits in Filippov systems.
+
+Where a periodic orbit's sequence of events changes by a sliding segment, the
+change is one of the four codimension-one sliding bifurcations (di Bernardo,
+Kowalczyk and Nordmark, Physica D 170, 2002; Kuznetsov, Rinaldi and
+Gragnani, Int. J. Bif. Chaos 13, 2003).  Each happens where the orbit meets
+the boundary of a sliding region, a point where the field ``f_B`` of one side
+is tangent to the switching surface (``h_x f_B + h_t = 0``):
+
+* grazing-sliding: the orbit grazes the surface there.  One side misses the
+  surface, the other slides for a moment.  Located by the grazing defining
+  system of :mod:`saltation.special_points.grazing` with the transition into sliding
+  disabled;
+* crossing-sliding: the orbit arrives at the surface there, and the
+  tangency is *visible* from ``B`` (the orbit of ``f_B`` through the point
+  leaves the surface).  One side crosses into ``B``; the other slides first,
+  for a time that shrinks to zero, and then leaves into ``B``.  Event
+  sequences: ``crossing into B`` and ``sliding start, sliding end into B``;
+* switching-sliding: the same arrival, with the tangency *invisible* from
+  ``B`` (the orbit of ``f_B`` returns to the surface).  One side starts
+  sliding at once; the other first crosses into ``B`` and comes back to
+  slide.  Event sequences: ``sliding start`` and ``crossing into B, sliding
+  start``.  Both arrival cases are located by periodicity plus
+  ``h_x f_B + h_t = 0`` at the arrival (:func:`locate_tangent_arrival`);
+* adding-sliding: a sliding motion touches the boundary of its sliding region
+  from inside, where the exit side's field ``f_A`` has a cubic tangency with
+  the surface (``h_x f_A + h_t = 0`` and its derivative along ``f_A`` zero).
+  One side keeps sliding; on the other the motion leaves into ``A`` and
+  returns to slide again: a sliding segment is added.  Event sequences:
+  ``..., sliding end`` and ``..., sliding end into A, sliding start, sliding
+  end``.  Located by periodicity plus both conditions at the touch
+  (:func:`locate_adding_sliding`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from saltation.branches.branch import SpecialPointKind
+from saltation.errors import ConvergenceError, ModelError
+from saltation.special_points.grazing import location_tolerances
+from saltation.engine.flow import EventKind, Flow, SwitchingEvent, Trajectory
+
+_ARRIVALS = (EventKind.TRANSITION, EventKind.SLIDING_START)
+
+
+@dataclass(frozen=True)
+class SlidingChange:
+    """How two orbits on either side of a sliding bifurcation differ.
+
+    Attributes
+    ----------
+    kind : SpecialPointKind
+        ``crossing_sliding``, ``switching_sliding`` or ``adding_sliding``.
+    index : int
+        In the events of the side without the extra events: the arrival at
+        the surface (crossing- and switching-sliding), or the end of the
+        sliding motion that touches the boundary (adding-sliding).
+    mode : str
+        The mode whose field is tangent to the surface at the bifurcation.
+    surface : str
+    t_guess : float
+        Where the side with the extra events has them (the touch lies between).
+    side : float
+        The side of the surface (the sign of ``h``) where ``mode`` lies.
+    count : int
+        At how many points of the orbit the change happens at once (2 for the two switchings of a
+        symmetric orbit); the defining system holds at the first, symmetry gives the others.
+    """
+
+    kind: SpecialPointKind
+    index: int
+    mode: str
+    surface: str
+    t_guess: float
+    side: float
+    count: int = 1
+
+
+def _arrival_side(flow: Flow, e: SwitchingEvent, p: np.ndarray) -> float:
+    """The side of the surface an arrival moves to (the sign of ``dh/dt`` along the arriving field)."""
+    return 1.0 if exit_rate(flow, e.mode_from, e.surface, e.t, e.x_minus, p) > 0 else -1.0
+
+
+def _cyclic(traj: Trajectory) -> list[SwitchingEvent]:
+    """The orbit's events as a cycle: a sliding start at ``t0`` that continues the sliding motion the
+    period ends on is the section cutting that motion, not an event of its own."""
+    ev = traj.events
+    if ev and ev[0].kind == EventKind.SLIDING_START and ev[0].t == traj.t0 and traj.sliding_at_end \
+            and any(e.kind == EventKind.SLIDING_START and e.surface == ev[0].surface for e in ev[1:]):
+        return ev[1:]
+    return ev
+
+
+def _signature(e: SwitchingEvent) -> tuple:
+    """What identifies an event in a change of sequence: its kind and surface, and the mode it enters
+    (not for a sliding start, whose arrival side is what changes at a switching-sliding)."""
+    return (int(e.kind), e.surface, "" if e.kind == EventKind.SLIDING_START else e.mode_to)
+
+
+def _reduce(sigs: list, i: int, kind: SpecialPointKind) -> list | None:
+    """The cycle of signatures with the extra events of a ``kind`` change at position ``i`` turned into
+    the other side's form (rotated to start there), or None when there is no such change at ``i``."""
+    m = len(sigs)
+    if m < 2:
+        return None
+    rot = [sigs[(i + k) % m] for k in range(m)]
+    (k0, s0, _), (k1, s1, m1) = rot[0], rot[1]
+    if s0 != s1:
+        return None
+    tr, ss, se = int(EventKind.TRANSITION), int(EventKind.SLIDING_START), int(EventKind.SLIDING_END)
+    if kind is SpecialPointKind.SWITCHING_SLIDING and (k0, k1) == (tr, ss):
+        return rot[1:]  # [crossing into B, sliding start] -> [sliding start]
+    if kind is SpecialPointKind.CROSSING_SLIDING and (k0, k1) == (ss, se):
+        return [(tr, s0, m1)] + rot[2:]  # [sliding start, sliding end into B] -> [crossing into B]
+    if kind is SpecialPointKind.ADDING_SLIDING and (k0, k1) == (se, ss) and m > 2 and rot[2][:2] == (se, s0):
+        return rot[2:]  # [sliding end into A, sliding start, sliding end] -> [sliding end]
+    return None
+
+
+def _same_cycle(a: list, b: list) -> bool:
+    n = len(a)
+    return n == len(b) and any(all(a[k] == b[(k + r) % n] for k in range(n)) for r in range(max(n, 1)))
+
+
+def _nearest(events: list[SwitchingEvent], kind: EventKind, surface: str, t: float, span: float,
+             mode_to: str | None = None) -> SwitchingEvent | None:
+    """Of the events of a kind on a surface (entering ``mode_to``, if given), the nearest in time to ``t``,
+    modulo the period ``span``."""
+
+    def distance(e):
+        d = (e.t - t) % span
+        return min(d, span - d)
+
+    found = [e for e in events if e.kind == kind and e.surface == surface and (mode_to is None or e.mode_to == mode_to)]
+    return min(found, key=distance) if found else None
+
+
+def sliding_change(flow: Flow, without: Trajectory, with_: Trajectory, p_with: np.ndarray,
+                   p_without: np.ndarray) -> SlidingChange | None:
+    """Recognise a crossing-, switching- or adding-sliding change between two orbits.
+
+    ``with_`` has the extra events: one more (crossing- and switching-sliding)
+    or two more (adding-sliding), or twice that where the change happens at
+    two points of the orbit at once (the two switchings of a symmetric orbit).
+    ``p_with`` and ``p_without`` are their parameter values.  The event
+    sequences are compared as cycles (events may pass the section ``t = t0``
+    between the two orbits).  Returns None for any other change.
+    """
+    w, wo = _cyclic(with_), _cyclic(without)
+    if not wo:
+        return None
+    sw, swo = [_signature(e) for e in w], [_signature(e) for e in wo]
+    span = with_.t1 - with_.t0
+    for kind, per in ((SpecialPointKind.SWITCHING_SLIDING, 1), (SpecialPointKind.CROSSING_SLIDING, 1),
+                      (SpecialPointKind.ADDING_SLIDING, 2)):
+        for count in (1, 2):
+            if len(w) - len(wo) != per * count:
+                continue
+            for i in range(len(w)):
+                reduced = _reduce(sw, i, kind)
+                if reduced is None:
+                    continue
+                if count == 2:
+                    seconds = (_reduce(reduced, j, kind) for j in range(1, len(reduced)))
+                    if not any(r is not None and _same_cycle(r, swo) for r in seconds):
+                        continue
+                elif not _same_cycle(reduced, swo):
+                    continue
+                change = _change(flow, kind, w, i, without, span, p_with, p_without)
+                if change is not None:
+                    return replace(change, count=count)
+    return None
+
+
+def _change(flow: Flow, kind: SpecialPointKind, w: list[SwitchingEvent], i: int, without: Trajectory, span: float,
+            p_with: np.ndarray, p_without: np.ndarray) -> SlidingChange | None:
+    """The change of ``kind`` whose extra events start at ``w[i]``, tied to the other side's event."""
+    m = len(w)
+    e, nxt = w[i], w[(i + 1) % m]
+    if kind is SpecialPointKind.SWITCHING_SLIDING:  # the arrival: a sliding start on the other side
+        arrival = _nearest(without.events, EventKind.SLIDING_START, e.surface, nxt.t, span)
+        return None if arrival is None else SlidingChange(
+            kind, without.events.index(arrival), e.mode_to, e.surface, e.t, _arrival_side(flow, e, p_with))
+    if kind is SpecialPointKind.CROSSING_SLIDING:  # the arrival: a crossing into B on the other side
+        crossing = _nearest(without.events, EventKind.TRANSITION, e.surface, e.t, span, nxt.mode_to)
+        return None if crossing is None else SlidingChange(
+            kind, without.events.index(crossing), nxt.mode_to, e.surface, e.t,
+            _arrival_side(flow, crossing, p_without))
+    late = w[(i + 2) % m]  # adding-sliding: the touch lies between the extra exit and re-entry
+    exit_ = _nearest(without.events, EventKind.SLIDING_END, e.surface, late.t, span, late.mode_to)
+    if exit_ is None:
+        return None
+    t_guess = without.t0 + (e.t - without.t0 + 0.5 * ((nxt.t - e.t) % span)) % span
+    return SlidingChange(kind, without.events.index(exit_), e.mode_to, e.surface, t_guess,
+                         -_arrival_side(flow, nxt, p_with))
+
+
+@dataclass(frozen=True)
+class SlidingBifurcationOrbit:
+    """A located orbit at a crossing-, switching- or adding-sliding bifurcation.
+
+    Attributes
+    ----------
+    kind : SpecialPointKind
+    parameter : float
+    state0 : ndarray
+        The orbit's state at ``t0``.
+    t_touch : float
+        Where the orbit meets the boundary of the sliding region.
+    x_touch : ndarray
+    mode : str
+        The mode whose field is tangent to the surface there.
+    curvature : float
+        ``d2h/dt2`` along that field at the touch, signed so that positive
+        means the field's orbit leaves the surface to the mode's side (a
+        visible tangency); zero to rounding at an adding-sliding, where the
+        third derivative decides.
+    accuracy : float
+        The Newton correction of the parameter that would follow, plus the
+        integration error carried to the parameter (an error estimate).
+    residuals : list of float
+    trajectory : Trajectory
+        The period from ``state0``, with its monodromy.
+    """
+
+    kind: SpecialPointKind
+    parameter: float
+    state0: np.ndarray
+    t_touch: float
+    x_touch: np.ndarray
+    mode: str
+    curvature: float
+    accuracy: float
+    residuals: list[float]
+    trajectory: Trajectory
+
+
+def exit_rate(flow: Flow, mode: str, surface: str, t: float, x: np.ndarray, p: np.ndarray) -> float:
+    """``h_x f + h_t``: the rate of the indicator along a mode's field (zero where the field is tangent)."""
+    hx, ht, _ = flow.indicator_gradient(surface, t, x, p)
+    return float(hx @ flow.vector_field(mode, t, x, p) + ht)
+
+
+def rate_along(flow: Flow, mode: str, fn: Callable[[float, np.ndarray], float], t: float, x: np.ndarray,
+               p: np.ndarray, delta: float = 1e-3) -> float:
+    """The derivative of ``fn(t, x)`` along the field of ``mode``: a fourth-order central difference
+    along the straight line ``(t + s, x + s f(t, x))`` (exact to ``O(delta^4)``, rounding
+    ``O(eps / delta)``)."""
+    f = flow.vector_field(mode, t, x, p)
+    d = delta * max(1.0, abs(t)) / max(1.0, float(np.linalg.norm(f)))
+    v = [fn(t + k * d, x + k * d * f) for k in (-2, -1, 1, 2)]
+    return (v[0] - 8.0 * v[1] + 8.0 * v[2] - v[3]) / (12.0 * d)
+
+
+def _curvature(flow: Flow, mode: str, surface: str, side: float, t: float, x: np.ndarray, p: np.ndarray) -> float:
+    """``d2h/dt2`` along a mode's field, signed positive when its orbit leaves the surface into the mode
+    (on ``side``)."""
+    return side * rate_along(flow, mode, lambda s, y: exit_rate(flow, mode, surface, s, y, p), t, x, p)
+
+
+def _newton(flow: Flow, z0: np.ndarray, lam_name: str, extra: Callable, n_extra: int, history: list[float], *,
+            parameters, t0: float, tol: float, max_iter: int, fd_step: float, tolerances, what: str,
+            autonomous: bool = False):
+    """Newton's method on periodicity plus ``n_extra`` conditions ``extra(z, q) -> (values, info)`` of
+    ``z = (x0, lam, extra unknowns)``, and for an autonomous orbit its period as the last unknown with
+    the phase condition ``f_ref . (x0 - x_ref) = 0`` (anchored at the start); the periodicity rows are
+    exact (variational equations), the conditions' rows central differences.  Appends the residual
+    norms to ``history``; returns ``(z, info, full trajectory, accuracy)``."""
+    system = flow.system
+    j = system.parameter_index(lam_name)
+    p = flow.parameters(parameters).copy()
+    n = system.n
+    m = len(z0)
+    rows = n + (1 if autonomous else 0)
+
+    def params(z):
+        q = p.copy()
+        q[j] = z[n]
+        return q
+
+    z = np.asarray(z0, dtype=float).copy()
+    if autonomous:  # the phase condition, anchored at the start
+        x_ref = z[:n].copy()
+        f_ref = flow.vector_field(flow.initial_mode(x_ref, params(z), t0), t0, x_ref, params(z))
+        f_ref = f_ref / np.linalg.norm(f_ref)
+    for it in range(max_iter + 1):
+        q = params(z)
+        T = z[-1] if autonomous else system.forcing_period(q)
+        full = flow.run(z[:n], t0, t0 + T, q, variational=True, sensitivity=j, tolerances=tolerances)
+        c, info = extra(z, q)
+        phase = [f_ref @ (z[:n] - x_ref)] if autonomous else []
+        residual = np.concatenate([full.x1 - z[:n], phase, c])
+        rn = float(np.linalg.norm(residual))
+        history.append(rn)
+        J = np.zeros((rows + n_extra, m))
+        J[:n, :n] = full.monodromy - np.eye(n)
+        J[:n, n] = full.parameter_sensitivity
+        if autonomous:
+            J[:n, m - 1] = full.velocity_end
+            J[n, :n] = f_ref
+        else:
+            J[:n, n] += system.period_derivative(q, j) * full.velocity_end
+        for i in range(m):
+            step = fd_step * max(1.0, abs(z[i]))
+            e = np.zeros(m)
+            e[i] = step
+            J[rows:, i] = (extra(z + e, params(z + e))[0] - extra(z - e, params(z - e))[0]) / (2 * step)
+        dz = np.linalg.lstsq(J, -residual, rcond=None)[0] if J.shape[0] != J.shape[1] else np.linalg.solve(J, -residual)
+        if rn <= tol * (1.0 + float(np.linalg.norm(z[: n + 1]))):
+            carried = float(np.abs(np.linalg.pinv(J)[n]).sum()) * flow.integration_error(full, tolerances)
+            accuracy = abs(float(dz[n])) + carried + 4e-16 * max(1.0, abs(float(z[n])))
+            return z, info, full, accuracy
+        if it == max_iter:
+            break
+        z = z + dz
+    raise ConvergenceError(f"{what} did not converge", history)
+
+
+def locate_tangent_arrival(
+    flow: Flow, x0: np.ndarray, lam: float, lam_name: str, index: int, far_mode: str, side: float, *, parameters=None,
+    t0: float = 0.0, tol: float = 1e-12, max_iter: int = 20, fd_step: float = 1e-7, tolerances=None,
+    period: float | None = None,
+) -> SlidingBifurcationOrbit:
+    """Locate a crossing- or switching-sliding: periodicity plus ``h_x f_B + h_t = 0`` where the orbit
+    arrives at the surface.
+
+    ``index`` is the position of that arrival among the orbit's events: a
+    crossing into ``B`` or a sliding start, the same point on either side of
+    the bifurcation (continuous across it), so the condition's derivatives by
+    central differences are well defined there.  ``side`` is the sign of
+    ``h`` on ``B``'s side.  The kind follows from the tangency's curvature:
+    visible from ``B`` (its orbit leaves the surface) is a crossing-sliding,
+    invisible a switching-sliding.
+
+    Raises
+    ------
+    ConvergenceError
+        If Newton does not converge, or the orbit's events change along the way.
+    ModelError
+        For an autonomous model without a ``period`` guess.
+    """
+    system = flow.system
+    tolerances = location_tolerances(flow, tolerances)
+    autonomous = system.is_autonomous
+    if autonomous and period is None:
+        raise ModelError(f"{system.name!r} is autonomous: locating its sliding bifurcation needs a period guess")
+    n = system.n
+    history: list[float] = []
+
+    def tangency(z: np.ndarray, q: np.ndarray):
+        traj = flow.run(z[:n], t0, t0 + (z[-1] if autonomous else system.forcing_period(q)), q, tolerances=tolerances)
+        if len(traj.events) <= index or traj.events[index].kind not in _ARRIVALS:
+            raise ConvergenceError("sliding bifurcation: the orbit's events changed during the iteration", history)
+        e = traj.events[index]
+        return np.array([exit_rate(flow, far_mode, e.surface, e.t, e.x_minus, q)]), e
+
+    z0 = np.concatenate([np.asarray(x0, dtype=float)[:n], [float(lam)], [float(period)] if autonomous else []])
+    z, hit, full, accuracy = _newton(
+        flow, z0, lam_name, tangency, 1, history, parameters=parameters, t0=t0, tol=tol, max_iter=max_iter,
+        fd_step=fd_step, tolerances=tolerances, what="sliding bifurcation", autonomous=autonomous,
+    )
+    q = flow.parameters(parameters).copy()
+    q[system.parameter_index(lam_name)] = z[n]
+    curvature = _curvature(flow, far_mode, hit.surface, side, hit.t, hit.x_minus, q)
+    kind = SpecialPointKind.CROSSING_SLIDING if curvature > 0 else SpecialPointKind.SWITCHING_SLIDING
+    return SlidingBifurcationOrbit(
+        kind=kind, parameter=float(z[n]), state0=z[:n].copy(), t_touch=hit.t, x_touch=hit.x_minus.copy(),
+        mode=far_mode, curvature=curvature, accuracy=accuracy, residuals=history, trajectory=full,
+    )
+
+
+def locate_adding_sliding(
+    flow: Flow, x0: np.ndarray, lam: float, lam_name: str, t_guess: float, exit_mode: str, surface: str, side: float, *,
+    parameters=None, t0: float = 0.0, tol: float = 1e-12, max_iter: int = 20, fd_step: float = 1e-6,
+    tolerances=None,
+) -> SlidingBifurcationOrbit:
+    """Locate an adding-sliding: periodicity plus, at an unknown instant ``tau`` of a sliding motion,
+    ``g = h_x f_A + h_t = 0`` and ``dg/dt = 0`` along ``f_A`` (the exit side's cubic tangency).
+
+    The unknowns are ``(x0, lam, tau)``; ``t_guess`` starts ``tau`` (for
+    example between the extra exit and re-entry of the orbit that has them);
+    ``side`` is the sign of ``h`` on ``A``'s side.
+    ``g`` and its rate are taken at the state reached at ``tau`` (on the
+    surface while the orbit slides; on the side that leaves, a state a little
+    off it, where both are continuous).
+
+    Raises
+    ------
+    ConvergenceError
+        If Newton does not converge, or the touch does not lie on a sliding motion.
+    ModelError
+        For an autonomous model.
+    """
+    system = flow.system
+    tolerances = location_tolerances(flow, tolerances)
+    if system.is_autonomous:
+        raise ModelError(f"locating a sliding bifurcation is implemented for forced models; {system.name!r} is autonomous")
+    n = system.n
+    history: list[float] = []
+
+    def touch(z: np.ndarray, q: np.ndarray):
+        tau = float(z[n + 1])
+        traj = flow.run(z[:n], t0, tau, q, tolerances=tolerances)
+        x = traj.x1
+
+        def g(s, y):
+            return exit_rate(flow, exit_mode, surface, s, y, q)
+
+        return np.array([g(tau, x), rate_along(flow, exit_mode, g, tau, x, q)]), traj
+
+    z0 = np.concatenate([np.asarray(x0, dtype=float), [float(lam), float(t_guess)]])
+    z, traj, full, accuracy = _newton(
+        flow, z0, lam_name, touch, 2, history, parameters=parameters, t0=t0, tol=tol, max_iter=max_iter,
+        fd_step=fd_step, tolerances=tolerances, what="adding-sliding",
+    )
+    q = flow.parameters(parameters).copy()
+    q[system.parameter_index(lam_name)] = z[n]
+    # at the touch the orbit slides (or, exactly at the bifurcation, leaves and returns at once)
+    if abs(flow.indicator(surface, float(z[n + 1]), traj.x1, q)) > 1e-9 * (1.0 + float(np.linalg.norm(traj.x1))):
+        raise ConvergenceError("adding-sliding: the located touch does not lie on the switching surface", history)
+    curvature = _curvature(flow, exit_mode, surface, side, float(z[n + 1]), traj.x1, q)
+    return SlidingBifurcationOrbit(
+        kind=SpecialPointKind.ADDING_SLIDING, parameter=float(z[n]), state0=z[:n].copy(), t_touch=float(z[n + 1]),
+        x_touch=traj.x1.copy(), mode=exit_mode, curvature=curvature, accuracy=accuracy, residuals=history,
+        trajectory=full,
+    )
+
+
+__all__ = [
+    "SlidingBifurcationOrbit", "SlidingChange", "exit_rate", "locate_adding_sliding", "locate_tangent_arrival",
+    "rate_along", "sliding_change",
+]
