@@ -21,7 +21,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition, codegen
+from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition
+from saltation.engine import codegen
 from saltation.engine.codegen import KernelCacheError
 from saltation.orbits.shooting import find_periodic_orbit
 

@@ -7,7 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from saltation import Flow, cli
+from saltation import Flow
+from saltation.apps import cli
 from saltation.branches.branch import SpecialPointKind
 from saltation.special_points.continuation import ContinuationSettings, continue_branch
 from saltation.engine.flow import Tolerances
