@@ -14,7 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from saltation.errors import ConvergenceError
-from saltation.orbits.shooting import Evaluation, SolutionSummary
+from saltation.orbits.records import Evaluation, SolutionSummary
 
 
 class NewtonSettings(Protocol):

@@ -503,6 +503,7 @@ class Flow:
         dense: bool = False,
         tolerances: Tolerances | None = None,
         phi0: np.ndarray | None = None,
+        psi0: np.ndarray | None = None,
         disabled: Sequence[int] = (),
     ) -> Trajectory:
         """Integrate from ``t0`` to ``t1`` (``t1 < t0`` integrates backward in time).
@@ -524,6 +525,10 @@ class Flow:
             (-1: none); with ``variational``, :attr:`Trajectory.parameter_sensitivity`.
         dense : bool
             Keep the dense output for :meth:`Trajectory.sample`.
+        phi0, psi0 : ndarray, optional
+            The fundamental solution matrix, shape (n, n), and the parameter
+            sensitivity, shape (n,), at ``t0`` (identity and zero by default):
+            a shot continued from an interior instant carries on from there.
         disabled : sequence of int
             Indices of transitions that never fire in this run (the orbit
             passes their surfaces as if they were not there): the virtual
@@ -555,6 +560,9 @@ class Flow:
         phi = self._identity if phi0 is None else _c_array(phi0)
         if phi.shape != (sys_.n, sys_.n):
             raise ModelError(f"initial fundamental matrix must have shape ({sys_.n}, {sys_.n}), got {phi.shape}")
+        psi = self._zeros if psi0 is None else _c_array(psi0)
+        if psi.shape != (sys_.n,):
+            raise ModelError(f"initial parameter sensitivity must have shape ({sys_.n},), got {psi.shape}")
         steps, limits, flags = tol.kernel_arguments
         table = self._table
         if len(disabled):
@@ -564,7 +572,7 @@ class Flow:
         try:
             out = self._engine.integrate_kernel(
                 self._addresses, self._affine_modes, t0, t1, x0, int(m0), p, bool(variational), sens, *steps, 0.0,
-                *limits, table, self._n_surfaces, bool(dense), phi, self._zeros, *flags,
+                *limits, table, self._n_surfaces, bool(dense), phi, psi, *flags,
             )
         except ArithmeticError as exc:  # the compiled engine raises Python's errors for a division by zero
             raise IntegrationError(

@@ -38,6 +38,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from saltation.engine.flow import (
+    EventKind,
+    Flow,
+    SwitchingEvent,
+    Tolerances,
+    Trajectory,
+)
 from saltation.errors import (
     ConvergenceError,
     InconsistentResultError,
@@ -47,6 +54,7 @@ from saltation.errors import (
     SaltationError,
     StationaryStateError,
 )
+from saltation.orbits.conditions import Condition, ConditionedProblem
 from saltation.orbits.floquet import (
     autonomous_multipliers,
     is_stable,
@@ -55,7 +63,12 @@ from saltation.orbits.floquet import (
     reciprocal,
     sort_multipliers,
 )
-from saltation.engine.flow import EventKind, Flow, SwitchingEvent, Tolerances, Trajectory
+from saltation.orbits.records import (
+    Evaluation,
+    SolutionSummary,
+    event_ids,
+    event_labels,
+)
 
 #: The largest error of an autonomous orbit's trivial multiplier (``|M n - n|``, see
 #: :func:`saltation.orbits.floquet.autonomous_multipliers`) that a converged orbit may have.
@@ -68,77 +81,6 @@ STATIONARY_FACTOR = 100.0
 #: Newton steps of an autonomous orbit that make the period longer than this many times its guess are
 #: shortened (as steps that do not reduce the residual): a period near zero can throw the next iterate far away.
 PERIOD_GROWTH = 100.0
-
-
-@dataclass(frozen=True)
-class Evaluation:
-    """Residual and Jacobians of a problem at ``(u, lam)``."""
-
-    residual: np.ndarray
-    jac_u: np.ndarray
-    jac_lam: np.ndarray | None
-    trajectory: Trajectory | None = None
-
-
-@dataclass(frozen=True)
-class SolutionSummary:
-    """What a branch records of a solved point."""
-
-    state: np.ndarray
-    period: float
-    amplitude: float
-    half_peak_to_peak: float
-    multipliers: np.ndarray
-    stable: bool
-    event_labels: tuple[str, ...]
-    monodromy: np.ndarray | None = None
-    #: the event sequence by identity (see :func:`event_ids`): what detectors compare
-    event_ids: tuple[tuple[int, int, int], ...] = ()
-    #: autonomous orbits: ``|M n - n|`` along the flow direction ``n``, the monodromy's accuracy figure
-    trivial_error: float = float("nan")
-    #: ``max_i (max x_i - min x_i)`` over the period: how far the orbit moves (0 for an equilibrium)
-    excursion: float = float("nan")
-
-
-def orbit_events(traj: Trajectory) -> list:
-    """The events of a periodic orbit's trajectory, as the orbit's cycle of events.
-
-    An orbit that is sliding at ``t0`` starts its sliding motion there (an
-    event at ``t0``) and ends the period on it: that is one sliding motion cut
-    by the section ``t = t0``, counted once (by its arrival at the end), so
-    that the sequence of an orbit does not change as its events pass ``t0``.
-    """
-    events = traj.events
-    if (events and events[0].kind == EventKind.SLIDING_START and events[0].t == traj.t0 and traj.sliding_at_end
-            and any(e.kind == EventKind.SLIDING_START and e.surface == events[0].surface for e in events[1:])):
-        return events[1:]
-    return events
-
-
-def event_ids(traj: Trajectory) -> tuple[tuple[int, int, int], ...]:
-    """The orbit's events by identity: ``(kind, transition index, mode entered)`` each.
-
-    Two transitions that differ only in their guard (or reset) have the same
-    label but not the same index; a sliding motion's end is told by the mode
-    it leaves into.  Detectors of non-smooth points compare these.
-    """
-    names = traj.system.mode_names
-    return tuple((int(e.kind), int(e.transition), names.index(e.mode_to)) for e in orbit_events(traj))
-
-
-def event_labels(traj: Trajectory) -> tuple[str, ...]:
-    """Readable labels of a trajectory's events (see :func:`orbit_events`): the transition, or the sliding
-    motion started or ended."""
-    sys_ = traj.system
-    labels = []
-    for e in orbit_events(traj):
-        if e.kind == EventKind.TRANSITION:
-            labels.append(sys_.transitions[e.transition].label)
-        elif e.kind == EventKind.SLIDING_START:
-            labels.append(f"slide on {e.surface} ({e.mode_from}|{e.mode_to})")
-        else:
-            labels.append(f"leave {e.surface} sliding -> {e.mode_to}")
-    return tuple(labels)
 
 
 @dataclass(frozen=True)
@@ -375,8 +317,10 @@ class ShootingProblem:
 
     def set_phase_reference(self, u: np.ndarray, lam: float | None = None) -> None:
         """Anchor the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` at ``u``."""
-        x = u[: self.system.n]
-        p = self.parameters_at(lam)
+        self.anchor_phase(np.asarray(u[: self.system.n], dtype=float), self.parameters_at(lam))
+
+    def anchor_phase(self, x: np.ndarray, p: np.ndarray) -> None:
+        """Anchor the phase condition at the state ``x`` under the parameters ``p``."""
         mode = self.flow.initial_mode(x, p, self.t0)
         f = self.flow.vector_field(mode, self.t0, x, p)
         norm = np.linalg.norm(f)
@@ -454,31 +398,74 @@ class ShootingProblem:
             x0, self.t0, self.t0 + self.sign * T, p, variational=True, sensitivity=pidx, tolerances=self.tolerances
         )
         traj = self.close_period(traj, p, pidx)
+        sens = {pidx: traj.parameter_sensitivity} if pidx >= 0 else {}
+        r, J, jp = self.periodicity(x0, traj, p, sens)
+        return Evaluation(residual=r, jac_u=J, jac_lam=jp[:, 0].copy() if pidx >= 0 else None, trajectory=traj)
+
+    def periodicity(
+        self, x0: np.ndarray, traj: Trajectory, p: np.ndarray, sensitivities: Mapping[int, np.ndarray]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The periodicity equations of one shot, and the phase condition of an autonomous orbit.
+
+        The one place (besides the compiled kernel) where ``x(t0 + s T) - x0 = 0`` and its Jacobian are
+        written; every defining system of a special point adds its conditions to these rows
+        (:mod:`saltation.orbits.conditions`).
+
+        Parameters
+        ----------
+        x0 : ndarray, shape (n,)
+        traj : Trajectory
+            The shot over the period, with its monodromy (and :meth:`close_period` applied).
+        p : ndarray
+        sensitivities : mapping of int to ndarray, shape (n,)
+            ``d x(end) / d p_j`` as the shot carried them, by parameter index.
+
+        Returns
+        -------
+        residual : ndarray, shape (n[+1],)
+        jac_u : ndarray, shape (n[+1], n[+1])
+            By ``u = (x0[, T])``.
+        jac_p : ndarray, shape (n[+1], k)
+            By the parameters of ``sensitivities``, in their order: for a forced orbit the period
+            ``T(p)`` moves the end point along the flow, ``psi_j + s dT/dp_j f(end)``.
+        """
+        n = self.system.n
         M = traj.monodromy
-        jl = None
-        if not self.autonomous:
-            r = traj.x1 - x0
-            J = M - np.eye(n)
-            if pidx >= 0:
-                jl = traj.parameter_sensitivity.copy()
-                dT = self.periods * self.system.period_derivative(p, pidx)
-                if dT:  # the period moves with the parameter: the end point moves along the flow
-                    jl += (self.sign * dT) * traj.velocity_end
-            return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
-        if self.x_ref is None:
-            self.set_phase_reference(u, lam)
-        r = np.empty(n + 1)
+        rows = n + (1 if self.autonomous else 0)
+        r = np.empty(rows)
         r[:n] = traj.x1 - x0
-        r[n] = self.f_ref @ (x0 - self.x_ref)
-        J = np.zeros((n + 1, n + 1))
+        J = np.zeros((rows, rows))
         J[:n, :n] = M
         J[:n, :n] -= np.eye(n)
-        J[:n, n] = self.sign * traj.velocity_end
-        J[n, :n] = self.f_ref
-        if pidx >= 0:
-            jl = np.zeros(n + 1)
-            jl[:n] = traj.parameter_sensitivity
-        return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=traj)
+        jp = np.zeros((rows, len(sensitivities)))
+        for c, (j, psi) in enumerate(sensitivities.items()):
+            jp[:n, c] = psi
+            if not self.autonomous:
+                dT = self.periods * self.system.period_derivative(p, j)
+                if dT:  # the period moves with the parameter: the end point moves along the flow
+                    jp[:n, c] += (self.sign * dT) * traj.velocity_end
+        if self.autonomous:
+            if self.x_ref is None:
+                self.anchor_phase(x0, p)
+            r[n] = self.f_ref @ (x0 - self.x_ref)
+            J[:n, n] = self.sign * traj.velocity_end
+            J[n, :n] = self.f_ref
+        return r, J, jp
+
+    def with_conditions(
+        self, conditions: Sequence[Condition], free: Sequence[str], *, continuation: str | None = None,
+        parameters: np.ndarray | None = None,
+    ) -> ConditionedProblem:
+        """This problem with conditions attached and parameters freed: the defining system of a special
+        point (``continuation`` None) or a two-parameter curve of one (see :mod:`saltation.orbits.conditions`).
+
+        Examples
+        --------
+        A grazing of transition 0 near ``t = 0.3``, located in ``s``::
+
+            located = problem.with_conditions([Tangency(flow, 0, 0.3)], free=("s",)).solve(u0)
+        """
+        return ConditionedProblem(self, conditions, free, continuation=continuation, parameters=parameters)
 
     def close_period(self, traj: Trajectory, p: np.ndarray, sensitivity: int = -1) -> Trajectory:
         """The shot with the crossing at the seam ``t0 = t0 + T`` counted once, as the orbit crosses there.

@@ -31,8 +31,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import brentq
 
-from saltation.errors import ConvergenceError, ModelError
 from saltation.engine.flow import Flow, Trajectory
+from saltation.errors import ConvergenceError, ModelError
+from saltation.orbits.conditions import ConditionedProblem, Tangency
+from saltation.orbits.shooting import ShootingProblem
 
 
 def location_tolerances(flow: Flow, tolerances=None):
@@ -95,18 +97,19 @@ def indicator_rate(flow: Flow, surface: int, traj: Trajectory, p: np.ndarray) ->
 
 def tangency_time(
     flow: Flow, x0: np.ndarray, t0: float, p: np.ndarray, surface: int, t_guess: float, span: float, *,
-    mode0: int | str | None = None, disabled: Sequence[int] = (), tolerances=None,
+    mode0: int | str | None = None, disabled: Sequence[int] = (), tolerances=None, sign: float = 1.0,
 ) -> float | None:
     """The extremum of ``h`` along the orbit from ``(t0, x0)`` nearest ``t_guess``: a root of ``dh/dt``.
 
     Searches ``t_guess +- delta`` for a sign change of the rate, ``delta``
-    growing to ``span / 4``; None when there is none.
+    growing to ``span / 4``, within ``t0 .. t0 + sign span`` (``sign`` -1: backward time); None when
+    there is none.
     """
     def rate(t: float) -> float:
         traj = flow.run(x0, t0, t, p, mode0=mode0, disabled=disabled, tolerances=tolerances)
         return indicator_rate(flow, surface, traj, p)
 
-    lo_limit, hi_limit = t0, t0 + span
+    lo_limit, hi_limit = (t0, t0 + span) if sign > 0 else (t0 - span, t0)
     delta = 1e-6 * span
     while delta <= 0.25 * span:
         a, b = max(lo_limit, t_guess - delta), min(hi_limit, t_guess + delta)
@@ -120,77 +123,6 @@ def tangency_time(
                 return float(brentq(rate, a, b, xtol=1e-15 * max(1.0, abs(a)), rtol=1e-15, maxiter=200))
         delta *= 4.0
     return None
-
-
-@dataclass(frozen=True)
-class GrazingSystem:
-    """The defining system of a grazing at ``(x0, p)`` and its exact derivatives.
-
-    ``residual = (x(t0 + T) - x0, h(t_g, x(t_g)))``; ``jac_x`` its derivative
-    in ``x0`` (``(n + 1, n)``), ``jac_p`` in the requested parameters
-    (``(n + 1, k)``), by the envelope theorem for the tangency row.
-    """
-
-    residual: np.ndarray
-    jac_x: np.ndarray
-    jac_p: np.ndarray
-    t_graze: float
-    x_graze: np.ndarray
-    period: float
-    monodromy: np.ndarray
-    fundamental_to_graze: np.ndarray
-    trajectory: Trajectory
-    jac_period: np.ndarray
-
-
-def grazing_system(
-    flow: Flow, x0: np.ndarray, p: np.ndarray, transition: int, t_guess: float, params: Sequence[int], *,
-    t0: float = 0.0, tolerances=None, history: list[float] | None = None, also_disabled: Sequence[int] = (),
-    period: float | None = None,
-) -> GrazingSystem:
-    """Evaluate the defining system of a grazing of a periodic orbit (see the module docstring).
-
-    ``also_disabled``: further transitions the virtual orbit passes (surfaces
-    it touches at the same time, such as the other support of a symmetric orbit).
-    ``period``: the period of an autonomous orbit (an unknown of its defining
-    system, whose column ``d residual / dT = (f(x(T)), 0)`` is ``jac_period``).
-
-    Raises
-    ------
-    ModelError
-        For an autonomous model without ``period``.
-    ConvergenceError
-        If no tangency is found near ``t_guess``.
-    """
-    system = flow.system
-    if system.is_autonomous and period is None:
-        raise ModelError(f"model {system.name!r} is autonomous: its grazing system needs the period")
-    surface = system.surface_index(system.transitions[transition].surface)
-    n = system.n
-    disabled = (int(transition), *map(int, also_disabled))
-    T = float(period) if system.is_autonomous else system.forcing_period(p)
-    runs = [flow.run(x0, t0, t0 + T, p, variational=True, sensitivity=j, disabled=disabled, tolerances=tolerances)
-            for j in params]
-    full = runs[0]
-    t_g = tangency_time(flow, x0, t0, p, surface, t_guess, T, mode0=full.mode0, disabled=disabled, tolerances=tolerances)
-    if t_g is None:
-        raise ConvergenceError(f"grazing of surface {system.surface_names[surface]!r}: no tangency near t = {t_guess:.6g}",
-                               history or [])
-    parts = [flow.run(x0, t0, t_g, p, variational=True, sensitivity=j, mode0=full.mode0, disabled=disabled,
-                      tolerances=tolerances) for j in params]
-    part = parts[0]
-    hx, _, hp = flow.indicator_gradient(surface, t_g, part.x1, p)
-    residual = np.append(full.x1 - x0, flow.indicator(surface, t_g, part.x1, p))
-    jac_x = np.vstack([full.monodromy - np.eye(n), hx @ part.monodromy])
-    jac_p = np.empty((n + 1, len(params)))
-    for c, (j, run, to_g) in enumerate(zip(params, runs, parts)):
-        jac_p[:n, c] = run.parameter_sensitivity + system.period_derivative(p, j) * run.velocity_end
-        jac_p[n, c] = hx @ to_g.parameter_sensitivity + hp[j]
-    return GrazingSystem(
-        residual=residual, jac_x=jac_x, jac_p=jac_p, t_graze=t_g, x_graze=part.x1, period=T,
-        monodromy=full.monodromy, fundamental_to_graze=part.monodromy, trajectory=full,
-        jac_period=np.append(full.velocity_end, 0.0),
-    )
 
 
 def locate_grazing(
@@ -207,8 +139,11 @@ def locate_grazing(
     max_iter: int = 20,
     tolerances=None,
     period: float | None = None,
+    backward: bool = False,
+    also_disabled: Sequence[int] = (),
 ) -> GrazingOrbit:
-    """Locate a grazing periodic orbit by Newton's method on its defining system.
+    """Locate a grazing periodic orbit: the orbit's problem with a :class:`~saltation.orbits.conditions.Tangency`
+    attached and the parameter freed, solved by the one Newton of :class:`~saltation.orbits.conditions.ConditionedProblem`.
 
     Parameters
     ----------
@@ -226,6 +161,10 @@ def locate_grazing(
     period : float, optional
         Autonomous models: the guess of the period, then an unknown too, with
         the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` anchored at the guess.
+    backward : bool
+        The orbit is one of backward time (the grazing of an orbit that is unstable in forward time).
+    also_disabled : sequence of int
+        Further transitions the virtual orbit passes (touched at the same time, by symmetry).
 
     Raises
     ------
@@ -236,58 +175,35 @@ def locate_grazing(
     """
     system = flow.system
     tolerances = location_tolerances(flow, tolerances)
-    j = system.parameter_index(lam_name)
-    p = flow.parameters(parameters).copy()
-    n = system.n
     autonomous = system.is_autonomous
     if autonomous and period is None:
         raise ModelError(f"model {system.name!r} is autonomous: give the period guess to locate its grazing")
-    x_ref = np.asarray(x0, dtype=float).copy()
-    p[j] = float(lam)
-    if autonomous:
-        f_ref = flow.vector_field(flow.initial_mode(x_ref, p, t0), t0, x_ref, p)
-        f_ref = f_ref / np.linalg.norm(f_ref)
-        z = np.concatenate([x_ref, [float(period), float(lam)]])
-    else:
-        z = np.append(x_ref, float(lam))
-    history: list[float] = []
-    t_g = float(t_guess)
-    for it in range(max_iter + 1):
-        p[j] = z[-1]
-        gs = grazing_system(flow, z[:n], p, transition, t_g, (j,), t0=t0, tolerances=tolerances, history=history,
-                            period=z[n] if autonomous else None)
-        t_g = gs.t_graze
-        if autonomous:  # unknowns (x0, T, lam): the phase condition closes the system
-            J = np.zeros((n + 2, n + 2))
-            J[: n + 1, :n] = gs.jac_x
-            J[: n + 1, n] = gs.jac_period
-            J[: n + 1, n + 1] = gs.jac_p[:, 0]
-            J[n + 1, :n] = f_ref
-            residual = np.append(gs.residual, f_ref @ (z[:n] - x_ref))
-        else:
-            J = np.column_stack([gs.jac_x, gs.jac_p[:, 0]])
-            residual = gs.residual
-        rn = float(np.linalg.norm(residual))
-        history.append(rn)
-        try:
-            dz = np.linalg.solve(J, -residual)
-        except np.linalg.LinAlgError:
-            raise ConvergenceError("grazing: singular Jacobian of the defining system", history) from None
-        if rn <= tol * (1.0 + float(np.linalg.norm(z))):
-            # the Newton correction that would follow, plus the integration error carried to the parameter
-            # through the inverse Jacobian, estimate the error that is left
-            carried = float(np.abs(np.linalg.inv(J)[-1]).sum()) * flow.integration_error(gs.trajectory, tolerances)
-            return GrazingOrbit(
-                parameter=float(z[-1]), state0=z[:n].copy(), period=gs.period, t_graze=t_g,
-                x_graze=gs.x_graze.copy(), transition=int(transition), monodromy=gs.monodromy.copy(),
-                fundamental_to_graze=gs.fundamental_to_graze.copy(), trajectory=gs.trajectory,
-                accuracy=abs(float(dz[-1])) + carried + 4e-16 * max(1.0, abs(float(z[-1]))), residuals=history,
-            )
-        if it == max_iter:
-            break
-        z = z + dz
-    surface = system.transitions[transition].surface
-    raise ConvergenceError(f"grazing of surface {surface!r} did not converge in {max_iter} iterations", history)
+    p = flow.parameters(parameters).copy()
+    p[system.parameter_index(lam_name)] = float(lam)
+    x0 = np.asarray(x0, dtype=float)
+    base = ShootingProblem(flow, p, backward=backward, t0=t0, tolerances=tolerances)
+    sign = base.sign
+    T = float(period) if autonomous else system.forcing_period(p)
+    surface = system.surface_index(system.transitions[transition].surface)
+    disabled = (int(transition), *map(int, also_disabled))
+    mode0 = flow.initial_mode(x0, p, base.t0)
+    t_g = tangency_time(flow, x0, base.t0, p, surface, t_guess, T, mode0=mode0, disabled=disabled,
+                        tolerances=tolerances, sign=sign)
+    if t_g is None:
+        raise ConvergenceError(f"grazing of surface {system.surface_names[surface]!r}: no tangency near t = {t_guess:.6g}",
+                               [])
+    tangency = Tangency(flow, transition, t_g, also_disabled=also_disabled)
+    problem = ConditionedProblem(base, [tangency], free=(lam_name,))
+    found = problem.solve(problem.pack(x0, period=period), tol=tol, max_iter=max_iter,
+                          what=f"grazing of surface {system.surface_names[surface]!r}")
+    shot = found.shot
+    return GrazingOrbit(
+        parameter=float(found.parameters[system.parameter_index(lam_name)]), state0=found.state0,
+        period=found.period, t_graze=float(found.unknowns[-1]), x_graze=shot.piece.x.copy(),
+        transition=int(transition), monodromy=shot.trajectory.monodromy.copy(),
+        fundamental_to_graze=shot.piece.fundamental.copy(), trajectory=shot.trajectory,
+        accuracy=float(found.accuracy[0]), residuals=found.residuals,
+    )
 
 
 @dataclass(frozen=True)
@@ -453,4 +369,4 @@ def growth_exponent(distances: np.ndarray, magnitudes: np.ndarray) -> float:
     return float(slope)
 
 
-__all__ = ["location_tolerances", "GrazingOrbit", "GrazingSystem", "grazing_system", "TangentialReturn", "locate_tangential_return", "grazing_candidates", "indicator_rate", "locate_grazing", "growth_exponent", "tangency_time"]
+__all__ = ["GrazingOrbit", "TangentialReturn", "grazing_candidates", "growth_exponent", "indicator_rate", "locate_grazing", "locate_tangential_return", "location_tolerances", "tangency_time"]

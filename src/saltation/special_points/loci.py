@@ -4,19 +4,28 @@ A special point located on a branch in one parameter is continued in a
 second one by pseudo-arclength continuation of its defining system, with the
 first parameter as one more unknown:
 
+Every curve is the orbit's problem with a condition attached
+(:mod:`saltation.orbits.conditions`), the first parameter freed and the second the curve's:
+
 * grazing and corner collisions (:class:`GrazingCurve`): periodicity of the
   virtual orbit plus tangency to the grazed surface
-  (:func:`saltation.special_points.grazing.grazing_system`, exact Jacobians).  A corner of
+  (:class:`~saltation.orbits.conditions.Tangency`, exact Jacobians).  A corner of
   the paper's trilinear kind is a grazing of the contact's entry surface at
   the point where the contact force vanishes, so it is continued by the same
   system;
 * crossing-, switching- and adding-sliding (:class:`SlidingCurve`):
-  periodicity plus the tangency conditions of :mod:`saltation.special_points.sliding`;
+  periodicity plus the far field's tangency at the orbit's arrival, named by
+  identity (:class:`~saltation.orbits.conditions.ArrivalTangency`), or the
+  exit field's cubic tangency (:class:`~saltation.orbits.conditions.CubicTangency`);
 * smooth folds and period doublings (:class:`MultiplierCurve`): periodicity
   plus a bordered test function ``g`` that vanishes where ``M - mu I`` is
   singular (``mu = +1`` or ``-1``), the minimally augmented system of Govaerts
   (*Numerical Bifurcation Analysis of Dynamical Systems*, SIAM 2000);
-  derivatives of ``g`` by central differences.
+  derivatives of ``g`` by central differences
+  (:class:`~saltation.orbits.conditions.MultiplierCondition`).
+
+A curve ends at its bounds, at a located or bracketed codimension-two point,
+or with a stop reason that says what failed.
 
 Along a grazing or corner curve the kind of the non-smooth point (its
 set-valued multipliers, classified as on a branch) is followed; where it
@@ -35,16 +44,30 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from saltation.special_points.detection import classify_nonsmooth
-from saltation.orbits.boundary import saltation_at_corner
 from saltation.branches.branch import SpecialPoint, SpecialPointKind, StopReason
-from saltation.special_points.continuation import Continuation, ContinuationSettings, canonical_events
-from saltation.errors import IntegrationError, ModelError, SaltationError
-from saltation.orbits.floquet import is_stable, multipliers_from_monodromy
-from saltation.special_points.grazing import grazing_candidates, grazing_system, locate_grazing, tangency_time
 from saltation.engine.flow import EventKind, Flow
-from saltation.orbits.shooting import Evaluation, ShootingProblem, SolutionSummary, event_ids
-from saltation.special_points.sliding import exit_rate, rate_along
+from saltation.errors import IntegrationError, ModelError, SaltationError
+from saltation.orbits.boundary import saltation_at_corner
+from saltation.orbits.conditions import (
+    ArrivalTangency,
+    ConditionedProblem,
+    CubicTangency,
+    EventIdentity,
+    MultiplierCondition,
+    Tangency,
+)
+from saltation.orbits.shooting import ShootingProblem
+from saltation.special_points.continuation import (
+    Continuation,
+    ContinuationSettings,
+    canonical_events,
+)
+from saltation.special_points.detection import classify_nonsmooth
+from saltation.special_points.grazing import (
+    grazing_candidates,
+    locate_grazing,
+    tangency_time,
+)
 
 #: Special points continued by the defining systems of :mod:`saltation.special_points.sliding`.
 SLIDING_KINDS = frozenset(
@@ -61,20 +84,26 @@ class Codim2Point:
     kinds : (str, str)
         The kinds on either side along the curve.
     values : (float, float)
-        The two parameters there (the midpoint of the two curve points around it).
+        The two parameters there.
     accuracy : float
-        Distance between those two curve points (in the two parameters).
+        How precisely it is known, in the two parameters: the distance between the two curve points
+        around it (``bracketed``), or from the curve point to the point located on the other curve.
+    status : str
+        ``"bracketed"`` (between two curve points, at their midpoint) or ``"located"`` (by a defining
+        system).
     """
 
     kinds: tuple[str, str]
     values: tuple[float, float]
     accuracy: float
+    status: str = "bracketed"
 
     def record(self) -> dict:
         return {
             "kind": f"{self.kinds[0]} -> {self.kinds[1]}",
             "value": [float(self.values[0]), float(self.values[1])],
             "accuracy": float(self.accuracy),
+            "status": self.status,
         }
 
 
@@ -114,57 +143,36 @@ class Locus:
         }
 
 
-class _CurveProblem:
-    """What :class:`Continuation` needs of a problem: unknowns ``u = (x0, lam1)``, parameter ``lam2``."""
+class _Curve(ConditionedProblem):
+    """A conditioned problem followed as a curve: ``u = (x0, lam1, extras)``, the curve's parameter ``lam2``."""
 
-    def __init__(self, flow: Flow, parameters: np.ndarray, first: str, second: str):
-        self.flow = flow
-        self.system = flow.system
-        self.p = np.asarray(parameters, dtype=float).copy()
-        self.j1 = self.system.parameter_index(first)
-        self.lam_index = self.system.parameter_index(second)
-        self.lam_name = second
+    def __init__(self, problem: ShootingProblem, conditions, parameters: np.ndarray, first: str, second: str):
+        if problem.autonomous or problem.backward:
+            raise ModelError("two-parameter curves are implemented for forced models in forward time; "
+                             f"{problem.system.name!r} is {'autonomous' if problem.autonomous else 'in backward time'}")
+        super().__init__(problem, conditions, free=(first,), continuation=second, parameters=parameters)
         self.first = first
-        self.backward = False
-        self.autonomous = self.system.is_autonomous
-        if self.autonomous:
-            raise ModelError(f"two-parameter curves are implemented for forced models; {self.system.name!r} is autonomous")
-
-    def parameters_at(self, u: np.ndarray, lam: float) -> np.ndarray:
-        p = self.p.copy()
-        p[self.j1] = u[-1]
-        p[self.lam_index] = lam
-        return p
-
-    def lam0(self) -> float:
-        return float(self.p[self.lam_index])
-
-    def accept(self, u: np.ndarray, lam: float) -> None:
-        """Nothing to re-anchor by default."""
 
     def snapshot(self) -> dict:
         """The state that :meth:`accept` moves along a run (restored before a run in the other direction)."""
-        return {}
+        return {"_last": None, "event_ids": [], "_guesses": [c.start() for c in self.conditions]}
 
     def restore(self, state: dict) -> None:
         for key, value in state.items():
-            setattr(self, key, list(value) if isinstance(value, list) else value)  # each run its own lists
-
-    def _summary(self, u: np.ndarray, monodromy: np.ndarray, period: float, traj) -> SolutionSummary:
-        mu = multipliers_from_monodromy(monodromy)
-        return SolutionSummary(
-            state=np.array(u[:-1]), period=period, amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
-            half_peak_to_peak=float(0.5 * (traj.x_max[0] - traj.x_min[0])), multipliers=mu,
-            stable=is_stable(mu, autonomous=False), event_labels=(), monodromy=monodromy,
-        )
+            if key == "_guesses":
+                for c, g in zip(self.conditions, value):
+                    if len(g):
+                        c.t_guess = float(g[0])
+            else:
+                setattr(self, key, list(value) if isinstance(value, list) else value)  # each run its own lists
 
 
-class GrazingCurve(_CurveProblem):
+class GrazingCurve(_Curve):
     """Grazings (and corners) of a forced orbit in two parameters.
 
     Parameters
     ----------
-    flow : Flow
+    problem : ShootingProblem
     parameters : ndarray
         Parameter values at the start.
     first, second : str
@@ -173,48 +181,29 @@ class GrazingCurve(_CurveProblem):
         The transition whose surface is grazed.
     t_guess : float
         Instant of tangency at the start.
+    others : sequence of (int, float)
+        Transitions touched at the same time (by symmetry), passed too.
     """
 
-    def __init__(self, flow: Flow, parameters: np.ndarray, first: str, second: str, transition: int, t_guess: float,
-                 *, t0: float = 0.0, tolerances=None, others: Sequence[tuple[int, float]] = ()):
-        super().__init__(flow, parameters, first, second)
+    def __init__(self, problem: ShootingProblem, parameters: np.ndarray, first: str, second: str, transition: int,
+                 t_guess: float, *, others: Sequence[tuple[int, float]] = ()):
+        self.tangency = Tangency(problem.flow, transition, t_guess, also_disabled=[int(k) for k, _ in others])
+        super().__init__(problem, [self.tangency], parameters, first, second)
         self.transition = int(transition)
-        self.t_guess = float(t_guess)
-        self.others = [(int(k), float(t)) for k, t in others]  # touched at the same time (by symmetry): passed too
+        self.others = [(int(k), float(t)) for k, t in others]
         self.kinds: list[str] = []  # the corner's kind at every accepted point
         self.t_start = float(t_guess)  # the others' touches keep their offsets from the first one's, in periods
         self.period_start = self.system.forcing_period(self.p)
-        self.t0 = float(t0)
-        self.tolerances = tolerances
-        self._last = None
-
-    @property
-    def dimension(self) -> int:
-        return self.system.n + 1
-
-    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
-        n = self.system.n
-        p = self.parameters_at(u, self.lam0() if lam is None else lam)
-        gs = grazing_system(self.flow, u[:n], p, self.transition, self.t_guess, (self.j1, self.lam_index), t0=self.t0,
-                            tolerances=self.tolerances, also_disabled=[k for k, _ in self.others])
-        self._last = gs
-        jac_u = np.column_stack([gs.jac_x, gs.jac_p[:, 0]])
-        return Evaluation(residual=gs.residual, jac_u=jac_u, jac_lam=gs.jac_p[:, 1].copy(), trajectory=gs.trajectory)
-
-    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
-        gs = self._last
-        return self._summary(u, gs.monodromy, gs.period, gs.trajectory)
 
     def accept(self, u: np.ndarray, lam: float) -> None:
-        if self._last is not None:  # the accepted point's own evaluation (the corrector's last)
-            self.t_guess = self._last.t_graze
-            self.kinds.append(self.corner_kind(u, lam, self.t_guess, gs=self._last))
+        super().accept(u, lam)
+        self.kinds.append(self.corner_kind(u, lam))
 
     def snapshot(self) -> dict:
-        return {"t_guess": self.t_guess, "_last": None, "kinds": []}
+        return super().snapshot() | {"kinds": []}
 
-    def corner_kind(self, u: np.ndarray, lam: float, t_guess: float, *, gs=None) -> str:
-        """The kind of the non-smooth point at a curve point (``gs``: its grazing system, if evaluated).
+    def corner_kind(self, u: np.ndarray, lam: float) -> str:
+        """The kind of the non-smooth point at a curve point ``u = (x0, lam1, t_g)``.
 
         The set-valued multipliers between the grazing orbit's monodromy and the
         same with the excursion's saltation matrices inserted, classified as on a
@@ -222,17 +211,17 @@ class GrazingCurve(_CurveProblem):
         """
         n = self.system.n
         p = self.parameters_at(u, lam)
-        disabled = [self.transition] + [k for k, _ in self.others]
-        if gs is None:
-            gs = grazing_system(self.flow, u[:n], p, self.transition, t_guess, (self.j1,), t0=self.t0,
-                                tolerances=self.tolerances, also_disabled=disabled[1:])
+        shot = self._last[0] if self._last is not None and np.array_equal(self._last[0].x0, u[:n]) \
+            and np.array_equal(self._last[0].parameters, p) else self.equations(u, lam, need_lam=False)[3]
+        disabled = list(self.disabled)
+        t_graze = float(u[-1])
         product = np.eye(n)
-        stretch = gs.period / self.period_start
-        touches = [(self.transition, gs.t_graze)] + [(k, gs.t_graze + (t - self.t_start) * stretch) for k, t in self.others]
+        stretch = shot.period / self.period_start
+        touches = [(self.transition, t_graze)] + [(k, t_graze + (t - self.t_start) * stretch) for k, t in self.others]
         for k, t_k in sorted(touches, key=lambda kt: kt[1]):
             if k != self.transition:
                 surface = self.system.surface_index(self.system.transitions[k].surface)
-                t_k = tangency_time(self.flow, u[:n], self.t0, p, surface, t_k, gs.period, disabled=disabled,
+                t_k = tangency_time(self.flow, u[:n], self.t0, p, surface, t_k, shot.period, disabled=disabled,
                                     tolerances=self.tolerances)
                 if t_k is None:
                     raise SaltationError(f"the second touch of transition {k} was lost along the curve")
@@ -242,7 +231,8 @@ class GrazingCurve(_CurveProblem):
                 return SpecialPointKind.GRAZING.value
             phi = to_k.monodromy
             product = np.linalg.solve(phi, P @ phi) @ product
-        return classify_nonsmooth(gs.monodromy, gs.monodromy @ product).kind.value
+        M = shot.trajectory.monodromy
+        return classify_nonsmooth(M, M @ product).kind.value
 
     def _excursion(self, transition: int, t: float, x: np.ndarray, p: np.ndarray) -> list[int]:
         """A grazed transition, then the exit back that holds at the corner (a surface through it), if any."""
@@ -309,36 +299,43 @@ def follow_locus(
     problem : ShootingProblem
         The problem of the branch (forced, forward time, its continuation parameter set).
     point : SpecialPoint
-        A grazing or a non-smooth point (corner) of that branch, or a fold or period doubling.
+        A grazing or a non-smooth point (corner) of that branch, a crossing-, switching- or
+        adding-sliding, or a fold or period doubling.
     second : str
         The second parameter.
     bounds : (float, float)
         The range of the second parameter.
 
+    Returns
+    -------
+    Locus
+        Its ``stop_reason`` says, per direction, whether the curve reached a bound or what failed.
+
     Raises
     ------
     ModelError
         For an autonomous or backward-time problem, or a kind without a defining system here.
+    SaltationError
+        If the curve cannot start: the special point's defining system has no solution at its start.
     """
     if problem.autonomous or problem.backward or problem.periods != 1:
         raise ModelError("two-parameter curves are implemented for forced models in forward time, over one forcing period")
     p = problem.parameters_at(point.parameter)
-    u0 = np.append(np.asarray(point.state, dtype=float), point.parameter)
+    state = np.asarray(point.state, dtype=float)
     if point.kind in SLIDING_KINDS:
         curve = SlidingCurve(problem, p, second, point)
-        u0 = curve.start(np.asarray(point.state, dtype=float), point.parameter)
         classify = False
     elif point.kind.is_nonsmooth:
-        (transition, t_g), *others = grazed_transitions(problem.flow, point.state, p, t0=problem.t0,
+        (transition, t_g), *others = grazed_transitions(problem.flow, state, p, t0=problem.t0,
                                                         tolerances=problem.tolerances)
-        curve = GrazingCurve(problem.flow, p, problem.lam_name, second, transition, t_g, t0=problem.t0,
-                             tolerances=problem.tolerances, others=others)
+        curve = GrazingCurve(problem, p, problem.lam_name, second, transition, t_g, others=others)
         classify = True
     elif point.kind in (SpecialPointKind.FOLD, SpecialPointKind.PERIOD_DOUBLING):
         curve = MultiplierCurve(problem, p, second, mu=1.0 if point.kind is SpecialPointKind.FOLD else -1.0)
         classify = False
     else:
         raise ModelError(f"no two-parameter continuation for special points of kind {point.kind.value}")
+    u0 = curve.pack(state)
     settings = settings or ContinuationSettings(bounds=bounds)
     # the curve's own turning points and the multipliers of its orbits are not special points of the curve
     settings = replace(settings, bounds=bounds, detect=False)
@@ -348,14 +345,22 @@ def follow_locus(
     for direction in (1, -1):
         curve.restore(start)  # each direction starts from the special point's own guesses
         cont = Continuation(curve, settings)
-        for pt in cont.run(u0, lam0, direction=direction):
-            if progress is not None:
-                progress(pt)
+        way = f"{'increasing' if direction > 0 else 'decreasing'} {second}"
+        failure = None
+        try:
+            for pt in cont.run(u0, lam0, direction=direction):
+                if progress is not None:
+                    progress(pt)
+        except (SaltationError, np.linalg.LinAlgError) as exc:
+            if not cont.solutions:
+                raise SaltationError(f"the {point.kind.value} curve in {second} cannot start from the point at "
+                                     f"{problem.lam_name} = {point.parameter:.10g}: {exc}") from exc
+            failure = f"failed after {len(cont.solutions)} points: {exc}"
         runs.append([sol.z.copy() for sol in cont.solutions])
         kinds_by_run.append(list(getattr(curve, "kinds", [])))
-        reasons.append(f"{'increasing' if direction > 0 else 'decreasing'} {second}: {cont.branch.stop_reason.value}")
-        events_by_run.append(list(getattr(curve, "event_ids", [])))
-        if not classify and cont.branch.stop_reason is not StopReason.PARAMETER_BOUND:
+        reasons.append(f"{way}: {failure or cont.branch.stop_reason.value}")
+        events_by_run.append([canonical_events(e) for e in curve.event_ids])
+        if isinstance(curve, MultiplierCurve) and failure is None and cont.branch.stop_reason is not StopReason.PARAMETER_BOUND:
             end = _end_at_a_corner(problem, curve, point.kind, runs[-1])
             if end is not None:
                 ends.append(end)
@@ -374,7 +379,7 @@ def follow_locus(
                     accuracy=float(np.linalg.norm(points[a + 1] - points[a])),
                 ))
     events = list(reversed(events_by_run[1]))[:-1] + events_by_run[0]
-    if not classify and len(events) == len(zs):  # (curves that follow their orbits' event sequences)
+    if isinstance(curve, MultiplierCurve) and len(events) == len(zs):  # (a fold curve follows its orbits' events)
         for a in range(len(zs) - 1):
             if events[a] != events[a + 1]:
                 touch = _touch_kind(problem, curve, zs[a] if len(events[a]) <= len(events[a + 1]) else zs[a + 1])
@@ -387,7 +392,7 @@ def follow_locus(
     return locus
 
 
-def _end_at_a_corner(problem: ShootingProblem, curve: _CurveProblem, kind: SpecialPointKind,
+def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: SpecialPointKind,
                      zs: list[np.ndarray], *, gap: float = 1e-3, last: int = 12) -> Codim2Point | None:
     """Where a fold or period-doubling curve stops short of its bounds because its orbit comes to touch a
     switching surface (a segment of the orbit shrinks to nothing: a smooth fold born at a corner), the
@@ -419,10 +424,10 @@ def _end_at_a_corner(problem: ShootingProblem, curve: _CurveProblem, kind: Speci
         return None
     at = np.concatenate([corner.state0, [corner.parameter, z[-1]]])
     return Codim2Point(kinds=(kind.value, _touch_kind(problem, curve, at)), values=(corner.parameter, float(z[-1])),
-                       accuracy=abs(corner.parameter - float(z[n])))
+                       accuracy=max(abs(corner.parameter - float(z[n])), corner.accuracy), status="located")
 
 
-def _touch_kind(problem: ShootingProblem, curve: _CurveProblem, z: np.ndarray) -> str:
+def _touch_kind(problem: ShootingProblem, curve: _Curve, z: np.ndarray) -> str:
     """The kind of the non-smooth point a curve's orbit meets where its event sequence changes (a smooth
     fold born at a corner, a fold curve ended by a grazing): classified at the curve point on the side
     without the extra events, as on a corner curve; ``"nonsmooth"`` when that fails."""
@@ -431,206 +436,86 @@ def _touch_kind(problem: ShootingProblem, curve: _CurveProblem, z: np.ndarray) -
     try:
         (transition, t_g), *others = grazed_transitions(problem.flow, z[:n], p, t0=problem.t0,
                                                         tolerances=problem.tolerances)
-        corner = GrazingCurve(problem.flow, p, problem.lam_name, curve.lam_name, transition, t_g, t0=problem.t0,
-                              tolerances=problem.tolerances, others=others)
-        return corner.corner_kind(z[: n + 1], z[-1], t_g)
-    except SaltationError:
+        corner = GrazingCurve(problem, p, problem.lam_name, curve.lam_name, transition, t_g, others=others)
+        return corner.corner_kind(np.concatenate([z[: n + 1], [t_g]]), z[-1])
+    except (SaltationError, np.linalg.LinAlgError):
         return "nonsmooth"
 
 
-class SlidingCurve(_CurveProblem):
+def arrival_identity(flow: Flow, state: np.ndarray, p: np.ndarray, surface: str, t_touch: float, *,
+                     t0: float = 0.0, tolerances=None) -> tuple[EventIdentity, float]:
+    """The arrival at ``surface`` of the orbit from ``state`` nearest ``t_touch``, named by identity (the
+    mode it arrives from and its place among such arrivals), and its time.
+
+    Raises
+    ------
+    SaltationError
+        If the orbit does not arrive at the surface.
+    """
+    T = flow.system.forcing_period(p)
+    traj = flow.run(state, t0, t0 + T, p, tolerances=tolerances)
+    arrivals = [e for e in traj.events if e.surface == surface and e.kind in (EventKind.TRANSITION, EventKind.SLIDING_START)]
+    if not arrivals:
+        raise SaltationError(f"the orbit at {state.tolist()} does not arrive at surface {surface!r}")
+
+    def gap(e):
+        d = (e.t - t_touch) % T
+        return min(d, T - d)
+
+    e = min(arrivals, key=gap)
+    same = [a for a in arrivals if a.mode_from == e.mode_from]
+    return EventIdentity(surface=surface, mode_from=e.mode_from, ordinal=same.index(e)), e.t
+
+
+class SlidingCurve(_Curve):
     """Crossing-, switching- or adding-sliding bifurcations of a forced orbit in two parameters.
 
-    Periodicity plus the conditions of :mod:`saltation.special_points.sliding`: the far
-    field's tangency where the orbit arrives at the surface (crossing- and
-    switching-sliding; unknowns ``(x0, lam1)``), or the exit field's cubic
-    tangency at an instant ``tau`` of a sliding motion (adding-sliding;
-    unknowns ``(x0, lam1, tau)``).  The conditions' derivatives are taken by
-    central differences.  The arrival followed is the one on the surface
-    nearest in time to the last accepted touch.
+    Periodicity plus the far field's tangency at the orbit's arrival at the surface (crossing- and
+    switching-sliding; unknowns ``(x0, lam1)``), the arrival named once, at the start, by the mode it
+    arrives from and its place among such arrivals (:class:`~saltation.orbits.conditions.EventIdentity`):
+    a short excursion into the far side that re-arrives moments later comes from the other mode and
+    is never taken for it.  Or the exit field's cubic tangency at an instant ``tau`` of a sliding motion
+    (adding-sliding; unknowns ``(x0, lam1, tau)``).
     """
 
-    def __init__(self, problem: ShootingProblem, parameters: np.ndarray, second: str, point: SpecialPoint,
-                 *, h: float = 1e-7):
-        super().__init__(problem.flow, parameters, problem.lam_name, second)
+    def __init__(self, problem: ShootingProblem, parameters: np.ndarray, second: str, point: SpecialPoint):
         if not point.touch_surface:
             raise ModelError(f"the {point.kind.value} point does not say where the orbit touches the surface")
-        self.shooting = problem
+        flow = problem.flow
         self.adding = point.kind is SpecialPointKind.ADDING_SLIDING
-        self.surface, self.mode, self.t_touch = point.touch_surface, point.touch_mode, float(point.touch_time)
-        self.h = float(h)
-        self._last = None
-
-    @property
-    def dimension(self) -> int:
-        return self.system.n + (2 if self.adding else 1)
-
-    def parameters_at(self, u: np.ndarray, lam: float) -> np.ndarray:
-        p = self.p.copy()
-        p[self.j1] = u[self.system.n]
-        p[self.lam_index] = lam
-        return p
-
-    def start(self, state: np.ndarray, lam1: float) -> np.ndarray:
-        """The unknowns at the special point."""
-        return np.concatenate([state, [lam1], [self.t_touch] if self.adding else []])
-
-    def _conditions(self, u: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
-        n = self.system.n
-        p = self.parameters_at(u, lam)
-        t0, tol = self.shooting.t0, self.shooting.tolerances
         if self.adding:
-            tau = float(u[n + 1])
-            x = self.flow.run(u[:n], t0, tau, p, tolerances=tol).x1
-
-            def g(s, y):
-                return exit_rate(self.flow, self.mode, self.surface, s, y, p)
-
-            return np.array([g(tau, x), rate_along(self.flow, self.mode, g, tau, x, p)]), tau
-        traj = self.flow.run(u[:n], t0, t0 + self.system.forcing_period(p), p, tolerances=tol)
-        arrivals = [e for e in traj.events if e.surface == self.surface
-                    and e.kind in (EventKind.TRANSITION, EventKind.SLIDING_START)]
-        if not arrivals:
-            raise SaltationError(f"the orbit no longer arrives at surface {self.surface!r}")
-        period = self.system.forcing_period(p)
-
-        def distance(a):  # in time, modulo the period (the arrival may pass the section t = t0)
-            d = (a.t - self.t_touch) % period
-            return min(d, period - d)
-
-        e = min(arrivals, key=distance)
-        return np.array([exit_rate(self.flow, self.mode, e.surface, e.t, e.x_minus, p)]), e.t
-
-    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
-        n, m = self.system.n, self.dimension
-        lam = self.lam0() if lam is None else lam
-        p = self.parameters_at(u, lam)
-        T = self.system.forcing_period(p)
-        t0, tol = self.shooting.t0, self.shooting.tolerances
-        traj1 = self.flow.run(u[:n], t0, t0 + T, p, variational=True, sensitivity=self.j1, tolerances=tol)
-        traj2 = self.flow.run(u[:n], t0, t0 + T, p, variational=True, sensitivity=self.lam_index, tolerances=tol)
-        c, t_touch = self._conditions(u, lam)
-        residual = np.concatenate([traj1.x1 - u[:n], c])
-        jac_u = np.zeros((m, m))
-        jac_u[:n, :n] = traj1.monodromy - np.eye(n)
-        jac_u[:n, n] = traj1.parameter_sensitivity + self.system.period_derivative(p, self.j1) * traj1.velocity_end
-        jac_lam = np.zeros(m)
-        jac_lam[:n] = traj2.parameter_sensitivity + self.system.period_derivative(p, self.lam_index) * traj2.velocity_end
-        for i in range(m + 1):  # the conditions' derivatives, by central differences
-            z = np.append(u, lam)
-            step = self.h * max(1.0, abs(z[i]))
-            e = np.zeros(m + 1)
-            e[i] = step
-            d = (self._conditions((z + e)[:m], (z + e)[m])[0] - self._conditions((z - e)[:m], (z - e)[m])[0]) / (2 * step)
-            if i < m:
-                jac_u[n:, i] = d
-            else:
-                jac_lam[n:] = d
-        self._last = (traj1.monodromy, T, traj1, t_touch)
-        return Evaluation(residual=residual, jac_u=jac_u, jac_lam=jac_lam, trajectory=traj1)
-
-    def accept(self, u: np.ndarray, lam: float) -> None:
-        if self._last is not None:
-            self.t_touch = self._last[3]
+            condition = CubicTangency(flow, point.touch_mode, point.touch_surface, float(point.touch_time))
+        else:
+            identity, t_e = arrival_identity(flow, np.asarray(point.state, dtype=float), parameters, point.touch_surface,
+                                             float(point.touch_time), t0=problem.t0, tolerances=problem.tolerances)
+            condition = ArrivalTangency(flow, identity, point.touch_mode, t_e)
+        self.condition = condition
+        super().__init__(problem, [condition], parameters, problem.lam_name, second)
 
     def snapshot(self) -> dict:
-        return {"t_touch": self.t_touch, "_last": None}
+        state = super().snapshot()
+        if not self.adding:
+            state["_arrival"] = self.condition.t_event
+        return state
 
-    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
-        M, T, traj, _ = self._last
-        return self._summary(u[: self.system.n + 1], M, T, traj)
+    def restore(self, state: dict) -> None:
+        state = dict(state)
+        t = state.pop("_arrival", None)
+        if t is not None:
+            self.condition.t_event = self.condition._t_last_eval = t
+        super().restore(state)
 
 
-class MultiplierCurve(_CurveProblem):
-    """Folds (``mu = 1``) or period doublings (``mu = -1``) of a forced orbit in two parameters.
-
-    The test function ``g`` solves the bordered system
-    ``[[M - mu I, b], [c^T, 0]] [v; g] = [0; 1]``, with ``b`` and ``c`` the
-    singular vectors of ``M - mu I`` at the start (kept fixed): ``g = 0``
-    exactly where ``M - mu I`` is singular, and ``g`` is a smooth function of
-    the unknowns.  Its derivatives are taken by central differences.
-    """
+class MultiplierCurve(_Curve):
+    """Folds (``mu = 1``) or period doublings (``mu = -1``) of a forced orbit in two parameters
+    (:class:`~saltation.orbits.conditions.MultiplierCondition`)."""
 
     def __init__(self, problem: ShootingProblem, parameters: np.ndarray, second: str, *, mu: float, h: float = 1e-6):
-        super().__init__(problem.flow, parameters, problem.lam_name, second)
-        self.shooting = problem
         self.mu = float(mu)
-        self.h = float(h)
-        self._border: tuple[np.ndarray, np.ndarray] | None = None  # b, c: fixed at the first evaluation
-        self._last = None
-        self.event_ids: list[tuple] = []  # the orbit's event sequence (by identity) at every accepted point
-
-    @property
-    def dimension(self) -> int:
-        return self.system.n + 1
-
-    def _shot(self, x0: np.ndarray, p: np.ndarray, j: int):
-        T = self.system.forcing_period(p)
-        traj = self.flow.run(x0, self.shooting.t0, self.shooting.t0 + T, p, variational=True, sensitivity=j,
-                             tolerances=self.shooting.tolerances)
-        return traj, T
-
-    def _g(self, M: np.ndarray) -> float:
-        n = M.shape[0]
-        A = M - self.mu * np.eye(n)
-        if self._border is None:
-            U, _, Vt = np.linalg.svd(A)
-            self._border = (U[:, -1].copy(), Vt[-1].copy())
-        b, c = self._border
-        B = np.zeros((n + 1, n + 1))
-        B[:n, :n] = A
-        B[:n, n] = b
-        B[n, :n] = c
-        rhs = np.zeros(n + 1)
-        rhs[n] = 1.0
-        return float(np.linalg.solve(B, rhs)[n])
-
-    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
-        n = self.system.n
-        lam = self.lam0() if lam is None else lam
-        p = self.parameters_at(u, lam)
-        traj1, T = self._shot(u[:n], p, self.j1)
-        traj2, _ = self._shot(u[:n], p, self.lam_index)
-        M = traj1.monodromy
-        residual = np.append(traj1.x1 - u[:n], self._g(M))
-        jac_u = np.zeros((n + 1, n + 1))
-        jac_u[:n, :n] = M - np.eye(n)
-        jac_u[:n, n] = traj1.parameter_sensitivity + self.system.period_derivative(p, self.j1) * traj1.velocity_end
-        jac_lam = np.zeros(n + 1)
-        jac_lam[:n] = traj2.parameter_sensitivity + self.system.period_derivative(p, self.lam_index) * traj2.velocity_end
-        z = np.append(u, lam)
-        for i in range(n + 2):  # the test function's derivatives, by central differences
-            step = self.h * max(1.0, abs(z[i]))
-            e = np.zeros(n + 2)
-            e[i] = step
-            gp = self._g(self._monodromy(z + e))
-            gm = self._g(self._monodromy(z - e))
-            d = (gp - gm) / (2 * step)
-            if i <= n:
-                jac_u[n, i] = d
-            else:
-                jac_lam[n] = d
-        self._last = (M, T, traj1)
-        return Evaluation(residual=residual, jac_u=jac_u, jac_lam=jac_lam, trajectory=traj1)
-
-    def accept(self, u: np.ndarray, lam: float) -> None:
-        if self._last is not None:
-            self.event_ids.append(canonical_events(event_ids(self._last[2])))
-
-    def snapshot(self) -> dict:
-        return {"_last": None, "event_ids": []}
-
-    def _monodromy(self, z: np.ndarray) -> np.ndarray:
-        n = self.system.n
-        p = self.parameters_at(z[: n + 1], z[n + 1])
-        return self._shot(z[:n], p, -1)[0].monodromy
-
-    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
-        M, T, traj = self._last
-        return self._summary(u, M, T, traj)
+        super().__init__(problem, [MultiplierCondition(mu, h=h)], parameters, problem.lam_name, second)
 
 
 __all__ = [
-    "SLIDING_KINDS", "Codim2Point", "GrazingCurve", "Locus", "MultiplierCurve", "SlidingCurve", "follow_locus",
-    "grazed_transitions",
+    "SLIDING_KINDS", "Codim2Point", "GrazingCurve", "Locus", "MultiplierCurve", "SlidingCurve", "arrival_identity",
+    "follow_locus", "grazed_transitions",
 ]

@@ -40,9 +40,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from saltation.branches.branch import SpecialPointKind
-from saltation.errors import ConvergenceError, ModelError
-from saltation.special_points.grazing import location_tolerances
 from saltation.engine.flow import EventKind, Flow, SwitchingEvent, Trajectory
+from saltation.errors import ConvergenceError, ModelError
+from saltation.orbits.conditions import (
+    ArrivalTangency,
+    ConditionedProblem,
+    CubicTangency,
+    EventIdentity,
+)
+from saltation.orbits.shooting import ShootingProblem
+from saltation.special_points.grazing import location_tolerances
 
 _ARRIVALS = (EventKind.TRANSITION, EventKind.SLIDING_START)
 
@@ -262,64 +269,6 @@ def _curvature(flow: Flow, mode: str, surface: str, side: float, t: float, x: np
     return side * rate_along(flow, mode, lambda s, y: exit_rate(flow, mode, surface, s, y, p), t, x, p)
 
 
-def _newton(flow: Flow, z0: np.ndarray, lam_name: str, extra: Callable, n_extra: int, history: list[float], *,
-            parameters, t0: float, tol: float, max_iter: int, fd_step: float, tolerances, what: str,
-            autonomous: bool = False):
-    """Newton's method on periodicity plus ``n_extra`` conditions ``extra(z, q) -> (values, info)`` of
-    ``z = (x0, lam, extra unknowns)``, and for an autonomous orbit its period as the last unknown with
-    the phase condition ``f_ref . (x0 - x_ref) = 0`` (anchored at the start); the periodicity rows are
-    exact (variational equations), the conditions' rows central differences.  Appends the residual
-    norms to ``history``; returns ``(z, info, full trajectory, accuracy)``."""
-    system = flow.system
-    j = system.parameter_index(lam_name)
-    p = flow.parameters(parameters).copy()
-    n = system.n
-    m = len(z0)
-    rows = n + (1 if autonomous else 0)
-
-    def params(z):
-        q = p.copy()
-        q[j] = z[n]
-        return q
-
-    z = np.asarray(z0, dtype=float).copy()
-    if autonomous:  # the phase condition, anchored at the start
-        x_ref = z[:n].copy()
-        f_ref = flow.vector_field(flow.initial_mode(x_ref, params(z), t0), t0, x_ref, params(z))
-        f_ref = f_ref / np.linalg.norm(f_ref)
-    for it in range(max_iter + 1):
-        q = params(z)
-        T = z[-1] if autonomous else system.forcing_period(q)
-        full = flow.run(z[:n], t0, t0 + T, q, variational=True, sensitivity=j, tolerances=tolerances)
-        c, info = extra(z, q)
-        phase = [f_ref @ (z[:n] - x_ref)] if autonomous else []
-        residual = np.concatenate([full.x1 - z[:n], phase, c])
-        rn = float(np.linalg.norm(residual))
-        history.append(rn)
-        J = np.zeros((rows + n_extra, m))
-        J[:n, :n] = full.monodromy - np.eye(n)
-        J[:n, n] = full.parameter_sensitivity
-        if autonomous:
-            J[:n, m - 1] = full.velocity_end
-            J[n, :n] = f_ref
-        else:
-            J[:n, n] += system.period_derivative(q, j) * full.velocity_end
-        for i in range(m):
-            step = fd_step * max(1.0, abs(z[i]))
-            e = np.zeros(m)
-            e[i] = step
-            J[rows:, i] = (extra(z + e, params(z + e))[0] - extra(z - e, params(z - e))[0]) / (2 * step)
-        dz = np.linalg.lstsq(J, -residual, rcond=None)[0] if J.shape[0] != J.shape[1] else np.linalg.solve(J, -residual)
-        if rn <= tol * (1.0 + float(np.linalg.norm(z[: n + 1]))):
-            carried = float(np.abs(np.linalg.pinv(J)[n]).sum()) * flow.integration_error(full, tolerances)
-            accuracy = abs(float(dz[n])) + carried + 4e-16 * max(1.0, abs(float(z[n])))
-            return z, info, full, accuracy
-        if it == max_iter:
-            break
-        z = z + dz
-    raise ConvergenceError(f"{what} did not converge", history)
-
-
 def locate_tangent_arrival(
     flow: Flow, x0: np.ndarray, lam: float, lam_name: str, index: int, far_mode: str, side: float, *, parameters=None,
     t0: float = 0.0, tol: float = 1e-12, max_iter: int = 20, fd_step: float = 1e-7, tolerances=None,
@@ -348,28 +297,29 @@ def locate_tangent_arrival(
     autonomous = system.is_autonomous
     if autonomous and period is None:
         raise ModelError(f"{system.name!r} is autonomous: locating its sliding bifurcation needs a period guess")
-    n = system.n
-    history: list[float] = []
-
-    def tangency(z: np.ndarray, q: np.ndarray):
-        traj = flow.run(z[:n], t0, t0 + (z[-1] if autonomous else system.forcing_period(q)), q, tolerances=tolerances)
-        if len(traj.events) <= index or traj.events[index].kind not in _ARRIVALS:
-            raise ConvergenceError("sliding bifurcation: the orbit's events changed during the iteration", history)
-        e = traj.events[index]
-        return np.array([exit_rate(flow, far_mode, e.surface, e.t, e.x_minus, q)]), e
-
-    z0 = np.concatenate([np.asarray(x0, dtype=float)[:n], [float(lam)], [float(period)] if autonomous else []])
-    z, hit, full, accuracy = _newton(
-        flow, z0, lam_name, tangency, 1, history, parameters=parameters, t0=t0, tol=tol, max_iter=max_iter,
-        fd_step=fd_step, tolerances=tolerances, what="sliding bifurcation", autonomous=autonomous,
-    )
-    q = flow.parameters(parameters).copy()
-    q[system.parameter_index(lam_name)] = z[n]
+    p = flow.parameters(parameters).copy()
+    j = system.parameter_index(lam_name)
+    p[j] = float(lam)
+    x0 = np.asarray(x0, dtype=float)[: system.n]
+    base = ShootingProblem(flow, p, t0=t0, tolerances=tolerances)
+    T = float(period) if autonomous else system.forcing_period(p)
+    events = flow.run(x0, base.t0, base.t0 + T, p, tolerances=tolerances).events
+    if len(events) <= index or events[index].kind not in _ARRIVALS:
+        raise ConvergenceError(f"sliding bifurcation: the orbit's event {index} is not an arrival at a surface", [])
+    e = events[index]
+    same = [a for a in events if a.kind in _ARRIVALS and a.surface == e.surface and a.mode_from == e.mode_from]
+    identity = EventIdentity(surface=e.surface, mode_from=e.mode_from, ordinal=same.index(e))
+    condition = ArrivalTangency(flow, identity, far_mode, e.t)
+    problem = ConditionedProblem(base, [condition], free=(lam_name,))
+    found = problem.solve(problem.pack(x0, period=period), tol=tol, max_iter=max_iter, what="sliding bifurcation")
+    hit = condition.event
+    q = found.parameters
     curvature = _curvature(flow, far_mode, hit.surface, side, hit.t, hit.x_minus, q)
     kind = SpecialPointKind.CROSSING_SLIDING if curvature > 0 else SpecialPointKind.SWITCHING_SLIDING
     return SlidingBifurcationOrbit(
-        kind=kind, parameter=float(z[n]), state0=z[:n].copy(), t_touch=hit.t, x_touch=hit.x_minus.copy(),
-        mode=far_mode, curvature=curvature, accuracy=accuracy, residuals=history, trajectory=full,
+        kind=kind, parameter=float(q[j]), state0=found.state0, t_touch=hit.t, x_touch=hit.x_minus.copy(),
+        mode=far_mode, curvature=curvature, accuracy=float(found.accuracy[0]), residuals=found.residuals,
+        trajectory=found.shot.trajectory,
     )
 
 
@@ -399,34 +349,26 @@ def locate_adding_sliding(
     tolerances = location_tolerances(flow, tolerances)
     if system.is_autonomous:
         raise ModelError(f"locating a sliding bifurcation is implemented for forced models; {system.name!r} is autonomous")
-    n = system.n
+    p = flow.parameters(parameters).copy()
+    j = system.parameter_index(lam_name)
+    p[j] = float(lam)
+    base = ShootingProblem(flow, p, t0=t0, tolerances=tolerances)
+    condition = CubicTangency(flow, exit_mode, surface, float(t_guess), h=fd_step)
+    problem = ConditionedProblem(base, [condition], free=(lam_name,))
     history: list[float] = []
-
-    def touch(z: np.ndarray, q: np.ndarray):
-        tau = float(z[n + 1])
-        traj = flow.run(z[:n], t0, tau, q, tolerances=tolerances)
-        x = traj.x1
-
-        def g(s, y):
-            return exit_rate(flow, exit_mode, surface, s, y, q)
-
-        return np.array([g(tau, x), rate_along(flow, exit_mode, g, tau, x, q)]), traj
-
-    z0 = np.concatenate([np.asarray(x0, dtype=float), [float(lam), float(t_guess)]])
-    z, traj, full, accuracy = _newton(
-        flow, z0, lam_name, touch, 2, history, parameters=parameters, t0=t0, tol=tol, max_iter=max_iter,
-        fd_step=fd_step, tolerances=tolerances, what="adding-sliding",
-    )
-    q = flow.parameters(parameters).copy()
-    q[system.parameter_index(lam_name)] = z[n]
+    found = problem.solve(problem.pack(np.asarray(x0, dtype=float)), tol=tol, max_iter=max_iter,
+                          what="adding-sliding", history=history)
+    q = found.parameters
+    tau = float(found.unknowns[-1])
+    x = condition.piece.x
     # at the touch the orbit slides (or, exactly at the bifurcation, leaves and returns at once)
-    if abs(flow.indicator(surface, float(z[n + 1]), traj.x1, q)) > 1e-9 * (1.0 + float(np.linalg.norm(traj.x1))):
+    if abs(flow.indicator(surface, tau, x, q)) > 1e-9 * (1.0 + float(np.linalg.norm(x))):
         raise ConvergenceError("adding-sliding: the located touch does not lie on the switching surface", history)
-    curvature = _curvature(flow, exit_mode, surface, side, float(z[n + 1]), traj.x1, q)
+    curvature = _curvature(flow, exit_mode, surface, side, tau, x, q)
     return SlidingBifurcationOrbit(
-        kind=SpecialPointKind.ADDING_SLIDING, parameter=float(z[n]), state0=z[:n].copy(), t_touch=float(z[n + 1]),
-        x_touch=traj.x1.copy(), mode=exit_mode, curvature=curvature, accuracy=accuracy, residuals=history,
-        trajectory=full,
+        kind=SpecialPointKind.ADDING_SLIDING, parameter=float(q[j]), state0=found.state0, t_touch=tau,
+        x_touch=x.copy(), mode=exit_mode, curvature=curvature, accuracy=float(found.accuracy[0]), residuals=history,
+        trajectory=found.shot.trajectory,
     )
 
 

@@ -1,0 +1,797 @@
+"""Special points as one periodic-orbit problem with conditions attached.
+
+A special point of a periodic orbit is the orbit's own problem (periodicity, and for an autonomous
+orbit the phase condition: :meth:`saltation.orbits.shooting.ShootingProblem.periodicity`) with extra
+equations, each a :class:`Condition`, and as many parameters (or extra unknowns) freed to close the
+system.  The COCO ``hspo`` idea: an orbit problem plus zero functions.
+
+Each condition reads one shot's pieces (:class:`Shot`): the state, the fundamental solution matrix and
+the parameter sensitivities at the instant it looks at, and returns its value and its exact derivatives
+with respect to the unknowns and the parameters (:class:`Rows`).  The shot is split at that instant (the
+second piece carries on from the first, :meth:`saltation.engine.flow.Flow.run` with ``phi0``/``psi0``), so
+one integration of the period per free parameter gives the whole Jacobian.
+
+The conditions:
+
+* :class:`Tangency`: a grazing.  ``h(t_g, x(t_g)) = 0`` and ``L(t_g, x(t_g)) = h_x f + h_t = 0`` with the
+  instant ``t_g`` an unknown, on the virtual orbit that passes the grazed surface (its transitions
+  disabled).  A corner of the trilinear kind is the grazing of a contact's entry surface;
+* :class:`ArrivalTangency`: crossing- and switching-sliding.  Where the orbit arrives at a surface (an
+  event named by identity: its surface, the mode it arrives from and its place among such arrivals),
+  the far side's field is tangent, ``L_B(t_e, x_e) = 0``;
+* :class:`CubicTangency`: adding-sliding.  At an unknown instant ``tau`` of a sliding motion, the exit
+  side's field is tangent with zero rate: ``L_A = 0`` and ``L_A,x f_A + L_A,t = 0``;
+* :class:`MultiplierCondition`: a fold (``mu = +1``) or a period doubling (``mu = -1``), minimally
+  augmented: the bordered test function of Govaerts (*Numerical Bifurcation Analysis of Dynamical
+  Systems*, SIAM 2000) vanishes where ``M - mu I`` is singular.
+
+:class:`ConditionedProblem` is the augmented problem.  It has the continuation protocol (so a
+two-parameter curve is :class:`~saltation.branches.continuation.Continuation` on it) and one Newton
+(:meth:`ConditionedProblem.solve`) with one accuracy estimate for every location.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from saltation.engine.flow import EventKind, Flow, SwitchingEvent, Trajectory
+from saltation.errors import ConvergenceError, ModelError, SaltationError
+from saltation.orbits.floquet import is_stable, multipliers_from_monodromy
+from saltation.orbits.records import (
+    Evaluation,
+    SolutionSummary,
+    event_ids,
+    event_labels,
+)
+
+_ARRIVALS = (EventKind.TRANSITION, EventKind.SLIDING_START)
+
+
+@dataclass
+class Piece:
+    """The shot at an interior instant: time, state, mode, ``Phi(t, t0)`` and the sensitivities ``d x / d p_j``."""
+
+    t: float
+    x: np.ndarray
+    mode: str
+    fundamental: np.ndarray
+    sensitivities: dict[int, np.ndarray]
+    sliding: bool = False
+    velocity: np.ndarray | None = None
+
+
+@dataclass
+class Shot:
+    """One shot of the period and what conditions read from it.
+
+    Attributes
+    ----------
+    x0 : ndarray, shape (n,)
+    period : float
+    parameters : ndarray
+    trajectory : Trajectory
+        The whole period, with its monodromy.
+    sensitivities : dict of int to ndarray
+        ``d x(end) / d p_j`` as carried by the shot (the period's motion with the parameter is added by
+        the periodicity rows).
+    piece : Piece or None
+        The shot at the split instant, when a condition asked for one.
+    flow, t0, sign, tolerances, disabled :
+        How the shot was run, for conditions that need a further partial run.
+    """
+
+    x0: np.ndarray
+    period: float
+    parameters: np.ndarray
+    trajectory: Trajectory
+    sensitivities: dict[int, np.ndarray]
+    piece: Piece | None
+    flow: Flow
+    t0: float
+    sign: float
+    tolerances: object
+    disabled: tuple[int, ...] = ()
+
+    def run_to(self, t: float, params: Sequence[int]) -> Piece:
+        """A partial run from ``t0`` to ``t`` with the sensitivities of ``params`` (one integration each)."""
+        runs = [self.flow.run(self.x0, self.t0, t, self.parameters, mode0=self.trajectory.mode0, variational=True,
+                              sensitivity=j, disabled=self.disabled, tolerances=self.tolerances)
+                for j in (list(params) or [-1])]
+        first = runs[0]
+        return Piece(t=float(t), x=first.x1, mode=first.mode1, fundamental=first.monodromy,
+                     sensitivities={j: r.parameter_sensitivity for j, r in zip(params, runs)},
+                     sliding=first.sliding_at_end, velocity=first.velocity_end)
+
+
+@dataclass
+class Rows:
+    """A condition's values and derivatives: by ``x0`` (m, n), the period (m,), the parameters (m, k) in
+    the problem's order, and the condition's own extra unknowns (m, e)."""
+
+    value: np.ndarray
+    d_x0: np.ndarray
+    d_period: np.ndarray
+    d_parameters: np.ndarray
+    d_extra: np.ndarray
+
+
+class Condition:
+    """One or more equations attached to a periodic orbit (see the module docstring).
+
+    Attributes
+    ----------
+    size : int
+        Number of equations.
+    extras : int
+        Number of unknowns of its own (an instant).
+    disabled : tuple of int
+        Transitions the orbit passes as if they were not there (a grazing's virtual orbit).
+    needs_shots : bool
+        Whether its derivatives take further shots of the period (finite differences).
+    """
+
+    size: int = 1
+    extras: int = 0
+    disabled: tuple[int, ...] = ()
+    needs_shots: bool = False
+    name: str = "condition"
+
+    def start(self) -> np.ndarray:
+        """The initial values of its extra unknowns."""
+        return np.zeros(0)
+
+    def split(self, extra: np.ndarray) -> float | None:
+        """The instant to split the shot at (its fundamental matrix there is then free), or None."""
+        return None
+
+    def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
+        raise NotImplementedError
+
+    def accept(self, shot: Shot, extra: np.ndarray) -> None:
+        """Called at every accepted point: move the guesses along."""
+
+
+def _rows(size: int, n: int, k: int, e: int) -> Rows:
+    return Rows(np.zeros(size), np.zeros((size, n)), np.zeros(size), np.zeros((size, k)), np.zeros((size, e)))
+
+
+class Tangency(Condition):
+    """A grazing: the virtual orbit (``transition`` and ``also_disabled`` passed) is tangent to the
+    transition's surface at the unknown instant ``t_g``: ``h = 0`` and ``L = h_x f + h_t = 0`` there.
+
+    Derivatives: ``d h / d x0 = h_x Phi(t_g)``, ``d h / d p = h_x psi(t_g) + h_p``, ``d h / d t_g = L``;
+    the same for ``L`` with ``L_x``, ``L_p`` and ``d L / d t_g = L_x f + L_t`` (eq. 9's ingredients,
+    from the model's exact derivatives).
+    """
+
+    size = 2
+    extras = 1
+    name = "tangency"
+
+    def __init__(self, flow: Flow, transition: int, t_guess: float, *, also_disabled: Sequence[int] = ()):
+        system = flow.system
+        self.flow = flow
+        self.transition = int(transition)
+        self.surface = system.surface_index(system.transitions[self.transition].surface)
+        self.disabled = (self.transition, *map(int, also_disabled))
+        self.t_guess = float(t_guess)
+
+    def start(self) -> np.ndarray:
+        return np.array([self.t_guess])
+
+    def split(self, extra: np.ndarray) -> float | None:
+        return float(extra[0])
+
+    def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
+        flow, p, piece = self.flow, shot.parameters, shot.piece
+        n = len(shot.x0)
+        out = _rows(2, n, len(params), 1)
+        t, x = piece.t, piece.x
+        h = flow.indicator(self.surface, t, x, p)
+        hx, _, hp = flow.indicator_gradient(self.surface, t, x, p)
+        L, Lx, Lp, Lt = flow.lie_derivative(piece.mode, self.surface, t, x, p)
+        f = flow.vector_field(piece.mode, t, x, p)
+        out.value[:] = (h, L)
+        out.d_x0[0] = hx @ piece.fundamental
+        out.d_x0[1] = Lx @ piece.fundamental
+        for c, j in enumerate(params):
+            psi = piece.sensitivities[j]
+            out.d_parameters[0, c] = hx @ psi + hp[j]
+            out.d_parameters[1, c] = Lx @ psi + Lp[j]
+        out.d_extra[0, 0] = L
+        out.d_extra[1, 0] = Lx @ f + Lt
+        return out
+
+    def accept(self, shot: Shot, extra: np.ndarray) -> None:
+        self.t_guess = float(extra[0])
+
+
+@dataclass(frozen=True)
+class EventIdentity:
+    """An orbit's event named by what it is, not by when: its kind class, surface, the mode it comes
+    from, and its place among the period's events of that description."""
+
+    surface: str
+    mode_from: str
+    ordinal: int = 0
+    kinds: tuple[EventKind, ...] = _ARRIVALS
+
+    def matches(self, e: SwitchingEvent) -> bool:
+        return e.kind in self.kinds and e.surface == self.surface and e.mode_from == self.mode_from
+
+    def find(self, events: Sequence[SwitchingEvent], t_last: float | None = None, period: float = math.inf
+             ) -> SwitchingEvent:
+        """The event of this identity among ``events``.
+
+        By its place among the events of its description; where their number changed, or that event
+        lies more than a quarter period from ``t_last`` (an arrival that moved across the section
+        ``t = t0``), the one of them nearest ``t_last`` modulo the period.
+
+        Raises
+        ------
+        SaltationError
+            If the orbit no longer has such an event.
+        """
+        found = [e for e in events if self.matches(e)]
+        if not found:
+            raise SaltationError(f"the orbit no longer arrives at surface {self.surface!r} from mode {self.mode_from!r}")
+
+        def gap(e):
+            d = (e.t - t_last) % period if math.isfinite(period) else abs(e.t - t_last)
+            return min(d, period - d) if math.isfinite(period) else d
+
+        if self.ordinal < len(found):
+            e = found[self.ordinal]
+            if t_last is None or gap(e) <= 0.25 * period:
+                return e
+        if t_last is None:
+            raise SaltationError(f"the orbit has {len(found)} arrivals at surface {self.surface!r} from mode "
+                                 f"{self.mode_from!r}, not the {self.ordinal + 1}th")
+        return min(found, key=gap)
+
+
+class ArrivalTangency(Condition):
+    """Crossing- or switching-sliding: where the orbit arrives at a surface (the event ``identity``), the
+    field of ``far_mode`` is tangent to it: ``L_B(t_e, x_e) = h_x f_B + h_t = 0``.
+
+    The event's time and state move with the unknowns as the implicit function theorem says
+    (``d t_e = -h_x d x^- / L_A``, ``d x_e = d x^- + f_A d t_e``, with ``L_A`` the arriving field's
+    rate); ``d x^-`` is the shot's fundamental matrix just before the event, from the shot split a
+    moment ``delta`` before it and carried to the event to second order.
+    """
+
+    name = "arrival tangency"
+    #: the split lies this fraction of the period before the arrival
+    LEAD = 1e-7
+
+    def __init__(self, flow: Flow, identity: EventIdentity, far_mode: str, t_guess: float):
+        self.flow = flow
+        self.identity = identity
+        self.far_mode = far_mode
+        self.t_event = float(t_guess)
+        self._t_last_eval = float(t_guess)
+        self.event: SwitchingEvent | None = None
+
+    def split(self, extra: np.ndarray) -> float | None:
+        return None  # decided by the problem from the last evaluation (see ConditionedProblem._split_time)
+
+    def arrival(self, shot: Shot) -> SwitchingEvent:
+        return self.identity.find(shot.trajectory.events, self._t_last_eval, shot.period)
+
+    def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
+        flow, p = self.flow, shot.parameters
+        n = len(shot.x0)
+        out = _rows(1, n, len(params), 0)
+        e = self.arrival(shot)
+        self.event = e
+        self._t_last_eval = e.t
+        piece = shot.piece
+        if piece is None or shot.sign * (e.t - piece.t) < 0 or any(
+                shot.sign * (other.t - piece.t) >= 0 and shot.sign * (e.t - other.t) > 0
+                for other in shot.trajectory.events):
+            raise _Resplit(e.t)  # the split must lie before the arrival, with no event between them
+        # carry Phi and psi from the split to the arrival, to second order in the gap
+        gap = e.t - piece.t
+        A = flow.vector_field_jacobian(e.mode_from, piece.t, piece.x, p)
+        fp = flow.vector_field_parameters(e.mode_from, piece.t, piece.x, p)
+        step = np.eye(n) + gap * A + 0.5 * gap * gap * (A @ A)
+        Phi = step @ piece.fundamental
+        surface = flow.system.surface_index(e.surface)
+        hx, _, hp = flow.indicator_gradient(surface, e.t, e.x_minus, p)
+        f_a = flow.vector_field(e.mode_from, e.t, e.x_minus, p)
+        rate_a = float(hx @ f_a) + flow.indicator_gradient(surface, e.t, e.x_minus, p)[1]
+        if rate_a == 0.0:
+            raise SaltationError(f"the orbit arrives at surface {e.surface!r} tangentially: the arrival's time is not "
+                                 "a smooth function of the unknowns there")
+        L, Lx, Lp, Lt = flow.lie_derivative(self.far_mode, surface, e.t, e.x_minus, p)
+        out.value[0] = L
+
+        def through_event(dx_minus: np.ndarray, dh_extra: float | np.ndarray):
+            dt = -(hx @ dx_minus + dh_extra) / rate_a
+            return dx_minus + np.multiply.outer(f_a, dt) if np.ndim(dt) else dx_minus + f_a * dt, dt
+
+        dx, dt = through_event(Phi, 0.0)
+        out.d_x0[0] = Lx @ dx + Lt * dt
+        for c, j in enumerate(params):
+            psi = piece.sensitivities[j]
+            psi = psi + gap * (A @ psi + fp[:, j]) + 0.5 * gap * gap * (A @ (A @ psi + fp[:, j]))
+            dxp, dtp = through_event(psi, hp[j])
+            out.d_parameters[0, c] = Lx @ dxp + Lt * dtp + Lp[j]
+        return out
+
+    def accept(self, shot: Shot, extra: np.ndarray) -> None:
+        if self.event is not None:
+            self.t_event = self.event.t
+
+
+class CubicTangency(Condition):
+    """Adding-sliding: at an unknown instant ``tau`` of a sliding motion, the field of ``exit_mode`` has a
+    cubic tangency with the surface: ``G1 = L_A = 0`` and ``G2 = L_A,x f_A + L_A,t = 0`` at ``(tau,
+    x(tau))``.  ``x(tau)`` comes from a partial run (a split inside a sliding motion would restart it);
+    ``d x(tau) / d tau`` is the sliding velocity there.  The derivatives of ``G2`` (second derivatives
+    of the model) are central differences of closed-form functions, no integration."""
+
+    size = 2
+    extras = 1
+    needs_shots = False
+    name = "cubic tangency"
+
+    def __init__(self, flow: Flow, exit_mode: str, surface: str, t_guess: float, *, h: float = 1e-6):
+        self.flow = flow
+        self.exit_mode = exit_mode
+        self.surface = flow.system.surface_index(surface)
+        self.t_guess = float(t_guess)
+        self.h = float(h)
+        self.piece: Piece | None = None
+
+    def start(self) -> np.ndarray:
+        return np.array([self.t_guess])
+
+    def _g(self, t: float, x: np.ndarray, p: np.ndarray) -> np.ndarray:
+        L, Lx, _, Lt = self.flow.lie_derivative(self.exit_mode, self.surface, t, x, p)
+        return np.array([L, float(Lx @ self.flow.vector_field(self.exit_mode, t, x, p)) + Lt])
+
+    def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
+        p = shot.parameters
+        n = len(shot.x0)
+        out = _rows(2, n, len(params), 1)
+        tau = float(extra[0])
+        piece = shot.run_to(tau, params)
+        self.piece = piece
+        x = piece.x
+        out.value[:] = self._g(tau, x, p)
+        gx = np.zeros((2, n))
+        for i in range(n):
+            d = self.h * max(1.0, abs(x[i]))
+            e = np.zeros(n)
+            e[i] = d
+            gx[:, i] = (self._g(tau, x + e, p) - self._g(tau, x - e, p)) / (2 * d)
+        d = self.h * max(1.0, abs(tau))
+        gt = (self._g(tau + d, x, p) - self._g(tau - d, x, p)) / (2 * d)
+        out.d_x0[:] = gx @ piece.fundamental
+        out.d_extra[:, 0] = gt + gx @ piece.velocity
+        for c, j in enumerate(params):
+            q = p.copy()
+            d = self.h * max(1.0, abs(p[j]))
+            q[j] = p[j] + d
+            up = self._g(tau, x, q)
+            q[j] = p[j] - d
+            gp = (up - self._g(tau, x, q)) / (2 * d)
+            out.d_parameters[:, c] = gx @ piece.sensitivities[j] + gp
+        return out
+
+    def accept(self, shot: Shot, extra: np.ndarray) -> None:
+        self.t_guess = float(extra[0])
+
+
+class MultiplierCondition(Condition):
+    """A multiplier at ``mu`` (``+1``: fold, ``-1``: period doubling), minimally augmented.
+
+    ``g`` solves ``[[M - mu I, b], [c^T, 0]] [v; g] = [0; 1]`` with ``b``, ``c`` the singular vectors of
+    ``M - mu I`` at the first evaluation (kept): ``g = 0`` exactly where ``M - mu I`` is singular.  Its
+    derivatives are central differences over further shots (the second derivatives of the flow are
+    not carried by the engine).
+    """
+
+    needs_shots = True
+    name = "multiplier"
+
+    def __init__(self, mu: float, *, h: float = 1e-6):
+        self.mu = float(mu)
+        self.h = float(h)
+        self._border: tuple[np.ndarray, np.ndarray] | None = None
+
+    def g(self, M: np.ndarray) -> float:
+        n = M.shape[0]
+        A = M - self.mu * np.eye(n)
+        if self._border is None:
+            U, _, Vt = np.linalg.svd(A)
+            self._border = (U[:, -1].copy(), Vt[-1].copy())
+        b, c = self._border
+        B = np.zeros((n + 1, n + 1))
+        B[:n, :n] = A
+        B[:n, n] = b
+        B[n, :n] = c
+        rhs = np.zeros(n + 1)
+        rhs[n] = 1.0
+        try:
+            return float(np.linalg.solve(B, rhs)[n])
+        except np.linalg.LinAlgError:
+            raise SaltationError(f"the bordered matrix of the multiplier {self.mu:+g} test is singular") from None
+
+    def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
+        n = len(shot.x0)
+        out = _rows(1, n, len(params), 0)
+        out.value[0] = self.g(shot.trajectory.monodromy)
+        for i in range(n):
+            d = self.h * max(1.0, abs(shot.x0[i]))
+            e = np.zeros(n)
+            e[i] = d
+            out.d_x0[0, i] = (self.g(problem.monodromy(shot.x0 + e, shot.period, shot.parameters))
+                              - self.g(problem.monodromy(shot.x0 - e, shot.period, shot.parameters))) / (2 * d)
+        if problem.autonomous:
+            d = self.h * max(1.0, shot.period)
+            out.d_period[0] = (self.g(problem.monodromy(shot.x0, shot.period + d, shot.parameters))
+                               - self.g(problem.monodromy(shot.x0, shot.period - d, shot.parameters))) / (2 * d)
+        for c, j in enumerate(params):
+            d = self.h * max(1.0, abs(shot.parameters[j]))
+            q = shot.parameters.copy()
+            q[j] += d
+            up = self.g(problem.monodromy(shot.x0, problem.period_at(shot, q), q))
+            q[j] -= 2 * d
+            down = self.g(problem.monodromy(shot.x0, problem.period_at(shot, q), q))
+            out.d_parameters[0, c] = (up - down) / (2 * d)
+        return out
+
+
+class _Resplit(Exception):
+    """The shot must be split again, before the event at ``t``."""
+
+    def __init__(self, t: float):
+        super().__init__(t)
+        self.t = t
+
+
+@dataclass
+class Located:
+    """A solution of a conditioned problem.
+
+    Attributes
+    ----------
+    unknowns : ndarray
+        ``(x0[, T], free parameters..., extras...)``.
+    state0 : ndarray
+    period : float
+    parameters : ndarray
+        Every parameter's value there.
+    shot : Shot
+    accuracy : ndarray
+        Per free parameter: the Newton correction that would follow, plus the integration error carried
+        to it through the inverse Jacobian (an estimate of its error).
+    residuals : list of float
+    """
+
+    unknowns: np.ndarray
+    state0: np.ndarray
+    period: float
+    parameters: np.ndarray
+    shot: Shot
+    accuracy: np.ndarray
+    residuals: list[float] = field(default_factory=list)
+
+
+class ConditionedProblem:
+    """A periodic-orbit problem with conditions attached and parameters freed (see the module docstring).
+
+    The unknowns are ``u = (x0[, T], p_free..., extras...)``: the base problem's (the state, and the
+    period of an autonomous orbit), the freed parameters, and the conditions' own unknowns.  With
+    ``continuation`` one more parameter is ``lam``, and the problem is a curve for
+    :class:`~saltation.branches.continuation.Continuation`.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        The orbit's problem (single shooting, forced or autonomous, forward or backward time).
+    conditions : sequence of Condition
+    free : sequence of str
+        The parameters that become unknowns.
+    continuation : str, optional
+        The curve's parameter.
+    parameters : ndarray, optional
+        The parameter values to start from (the problem's own by default).
+
+    Raises
+    ------
+    ModelError
+        If the equations and unknowns do not balance, or a name is not a parameter.
+    """
+
+    def __init__(self, problem, conditions: Sequence[Condition], free: Sequence[str], *,
+                 continuation: str | None = None, parameters: np.ndarray | None = None):
+        if getattr(problem, "periods", 1) != 1:
+            raise ModelError("a special point's defining system is written over one forcing period")
+        self.base = problem
+        self.flow = problem.flow
+        self.system = problem.system
+        self.conditions = list(conditions)
+        self.free = [self.system.parameter_index(name) for name in free]
+        self.free_names = tuple(free)
+        self.autonomous = problem.autonomous
+        self.backward = problem.backward
+        self.sign = problem.sign
+        self.t0 = problem.t0
+        self.tolerances = problem.tolerances
+        self.p = np.array(problem.p if parameters is None else parameters, dtype=float)
+        self.lam_index = -1 if continuation is None else self.system.parameter_index(continuation)
+        self.lam_name = continuation
+        n = self.system.n
+        self.n_base = n + (1 if self.autonomous else 0)
+        self.n_extra = sum(c.extras for c in self.conditions)
+        rows = self.n_base + sum(c.size for c in self.conditions)
+        if rows != self.dimension:
+            raise ModelError(f"{sum(c.size for c in self.conditions)} condition equations need as many unknowns: "
+                             f"{len(self.free)} freed parameter(s) {list(free)} and {self.n_extra} unknown(s) of the "
+                             "conditions do not balance them")
+        self.disabled = tuple(sorted({k for c in self.conditions for k in c.disabled}))
+        self._last: tuple | None = None
+        self.event_ids: list[tuple] = []  # the orbit's event sequence (by identity) at every accepted point
+
+    # -- the layout ---------------------------------------------------------------------
+    @property
+    def dimension(self) -> int:
+        return self.n_base + len(self.free) + self.n_extra
+
+    def pack(self, state0: np.ndarray, *, period: float | None = None, extras: np.ndarray | None = None) -> np.ndarray:
+        """Unknowns from a state (the period of an autonomous orbit) and the freed parameters' values."""
+        head = [np.asarray(state0, dtype=float)]
+        if self.autonomous:
+            head.append([float(period)])
+        head.append(self.p[self.free])
+        head.append(np.concatenate([c.start() for c in self.conditions]) if extras is None else extras)
+        return np.concatenate(head)
+
+    def parameters_at(self, u: np.ndarray, lam: float | None = None) -> np.ndarray:
+        p = self.p.copy()
+        p[self.free] = u[self.n_base : self.n_base + len(self.free)]
+        if lam is not None and self.lam_index >= 0:
+            p[self.lam_index] = lam
+        return p
+
+    def lam0(self) -> float:
+        return float(self.p[self.lam_index])
+
+    def period_at(self, shot_or_u, p: np.ndarray) -> float:
+        if self.autonomous:
+            return shot_or_u.period if isinstance(shot_or_u, Shot) else float(shot_or_u[self.system.n])
+        return self.system.forcing_period(p)
+
+    def _extras(self, u: np.ndarray) -> list[np.ndarray]:
+        out, k = [], self.n_base + len(self.free)
+        for c in self.conditions:
+            out.append(u[k : k + c.extras])
+            k += c.extras
+        return out
+
+    # -- shots ----------------------------------------------------------------------------
+    def _split_time(self, extras: list[np.ndarray]) -> float | None:
+        for c, e in zip(self.conditions, extras):
+            t = c.split(e)
+            if t is not None:
+                return t
+            if isinstance(c, ArrivalTangency):
+                T = self.system.forcing_period(self.p) if not self.autonomous else 1.0
+                return c._t_last_eval - self.sign * c.LEAD * max(T, 1.0)
+        return None
+
+    def shoot(self, x0: np.ndarray, T: float, p: np.ndarray, params: Sequence[int], split: float | None) -> Shot:
+        """The period from ``x0``, one run per parameter of ``params``, split at ``split`` if given."""
+        flow, t0, tol = self.flow, self.t0, self.tolerances
+        t1 = t0 + self.sign * T
+        if split is not None and not (min(t0, t1) < split < max(t0, t1)):
+            split = None
+        base = self.base
+        mode0 = None
+        for _ in range(2):
+            runs, pieces = [], []
+            for j in list(params) or [-1]:
+                if split is None:
+                    traj = flow.run(x0, t0, t1, p, mode0=mode0, variational=True, sensitivity=j,
+                                    disabled=self.disabled, tolerances=tol)
+                    pieces.append(None)
+                else:
+                    a = flow.run(x0, t0, split, p, mode0=mode0, variational=True, sensitivity=j,
+                                 disabled=self.disabled, tolerances=tol)
+                    b = flow.run(a.x1, split, t1, p, mode0=a.mode1, variational=True, sensitivity=j,
+                                 phi0=a.monodromy, psi0=a.parameter_sensitivity if j >= 0 else None,
+                                 disabled=self.disabled, tolerances=tol)
+                    traj = _joined(a, b)
+                    pieces.append(a)
+                closed = base.close_period(traj, p, j)
+                if closed.mode0 != traj.mode0 and split is not None:
+                    mode0 = closed.mode0  # the seam's crossing is run again from the mode it enters: so the pieces
+                    break
+                runs.append(closed)
+            else:
+                break
+        first = runs[0]
+        piece = None
+        if split is not None:
+            a = pieces[0]
+            piece = Piece(t=float(split), x=a.x1, mode=a.mode1, fundamental=a.monodromy,
+                          sensitivities={j: pc.parameter_sensitivity for j, pc in zip(params, pieces)},
+                          sliding=a.sliding_at_end, velocity=a.velocity_end)
+        return Shot(x0=np.asarray(x0, dtype=float), period=float(T), parameters=p, trajectory=first,
+                    sensitivities={j: r.parameter_sensitivity for j, r in zip(params, runs)}, piece=piece, flow=flow,
+                    t0=t0, sign=self.sign, tolerances=tol, disabled=self.disabled)
+
+    def _runs(self, x0, t0, t1, p, params, split, mode0):
+        flow, tol = self.flow, self.tolerances
+        runs, pieces = [], []
+        for j in list(params) or [-1]:
+            if split is None:
+                traj = flow.run(x0, t0, t1, p, mode0=mode0, variational=True, sensitivity=j, disabled=self.disabled,
+                                tolerances=tol)
+                pieces.append(None)
+            else:
+                a = flow.run(x0, t0, split, p, mode0=mode0, variational=True, sensitivity=j, disabled=self.disabled,
+                             tolerances=tol)
+                b = flow.run(a.x1, split, t1, p, mode0=a.mode1, variational=True, sensitivity=j, phi0=a.monodromy,
+                             psi0=a.parameter_sensitivity if j >= 0 else None, disabled=self.disabled, tolerances=tol)
+                traj = _joined(a, b)
+                pieces.append(a)
+            runs.append(self.base.close_period(traj, p, j))
+        return runs, pieces
+
+    def monodromy(self, x0: np.ndarray, T: float, p: np.ndarray) -> np.ndarray:
+        """The monodromy of the period from ``x0`` (finite differences of multiplier conditions)."""
+        traj = self.flow.run(x0, self.t0, self.t0 + self.sign * T, p, variational=True, disabled=self.disabled,
+                             tolerances=self.tolerances)
+        return self.base.close_period(traj, p).monodromy
+
+    # -- the equations ------------------------------------------------------------------
+    def equations(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, Shot]:
+        """Residual, ``d/du``, ``d/dlam`` and the shot at ``(u, lam)``."""
+        n, nb, k = self.system.n, self.n_base, len(self.free)
+        p = self.parameters_at(u, lam)
+        x0 = np.ascontiguousarray(u[:n])
+        T = float(u[n]) if self.autonomous else self.system.forcing_period(p)
+        if not (T > 0 and math.isfinite(T)):
+            raise ConvergenceError(f"the period must be positive and finite, got {T}")
+        params = list(self.free) + ([self.lam_index] if (need_lam and lam is not None and self.lam_index >= 0) else [])
+        extras = self._extras(u)
+        split = self._split_time(extras)
+        for _ in range(3):
+            shot = self.shoot(x0, T, p, params, split)
+            try:
+                blocks = [c.rows(shot, e, params, self) for c, e in zip(self.conditions, extras)]
+                break
+            except _Resplit as again:
+                split = again.t - self.sign * ArrivalTangency.LEAD * max(T, 1.0)
+        else:
+            raise ConvergenceError("the shot could not be split before the condition's event")
+        r0, J0, jp = self.base.periodicity(x0, shot.trajectory, p, shot.sensitivities)
+        m = self.dimension
+        r = np.zeros(m)
+        J = np.zeros((m, m))
+        r[:nb] = r0
+        J[:nb, :nb] = J0
+        J[:nb, nb : nb + k] = jp[:, :k]
+        jl = jp[:, k].copy() if len(params) > k else None
+        if jl is not None:
+            jl = np.append(jl, np.zeros(m - nb))
+        row, col = nb, nb + k
+        for c, b in zip(self.conditions, blocks):
+            rows = slice(row, row + c.size)
+            r[rows] = b.value
+            J[rows, :n] = b.d_x0
+            if self.autonomous:
+                J[rows, n] = b.d_period
+            J[rows, nb : nb + k] = b.d_parameters[:, :k]
+            J[rows, col : col + c.extras] = b.d_extra
+            if jl is not None:
+                jl[rows] = b.d_parameters[:, k]
+            row += c.size
+            col += c.extras
+        self._last = (shot, extras)
+        return r, J, jl, shot
+
+    # -- the continuation protocol --------------------------------------------------------
+    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
+        r, J, jl, shot = self.equations(u, self.lam0() if (lam is None and self.lam_index >= 0) else lam,
+                                        need_lam=need_lam)
+        return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=shot.trajectory)
+
+    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+        """A curve point's summary: its orbit's multipliers (forward time), amplitude and events."""
+        traj = ev.trajectory
+        mu = multipliers_from_monodromy(traj.monodromy, backward=self.backward)
+        n = self.system.n
+        return SolutionSummary(
+            state=np.array(u[:n]), period=float(u[n]) if self.autonomous else self.system.forcing_period(
+                self.parameters_at(u, lam)),
+            amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
+            half_peak_to_peak=float(0.5 * (traj.x_max[0] - traj.x_min[0])), multipliers=mu,
+            stable=is_stable(mu, autonomous=self.autonomous), event_labels=event_labels(traj),
+            monodromy=traj.monodromy, event_ids=event_ids(traj),
+        )
+
+    def accept(self, u: np.ndarray, lam: float | None) -> None:
+        if self._last is not None:
+            shot, extras = self._last
+            for c, e in zip(self.conditions, extras):
+                c.accept(shot, e)
+            self.event_ids.append(event_ids(shot.trajectory))
+        if self.autonomous:
+            self.base.anchor_phase(np.asarray(u[: self.system.n], dtype=float), self.parameters_at(u, lam))
+
+    # -- location -------------------------------------------------------------------------
+    def solve(self, u0: np.ndarray, *, tol: float = 1e-12, max_iter: int = 20, what: str = "special point",
+              history: list[float] | None = None) -> Located:
+        """Newton's method on the conditioned problem from ``u0`` (the one Newton of every location).
+
+        Converged when ``|r| <= tol (1 + |u|)``; the accuracy of each freed parameter is the Newton
+        correction that would follow plus the integration error carried to it through the inverse
+        Jacobian, plus its rounding.
+
+        Raises
+        ------
+        ConvergenceError
+            With the residual history, if Newton does not converge, the Jacobian is singular or a shot
+            fails on the way.
+        """
+        u = np.asarray(u0, dtype=float).copy()
+        history = [] if history is None else history
+        n, nb, k = self.system.n, self.n_base, len(self.free)
+        if self.autonomous and self.base.x_ref is None:
+            self.base.anchor_phase(u[:n].copy(), self.parameters_at(u))
+        for it in range(max_iter + 1):
+            try:
+                r, J, _, shot = self.equations(u, need_lam=False)
+            except ConvergenceError:
+                raise
+            except SaltationError as exc:
+                raise ConvergenceError(f"{what}: {exc}", history) from exc
+            rn = float(np.linalg.norm(r))
+            history.append(rn)
+            if not math.isfinite(rn):
+                break
+            try:
+                du = np.linalg.solve(J, -r)
+            except np.linalg.LinAlgError:
+                raise ConvergenceError(f"{what}: singular Jacobian of the defining system", history) from None
+            if rn <= tol * (1.0 + float(np.linalg.norm(u[: nb + k]))):
+                try:
+                    inverse = np.linalg.inv(J)
+                except np.linalg.LinAlgError:
+                    raise ConvergenceError(f"{what}: singular Jacobian of the defining system", history) from None
+                error = self.flow.integration_error(shot.trajectory, self.tolerances)
+                rows = inverse[nb : nb + k]
+                accuracy = (np.abs(du[nb : nb + k]) + np.abs(rows).sum(axis=1) * error
+                            + 4e-16 * np.maximum(1.0, np.abs(u[nb : nb + k])))
+                return Located(unknowns=u, state0=u[:n].copy(), period=shot.period, parameters=shot.parameters,
+                               shot=shot, accuracy=accuracy, residuals=history)
+            if it == max_iter:
+                break
+            u = u + du
+        raise ConvergenceError(f"{what} did not converge in {max_iter} iterations", history)
+
+
+def _joined(a: Trajectory, b: Trajectory) -> Trajectory:
+    """Two consecutive pieces as one trajectory: ``b`` carried on from ``a`` (its matrices include ``a``'s)."""
+    from dataclasses import replace
+
+    event_log = tuple(np.concatenate([x, y]) for x, y in zip(a.event_log, b.event_log))
+    return replace(b, t0=a.t0, x0=a.x0, mode0=a.mode0, event_log=event_log, x_min=np.minimum(a.x_min, b.x_min),
+                   x_max=np.maximum(a.x_max, b.x_max), n_steps=a.n_steps + b.n_steps,
+                   n_rejected=a.n_rejected + b.n_rejected, _steps=None)
+
+
+__all__ = [
+    "ArrivalTangency", "Condition", "ConditionedProblem", "CubicTangency", "EventIdentity", "Located",
+    "MultiplierCondition", "Piece", "Rows", "Shot", "Tangency",
+]

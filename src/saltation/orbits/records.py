@@ -1,0 +1,87 @@
+"""The records a solved point of a problem leaves: its evaluation and its summary for a branch.
+
+They sit below every problem (:mod:`saltation.orbits.shooting`, :mod:`saltation.orbits.conditions`) so
+that each can build them, and the continuation engine reads them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from saltation.engine.flow import EventKind, Trajectory
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Residual and Jacobians of a problem at ``(u, lam)``."""
+
+    residual: np.ndarray
+    jac_u: np.ndarray
+    jac_lam: np.ndarray | None
+    trajectory: Trajectory | None = None
+
+
+@dataclass(frozen=True)
+class SolutionSummary:
+    """What a branch records of a solved point."""
+
+    state: np.ndarray
+    period: float
+    amplitude: float
+    half_peak_to_peak: float
+    multipliers: np.ndarray
+    stable: bool
+    event_labels: tuple[str, ...]
+    monodromy: np.ndarray | None = None
+    #: the event sequence by identity (see :func:`event_ids`): what detectors compare
+    event_ids: tuple[tuple[int, int, int], ...] = ()
+    #: autonomous orbits: ``|M n - n|`` along the flow direction ``n``, the monodromy's accuracy figure
+    trivial_error: float = float("nan")
+    #: ``max_i (max x_i - min x_i)`` over the period: how far the orbit moves (0 for an equilibrium)
+    excursion: float = float("nan")
+
+
+def orbit_events(traj: Trajectory) -> list:
+    """The events of a periodic orbit's trajectory, as the orbit's cycle of events.
+
+    An orbit that is sliding at ``t0`` starts its sliding motion there (an
+    event at ``t0``) and ends the period on it: that is one sliding motion cut
+    by the section ``t = t0``, counted once (by its arrival at the end), so
+    that the sequence of an orbit does not change as its events pass ``t0``.
+    """
+    events = traj.events
+    if (events and events[0].kind == EventKind.SLIDING_START and events[0].t == traj.t0 and traj.sliding_at_end
+            and any(e.kind == EventKind.SLIDING_START and e.surface == events[0].surface for e in events[1:])):
+        return events[1:]
+    return events
+
+
+def event_ids(traj: Trajectory) -> tuple[tuple[int, int, int], ...]:
+    """The orbit's events by identity: ``(kind, transition index, mode entered)`` each.
+
+    Two transitions that differ only in their guard (or reset) have the same
+    label but not the same index; a sliding motion's end is told by the mode
+    it leaves into.  Detectors of non-smooth points compare these.
+    """
+    names = traj.system.mode_names
+    return tuple((int(e.kind), int(e.transition), names.index(e.mode_to)) for e in orbit_events(traj))
+
+
+def event_labels(traj: Trajectory) -> tuple[str, ...]:
+    """Readable labels of a trajectory's events (see :func:`orbit_events`): the transition, or the sliding
+    motion started or ended."""
+    sys_ = traj.system
+    labels = []
+    for e in orbit_events(traj):
+        if e.kind == EventKind.TRANSITION:
+            labels.append(sys_.transitions[e.transition].label)
+        elif e.kind == EventKind.SLIDING_START:
+            labels.append(f"slide on {e.surface} ({e.mode_from}|{e.mode_to})")
+        else:
+            labels.append(f"leave {e.surface} sliding -> {e.mode_to}")
+    return tuple(labels)
+
+
+__all__ = ["Evaluation", "SolutionSummary", "event_ids", "event_labels", "orbit_events"]
