@@ -167,12 +167,13 @@ class SpecialPointDetector:
         orbit's state.
         """
         prob = self.problem
-        if not isinstance(prob, ShootingProblem) or prob.autonomous or prob.backward or prob.periods != 1:
+        if not isinstance(prob, ShootingProblem) or prob.periods != 1:
             return None
         flow, p = prob.flow, prob.parameters_at(prev.lam)
+        n = prob.system.n
         T = prob.period_of(prev.u, prev.lam)
         try:
-            traj = flow.run(prev.u, prob.t0, prob.t0 + T, p, dense=True, tolerances=prob.tolerances)
+            traj = flow.run(prev.u[:n], prob.t0, prob.t0 + prob.sign * T, p, dense=True, tolerances=prob.tolerances)
         except SaltationError:
             return None
         direction = 1.0 if prev.tangent[-1] >= 0 else -1.0
@@ -180,22 +181,24 @@ class SpecialPointDetector:
         for transition, t_guess in grazing_candidates(flow, traj, p):
             try:
                 orbit = locate_grazing(
-                    flow, prev.u, prev.lam, prob.lam_name, transition, t_guess, parameters=p, t0=prob.t0,
-                    tolerances=prob.tolerances,
+                    flow, prev.u[:n], prev.lam, prob.lam_name, transition, t_guess, parameters=p, t0=prob.t0,
+                    tolerances=prob.tolerances, period=T if prob.autonomous else None, backward=prob.backward,
                 )
             except SaltationError:
                 continue
             ahead = (orbit.parameter - prev.lam) * direction
             if not -1e-9 <= ahead <= 4.0 * s.ds_max:
                 continue
-            z_graze = np.append(orbit.state0, orbit.parameter)
+            u_graze = prob.pack(orbit.state0, orbit.period if prob.autonomous else None)
+            z_graze = np.append(u_graze, orbit.parameter)
             for delta in (1e-6, 1e-5, 1e-4, 1e-3, 1e-2):
                 lam = orbit.parameter + direction * delta * max(1.0, abs(orbit.parameter))
                 if not s.bounds[0] <= lam <= s.bounds[1]:
                     break
                 try:
-                    start = prob.solve(orbit.state0, lam)
-                    cand = self.corrector.solve_fixed(start.state0, lam)
+                    start = prob.solve(u_graze, lam)
+                    cand = self.corrector.solve_fixed(prob.pack(start.state0, start.period if prob.autonomous else None),
+                                                      lam)
                 except SaltationError:
                     continue
                 if len(cand.summary.event_labels) == len(prev.summary.event_labels):
@@ -565,7 +568,7 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     """
     flow = getattr(problem, "flow", None)
     sides = _sides(lo, hi)
-    if flow is None or sides is None or problem.backward or getattr(problem, "periods", 1) != 1:
+    if flow is None or sides is None or getattr(problem, "periods", 1) != 1:
         return None  # (the defining systems close orbits after one forcing period)
     lo_fewer, without, with_, traj_wo, traj_w = sides
     span = abs(traj_wo.t1 - traj_wo.t0)
@@ -578,6 +581,7 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
             flow, without.u[: problem.system.n], without.lam, problem.lam_name, first.transition, first.t,
             parameters=problem.parameters_at(without.lam), t0=problem.t0, tolerances=problem.tolerances,
             period=problem.period_of(without.u, without.lam) if problem.system.is_autonomous else None,
+            backward=problem.backward,
         )
     except SaltationError:
         return None
@@ -587,9 +591,15 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     p = problem.parameters_at(orbit.parameter)
     group = [traj_w.events[i] for i in groups[0]]
     sliding = any(e.kind != EventKind.TRANSITION for e in group)
-    P = None if sliding else saltation_at_corner(problem.system, [e.transition for e in group], orbit.t_graze, orbit.x_graze, p)
+    backward = problem.backward
+    # the excursion's transitions in forward time (a backward shot meets them in reverse order)
+    excursion = [e.transition for e in (reversed(group) if backward else group)]
+    P = None if sliding else saltation_at_corner(problem.system, excursion, orbit.t_graze, orbit.x_graze, p)
+    if P is not None and backward:  # run backward, the excursion's map is the inverse of the forward one
+        P = np.linalg.inv(P) if np.linalg.cond(P) < 1e12 else None
     m_without = orbit.monodromy
-    mu_without = multipliers_from_monodromy(m_without)
+    mu_without = multipliers_from_monodromy(m_without, backward=backward)
+    limit_error = None
     if sliding:
         # the orbit grazes the boundary of a sliding region: the sliding segment's saltation matrices are
         # 0/0 at the tangency; those of the nearest orbit with the segment stand in for their limit
@@ -598,21 +608,28 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
             P = e.saltation @ P
         phi = orbit.fundamental_to_graze
         m_with = m_without @ np.linalg.solve(phi, P @ phi)
-        mu_with = multipliers_from_monodromy(m_with)
+        mu_with = multipliers_from_monodromy(m_with, backward=backward)
         bounded = ("a sliding segment: the limit uses the saltation matrices of the nearest orbit that slides "
                    f"(multipliers known to about {np.linalg.norm(with_.summary.monodromy - m_with):.1e})")
     elif P is not None and np.linalg.norm(P) < 1e8:
         phi = orbit.fundamental_to_graze
         m_with = m_without @ np.linalg.solve(phi, P @ phi)
-        mu_with = multipliers_from_monodromy(m_with)
+        mu_with = multipliers_from_monodromy(m_with, backward=backward)
         bounded = "bounded: the crossing's saltation matrices at the tangency are finite"
     else:
         m_with = None
-        nearest = np.asarray(with_.summary.multipliers, dtype=complex)
-        keep = np.argsort(np.abs(nearest))[:-1]
-        mu_with = np.concatenate([[complex(np.inf, 0.0)], nearest[keep]])
-        bounded = ("unbounded: the crossing's saltation matrix grows like 1/sqrt(distance); the largest "
-                   "multiplier on that side is infinite in the limit, the others are those of the nearest orbit")
+        extrapolated = _autonomous_crossing_limit(problem, orbit, with_) if problem.autonomous else None
+        if extrapolated is not None:
+            mu_with, limit_error = extrapolated
+            bounded = ("unbounded saltation matrix along the flow: an autonomous orbit's kick at the tangency "
+                       "moves its phase only, so its multipliers stay finite; their limit is extrapolated in "
+                       f"sqrt(distance) from two crossing orbits (to about {limit_error:.1e})")
+        else:
+            nearest = np.asarray(with_.summary.multipliers, dtype=complex)
+            keep = np.argsort(np.abs(nearest))[:-1]
+            mu_with = np.concatenate([[complex(np.inf, 0.0)], nearest[keep]])
+            bounded = ("unbounded: the crossing's saltation matrix grows like 1/sqrt(distance); the largest "
+                       "multiplier on that side is infinite in the limit, the others are those of the nearest orbit")
     side = "plus" if lo_fewer else "minus"
     surface = problem.system.transitions[orbit.transition].surface
     m_lo, m_hi = (m_without, m_with) if lo_fewer else (m_with, m_without)
@@ -637,15 +654,43 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
         # the grazing orbit is exact to the located parameter; the finite multipliers of an unbounded side
         # are those of the nearest orbit, of unknown accuracy
         multipliers_accuracy=(
-            float("nan") if m_with is None
+            limit_error if limit_error is not None
+            else float("nan") if m_with is None
             else float(np.linalg.norm(with_.summary.monodromy - m_with)) if sliding
             else orbit.accuracy * float(np.linalg.norm(m_without)) + 1e-13
         ),
-        limits="nearest_saltation" if sliding else "grazing",
+        limits="nearest_saltation" if sliding else "extrapolated" if limit_error is not None else "grazing",
         touch_surface=surface,
         touch_mode=problem.system.transitions[orbit.transition].source,
         touch_time=orbit.t_graze,
     )
+
+
+def _autonomous_crossing_limit(problem, orbit, with_: Solution) -> tuple[np.ndarray, float] | None:
+    """The crossing side's multipliers at an autonomous grazing, extrapolated to the grazing orbit.
+
+    On an autonomous orbit the unbounded part of an impact's saltation matrix at the tangency points
+    along the flow (the kick shifts the phase), so the multipliers have finite limits, approached like
+    ``sqrt(d)``.  Two crossing orbits at ``d`` and ``4 d`` give ``mu(0) ~ 2 mu(d) - mu(4 d)``; the error
+    estimate is ``|mu(d) - mu(4 d)|``, the size of the square-root term at ``d``.  None when they cannot
+    be solved.
+    """
+    direction = 1.0 if with_.lam >= orbit.parameter else -1.0
+    saved = (problem.x_ref, problem.f_ref)  # the branch's phase anchor stays
+    values = []
+    try:
+        for d in (1e-7, 4e-7):
+            lam = orbit.parameter + direction * d * max(1.0, abs(orbit.parameter))
+            found = problem.solve(problem.pack(orbit.state0, orbit.period), lam)
+            values.append(np.asarray(found.multipliers, dtype=complex))
+    except SaltationError:
+        return None
+    finally:
+        problem.x_ref, problem.f_ref = saved
+    near, far = (v[np.argsort(np.abs(v))] for v in values)
+    if len(near) != len(far) or not np.all(np.isfinite(near)):
+        return None
+    return 2.0 * near - far, float(np.max(np.abs(near - far)))
 
 
 def _sqrt_extrapolated_error(lo: Solution, hi: Solution, far: tuple[Solution, Solution] | None) -> float:
