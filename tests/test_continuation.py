@@ -10,7 +10,7 @@ from scipy.optimize import brentq, fsolve
 
 from saltation import Flow
 from saltation.special_points.detection import classify_nonsmooth
-from saltation.branches.branch import SpecialPointKind
+from saltation.branches.branch import Limits, SpecialPointKind, SpecialPointStatus
 from saltation.special_points.continuation import Continuation, ContinuationSettings, continue_branch
 from saltation.models import block_on_belt, trilinear
 from saltation.models.block_on_belt import DEFAULTS as BELT
@@ -369,7 +369,9 @@ def test_stick_slip_fold_stable_side_limit(belt_diagram, belt_flow):
     from saltation.orbits.shooting import find_periodic_orbit
 
     (fold,) = [sp for sp in belt_diagram.special_points if sp.kind is SpecialPointKind.DISCONTINUOUS_FOLD]
-    assert fold.limits.startswith("extrapolated (unbounded")
+    assert fold.limits is Limits.EXTRAPOLATED and fold.status is SpecialPointStatus.LOCATED
+    (exponent,) = fold.growth_exponents  # the one that grows: |mu| ~ d^a, a = -1/2
+    assert exponent == pytest.approx(-0.5, abs=0.05)
     assert np.isinf(np.abs(fold.multipliers_minus)).sum() == 1
     stable = belt_diagram.branches[0]
     near = stable.points[int(np.argmax(stable.parameter))]

@@ -299,7 +299,7 @@ def test_csv_rejects_ragged_points(tmp_path):
 
 COMMON = {
     "model", "kind", "parameter", "value", "amplitude", "bracket", "accuracy", "crossing_point", "note",
-    "multipliers_accuracy", "limits",
+    "multipliers_accuracy", "limits", "status",
 }
 
 

@@ -41,7 +41,7 @@ SRC = REPO / "src"
 
 #: Gallery models, each a function below that returns ``(Figure, special points)``.
 MODELS = ("impact_oscillator", "bouncing_ball", "friction_oscillator", "relay_feedback", "buck_converter",
-          "two_mass_stops")
+          "two_mass_stops", "tilted_relay")
 
 _RESULTS: dict[str, dict] = {}
 
@@ -260,6 +260,40 @@ def figure_two_mass_stops():
     plot_response(zoom, ax2, state_name="x_1", xlabel="forcing amplitude F")
     ax2.set_title("near the onset of contact with stop 2 (small steps)")
     return fig, _records(branch) + _records(zoom)
+
+
+def figure_tilted_relay():
+    """Branch over v through grazing- and switching-sliding; both curves in (v, kappa) vs the closed-form grazing."""
+    import numpy as np
+
+    from saltation import ContinuationSettings, Flow, ShootingProblem, continue_branch
+    from saltation.special_points.loci import follow_locus
+    from saltation.models.tilted_relay import DEFAULTS, tilted_relay
+    from saltation.output.plotting import plot_response
+
+    zeta, friction, a, w = (DEFAULTS[k] for k in ("zeta", "F", "a", "omega"))
+    d = (1 - w**2) ** 2 + (2 * zeta * w) ** 2
+    c_cos, c_sin = a * (1 - w**2) / d, a * 2 * zeta * w / d
+    x0 = [friction + c_cos, w * c_sin]  # the harmonic response of mode minus (s < 0) at t = 0
+    problem = ShootingProblem(Flow(tilted_relay()), {"v": 3.0}, continuation_parameter="v")
+    branch = continue_branch(problem, x0, 3.0, directions=(-1,),
+                             settings=ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(1.5, 3.0)))
+    fig, (ax1, ax2) = _two_panels()
+    plot_response(branch, ax1, xlabel="v")
+    ax1.set_title("period-1 orbits over v")
+    kappa = np.linspace(0.3, 0.7, 200)
+    ax2.plot(friction * kappa + np.hypot(c_cos, c_sin) * np.hypot(kappa, w), kappa, color="0.7", linewidth=4,
+             label="closed form $v = \\kappa F + A\\sqrt{\\kappa^2+\\omega^2}$")
+    curve = ContinuationSettings(ds=0.01, ds_max=0.02)
+    for kind, style in (("grazing_sliding", "k."), ("switching_sliding", "C3.")):
+        (sp,) = [sp for sp in branch.special_points if sp.kind.value == kind]
+        locus = follow_locus(problem, sp, "kappa", (0.3, 0.7), settings=curve)
+        ax2.plot(locus.points[:, 0], locus.points[:, 1], style, markersize=3, label=f"{kind} (follow_locus)")
+    ax2.set_xlabel("v")
+    ax2.set_ylabel("kappa")
+    ax2.set_title("sliding bifurcation curves in (v, kappa)")
+    ax2.legend(fontsize="small")
+    return fig, _records(branch)
 
 
 def compute(model: str) -> dict:

@@ -89,7 +89,7 @@ def special_point_summary(point) -> str:
         rows.append(("multipliers, one side", _multipliers(point.multipliers_minus)))
         rows.append(("multipliers, other side", _multipliers(point.multipliers_plus)))
         if point.limits:
-            rows.append(("one-sided multipliers", point.limits))
+            rows.append(("one-sided multipliers", point.limits.value + (f" (growing like d^{point.growth_exponents})" if point.growth_exponents else "")))
     if np.isfinite(point.multipliers_accuracy):
         rows.append(("multipliers known to", f"{point.multipliers_accuracy:.1e}"))
     if point.crossing_q is not None:

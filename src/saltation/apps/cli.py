@@ -634,6 +634,7 @@ def orbit_to_dict(orbit, system: PiecewiseSystem) -> dict:
         "converged": bool(orbit.converged),
         "iterations": int(orbit.iterations),
         "residual_norm": float(orbit.residual_norm),
+        "segments": int(orbit.segments),
     }
 
 
@@ -702,7 +703,7 @@ def cmd_orbit(args: argparse.Namespace) -> int:
         if system.is_autonomous and period is None:
             period = estimate_period(traj)
     orbit = find_periodic_orbit(
-        flow, x0, parameters=overrides, period=period, backward=args.backward, t0=t0
+        flow, x0, parameters=overrides, period=period, backward=args.backward, t0=t0, segments=args.segments
     )
     if args.json:
         print(json.dumps(orbit_to_dict(orbit, system)))
@@ -743,7 +744,7 @@ def _orbit_epilog() -> str:
             one period. --json prints one JSON object with the keys model, parameters,
             state_names, state0, t0, period, autonomous, backward, amplitude, half_peak_to_peak,
             multipliers ([re, im] pairs, or "inf"), multiplier_magnitudes, stable, events
-            ([surface, time] pairs), event_modes, converged, iterations, residual_norm."""
+            ([surface, time] pairs), event_modes, converged, iterations, residual_norm, segments."""
         ),
         "",
         _paragraph(
@@ -796,6 +797,11 @@ def _add_orbit_parser(sub) -> None:
         help="shoot in backward time: finds orbits that are unstable in forward time, including "
         "infinitely unstable ones (a multiplier 'inf')",
     )
+    p.add_argument(
+        "--segments", metavar="M", type=_integer("--segments", 1), default=1,
+        help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
+        "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(handler=cmd_orbit)
 
@@ -828,7 +834,7 @@ def _special_points_text(records: list[dict]) -> str:
 def periodic_start(args: argparse.Namespace, flow, overrides: dict[str, float], p: np.ndarray, x0: np.ndarray | None):
     """The shooting problem over ``--param`` and its first unknowns: a periodic orbit from ``--x0`` (or
     the end of a transient) and ``--period`` (or an estimate), forward or ``--backward``."""
-    from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
+    from saltation.orbits.shooting import MultipleShootingProblem, ShootingProblem, find_periodic_orbit
 
     system = flow.system
     period = args.period if system.is_autonomous else None  # checked by the caller (check_start_period)
@@ -837,8 +843,14 @@ def periodic_start(args: argparse.Namespace, flow, overrides: dict[str, float], 
         x0 = traj.x1.copy() if x0 is None else x0
         if system.is_autonomous and period is None:
             period = estimate_period(traj)
-    orbit = find_periodic_orbit(flow, x0, parameters=overrides, period=period, backward=args.backward)
+    segments = getattr(args, "segments", 1)
+    orbit = find_periodic_orbit(flow, x0, parameters=overrides, period=period, backward=args.backward,
+                                segments=segments)
     problem = ShootingProblem(flow, overrides, continuation_parameter=args.param, backward=args.backward)
+    if segments > 1:  # multiple shooting: the unknowns are the orbit's nodes (and its period)
+        nodes = np.asarray(orbit.nodes, dtype=float).ravel()
+        return MultipleShootingProblem(problem, segments), (np.append(nodes, orbit.period) if system.is_autonomous
+                                                            else nodes)
     return problem, problem.pack(orbit.state0, orbit.period if system.is_autonomous else None)
 
 
@@ -887,7 +899,8 @@ def cmd_continue(args: argparse.Namespace) -> int:
         except SaltationError:
             raise UsageError(f"unknown mode {args.equilibrium!r} in --equilibrium for model {system.name!r}; modes "
                              f"are {', '.join(system.mode_names)}") from None
-        for flag, given in (("--period", args.period is not None), ("--backward", args.backward)):
+        for flag, given in (("--period", args.period is not None), ("--backward", args.backward),
+                            ("--segments", args.segments != 1)):
             if given:
                 raise UsageError(f"{flag} does not apply to --equilibrium (an equilibrium has no period and no "
                                  "direction of time)")
@@ -923,7 +936,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
         branches.append(cont.branch)
         note = ""
         if cont.branch.stop_reason is not None and cont.branch.stop_reason.name == "MIN_STEP" and not args.backward \
-                and args.equilibrium is None:
+                and args.equilibrium is None and args.segments == 1:
             try:
                 unstable, _fold = follow_through_discontinuous_fold(cont, settings=settings, progress=counter)
                 branches.append(unstable)
@@ -985,6 +998,11 @@ def _add_continue_parser(sub) -> None:
                    default=0.02, help="largest step (default 0.02)")
     p.add_argument("--max-points", metavar="N", type=_integer("--max-points", 1), default=2000,
                    help="largest number of points, a positive integer (default 2000)")
+    p.add_argument(
+        "--segments", metavar="M", type=_integer("--segments", 1), default=1,
+        help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
+        "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models; the branch's multipliers come from the segments' matrices (periodic Schur decomposition)",
+    )
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(handler=cmd_continue)
 
@@ -1051,7 +1069,8 @@ def cmd_locus(args: argparse.Namespace) -> int:
         points = [sp for sp in cont.branch.special_points if sp.kind is kind]
         curve_settings = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(min(lo2, hi2), max(lo2, hi2)))
         counter2 = (lambda point: update(f"{args.model}: {kind.value} over {args.param2}", 0)) if update else None
-        loci = [follow_locus(problem, sp, args.param2, curve_settings.bounds, settings=curve_settings, progress=counter2)
+        single = getattr(problem, "problem", problem)  # the curves' defining systems shoot once per period
+        loci = [follow_locus(single, sp, args.param2, curve_settings.bounds, settings=curve_settings, progress=counter2)
                 for sp in points]
     finally:
         close()
@@ -1107,6 +1126,11 @@ def _add_locus_parser(sub) -> None:
     p.add_argument("--backward", action="store_true", help="shoot in backward time")
     p.add_argument("--out", metavar="DIR", help="write the curves (JSON) and their plot here")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument(
+        "--segments", metavar="M", type=_integer("--segments", 1), default=1,
+        help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
+        "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models (for the branch; the curves' defining systems use single shooting)",
+    )
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(handler=cmd_locus)
 

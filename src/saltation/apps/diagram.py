@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from saltation.special_points.detection import classify_nonsmooth, special_point_between
-from saltation.branches.branch import Branch, SpecialPoint
+from saltation.branches.branch import Branch, Limits, SpecialPoint, SpecialPointStatus
 from saltation.special_points.continuation import Continuation, ContinuationSettings, Corrector, Solution, canonical_events
 from saltation.errors import SaltationError
 from saltation.special_points.grazing import locate_tangential_return
@@ -253,10 +253,11 @@ def _fold_by_tangential_return(
     limit = None if corrector is None else _stable_side_limit(corrector, end, found.parameter)
     extra = {}
     if limit is not None:
-        mu, error, how = limit
-        extra = {"multipliers_minus": mu, "multipliers_accuracy": error, "limits": how}
+        mu, error, exponents = limit
+        extra = {"multipliers_minus": mu, "multipliers_accuracy": error, "limits": Limits.EXTRAPOLATED,
+                 "growth_exponents": exponents}
     return replace(
-        fold, **extra, parameter=found.parameter,
+        fold, **extra, parameter=found.parameter, status=SpecialPointStatus.LOCATED,
         bracket=(found.parameter - found.accuracy, found.parameter + found.accuracy), accuracy=found.accuracy,
         note=(
             f"located where the orbit returns tangentially to surface {best.surface!r} and enters "
@@ -266,8 +267,10 @@ def _fold_by_tangential_return(
     )
 
 
-def _stable_side_limit(corrector: Corrector, end: Solution, fold: float) -> tuple[np.ndarray, float, str] | None:
-    """The multipliers at the fold as the limit along the stable branch: ``(mu, error, how)``, or None.
+def _stable_side_limit(corrector: Corrector, end: Solution, fold: float
+                       ) -> tuple[np.ndarray, float, tuple[float, ...]] | None:
+    """The multipliers at the fold as the limit along the stable branch: ``(mu, error, growth exponents
+    of the unbounded ones)``, or None.
 
     As the slip arc's return to the stick band turns tangential, the entry into
     the stick phase has a saltation matrix that is 0/0 at the fold.  Along the
@@ -297,7 +300,7 @@ def _stable_side_limit(corrector: Corrector, end: Solution, fold: float) -> tupl
         exponent = np.polyfit(np.log(distances), np.log(np.maximum(mags, 1e-300)), 1)[0] if np.all(mags > 0) else 0.0
         if exponent < -0.25:
             limit.append(complex(np.inf, 0.0))
-            notes.append(f"|mu| ~ d^{exponent:.2f}")
+            notes.append(float(exponent))
             continue
         # mu(d) = mu_0 + C sqrt(d): from the two nearest orbits, checked against the third
         c = (mus[1, k] - mus[0, k]) / (root[1] - root[0])
@@ -305,8 +308,7 @@ def _stable_side_limit(corrector: Corrector, end: Solution, fold: float) -> tupl
         c2 = (mus[2, k] - mus[1, k]) / (root[2] - root[1])
         error = max(error, abs(mu0 - (mus[1, k] - c2 * root[1])))
         limit.append(complex(mu0))
-    how = "extrapolated" + (f" (unbounded: {', '.join(notes)})" if notes else "")
-    return np.array(limit), float(error), how
+    return np.array(limit), float(error), tuple(notes)
 
 
 def _point_of(cont: Continuation, sol: Solution):

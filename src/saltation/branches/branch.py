@@ -49,6 +49,46 @@ NONSMOOTH_KINDS = frozenset(
 )
 
 
+class SpecialPointStatus(str, enum.Enum):
+    """How a special point was found; the value is the name used in files."""
+
+    #: by Newton on its defining system (:mod:`saltation.orbits.conditions`), to the stated accuracy
+    LOCATED = "located"
+    #: between two computed solutions (a bisection of a test function or of the event sequence), or
+    #: extrapolated: it lies within ``bracket``, and ``parameter`` is a point of it
+    BRACKETED = "bracketed"
+    #: its location failed: only the branch points around it are known
+    FAILED = "failed"
+
+
+class Limits(str, enum.Enum):
+    """How the one-sided multipliers of a non-smooth point were obtained; the value is the name in files."""
+
+    #: not one-sided (a smooth point)
+    NONE = ""
+    #: the limits at the boundary orbit, with closed-form saltation matrices at the corner
+    EXACT = "exact"
+    #: the limits at the boundary orbit, with the saltation matrices of the nearest orbit
+    NEAREST_SALTATION = "nearest_saltation"
+    #: the monodromies of the two orbits bracketing the point
+    NEAREST_ORBITS = "nearest_orbits"
+    #: the limit along the branch, its square-root behaviour extrapolated (``growth_exponents`` holds the
+    #: fitted exponents of those that grow without bound)
+    EXTRAPOLATED = "extrapolated"
+    #: a grazing: the grazing orbit's monodromy on the side that misses the surface
+    GRAZING = "grazing"
+
+    @classmethod
+    def parse(cls, text: str) -> tuple[Limits, tuple[float, ...]]:
+        """A name as files hold it, with the growth exponents that files before this release wrote into
+        it (``"extrapolated (unbounded: |mu| ~ d^-0.50)"``)."""
+        import re
+
+        head = text.split(" (", 1)[0].strip()
+        exponents = tuple(float(a) for a in re.findall(r"d\^(-?[0-9.]+(?:e-?[0-9]+)?)", text))
+        return cls(head), exponents
+
+
 class StopReason(enum.Enum):
     """Why a continuation run stopped; the value is the message."""
 
@@ -136,14 +176,13 @@ class SpecialPoint:
     multipliers_accuracy : float
         How well the multipliers (one-sided or not) are known: an estimate of
         the error of their matrices (``nan`` when unknown).
-    limits : str
-        How the one-sided multipliers were obtained: ``"exact"`` (limits at
-        the boundary orbit, closed-form saltation matrices at the corner),
-        ``"nearest_saltation"`` (limits at the boundary orbit with the
-        saltation matrices of the nearest orbit), ``"nearest_orbits"`` (the
-        monodromies of the two orbits bracketing the point), ``"extrapolated"``
-        (the limit along the branch, its square-root behaviour extrapolated),
-        ``"grazing"``, or ``""``.
+    limits : Limits
+        How the one-sided multipliers were obtained (a string enum: ``sp.limits == "exact"`` holds).
+    growth_exponents : tuple of float
+        With ``limits`` EXTRAPOLATED: the fitted exponents ``a`` of ``|mu| ~ d^a`` of the multipliers
+        that grow without bound towards the point (reported as ``inf``).
+    status : SpecialPointStatus
+        Located by its defining system, bracketed between two solutions, or failed.
     note : str
     touch_surface, touch_mode : str
         Where the orbit meets a switching surface at a grazing or a sliding
@@ -172,10 +211,23 @@ class SpecialPoint:
     event_labels_plus: tuple[str, ...] = ()
     note: str = ""
     multipliers_accuracy: float = float("nan")
-    limits: str = ""
+    limits: Limits = Limits.NONE
     touch_surface: str = ""
     touch_mode: str = ""
     touch_time: float = float("nan")
+    growth_exponents: tuple[float, ...] = ()
+    status: SpecialPointStatus = SpecialPointStatus.BRACKETED
+
+    def __post_init__(self):
+        # names as files and older callers give them
+        if not isinstance(self.limits, Limits):
+            limits, exponents = Limits.parse(str(self.limits))
+            object.__setattr__(self, "limits", limits)
+            if exponents and not self.growth_exponents:
+                object.__setattr__(self, "growth_exponents", exponents)
+        if not isinstance(self.status, SpecialPointStatus):
+            object.__setattr__(self, "status", SpecialPointStatus(self.status))
+        object.__setattr__(self, "growth_exponents", tuple(float(a) for a in self.growth_exponents))
 
     def _repr_markdown_(self) -> str:
         """A summary for Jupyter (:mod:`saltation.summary`)."""

@@ -190,6 +190,9 @@ class Tangency(Condition):
         flow, p, piece = self.flow, shot.parameters, shot.piece
         n = len(shot.x0)
         out = _rows(2, n, len(params), 1)
+        if piece is None:
+            raise SaltationError(f"the instant of tangency t = {float(extra[0]):.10g} left the period "
+                                 f"[{shot.t0:.10g}, {shot.t0 + shot.sign * shot.period:.10g}]")
         t, x = piece.t, piece.x
         h = flow.indicator(self.surface, t, x, p)
         hx, _, hp = flow.indicator_gradient(self.surface, t, x, p)

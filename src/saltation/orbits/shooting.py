@@ -972,6 +972,12 @@ class MultipleShootingProblem:
         self.problem = problem
         self.segments = int(segments)
         self.n = problem.system.n
+        # what the continuation engine reads of a problem (the base problem's)
+        self.flow, self.system, self.p = problem.flow, problem.system, problem.p
+        self.lam_index, self.lam_name = problem.lam_index, problem.lam_name
+        self.backward, self.autonomous, self.t0 = problem.backward, problem.autonomous, problem.t0
+        self.sign, self.tolerances, self.periods = problem.sign, problem.tolerances, 1
+        self._segs: tuple[np.ndarray, float | None, list[Trajectory]] | None = None
 
     @property
     def dimension(self) -> int:
@@ -999,9 +1005,10 @@ class MultipleShootingProblem:
         U = np.concatenate(nodes)
         return np.append(U, T) if prob.autonomous else U
 
-    def shoot(self, U: np.ndarray, lam: float | None = None) -> list[Trajectory]:
-        """The segments from the nodes of ``U``, each with its transfer matrix; each starts in the mode
-        its predecessor ends in (the first in the mode of its state)."""
+    def shoot(self, U: np.ndarray, lam: float | None = None, sensitivity: int = -1) -> list[Trajectory]:
+        """The segments from the nodes of ``U``, each with its transfer matrix (and the sensitivity to
+        parameter ``sensitivity``); each starts in the mode its predecessor ends in (the first in the
+        mode of its state)."""
         prob, n = self.problem, self.n
         T = self.period_of(U, lam)
         if not (T > 0 and math.isfinite(T)):
@@ -1012,15 +1019,17 @@ class MultipleShootingProblem:
         mode = None
         for i in range(self.segments):
             x = np.ascontiguousarray(U[i * n:(i + 1) * n])
-            traj = prob.flow.run(x, times[i], times[i + 1], p, mode0=mode, variational=True, tolerances=prob.tolerances)
+            traj = prob.flow.run(x, times[i], times[i + 1], p, mode0=mode, variational=True, sensitivity=sensitivity,
+                                 tolerances=prob.tolerances)
             segs.append(traj)
             mode = traj.mode1
         return segs
 
-    def residual(self, U: np.ndarray, lam: float | None = None) -> tuple[np.ndarray, np.ndarray, list[Trajectory]]:
+    def residual(self, U: np.ndarray, lam: float | None = None, *, sensitivity: int = -1
+                 ) -> tuple[np.ndarray, np.ndarray, list[Trajectory]]:
         """``(r, J, segments)``: the matching equations (and phase condition) and their exact Jacobian."""
         prob, n, m = self.problem, self.n, self.segments
-        segs = self.shoot(U, lam)
+        segs = self.shoot(U, lam, sensitivity)
         dim = self.dimension
         r = np.zeros(dim)
         J = np.zeros((dim, dim))
@@ -1038,6 +1047,62 @@ class MultipleShootingProblem:
             r[-1] = prob.f_ref @ (U[:n] - prob.x_ref)
             J[-1, :n] = prob.f_ref
         return r, J, segs
+
+    # -- the continuation protocol ----------------------------------------------------------
+    def parameters_at(self, lam: float | None) -> np.ndarray:
+        return self.problem.parameters_at(lam)
+
+    def lam0(self) -> float:
+        return self.problem.lam0()
+
+    def evaluate(self, U: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
+        """The matching equations at ``(U, lam)`` with their Jacobians by ``U`` and by ``lam``.
+
+        Segment ``i`` runs from ``t_i = t0 + s i T / m``: where the forcing period ``T`` moves with
+        ``lam``, its start and end move too, ``d/dlam = psi_i + s dT/dlam ((i + 1) f(end_i) - i Phi_i
+        f(t_i, x_i)) / m``.
+        """
+        prob, n, m = self.problem, self.n, self.segments
+        pidx = self.lam_index if (need_lam and lam is not None) else -1
+        r, J, segs = self.residual(U, lam, sensitivity=pidx)
+        jl = None
+        if pidx >= 0:
+            jl = np.zeros(self.dimension)
+            p = self.parameters_at(lam)
+            dT = 0.0 if prob.autonomous else prob.system.period_derivative(p, pidx)
+            for i, seg in enumerate(segs):
+                rows = slice(i * n, (i + 1) * n)
+                jl[rows] = seg.parameter_sensitivity
+                if dT:
+                    f_start = prob.flow.vector_field(seg.mode0, seg.t0, seg.x0, p)
+                    jl[rows] += (prob.sign * dT / m) * ((i + 1) * seg.velocity_end - i * (seg.monodromy @ f_start))
+        self._segs = (np.array(U, dtype=float), lam, segs)
+        return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=join(segs))
+
+    def describe(self, U: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+        """A branch point's summary, its multipliers from the segments' matrices (periodic Schur).
+
+        Raises
+        ------
+        StationaryStateError, InconsistentResultError
+            As :meth:`orbit`.
+        """
+        segs = self._segs[2] if self._segs is not None and np.array_equal(self._segs[0], U) else self.shoot(U, lam)
+        orbit = self.orbit(U, lam, segs, [0.0])
+        traj = orbit.trajectory
+        return SolutionSummary(
+            state=np.array(U[: self.n]), period=orbit.period,
+            amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
+            half_peak_to_peak=float(0.5 * (traj.x_max[0] - traj.x_min[0])), multipliers=orbit.multipliers,
+            stable=is_stable(orbit.multipliers, autonomous=self.autonomous), event_labels=event_labels(traj),
+            monodromy=traj.monodromy, event_ids=event_ids(traj), trivial_error=orbit.trivial_error,
+            excursion=float(np.max(traj.x_max - traj.x_min)),
+        )
+
+    def accept(self, U: np.ndarray, lam: float | None) -> None:
+        """Called by continuation at every accepted point: re-anchor the phase condition."""
+        if self.autonomous:
+            self.problem.set_phase_reference(U, lam)
 
     def solve(self, U0: np.ndarray, lam: float | None = None, *, tol: float = 1e-10, max_iter: int = 30) -> PeriodicOrbit:
         """Newton on the matching equations from the nodes ``U0`` (see :meth:`pack`)."""

@@ -66,6 +66,7 @@ from saltation.branches.branch import (
     BranchPoint,
     SpecialPoint,
     SpecialPointKind,
+    SpecialPointStatus,
     StopReason,
 )
 from saltation.errors import SaltationError
@@ -591,14 +592,17 @@ def _special_point_to_dict(sp: SpecialPoint) -> dict[str, Any]:
         "event_labels_plus": list(sp.event_labels_plus),
         "note": sp.note,
         "multipliers_accuracy": _enc_float(sp.multipliers_accuracy),
-        "limits": sp.limits,
+        "limits": sp.limits.value,
         "touch_surface": sp.touch_surface,
         "touch_mode": sp.touch_mode,
         "touch_time": _enc_float(sp.touch_time),
+        "growth_exponents": [_enc_float(a) for a in sp.growth_exponents],
+        "status": sp.status.value,
     }
 
 
 _KINDS = {k.value: k for k in SpecialPointKind}
+_STATUSES = {k.value: k for k in SpecialPointStatus}
 
 
 def _special_point_from_dict(v: Any, f: _Fields, where: str) -> SpecialPoint:
@@ -640,6 +644,9 @@ def _special_point_from_dict(v: Any, f: _Fields, where: str) -> SpecialPoint:
         touch_surface=f.take(d, where, "touch_surface", f.string, ""),
         touch_mode=f.take(d, where, "touch_mode", f.string, ""),
         touch_time=f.take(d, where, "touch_time", real, math.nan),
+        growth_exponents=tuple(f.take(d, where, "growth_exponents", f.reals, ())),
+        # files before 2026-11-25 do not say: the weaker claim (it lies within its bracket)
+        status=f.take(d, where, "status", lambda x, field: f.choice(x, field, _STATUSES), SpecialPointStatus.BRACKETED),
     )
 
 
@@ -1124,8 +1131,10 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
         then ``multipliers`` for a smooth point, or ``multipliers_minus``,
         ``multipliers_plus`` and ``crossing_q`` for a non-smooth one; then ``bracket``,
         ``accuracy``, ``crossing_point``, ``note``, ``multipliers_accuracy`` (an estimate of the
-        multipliers' error) and ``limits`` (how the one-sided multipliers were obtained:
-        ``"exact"``, ``"nearest_saltation"``, ``"nearest_orbits"``); for a grazing or a sliding
+        multipliers' error), ``limits`` (how the one-sided multipliers were obtained:
+        ``"exact"``, ``"nearest_saltation"``, ``"nearest_orbits"``, ``"extrapolated"``, ``"grazing"``
+        or ``""``), ``status`` (``"located"`` by a defining system, ``"bracketed"`` or ``"failed"``),
+        ``growth_exponents`` where multipliers grow without bound towards the point; for a grazing or a sliding
         bifurcation also ``touch_surface``, ``touch_mode`` and ``touch_time`` (where the orbit meets
         the surface, and whose field is tangent there). Multipliers are ``[re, im]`` pairs, an
         infinite one the string ``"inf"``; absent values are ``null``.
@@ -1148,7 +1157,10 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
     rec["crossing_point"] = None if sp.crossing_point is None else _enc_complex(sp.crossing_point)
     rec["note"] = sp.note
     rec["multipliers_accuracy"] = _enc_float(sp.multipliers_accuracy)
-    rec["limits"] = sp.limits
+    rec["limits"] = sp.limits.value
+    rec["status"] = sp.status.value
+    if sp.growth_exponents:
+        rec["growth_exponents"] = [_enc_float(a) for a in sp.growth_exponents]
     if sp.touch_surface:
         rec["touch_surface"] = sp.touch_surface
         rec["touch_mode"] = sp.touch_mode
@@ -1184,7 +1196,8 @@ def _check_record(v: Any, f: _Fields, where: str) -> dict[str, Any]:
         "multipliers_plus": opt(f.complexes), "crossing_q": opt(f.real),
         "bracket": lambda x, field: f.reals(x, field, 2), "accuracy": f.real, "crossing_point": opt(f.complex),
         "note": f.string, "multipliers_accuracy": f.real, "limits": f.string, "touch_surface": f.string,
-        "touch_mode": f.string, "touch_time": f.real,
+        "touch_mode": f.string, "touch_time": f.real, "status": lambda x, field: f.choice(x, field, _STATUSES),
+        "growth_exponents": f.reals,
     }
     for key, decode in optional.items():
         f.take(d, where, key, decode, None)

@@ -17,7 +17,7 @@ from saltation.branches import continuation as engine
 from saltation.branches.branch import Branch
 from saltation.branches.continuation import ContinuationSettings, Corrector, Solution, canonical_events
 from saltation.errors import ModelError
-from saltation.orbits.shooting import PeriodicOrbit, ShootingProblem
+from saltation.orbits.shooting import MultipleShootingProblem, PeriodicOrbit, ShootingProblem
 from saltation.special_points.detection import SpecialPointDetector
 
 
@@ -69,6 +69,7 @@ def continue_orbit(
     bounds: tuple[float, float],
     directions: tuple[int, ...] = (1, -1),
     settings: ContinuationSettings | None = None,
+    segments: int | None = None,
 ) -> Branch:
     """Follow the branch of a periodic orbit in one parameter, with its special points.
 
@@ -88,6 +89,12 @@ def continue_orbit(
         ``(1, -1)``: both ways from the orbit; ``(1,)`` or ``(-1,)``: one.
     settings : ContinuationSettings, optional
         Step sizes and tolerances (``bounds`` overrides theirs).
+    segments : int, optional
+        Shooting segments (the orbit's own by default): ``m > 1`` follows the branch by multiple
+        shooting (:class:`~saltation.orbits.shooting.MultipleShootingProblem`), the multipliers of each
+        point from the segments' matrices by the periodic Schur decomposition.  The jump through a
+        grazing that stalls the corrector and the cycle-collapse test are those of single shooting
+        and are not run; special points are located by their single-shooting defining systems.
 
     Raises
     ------
@@ -104,6 +111,15 @@ def continue_orbit(
                               t0=orbit.t0, tolerances=base.tolerances, periods=base.periods)
     settings = replace(settings or ContinuationSettings(), bounds=tuple(bounds))
     u0 = problem.pack(orbit.state0, orbit.period if orbit.autonomous else None)
+    m = orbit.segments if segments is None else segments
+    if m != 1:
+        multiple = MultipleShootingProblem(problem, m)
+        if orbit.nodes is not None and len(orbit.nodes) == multiple.segments:
+            nodes = np.asarray(orbit.nodes, dtype=float).ravel()
+            u0 = np.append(nodes, orbit.period) if orbit.autonomous else nodes
+        else:
+            u0 = multiple.pack(u0)
+        return continue_branch(multiple, u0, values[parameter], settings=settings, directions=directions)
     return continue_branch(problem, u0, values[parameter], settings=settings, directions=directions)
 
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from saltation.orbits.boundary import one_sided_limits, saltation_at_corner, zero_length_segments
-from saltation.branches.branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
+from saltation.branches.branch import Branch, BranchKind, Limits, SpecialPoint, SpecialPointKind, SpecialPointStatus
 from saltation.branches.corrector import Corrector, Solution, canonical_events
 from saltation.errors import SaltationError
 from saltation.orbits.floquet import multipliers_from_monodromy, set_valued_multipliers
@@ -389,7 +389,7 @@ class SpecialPointDetector:
                     return found
             m_lo, m_hi = lo.summary.monodromy, hi.summary.monodromy
             mu_lo, mu_hi = lo.summary.multipliers, hi.summary.multipliers
-            how, mu_accuracy, at = "nearest_orbits", _sqrt_extrapolated_error(lo, hi, far), None
+            how, mu_accuracy, at = Limits.NEAREST_ORBITS, _sqrt_extrapolated_error(lo, hi, far), None
         else:
             m_lo, m_hi, how, mu_accuracy, at = limits
             mu_lo = multipliers_from_monodromy(m_lo, backward=self.branch.backward)
@@ -435,7 +435,7 @@ class SpecialPointDetector:
                 rate = float(np.linalg.norm(other.summary.monodromy - lim.monodromy_without)) / abs(other.lam - without.lam)
         scale = max(1.0, float(np.linalg.norm(lim.monodromy_with)))
         mu_accuracy = width * rate + 1e-13 * scale
-        how = "exact" if lim.exact else "nearest_saltation"
+        how = Limits.EXACT if lim.exact else Limits.NEAREST_SALTATION
         if not lim.exact:
             mu_accuracy += float(np.linalg.norm(traj_w.monodromy - lim.monodromy_with))
         m_lo, m_hi = (lim.monodromy_without, lim.monodromy_with) if lo_fewer else (lim.monodromy_with, lim.monodromy_without)
@@ -535,7 +535,8 @@ def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -
               f"{found.curvature:.3g}){'' if change.count == 1 else f', at {change.count} points of the orbit at once'}; "
               f"the side with the extra events is {'plus' if lo_fewer else 'minus'}"),
         multipliers_accuracy=float(np.linalg.norm(hi.summary.monodromy - lo.summary.monodromy)),
-        limits="nearest_orbits",
+        limits=Limits.NEAREST_ORBITS,
+        status=SpecialPointStatus.LOCATED,
         touch_surface=change.surface,
         touch_mode=found.mode,
         touch_time=found.t_touch,
@@ -659,7 +660,9 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
             else float(np.linalg.norm(with_.summary.monodromy - m_with)) if sliding
             else orbit.accuracy * float(np.linalg.norm(m_without)) + 1e-13
         ),
-        limits="nearest_saltation" if sliding else "extrapolated" if limit_error is not None else "grazing",
+        limits=(Limits.NEAREST_SALTATION if sliding else Limits.EXTRAPOLATED if limit_error is not None
+                else Limits.GRAZING),
+        status=SpecialPointStatus.LOCATED,
         touch_surface=surface,
         touch_mode=problem.system.transitions[orbit.transition].source,
         touch_time=orbit.t_graze,
@@ -675,6 +678,8 @@ def _autonomous_crossing_limit(problem, orbit, with_: Solution) -> tuple[np.ndar
     estimate is ``|mu(d) - mu(4 d)|``, the size of the square-root term at ``d``.  None when they cannot
     be solved.
     """
+    if not isinstance(problem, ShootingProblem):
+        return None
     direction = 1.0 if with_.lam >= orbit.parameter else -1.0
     saved = (problem.x_ref, problem.f_ref)  # the branch's phase anchor stays
     values = []

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from saltation.branches.branch import SpecialPoint, SpecialPointKind, StopReason
+from saltation.branches.branch import SpecialPoint, SpecialPointKind, SpecialPointStatus, StopReason
 from saltation.engine.flow import EventKind, Flow
 from saltation.errors import IntegrationError, ModelError, SaltationError
 from saltation.orbits.boundary import saltation_at_corner
@@ -88,22 +88,21 @@ class Codim2Point:
     accuracy : float
         How precisely it is known, in the two parameters: the distance between the two curve points
         around it (``bracketed``), or from the curve point to the point located on the other curve.
-    status : str
-        ``"bracketed"`` (between two curve points, at their midpoint) or ``"located"`` (by a defining
-        system).
+    status : SpecialPointStatus
+        BRACKETED (between two curve points, at their midpoint) or LOCATED (by a defining system).
     """
 
     kinds: tuple[str, str]
     values: tuple[float, float]
     accuracy: float
-    status: str = "bracketed"
+    status: SpecialPointStatus = SpecialPointStatus.BRACKETED
 
     def record(self) -> dict:
         return {
             "kind": f"{self.kinds[0]} -> {self.kinds[1]}",
             "value": [float(self.values[0]), float(self.values[1])],
             "accuracy": float(self.accuracy),
-            "status": self.status,
+            "status": self.status.value,
         }
 
 
@@ -326,8 +325,19 @@ def follow_locus(
         curve = SlidingCurve(problem, p, second, point)
         classify = False
     elif point.kind.is_nonsmooth:
-        (transition, t_g), *others = grazed_transitions(problem.flow, state, p, t0=problem.t0,
-                                                        tolerances=problem.tolerances)
+        touched = _touch_of(problem, point)
+        if point.kind is SpecialPointKind.GRAZING_SLIDING and touched is not None:
+            # the located orbit touches the sliding region's boundary: its run may slide for a rounding
+            # there, so the transition and instant come from the point itself
+            transition, t_g, others = *touched, []
+        else:
+            try:
+                (transition, t_g), *others = grazed_transitions(problem.flow, state, p, t0=problem.t0,
+                                                                tolerances=problem.tolerances)
+            except SaltationError:
+                if touched is None:
+                    raise
+                transition, t_g, others = *touched, []
         curve = GrazingCurve(problem, p, problem.lam_name, second, transition, t_g, others=others)
         classify = True
     elif point.kind in (SpecialPointKind.FOLD, SpecialPointKind.PERIOD_DOUBLING):
@@ -392,6 +402,17 @@ def follow_locus(
     return locus
 
 
+def _touch_of(problem: ShootingProblem, point: SpecialPoint) -> tuple[int, float] | None:
+    """``(transition, instant)`` of a grazing point's touch, from what the point records (the surface, the
+    mode the grazed transition leaves, the instant), or None."""
+    if not point.touch_surface or not np.isfinite(point.touch_time):
+        return None
+    for k, tr in enumerate(problem.system.transitions):
+        if tr.surface == point.touch_surface and tr.source == point.touch_mode:
+            return k, float(point.touch_time)
+    return None
+
+
 def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: SpecialPointKind,
                      zs: list[np.ndarray], *, gap: float = 1e-3, last: int = 12) -> Codim2Point | None:
     """Where a fold or period-doubling curve stops short of its bounds because its orbit comes to touch a
@@ -424,7 +445,8 @@ def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: Spe
         return None
     at = np.concatenate([corner.state0, [corner.parameter, z[-1]]])
     return Codim2Point(kinds=(kind.value, _touch_kind(problem, curve, at)), values=(corner.parameter, float(z[-1])),
-                       accuracy=max(abs(corner.parameter - float(z[n])), corner.accuracy), status="located")
+                       accuracy=max(abs(corner.parameter - float(z[n])), corner.accuracy),
+                       status=SpecialPointStatus.LOCATED)
 
 
 def _touch_kind(problem: ShootingProblem, curve: _Curve, z: np.ndarray) -> str:
