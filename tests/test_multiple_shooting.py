@@ -142,3 +142,62 @@ def test_segments_must_be_a_positive_integer():
 
     with pytest.raises(ModelError, match="segments"):
         find_periodic_orbit(unstable_relay(), [0.1, 0.1], segments=0)
+
+
+def test_the_parameter_column_of_the_matching_equations_equals_finite_differences(trilinear_flow):
+    """Segment ``i`` of a forced orbit runs over ``[t0 + i T / m, t0 + (i + 1) T / m]`` with ``T = 2 pi /
+    omega``: its column by ``omega`` holds the sensitivity and the motion of both ends of the segment.
+    Central differences of the residual (the period map of DOP853 steps and exact affine steps at rtol
+    1e-12, step 1e-6): agreement to 1e-6 relative, the differences' truncation and rounding."""
+    from saltation.engine.flow import Tolerances
+    from saltation.models.trilinear import DEFAULTS as TRI
+    from saltation.apps.paper import linear_response_state
+    from saltation.orbits.shooting import MultipleShootingProblem, ShootingProblem
+
+    tol = Tolerances(rtol=1e-12, atol=1e-14)
+    base = ShootingProblem(trilinear_flow, {"omega": 1.3}, continuation_parameter="omega", tolerances=tol)
+    multiple = MultipleShootingProblem(base, 4)
+    U = multiple.pack(linear_response_state(dict(TRI, omega=1.3)), 1.3)
+    column = multiple.evaluate(U, 1.3).jac_lam
+    h = 1e-6
+    numeric = (multiple.evaluate(U, 1.3 + h, need_lam=False).residual
+               - multiple.evaluate(U, 1.3 - h, need_lam=False).residual) / (2 * h)
+    np.testing.assert_allclose(column, numeric, rtol=1e-6, atol=1e-6 * np.abs(numeric).max())
+
+
+def test_a_branch_by_multiple_shooting_has_the_special_points_of_single_shooting(trilinear_flow):
+    """The trilinear branch over omega: the same special points, each within the sum of the two stated
+    accuracies, and the multipliers of the orbits at the fold agree to the fold's multiplier accuracy."""
+    from saltation.models.trilinear import DEFAULTS as TRI
+    from saltation.apps.paper import linear_response_state
+    from saltation.special_points.continuation import ContinuationSettings, continue_orbit
+
+    x0 = linear_response_state(dict(TRI, omega=0.6))
+    settings = ContinuationSettings(ds=0.02, ds_max=0.05)
+    branches = []
+    for m in (1, 4):
+        orbit = find_periodic_orbit(trilinear_flow, x0, parameters={"omega": 0.6}, segments=m)
+        branches.append(continue_orbit(orbit, "omega", bounds=(0.6, 1.6), directions=(1,), settings=settings))
+    single, multiple = ([sp for sp in b.special_points] for b in branches)
+    assert [sp.kind for sp in single] == [sp.kind for sp in multiple] and len(single) == 3
+    for a, b in zip(single, multiple):
+        assert abs(a.parameter - b.parameter) <= a.accuracy + b.accuracy + 1e-12, (a.kind, a.parameter, b.parameter)
+    assert all(b.stop_reason.name == "PARAMETER_BOUND" for b in branches)
+
+
+def test_the_command_line_shoots_with_segments(capsys):
+    """``orbit --segments 3`` finds the single-shooting orbit (state and multipliers to 1e-9: both
+    converge to |r| <= 1e-10 (1 + |u|) on an orbit whose M - I is well conditioned) and says so."""
+    import json
+
+    from saltation.apps import cli
+
+    found = []
+    for m in (1, 3):
+        assert cli.main(["orbit", "trilinear", "--set", "omega=1.2", "--x0", "0.5,0.5", "--segments", str(m),
+                         "--json"]) == 0
+        found.append(json.loads(capsys.readouterr().out))
+    single, multiple = found
+    assert (single["segments"], multiple["segments"]) == (1, 3)
+    np.testing.assert_allclose(multiple["state0"], single["state0"], atol=1e-9)
+    np.testing.assert_allclose(multiple["multipliers"], single["multipliers"], atol=1e-9)

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from saltation.orbits.floquet import is_stable
+from saltation.orbits.records import BranchPoint
 
 
 class SpecialPointKind(enum.Enum):
@@ -103,45 +104,6 @@ class StopReason(enum.Enum):
 class BranchKind(enum.Enum):
     PERIODIC = "periodic"
     EQUILIBRIUM = "equilibrium"
-
-
-@dataclass(frozen=True)
-class BranchPoint:
-    """One point of a branch.
-
-    Attributes
-    ----------
-    parameter : float
-        Value of the continuation parameter.
-    state : ndarray, shape (n,)
-        Initial state of the periodic orbit (or the equilibrium).
-    period : float
-        Period (``nan`` for equilibria).
-    amplitude : float
-        ``max |x_1|`` over the period (the equilibrium's ``|x_1|``).
-    half_peak_to_peak : float
-        ``(max x_1 - min x_1) / 2`` (0 for equilibria).
-    multipliers : ndarray, complex
-        Forward-time Floquet multipliers (eigenvalues for equilibria).
-    stable : bool
-    event_labels : tuple of str
-        The orbit's event sequence (labels of the transitions met).
-    step : float
-        Arclength step that led to the point.
-    iterations : int
-        Newton iterations of the corrector.
-    """
-
-    parameter: float
-    state: np.ndarray
-    period: float
-    amplitude: float
-    half_peak_to_peak: float
-    multipliers: np.ndarray
-    stable: bool
-    event_labels: tuple[str, ...]
-    step: float = 0.0
-    iterations: int = 0
 
 
 @dataclass(frozen=True)

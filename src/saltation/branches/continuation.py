@@ -248,7 +248,7 @@ class Continuation:
         """The cycle collapse ahead of the last three orbits of an autonomous branch, or None.
 
         Where the orbits shrink onto an equilibrium their excursion ``e`` (see
-        :class:`~saltation.orbits.shooting.SolutionSummary`) tends to zero.  With the last three points
+        :class:`~saltation.orbits.records.BranchPoint`) tends to zero.  With the last three points
         shrinking, ``e`` is extrapolated linearly in the parameter from the last two; if it reaches
         zero within 1.5 steps ahead (4 when the corrector has failed: ``strict`` False), the branch
         ends there.  The accuracy is the distance between that extrapolation and the one from the
@@ -320,21 +320,7 @@ class Continuation:
     def _accept(self, sol: Solution) -> None:
         self.problem.accept(sol.u, sol.lam)
         self.solutions.append(sol)
-        sm = sol.summary
-        self.branch.points.append(
-            BranchPoint(
-                parameter=sol.lam,
-                state=sm.state,
-                period=sm.period,
-                amplitude=sm.amplitude,
-                half_peak_to_peak=sm.half_peak_to_peak,
-                multipliers=sm.multipliers,
-                stable=sm.stable,
-                event_labels=sm.event_labels,
-                step=sol.step,
-                iterations=sol.iterations,
-            )
-        )
+        self.branch.points.append(replace(sol.summary, parameter=sol.lam, step=sol.step, iterations=sol.iterations))
 
 
 def _same_special_point(a, b, rtol: float = 1e-6) -> bool:

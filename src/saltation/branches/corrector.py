@@ -14,7 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from saltation.errors import ConvergenceError
-from saltation.orbits.records import Evaluation, SolutionSummary
+from saltation.orbits.records import BranchPoint, Evaluation
 
 
 class NewtonSettings(Protocol):
@@ -31,7 +31,7 @@ class Solution:
 
     z: np.ndarray
     evaluation: Evaluation
-    summary: SolutionSummary
+    summary: BranchPoint
     tangent: np.ndarray | None = None
     iterations: int = 0
     step: float = 0.0

@@ -43,7 +43,8 @@ from saltation.errors import ConvergenceError, ModelError, SaltationError
 from saltation.orbits.floquet import is_stable, multipliers_from_monodromy
 from saltation.orbits.records import (
     Evaluation,
-    SolutionSummary,
+    BranchPoint,
+    amplitude_measures,
     event_ids,
     event_labels,
 )
@@ -709,18 +710,17 @@ class ConditionedProblem:
                                         need_lam=need_lam)
         return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=shot.trajectory)
 
-    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> BranchPoint:
         """A curve point's summary: its orbit's multipliers (forward time), amplitude and events."""
         traj = ev.trajectory
         mu = multipliers_from_monodromy(traj.monodromy, backward=self.backward)
         n = self.system.n
-        return SolutionSummary(
+        return BranchPoint(
+            parameter=math.nan if lam is None else float(lam),
             state=np.array(u[:n]), period=float(u[n]) if self.autonomous else self.system.forcing_period(
                 self.parameters_at(u, lam)),
-            amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
-            half_peak_to_peak=float(0.5 * (traj.x_max[0] - traj.x_min[0])), multipliers=mu,
-            stable=is_stable(mu, autonomous=self.autonomous), event_labels=event_labels(traj),
-            monodromy=traj.monodromy, event_ids=event_ids(traj),
+            multipliers=mu, stable=is_stable(mu, autonomous=self.autonomous), event_labels=event_labels(traj),
+            monodromy=traj.monodromy, event_ids=event_ids(traj), **amplitude_measures(traj),
         )
 
     def accept(self, u: np.ndarray, lam: float | None) -> None:

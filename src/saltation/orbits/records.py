@@ -6,7 +6,7 @@ that each can build them, and the continuation engine reads them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -24,9 +24,42 @@ class Evaluation:
 
 
 @dataclass(frozen=True)
-class SolutionSummary:
-    """What a branch records of a solved point."""
+class BranchPoint:
+    """A solved point: what a problem's ``describe`` returns and what a branch records, one record.
 
+    Attributes
+    ----------
+    parameter : float
+        Value of the continuation parameter (``nan`` where there is none).
+    state : ndarray, shape (n,)
+        Initial state of the periodic orbit (or the equilibrium).
+    period : float
+        Period (``nan`` for equilibria).
+    amplitude : float
+        ``max |x_1|`` over the period (the equilibrium's ``|x_1|``); see :func:`amplitude_measures`.
+    half_peak_to_peak : float
+        ``(max x_1 - min x_1) / 2`` (0 for equilibria).
+    multipliers : ndarray, complex
+        Forward-time Floquet multipliers (eigenvalues for equilibria).
+    stable : bool
+    event_labels : tuple of str
+        The orbit's event sequence, readable (for display).
+    step : float
+        Arclength step that led to the point.
+    iterations : int
+        Newton iterations of the corrector.
+    monodromy : ndarray or None
+        The monodromy matrix (kept in memory for the detectors; not written to files).
+    event_ids : tuple of (int, int, int)
+        The event sequence by identity, ``(kind, transition, mode entered)`` each (:func:`event_ids`):
+        what detectors compare, and what files store beside the labels.
+    trivial_error : float
+        Autonomous orbits: ``|M n - n|`` along the flow direction ``n``, the monodromy's accuracy figure.
+    excursion : float
+        ``max_i (max x_i - min x_i)`` over the period: how far the orbit moves (0 for an equilibrium).
+    """
+
+    parameter: float
     state: np.ndarray
     period: float
     amplitude: float
@@ -34,13 +67,27 @@ class SolutionSummary:
     multipliers: np.ndarray
     stable: bool
     event_labels: tuple[str, ...]
-    monodromy: np.ndarray | None = None
-    #: the event sequence by identity (see :func:`event_ids`): what detectors compare
+    step: float = 0.0
+    iterations: int = 0
+    monodromy: np.ndarray | None = field(default=None, repr=False, compare=False)
     event_ids: tuple[tuple[int, int, int], ...] = ()
-    #: autonomous orbits: ``|M n - n|`` along the flow direction ``n``, the monodromy's accuracy figure
     trivial_error: float = float("nan")
-    #: ``max_i (max x_i - min x_i)`` over the period: how far the orbit moves (0 for an equilibrium)
     excursion: float = float("nan")
+
+
+#: The name of :class:`BranchPoint` where a problem describes a solved point (before a branch records it).
+SolutionSummary = BranchPoint
+
+
+def amplitude_measures(traj: Trajectory) -> dict[str, float]:
+    """The amplitude measures of an orbit's period, computed in one place: ``amplitude = max |x_1|``,
+    ``half_peak_to_peak = (max x_1 - min x_1) / 2`` and ``excursion = max_i (max x_i - min x_i)``."""
+    lo, hi = traj.x_min, traj.x_max
+    return {
+        "amplitude": float(max(abs(hi[0]), abs(lo[0]))),
+        "half_peak_to_peak": float(0.5 * (hi[0] - lo[0])),
+        "excursion": float(np.max(hi - lo)),
+    }
 
 
 def orbit_events(traj: Trajectory) -> list:
@@ -84,4 +131,4 @@ def event_labels(traj: Trajectory) -> tuple[str, ...]:
     return tuple(labels)
 
 
-__all__ = ["Evaluation", "SolutionSummary", "event_ids", "event_labels", "orbit_events"]
+__all__ = ["BranchPoint", "Evaluation", "SolutionSummary", "amplitude_measures", "event_ids", "event_labels", "orbit_events"]

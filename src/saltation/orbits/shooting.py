@@ -65,7 +65,9 @@ from saltation.orbits.floquet import (
 )
 from saltation.orbits.records import (
     Evaluation,
+    BranchPoint,
     SolutionSummary,
+    amplitude_measures,
     event_ids,
     event_labels,
 )
@@ -143,13 +145,13 @@ class PeriodicOrbit:
 
     @property
     def amplitude(self) -> float:
-        """``max |x_1|`` over the period."""
-        return float(max(abs(self.trajectory.x_max[0]), abs(self.trajectory.x_min[0])))
+        """``max |x_1|`` over the period (:func:`~saltation.orbits.records.amplitude_measures`)."""
+        return amplitude_measures(self.trajectory)["amplitude"]
 
     @property
     def half_peak_to_peak(self) -> float:
-        """``(max x_1 - min x_1) / 2`` over the period."""
-        return float(0.5 * (self.trajectory.x_max[0] - self.trajectory.x_min[0]))
+        """``(max x_1 - min x_1) / 2`` over the period (:func:`~saltation.orbits.records.amplitude_measures`)."""
+        return amplitude_measures(self.trajectory)["half_peak_to_peak"]
 
     @property
     def backward_multipliers(self) -> np.ndarray:
@@ -685,7 +687,7 @@ class ShootingProblem:
                 f"state moves by {excursion:.1e} only (|f| = {float(np.linalg.norm(f)):.3g}): it does not return by "
                 "its own motion; not a periodic orbit, nor an equilibrium; give a better period guess")
 
-    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> BranchPoint:
         """Summary of a solved point for a branch (multipliers, amplitude, events).
 
         Raises
@@ -695,18 +697,17 @@ class ShootingProblem:
         """
         traj = ev.trajectory
         mu, trivial_error = self.verify(u, lam, traj)
-        return SolutionSummary(
+        return BranchPoint(
+            parameter=math.nan if lam is None else float(lam),
             state=np.array(u[: self.system.n]),
             period=self.period_of(u, lam),
-            amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
-            half_peak_to_peak=float(0.5 * (traj.x_max[0] - traj.x_min[0])),
             multipliers=mu,
             stable=is_stable(mu, autonomous=self.autonomous),
             event_labels=event_labels(traj),
             monodromy=traj.monodromy,
             event_ids=event_ids(traj),
             trivial_error=trivial_error,
-            excursion=float(np.max(traj.x_max - traj.x_min)),
+            **amplitude_measures(traj),
         )
 
     def accept(self, u: np.ndarray, lam: float | None) -> None:
@@ -1079,7 +1080,7 @@ class MultipleShootingProblem:
         self._segs = (np.array(U, dtype=float), lam, segs)
         return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=join(segs))
 
-    def describe(self, U: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+    def describe(self, U: np.ndarray, lam: float | None, ev: Evaluation) -> BranchPoint:
         """A branch point's summary, its multipliers from the segments' matrices (periodic Schur).
 
         Raises
@@ -1090,13 +1091,11 @@ class MultipleShootingProblem:
         segs = self._segs[2] if self._segs is not None and np.array_equal(self._segs[0], U) else self.shoot(U, lam)
         orbit = self.orbit(U, lam, segs, [0.0])
         traj = orbit.trajectory
-        return SolutionSummary(
-            state=np.array(U[: self.n]), period=orbit.period,
-            amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
-            half_peak_to_peak=float(0.5 * (traj.x_max[0] - traj.x_min[0])), multipliers=orbit.multipliers,
-            stable=is_stable(orbit.multipliers, autonomous=self.autonomous), event_labels=event_labels(traj),
-            monodromy=traj.monodromy, event_ids=event_ids(traj), trivial_error=orbit.trivial_error,
-            excursion=float(np.max(traj.x_max - traj.x_min)),
+        return BranchPoint(
+            parameter=math.nan if lam is None else float(lam), state=np.array(U[: self.n]), period=orbit.period,
+            multipliers=orbit.multipliers, stable=is_stable(orbit.multipliers, autonomous=self.autonomous),
+            event_labels=event_labels(traj), monodromy=traj.monodromy, event_ids=event_ids(traj),
+            trivial_error=orbit.trivial_error, **amplitude_measures(traj),
         )
 
     def accept(self, U: np.ndarray, lam: float | None) -> None:
@@ -1256,10 +1255,11 @@ class EquilibriumProblem:
             jl = self.flow.vector_field_parameters(self.mode, 0.0, x, p)[:, self.lam_index].copy()
         return Evaluation(residual=f, jac_u=J, jac_lam=jl)
 
-    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> SolutionSummary:
+    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> BranchPoint:
         eig = np.linalg.eigvals(ev.jac_u).astype(complex)
         eig = eig[np.lexsort((-eig.imag, -eig.real))]
-        return SolutionSummary(
+        return BranchPoint(
+            parameter=math.nan if lam is None else float(lam),
             state=np.array(u),
             period=float("nan"),
             amplitude=float(abs(u[0])),

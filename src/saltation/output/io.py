@@ -539,6 +539,10 @@ def _point_to_dict(p: BranchPoint) -> dict[str, Any]:
         "event_labels": list(p.event_labels),
         "step": _enc_float(p.step),
         "iterations": int(p.iterations),
+        "monodromy": _enc_real_array(p.monodromy),
+        "event_ids": [[int(k), int(tr), int(m)] for k, tr, m in p.event_ids],
+        "trivial_error": _enc_float(p.trivial_error),
+        "excursion": _enc_float(p.excursion),
     }
 
 
@@ -557,7 +561,21 @@ def _point_from_dict(v: Any, f: _Fields, where: str) -> BranchPoint:
         event_labels=f.take(d, where, events_key, f.strings),
         step=f.take(d, where, "step", real),
         iterations=f.take(d, where, "iterations", lambda x, field: f.integer(x, field, minimum=0)),
+        # files before 2026-11-25 hold the labels only
+        monodromy=f.take(d, where, "monodromy", f.nullable(lambda x, field: f.square(x, field)), None),
+        event_ids=f.take(d, where, "event_ids", lambda x, field: _event_ids(f, x, field), ()),
+        trivial_error=f.take(d, where, "trivial_error", real, math.nan),
+        excursion=f.take(d, where, "excursion", real, math.nan),
     )
+
+
+def _event_ids(f: _Fields, v: Any, field: str) -> tuple[tuple[int, int, int], ...]:
+    """A point's event identities: ``[[kind, transition, mode entered], ...]``."""
+    if not isinstance(v, list) or not all(
+            isinstance(e, list) and len(e) == 3 and all(isinstance(i, int) and not isinstance(i, bool) for i in e)
+            for e in v):
+        f.fail(field, f"expected a list of [kind, transition, mode] integer triples, got {v!r}")
+    return tuple((e[0], e[1], e[2]) for e in v)
 
 
 def _check_points(points: Sequence[BranchPoint], f: _Fields, name: Callable[[int], str]) -> None:
