@@ -73,6 +73,7 @@ TARGETS = {
     "sweep_s": 1.0,
     "corner_curve_s_per_200_points": 1.0,
     "fold_curve_s_per_200_points": 1.0,
+    "sliding_curve_s_per_200_points": 1.0,
 }
 
 
@@ -351,7 +352,27 @@ def bench_loci(quick: bool) -> dict:
     out["grazing_location_ms"] = t_graze * 1e3
     out["grazing_location_in_period_maps"] = t_graze / t_map
     out.update(_sliding_locations(quick))
+    out.update(_sliding_curve(quick))
     return out
+
+
+def _sliding_curve(quick: bool) -> dict:
+    """The switching-sliding curve of the forced relay with a tilted switching line in (v, kappa), scaled
+    to 200 points (one Newton step of its defining system: one integration per freed parameter)."""
+    from saltation.models.tilted_relay import tilted_relay
+    from saltation.special_points.continuation import ContinuationSettings, continue_branch
+    from saltation.special_points.loci import follow_locus
+    from saltation.orbits.shooting import ShootingProblem
+
+    flow = Flow(tilted_relay())
+    problem = ShootingProblem(flow, {"v": 3.0}, continuation_parameter="v")
+    start = find_periodic_orbit(flow, [0.0, 1.0], parameters={"v": 3.0}).state0
+    branch = continue_branch(problem, start, 3.0, directions=(-1,),
+                             settings=ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(1.5, 3.0)))
+    point = next(sp for sp in branch.special_points if sp.kind.value == "switching_sliding")
+    settings = ContinuationSettings(ds=0.002, ds_max=0.002, bounds=(0.3, 0.7), max_points=200)
+    t, locus = timed_runs(lambda: follow_locus(problem, point, "kappa", (0.3, 0.7), settings=settings), quick)
+    return {"sliding_curve_points": len(locus.points), "sliding_curve_s_per_200_points": t * 200 / len(locus.points)}
 
 
 def _sliding_locations(quick: bool) -> dict:
@@ -475,6 +496,7 @@ def table(results: dict) -> str:
         ("adding-sliding located (in period maps)", "adding_sliding_location_in_period_maps", None, None),
         ("corner curve, 200 points (s)", "corner_curve_s_per_200_points", None, None),
         ("fold curve, 200 points (s)", "fold_curve_s_per_200_points", None, None),
+        ("sliding curve, 200 points (s)", "sliding_curve_s_per_200_points", None, None),
     ]
     lines = [f"{'benchmark':42s} {'saltation':>11s} {'scipy':>11s} {'ratio':>8s}  target"]
     for label, k, kb, kr in rows:

@@ -135,7 +135,8 @@ def saltation_at_corner(
     P = np.eye(n)
     x = np.asarray(x, dtype=float)
     for k in transitions:
-        S = np.asarray(_closed_form_saltation(system, int(k))(t, list(x), list(p)), dtype=float).reshape(n, n)
+        with np.errstate(divide="ignore", invalid="ignore"):  # 0/0 at a tangency: reported as None below
+            S = np.asarray(_closed_form_saltation(system, int(k))(t, list(x), list(p)), dtype=float).reshape(n, n)
         if not np.all(np.isfinite(S)):
             return None
         P = S @ P
