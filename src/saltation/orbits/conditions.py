@@ -32,6 +32,7 @@ two-parameter curve is :class:`~saltation.branches.continuation.Continuation` on
 
 from __future__ import annotations
 
+import abc
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -120,7 +121,7 @@ class Rows:
     d_extra: np.ndarray
 
 
-class Condition:
+class Condition(abc.ABC):
     """One or more equations attached to a periodic orbit (see the module docstring).
 
     Attributes
@@ -149,8 +150,10 @@ class Condition:
         """The instant to split the shot at (its fundamental matrix there is then free), or None."""
         return None
 
+    @abc.abstractmethod
     def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
-        raise NotImplementedError
+        """Its values and derivatives at the shot (``extra``: its own unknowns; ``params``: the parameter
+        indices of the derivative columns, in order)."""
 
     def accept(self, shot: Shot, extra: np.ndarray) -> None:
         """Called at every accepted point: move the guesses along."""
