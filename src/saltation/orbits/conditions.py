@@ -43,8 +43,8 @@ from saltation.engine.flow import EventKind, Flow, SwitchingEvent, Trajectory
 from saltation.errors import ConvergenceError, ModelError, SaltationError
 from saltation.orbits.floquet import is_stable, multipliers_from_monodromy
 from saltation.orbits.records import (
-    Evaluation,
     BranchPoint,
+    Evaluation,
     amplitude_measures,
     event_ids,
     event_labels,
@@ -132,14 +132,11 @@ class Condition(abc.ABC):
         Number of unknowns of its own (an instant).
     disabled : tuple of int
         Transitions the orbit passes as if they were not there (a grazing's virtual orbit).
-    needs_shots : bool
-        Whether its derivatives take further shots of the period (finite differences).
     """
 
     size: int = 1
     extras: int = 0
     disabled: tuple[int, ...] = ()
-    needs_shots: bool = False
     name: str = "condition"
 
     def start(self) -> np.ndarray:
@@ -344,7 +341,6 @@ class CubicTangency(Condition):
 
     size = 2
     extras = 1
-    needs_shots = False
     name = "cubic tangency"
 
     def __init__(self, flow: Flow, exit_mode: str, surface: str, t_guess: float, *, h: float = 1e-6):
@@ -404,7 +400,6 @@ class MultiplierCondition(Condition):
     not carried by the engine).
     """
 
-    needs_shots = True
     name = "multiplier"
 
     def __init__(self, mu: float, *, h: float = 1e-6):
