@@ -32,6 +32,7 @@ from saltation.errors import (
     NonFiniteError,
     SaltationError,
     SlidingError,
+    StartGuessError,
     StationaryStateError,
     StepSizeError,
 )
@@ -45,7 +46,7 @@ __version__ = "0.1.0"
 __all__ = [
     "Branch", "ChatteringError", "ContinuationSettings", "ConvergenceError", "Crossing", "InconsistentResultError", "EventKind", "Flow",
     "InitialModeError", "IntegrationError", "Mode", "ModelError", "NoOrbitNearGuessError", "NonFiniteError", "PeriodicOrbit",
-    "PiecewiseSystem", "SaltationError", "ShootingProblem", "SlidingError", "SpecialPoint", "StationaryStateError", "SpecialPointKind",
+    "PiecewiseSystem", "SaltationError", "ShootingProblem", "SlidingError", "SpecialPoint", "StartGuessError", "StationaryStateError", "SpecialPointKind",
     "Status", "StepSizeError", "SweepStart", "SwitchingEvent", "Tolerances", "Trajectory", "Transition", "continue_branch",
     "continue_orbit", "find_periodic_orbit", "period_map", "simulate", "sweep",
 ]

@@ -77,6 +77,11 @@ class StationaryStateError(SaltationError, RuntimeError):
         super().__init__(message)
 
 
+class StartGuessError(SaltationError, RuntimeError):
+    """No starting guess of a periodic orbit could be made: the transient failed, diverged, or shows no
+    oscillation to read a period from (:mod:`saltation.orbits.start`)."""
+
+
 class InconsistentResultError(SaltationError, RuntimeError):
     """A computed result contradicts itself beyond its stated accuracy.
 

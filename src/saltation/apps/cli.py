@@ -37,16 +37,14 @@ from pathlib import Path
 
 import numpy as np
 
-from saltation.errors import SaltationError
+from saltation.errors import SaltationError, StartGuessError
 from saltation.model.system import PiecewiseSystem
 from saltation.models import SHIPPED
+from saltation.orbits import start as start_guesses
+from saltation.orbits.start import TRANSIENT_PERIODS, TRANSIENT_TIME
 
 PROG = "saltation"
 
-#: Number of forcing periods of the transient of a forced model (when --x0 is not given).
-TRANSIENT_PERIODS = 50
-#: Length of the transient of an autonomous model without a better hint, in time units.
-TRANSIENT_TIME = 200.0
 #: The shortest period (guess) accepted, in time units, relative to ``max(1, |t0|)``: over shorter times
 #: the time axis near ``t0`` no longer resolves the period to a millionth, and every state of a model whose
 #: field is of order one moves by less than the shooting tolerance, so shooting would "converge" anywhere.
@@ -520,92 +518,35 @@ def multipliers_json(mu: Sequence[complex]) -> list:
 # transients: a starting guess when the user gives none
 # --------------------------------------------------------------------------------------------
 
-def _period_from_events(events) -> float | None:
-    """Period of the event sequence at the end of a trajectory (shortest repeating lag)."""
-    sig = [e.signature for e in events]
-    n = len(sig)
-    for lag in range(1, n // 2 + 1):
-        if all(sig[n - 1 - j] == sig[n - 1 - lag - j] for j in range(lag)):
-            return abs(events[-1].t - events[-1 - lag].t)
-    return None
-
-
-def _period_from_section(traj) -> float | None:
-    """Period from successive crossings of a Poincaré section ``x_1 = mid-range`` (last half)."""
-    t, x = traj.sample(16)
-    if t.size < 4:
-        return None
-    half = np.abs(t - t[0]) >= 0.5 * abs(t[-1] - t[0])
-    t, x1 = t[half], x[half, 0]
-    lo, hi = float(np.min(x1)), float(np.max(x1))
-    if hi - lo <= 1e-8 * (1.0 + abs(hi)):
-        return None  # settles to an equilibrium
-    g = x1 - 0.5 * (lo + hi)
-    up = np.nonzero((g[:-1] < 0) & (g[1:] >= 0))[0]
-    if up.size < 3:
-        return None
-    times = [t[i] - g[i] * (t[i + 1] - t[i]) / (g[i + 1] - g[i]) for i in up[-2:]]
-    return abs(times[1] - times[0])
-
-
 def transient(flow, name: str, p: np.ndarray, state: np.ndarray | None, *, t0: float, backward: bool):
-    """Simulate a transient in the direction of integration; returns (trajectory, start state).
-
-    Forced models run :data:`TRANSIENT_PERIODS` forcing periods (so the end
-    state has the phase ``t0``); autonomous ones the shipped model's
-    ``transient_length`` (or :data:`TRANSIENT_TIME`).  A run that would end on a sliding motion is
-    extended until it does not.
-    """
+    """A transient in the direction of integration (:func:`saltation.orbits.start.transient`) from the
+    shipped model's start state and with its length; returns (trajectory, start state)."""
     system = flow.system
     values = dict(zip(system.parameter_names, map(float, p)))
     if state is None:
         start = SHIPPED[name].start if name in SHIPPED else None
         state = np.array(start(values, backward) if start else np.zeros(system.n), dtype=float)
-    sign = -1.0 if backward else 1.0
-    if system.is_autonomous:
-        length_fn = SHIPPED[name].transient_length if name in SHIPPED else None
-        length = length_fn(values) if length_fn else TRANSIENT_TIME
-        extra = 0.01 * length
-    else:
-        T = system.forcing_period(p)
-        length = TRANSIENT_PERIODS * T
-        extra = T
-    direction = "backward" if backward else "forward"
-    for attempt in range(20):
-        try:
-            traj = flow.run(state, t0, t0 + sign * (length + attempt * extra), p, dense=system.is_autonomous)
-        except SaltationError as exc:
-            raise CommandError(
-                f"the {direction} transient from {state.tolist()} failed ({exc}); give a starting guess with --x0"
-            ) from None
-        if not traj.sliding_at_end:
-            break
-    if not np.all(np.isfinite(traj.x1)) or np.max(np.abs(traj.x1)) > 1e6 * (1.0 + np.max(np.abs(state))):
-        raise CommandError(
-            f"the {direction} transient from {state.tolist()} diverges (ends at {traj.x1.tolist()}); "
-            "give a starting guess with --x0"
-        )
+    length_fn = SHIPPED[name].transient_length if name in SHIPPED else None
+    length = length_fn(values) if (length_fn and system.is_autonomous) else None
+    try:
+        traj = start_guesses.transient(flow, p, state, t0=t0, backward=backward, length=length)
+    except StartGuessError as exc:
+        raise CommandError(f"{exc}; give a starting guess with --x0") from None
     return traj, state
 
 
 def estimate_period(traj) -> float:
-    """Period estimate from a transient of an autonomous model.
+    """Period estimate from a transient of an autonomous model (:func:`saltation.orbits.start.estimate_period`).
 
     Raises
     ------
     CommandError
         If the transient shows no oscillation (e.g. it settles to an equilibrium).
     """
-    T = _period_from_events(traj.events)
-    if T is None or not T > 0:
-        T = _period_from_section(traj)
-    if T is None or not T > 0:
-        raise CommandError(
-            f"cannot estimate a period: the transient (t = {_fmt(traj.t0)} to {_fmt(traj.t1)}, ending at "
-            f"{traj.x1.tolist()}) shows no repeating events or oscillation (an equilibrium?); give --period "
-            "and a guess --x0"
-        )
-    return float(T)
+    try:
+        return start_guesses.estimate_period(traj)
+    except StartGuessError as exc:
+        raise CommandError(f"{exc}; give --period and a guess --x0") from None
 
 
 # --------------------------------------------------------------------------------------------

@@ -38,6 +38,7 @@ from saltation.engine.flow import Flow
 from saltation.models import SHIPPED, block_on_belt, trilinear
 from saltation.model.regularize import regularize
 from saltation.orbits.shooting import EquilibriumProblem, ShootingProblem, find_periodic_orbit
+from saltation.orbits.start import estimate_period, transient
 
 Progress = Callable[[str, int], None] | None
 
@@ -184,18 +185,8 @@ def stable_stick_slip_cycle(flow: Flow, v_dr: float):
     # every orbit through the stick band lies on the stable cycle after its stick phase: from the start
     # the command line uses too (sticking to the belt)
     values = dict(zip(flow.system.parameter_names, p))
-    transient = flow.run(SHIPPED["block_on_belt"].start(values, False), 0.0, 40.0, p)
-    period = _return_time(transient)
-    return find_periodic_orbit(flow, transient.x1, parameters={"v_dr": v_dr}, period=period)
-
-
-def _return_time(traj) -> float:
-    """Time between the last two events of the same transition (a period estimate)."""
-    last = traj.events[-1]
-    for e in reversed(traj.events[:-1]):
-        if e.transition == last.transition and e.kind == last.kind:
-            return last.t - e.t
-    raise SaltationError("the transient shows no repeated event; cannot estimate the period")
+    run = transient(flow, p, SHIPPED["block_on_belt"].start(values, False), length=40.0)
+    return find_periodic_orbit(flow, run.x1, parameters={"v_dr": v_dr}, period=estimate_period(run))
 
 
 def phase_plane(v_dr: float = 1.0) -> dict[str, np.ndarray]:

@@ -54,6 +54,7 @@ from saltation.errors import (
     SaltationError,
     StationaryStateError,
 )
+from saltation.model.system import PiecewiseSystem
 from saltation.orbits.conditions import Condition, ConditionedProblem
 from saltation.orbits.floquet import (
     autonomous_multipliers,
@@ -63,6 +64,7 @@ from saltation.orbits.floquet import (
     reciprocal,
     sort_multipliers,
 )
+from saltation.orbits.start import starting_guess
 from saltation.orbits.records import (
     Evaluation,
     BranchPoint,
@@ -839,8 +841,8 @@ def _logged(traj: Trajectory, kind: EventKind, transition: int, surface: str, mo
 
 
 def find_periodic_orbit(
-    flow: Flow,
-    state0: Sequence[float],
+    flow: Flow | PiecewiseSystem,
+    state0: Sequence[float] | None = None,
     *,
     parameters: Mapping[str, float] | None = None,
     period: float | None = None,
@@ -850,18 +852,22 @@ def find_periodic_orbit(
     max_iter: int = 30,
     tolerances: Tolerances | None = None,
     segments: int = 1,
+    transient_length: float | None = None,
 ) -> PeriodicOrbit:
     """Find one periodic orbit by shooting from a guess.
 
     Parameters
     ----------
-    flow : Flow
-    state0 : array_like
-        Guess of the state at ``t0``.
+    flow : Flow or PiecewiseSystem
+        The flow of the model (a model is given a :class:`Flow` of its own, with its default tolerances).
+    state0 : array_like, optional
+        Guess of the state at ``t0``.  Without one, the guess is the end of a transient from zeros
+        (:func:`saltation.orbits.start.transient`, in the direction of integration).
     parameters : mapping, optional
         Parameter overrides.
     period : float, optional
-        Period guess of an autonomous system.  A forced system's period is its
+        Period guess of an autonomous system; without one, it is read from a transient from
+        ``state0`` (:func:`saltation.orbits.start.estimate_period`).  A forced system's period is its
         forcing period; a ``period`` given for it must equal that.
     backward : bool
         Shoot in backward time.
@@ -880,6 +886,9 @@ def find_periodic_orbit(
         models.  ``state0`` is then either one state (the nodes are taken from its trajectory, which
         on a strongly unstable orbit drifts away within the period) or a guess of every node, shape
         ``(m, n)``, at ``t0 + i T / m``.
+    transient_length : float, optional
+        Length of the transient of an autonomous model, when one is needed
+        (:data:`saltation.orbits.start.TRANSIENT_TIME` by default).
 
     Returns
     -------
@@ -899,7 +908,16 @@ def find_periodic_orbit(
     InconsistentResultError
         An autonomous orbit whose trivial multiplier is not 1 to
         :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
+    StartGuessError
+        Without a guess: the transient failed, diverged or shows no oscillation.
     """
+    if not isinstance(flow, Flow):  # a model
+        flow = Flow(flow, tolerances=tolerances)
+    if state0 is not None and np.ndim(state0) == 2 and period is None and flow.system.is_autonomous:
+        raise ModelError(f"a guess of every node of the autonomous model {flow.system.name!r} needs a period guess")
+    if state0 is None or (flow.system.is_autonomous and period is None):
+        state0, period = starting_guess(flow, flow.parameters(parameters or {}), state0, period, t0=t0,
+                                        backward=backward, length=transient_length)
     prob = ShootingProblem(flow, parameters, backward=backward, t0=t0, tolerances=tolerances)
     if not prob.autonomous and period is not None:
         forced = prob.period_of(prob.pack(state0))

@@ -1,0 +1,167 @@
+"""Starting guesses of periodic orbits: a transient and the period read from it.
+
+When no guess of a periodic orbit is at hand, the flow itself makes one: a
+transient in the direction of integration (forward for attracting orbits,
+backward for the infinitely unstable stick-slip orbits of Fig. 7) ends near an
+attracting orbit, and the period of an autonomous one is read from the
+transient's repeating events, or from its crossings of a Poincaré section.
+:func:`saltation.orbits.shooting.find_periodic_orbit` uses these when it is
+given no state or, for an autonomous model, no period; the command line uses
+them with the shipped models' own start states.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from saltation.engine.flow import Flow, Trajectory
+from saltation.errors import SaltationError, StartGuessError
+
+#: Forcing periods of a forced model's transient.
+TRANSIENT_PERIODS = 50
+#: Length of an autonomous model's transient when none is given.
+TRANSIENT_TIME = 200.0
+#: A transient whose end state exceeds this factor times the start's size (plus one) diverges.
+DIVERGENCE_FACTOR = 1e6
+
+
+def transient(
+    flow: Flow,
+    parameters: np.ndarray,
+    state: Sequence[float] | None = None,
+    *,
+    t0: float = 0.0,
+    backward: bool = False,
+    length: float | None = None,
+) -> Trajectory:
+    """Simulate a transient in the direction of integration.
+
+    Parameters
+    ----------
+    flow : Flow
+    parameters : ndarray
+        Parameter vector (:meth:`Flow.parameters`).
+    state : array_like, optional
+        Where it starts (zeros by default).
+    t0 : float
+        Start time; a forced model's transient runs whole forcing periods, so that its end state has
+        the forcing phase of ``t0``.
+    backward : bool
+        Run backward in time.
+    length : float, optional
+        Its length for an autonomous model (:data:`TRANSIENT_TIME` by default); a forced model runs
+        :data:`TRANSIENT_PERIODS` forcing periods.  A run that would end on a sliding motion is
+        extended (by one forcing period, or 1 % of the length) until it does not.
+
+    Returns
+    -------
+    Trajectory
+        With dense output for an autonomous model (its period is read from it).
+
+    Raises
+    ------
+    StartGuessError
+        If the run fails or diverges; the message says where it started and ended.
+    """
+    system = flow.system
+    p = np.asarray(parameters, dtype=float)
+    x = np.zeros(system.n) if state is None else np.asarray(state, dtype=float).reshape(-1)
+    sign = -1.0 if backward else 1.0
+    if system.is_autonomous:
+        span = TRANSIENT_TIME if length is None else float(length)
+        if not span > 0.0:
+            raise StartGuessError(f"the transient of {system.name!r} needs a positive length, got {length!r}")
+        extra = 0.01 * span
+    else:
+        T = system.forcing_period(p)
+        span, extra = TRANSIENT_PERIODS * T, T
+    direction = "backward" if backward else "forward"
+    for attempt in range(20):
+        try:
+            traj = flow.run(x, t0, t0 + sign * (span + attempt * extra), p, dense=system.is_autonomous)
+        except SaltationError as exc:
+            raise StartGuessError(f"the {direction} transient of {system.name!r} from {x.tolist()} failed ({exc})") from exc
+        if not traj.sliding_at_end:
+            break
+    if not np.all(np.isfinite(traj.x1)) or np.max(np.abs(traj.x1)) > DIVERGENCE_FACTOR * (1.0 + np.max(np.abs(x))):
+        raise StartGuessError(
+            f"the {direction} transient of {system.name!r} from {x.tolist()} diverges (ends at {traj.x1.tolist()})"
+        )
+    return traj
+
+
+def period_from_events(traj: Trajectory) -> float | None:
+    """The period of the event sequence at the end of a trajectory (its shortest repeating lag), or None."""
+    events = traj.events
+    sig = [e.signature for e in events]
+    n = len(sig)
+    for lag in range(1, n // 2 + 1):
+        if all(sig[n - 1 - j] == sig[n - 1 - lag - j] for j in range(lag)):
+            return abs(events[-1].t - events[-1 - lag].t)
+    return None
+
+
+def period_from_section(traj: Trajectory) -> float | None:
+    """The period from the last two upward crossings of the Poincaré section ``x_1 =`` mid-range, over the
+    trajectory's second half (dense output needed), or None if it oscillates too little."""
+    t, x = traj.sample(16)
+    if t.size < 4:
+        return None
+    half = np.abs(t - t[0]) >= 0.5 * abs(t[-1] - t[0])
+    t, x1 = t[half], x[half, 0]
+    lo, hi = float(np.min(x1)), float(np.max(x1))
+    if hi - lo <= 1e-8 * (1.0 + abs(hi)):
+        return None  # settles to an equilibrium
+    g = x1 - 0.5 * (lo + hi)
+    up = np.nonzero((g[:-1] < 0) & (g[1:] >= 0))[0]
+    if up.size < 3:
+        return None
+    times = [t[i] - g[i] * (t[i + 1] - t[i]) / (g[i + 1] - g[i]) for i in up[-2:]]
+    return abs(times[1] - times[0])
+
+
+def estimate_period(traj: Trajectory) -> float:
+    """The period of the oscillation a transient of an autonomous model ends on.
+
+    Raises
+    ------
+    StartGuessError
+        If the transient shows no repeating events and no oscillation (it settles to an equilibrium).
+    """
+    T = period_from_events(traj)
+    if T is None or not T > 0:
+        T = period_from_section(traj)
+    if T is None or not T > 0:
+        raise StartGuessError(
+            f"cannot estimate a period: the transient (t = {traj.t0:.6g} to {traj.t1:.6g}, ending at "
+            f"{traj.x1.tolist()}) shows no repeating events or oscillation (an equilibrium?)"
+        )
+    return float(T)
+
+
+def starting_guess(
+    flow: Flow,
+    parameters: np.ndarray,
+    state: Sequence[float] | None = None,
+    period: float | None = None,
+    *,
+    t0: float = 0.0,
+    backward: bool = False,
+    length: float | None = None,
+) -> tuple[np.ndarray, float | None]:
+    """A guess ``(state, period)`` of a periodic orbit, completed from a transient where one is missing.
+
+    A given state is kept, and a given period; the transient (:func:`transient`, from ``state``) runs
+    only when the state is None or, for an autonomous model, the period is.  A forced model's period is
+    its forcing period (returned as None).
+    """
+    autonomous = flow.system.is_autonomous
+    if state is not None and (period is not None or not autonomous):
+        return np.asarray(state, dtype=float), period
+    traj = transient(flow, parameters, state, t0=t0, backward=backward, length=length)
+    x0 = traj.x1.copy() if state is None else np.asarray(state, dtype=float)
+    if autonomous and period is None:
+        period = estimate_period(traj)
+    return x0, period
