@@ -342,8 +342,8 @@ def bench_loci(quick: bool) -> dict:
     for name, sp in (("corner", corner), ("fold", fold)):
         settings = ContinuationSettings(ds=0.002, ds_max=0.002, bounds=(0.05, 0.4), max_points=200)
         t, locus = timed_runs(lambda sp=sp: follow_locus(problem, sp, "f0", (0.05, 0.4), settings=settings), quick)
-        out[f"{name}_curve_points"] = len(locus.points)
-        out[f"{name}_curve_s_per_200_points"] = t * 200 / len(locus.points)
+        out[f"{name}_curve_points"] = len(locus)
+        out[f"{name}_curve_s_per_200_points"] = t * 200 / len(locus)
     impact = Flow(impact_oscillator())
     w = impact.system.defaults["omega"]
     det = (1 - w**2) ** 2 + (0.1 * w) ** 2
@@ -372,7 +372,7 @@ def _sliding_curve(quick: bool) -> dict:
     point = next(sp for sp in branch.special_points if sp.kind.value == "switching_sliding")
     settings = ContinuationSettings(ds=0.002, ds_max=0.002, bounds=(0.3, 0.7), max_points=200)
     t, locus = timed_runs(lambda: follow_locus(problem, point, "kappa", (0.3, 0.7), settings=settings), quick)
-    return {"sliding_curve_points": len(locus.points), "sliding_curve_s_per_200_points": t * 200 / len(locus.points)}
+    return {"sliding_curve_points": len(locus), "sliding_curve_s_per_200_points": t * 200 / len(locus)}
 
 
 def _sliding_locations(quick: bool) -> dict:

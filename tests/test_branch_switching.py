@@ -153,7 +153,7 @@ def test_period_doubling_curve_against_closed_form(ball):
     _, problem, branch = ball
     (pd,) = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.PERIOD_DOUBLING]
     locus = follow_locus(problem, pd, "e", (0.3, 0.7))
-    A, e = locus.points.T
+    A, e = locus.values.T
     assert e.min() == pytest.approx(0.3) and e.max() == pytest.approx(0.7)
     reference = G / W**2 * np.sqrt((np.pi * (1 - e) / (1 + e)) ** 2 + (2 * (1 + e**2) / (1 + e) ** 2) ** 2)
     # the bordered test function's derivatives by central differences (h = 1e-6): Newton still converges

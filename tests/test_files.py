@@ -580,7 +580,8 @@ SWEEP_EDITS = [
     (_set("state_names", []), "state_names", "expected at least one state name"),
     (_set("settings", []), "settings", "expected an object"),
     (_del("model"), "model", "missing"),
-    (_set("format", "saltation.period_map/1"), "format", "not a saltation sweep record"),
+    (_set("format", "saltation.period_map"), "format", "not a saltation.sweep record"),
+    (_set("version", 2), "version", "unsupported saltation.sweep version 2"),
 ]
 
 
@@ -808,3 +809,15 @@ def test_a_closed_stdout_exits_quietly(trilinear_flow):
     proc.stdout.close()  # long before the orbit is found and printed
     err = proc.stderr.read().decode()
     assert (proc.wait(timeout=300), err) == (141, "")
+
+
+def test_sweep_and_map_files_of_the_earlier_format_key_are_read(tmp_path):
+    """Files written before the common format convention hold ``"format": "saltation.sweep/1"`` (or
+    ``"saltation.period_map/1"``) and no ``"version"``: they read back to the same record."""
+    sweep = make_sweep()
+    d = sweep.to_dict()
+    assert (d["format"], d["version"]) == ("saltation.sweep", 1)
+    del d["version"]
+    d["format"] = "saltation.sweep/1"
+    again = SweepResult.from_dict(d)
+    assert again.to_dict() == sweep.to_dict()

@@ -9,7 +9,7 @@ import pytest
 
 from saltation import Flow
 from saltation.apps import cli
-from saltation.branches.branch import SpecialPointKind
+from saltation.branches.branch import Branch, SpecialPointKind, SpecialPointStatus
 from saltation.special_points.continuation import ContinuationSettings, continue_branch
 from saltation.engine.flow import Tolerances
 from saltation.special_points.loci import follow_locus
@@ -40,7 +40,7 @@ def test_corner_curves_against_closed_form(trilinear_loci):
     _, loci = trilinear_loci
     for kind in (SpecialPointKind.NONSMOOTH_NO_CROSSING, SpecialPointKind.DISCONTINUOUS_FOLD):
         locus = loci[kind]
-        w, f0 = locus.points.T
+        w, f0 = locus.values.T
         assert len(w) > 50
         # the defining system is solved to 1e-10 in the residual; the closed form is exact
         np.testing.assert_allclose(f0, XC * np.sqrt((K - M * w**2) ** 2 + (C * w) ** 2), rtol=0, atol=1e-9)
@@ -53,9 +53,9 @@ def test_fold_curve_points_satisfy_the_fold_conditions(trilinear_loci, trilinear
     DOP853 integrations, no variational equation) has a multiplier +1."""
     _, loci = trilinear_loci
     locus = loci[SpecialPointKind.FOLD]
-    assert len(locus.points) > 20
+    assert len(locus) > 20
     tol = Tolerances(rtol=1e-12, atol=1e-14, exact_affine=False)
-    for (w, f0), x0 in list(zip(locus.points, locus.states))[:: max(1, len(locus.points) // 6)]:
+    for (w, f0), x0 in list(zip(locus.values, locus.states))[:: max(1, len(locus) // 6)]:
         p = trilinear_flow.parameters({"omega": w, "f0": f0})
         T = 2 * np.pi / w
         assert np.abs(trilinear_flow.run(x0, 0.0, T, p, tolerances=tol).x1 - x0).max() < 1e-9
@@ -74,22 +74,22 @@ def test_the_fold_curve_is_born_at_a_corner(trilinear_loci):
     the unit circle where the smooth fold curve ends on it (the fold is born at the corner)."""
     _, loci = trilinear_loci
     corner = loci[SpecialPointKind.DISCONTINUOUS_FOLD]
-    births = [c for c in corner.special_points if set(c.kinds) == {"nonsmooth_no_crossing", "discontinuous_fold"}]
+    births = [c for c in corner.special_points if set(c.sides) == {"nonsmooth_no_crossing", "discontinuous_fold"}]
     assert births
     fold = loci[SpecialPointKind.FOLD]
     assert "the corrector failed" in fold.stop_reason  # the fold curve ends: it does not go on past the corner
-    end = fold.points[np.argmin(fold.points[:, 1])]  # its low-forcing end
-    nearest = min(births, key=lambda c: np.hypot(*(np.array(c.values) - end)))
-    step = np.max(np.linalg.norm(np.diff(fold.points, axis=0), axis=1))
-    assert np.hypot(*(np.array(nearest.values) - end)) <= nearest.accuracy + step
+    end = fold.values[np.argmin(fold.values[:, 1])]  # its low-forcing end
+    nearest = min(births, key=lambda c: np.hypot(*(np.array([c.parameter, c.second_parameter]) - end)))
+    step = np.max(np.linalg.norm(np.diff(fold.values, axis=0), axis=1))
+    assert np.hypot(*(np.array([nearest.parameter, nearest.second_parameter]) - end)) <= nearest.accuracy + step
     # and on the fold curve itself: its end is labelled where it meets the corner curve (the corner located
     # at the f0 of its nearest point), within the stated accuracy of that point and of the birth
     (label,) = fold.special_points
-    assert label.kinds[0] == "fold" and label.kinds[1] in ("nonsmooth_no_crossing", "discontinuous_fold")
-    assert np.hypot(*(np.array(label.values) - end)) <= label.accuracy * (1 + 1e-9)
-    assert label.values[1] == pytest.approx(XC * np.sqrt((K - M * label.values[0] ** 2) ** 2 + (C * label.values[0]) ** 2),
+    assert label.sides[0] == "fold" and label.sides[1] in ("nonsmooth_no_crossing", "discontinuous_fold")
+    assert np.hypot(*(np.array([label.parameter, label.second_parameter]) - end)) <= label.accuracy * (1 + 1e-9)
+    assert label.second_parameter == pytest.approx(XC * np.sqrt((K - M * label.parameter ** 2) ** 2 + (C * label.parameter) ** 2),
                                             abs=1e-9)  # on the corner curve
-    assert np.hypot(*(np.array(nearest.values) - np.array(label.values))) <= nearest.accuracy + label.accuracy
+    assert np.hypot(*(np.array([nearest.parameter - label.parameter, nearest.second_parameter - label.second_parameter]))) <= nearest.accuracy + label.accuracy
 
 
 def test_grazing_curve_of_the_impact_oscillator_against_closed_form():
@@ -103,7 +103,7 @@ def test_grazing_curve_of_the_impact_oscillator_against_closed_form():
                              directions=(-1,))
     (grazing,) = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.GRAZING]
     locus = follow_locus(problem, grazing, "omega", (0.6, 0.95))
-    s, omega = locus.points.T
+    s, omega = locus.values.T
     np.testing.assert_allclose(s, 1 / np.sqrt((1 - omega**2) ** 2 + (2 * zeta * omega) ** 2), rtol=0, atol=1e-9)
     assert omega.min() == pytest.approx(0.6) and omega.max() == pytest.approx(0.95)
     assert set(locus.kinds) == {"grazing"}  # an impact: unbounded all along, no codimension-two point
@@ -130,3 +130,28 @@ def test_locus_command_line_contract(tmp_path, capsys):
     assert cli.main(["locus", "trilinear", "--kind", "nope", "--param", "omega", "--range", "0.6,1.6",
                      "--param2", "f0", "--range2", "0.05,0.4"]) == 2
     assert "unknown kind 'nope'" in capsys.readouterr().err
+
+
+def test_a_curve_is_a_branch_in_two_parameters(trilinear_loci):
+    """A curve is a Branch: its points carry both parameters and their orbits' records, and its
+    codimension-two points are SpecialPoint records.  Every fold-curve orbit has the multiplier +1 that
+    defines it (the condition is solved to 1e-10 on the bordered test function, whose slope in the
+    multiplier is of order one here)."""
+    _, loci = trilinear_loci
+    fold = loci[SpecialPointKind.FOLD]
+    assert isinstance(fold, Branch)
+    assert (fold.parameter_name, fold.second_parameter_name, fold.curve_of) == ("omega", "f0", SpecialPointKind.FOLD)
+    np.testing.assert_array_equal(fold.values, np.column_stack([fold.parameter, fold.second_parameter]))
+    for point in fold.points:
+        assert np.min(np.abs(point.multipliers - 1.0)) <= 1e-7
+        assert np.isfinite(point.period) and point.event_labels
+    (label,) = fold.special_points
+    assert label.kind is SpecialPointKind.CODIMENSION_TWO
+    assert label.status is SpecialPointStatus.LOCATED
+    corner = loci[SpecialPointKind.DISCONTINUOUS_FOLD]
+    assert corner.special_points
+    for c in corner.special_points:
+        assert c.kind is SpecialPointKind.CODIMENSION_TWO and c.status is SpecialPointStatus.BRACKETED
+        a, b = corner.values[c.index], corner.values[c.index + 1]
+        assert min(a[0], b[0]) <= c.parameter <= max(a[0], b[0])
+        assert min(a[1], b[1]) <= c.second_parameter <= max(a[1], b[1])

@@ -196,8 +196,8 @@ def test_adding_sliding_curve_against_closed_form(adding):
     br, problem = adding
     (a,) = [sp for sp in br.special_points if sp.kind is SpecialPointKind.ADDING_SLIDING]
     locus = follow_locus(problem, a, "v_b", (0.12, 0.3), settings=ContinuationSettings(ds=0.01, ds_max=0.02))
-    assert locus.points[:, 1].min() == pytest.approx(0.12) and locus.points[:, 1].max() == pytest.approx(0.3)
-    for friction, v_b in locus.points[::6]:
+    assert locus.values[:, 1].min() == pytest.approx(0.12) and locus.values[:, 1].max() == pytest.approx(0.3)
+    for friction, v_b in locus.values[::6]:
         reference = brentq(adding_sliding_residual, friction - 0.01, friction + 0.01, args=(v_b,), xtol=1e-15,
                            rtol=4 * np.finfo(float).eps)
         assert friction == pytest.approx(reference, abs=1e-9)
@@ -209,8 +209,8 @@ def test_crossing_sliding_curve_against_independent_computation(branch):
     br, problem = branch
     (c,) = [sp for sp in br.special_points if sp.kind is SpecialPointKind.CROSSING_SLIDING]
     locus = follow_locus(problem, c, "F", (0.45, 0.55), settings=ContinuationSettings(ds=0.005, ds_max=0.01))
-    assert locus.points[:, 1].min() == pytest.approx(0.45) and locus.points[:, 1].max() == pytest.approx(0.55)
-    for (v_b, friction), state in zip(locus.points[::5], locus.states[::5]):
+    assert locus.values[:, 1].min() == pytest.approx(0.45) and locus.values[:, 1].max() == pytest.approx(0.55)
+    for (v_b, friction), state in zip(locus.values[::5], locus.states[::5]):
         traj = problem.flow.run(state, 0.0, T, problem.flow.parameters({"v_b": v_b, "F": friction}))
         arrival = next(e for e in traj.events if e.mode_from == "slip_plus")
         z = fsolve(two_slip_orbit_residual, [arrival.t, arrival.x_minus[0], v_b], args=(friction,), xtol=1e-13)

@@ -9,7 +9,15 @@ import math
 import numpy as np
 import pytest
 
-from saltation import Crossing, Flow, Mode, PiecewiseSystem, StartGuessError, Transition, find_periodic_orbit
+from saltation import (
+    Crossing,
+    Flow,
+    Mode,
+    PiecewiseSystem,
+    StartGuessError,
+    Transition,
+    find_periodic_orbit,
+)
 from saltation.orbits.start import estimate_period, starting_guess, transient
 
 C, K, W, F0 = 0.2, 1.0, 1.3, 0.5

@@ -208,13 +208,13 @@ def switching_sliding_locus(branch):
 def _reaches_both_bounds(locus):
     assert "increasing kappa: reached a parameter bound" in locus.stop_reason, locus.stop_reason
     assert "decreasing kappa: reached a parameter bound" in locus.stop_reason, locus.stop_reason
-    assert locus.points[:, 1].min() == pytest.approx(KAPPA_RANGE[0], abs=1e-12)
-    assert locus.points[:, 1].max() == pytest.approx(KAPPA_RANGE[1], abs=1e-12)
+    assert locus.values[:, 1].min() == pytest.approx(KAPPA_RANGE[0], abs=1e-12)
+    assert locus.values[:, 1].max() == pytest.approx(KAPPA_RANGE[1], abs=1e-12)
 
 
 def test_grazing_sliding_curve_points(grazing_sliding_locus):
     """Every point of the grazing-sliding curve against v = kappa F + A sqrt(kappa^2 + omega^2)."""
-    v, kappa = grazing_sliding_locus.points.T
+    v, kappa = grazing_sliding_locus.values.T
     assert len(v) > 10
     reference = np.array([R.grazing_sliding(k)[0] for k in kappa])
     np.testing.assert_allclose(v, reference, rtol=0, atol=1e-9)
@@ -231,7 +231,7 @@ def test_grazing_sliding_curve_has_no_codimension_two_point(grazing_sliding_locu
 
 def test_switching_sliding_curve_points(switching_sliding_locus):
     """Every point of the switching-sliding curve against fsolve on the closed-form orbit at its kappa."""
-    v, kappa = switching_sliding_locus.points.T
+    v, kappa = switching_sliding_locus.values.T
     assert len(v) > 10
     np.testing.assert_allclose(v, R.switching_sliding(kappa), rtol=0, atol=1e-9)
 

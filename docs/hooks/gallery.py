@@ -90,7 +90,7 @@ def figure_impact_oscillator():
     omega = np.linspace(0.6, 1.0, 200)
     ax2.plot(omega, 1 / np.sqrt((1 - omega**2) ** 2 + (2 * zeta * omega) ** 2), color="0.7", linewidth=4,
              label="closed form $1/\\sqrt{(1-\\omega^2)^2+(2\\zeta\\omega)^2}$")
-    ax2.plot(locus.points[:, 1], locus.points[:, 0], "k.", markersize=3, label="follow_locus")
+    ax2.plot(locus.values[:, 1], locus.values[:, 0], "k.", markersize=3, label="follow_locus")
     ax2.set_xlabel("omega")
     ax2.set_ylabel("s at grazing")
     ax2.set_title("grazing curve in (omega, s)")
@@ -129,7 +129,7 @@ def figure_bouncing_ball():
     e_ref = np.linspace(0.3, 0.7, 200)
     a_ref = g / w**2 * np.sqrt((np.pi * (1 - e_ref) / (1 + e_ref)) ** 2 + (2 * (1 + e_ref**2) / (1 + e_ref) ** 2) ** 2)
     ax2.plot(e_ref, a_ref, color="0.7", linewidth=4, label="closed form (Holmes 1982)")
-    ax2.plot(locus.points[:, 1], locus.points[:, 0], "k.", markersize=3, label="follow_locus")
+    ax2.plot(locus.values[:, 1], locus.values[:, 0], "k.", markersize=3, label="follow_locus")
     ax2.set_xlabel("restitution e")
     ax2.set_ylabel("A at the period doubling")
     ax2.set_title("period-doubling curve in (e, A)")
@@ -288,7 +288,7 @@ def figure_tilted_relay():
     for kind, style in (("grazing_sliding", "k."), ("switching_sliding", "C3.")):
         (sp,) = [sp for sp in branch.special_points if sp.kind.value == kind]
         locus = follow_locus(problem, sp, "kappa", (0.3, 0.7), settings=curve)
-        ax2.plot(locus.points[:, 0], locus.points[:, 1], style, markersize=3, label=f"{kind} (follow_locus)")
+        ax2.plot(locus.values[:, 0], locus.values[:, 1], style, markersize=3, label=f"{kind} (follow_locus)")
     ax2.set_xlabel("v")
     ax2.set_ylabel("kappa")
     ax2.set_title("sliding bifurcation curves in (v, kappa)")

@@ -41,7 +41,7 @@ from saltation.errors import SaltationError, StartGuessError
 from saltation.model.system import PiecewiseSystem
 from saltation.models import SHIPPED
 from saltation.orbits import start as start_guesses
-from saltation.orbits.start import TRANSIENT_PERIODS, TRANSIENT_TIME
+from saltation.orbits.start import TRANSIENT_PERIODS
 
 PROG = "saltation"
 
@@ -1032,8 +1032,8 @@ def cmd_locus(args: argparse.Namespace) -> int:
         for k, locus in enumerate(loci):
             print(f"  curve {k}: {len(locus.points)} points; {locus.stop_reason}")
             for c in locus.special_points:
-                print(f"    {c.kinds[0]} -> {c.kinds[1]} at {args.param} = {c.values[0]:.8g}, {args.param2} = "
-                      f"{c.values[1]:.8g} (within {c.accuracy:.2g})")
+                print(f"    {c.sides[0]} -> {c.sides[1]} at {args.param} = {c.parameter:.8g}, {args.param2} = "
+                      f"{c.second_parameter:.8g} (within {c.accuracy:.2g}, {c.status.value})")
         if args.out is not None:
             print(f"written to {stem}.json (.png, .pdf)")
     return 0

@@ -65,10 +65,19 @@ if TYPE_CHECKING:  # matplotlib is imported where a figure is drawn: `import sal
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-from saltation.errors import ModelError, SaltationError
 from saltation.engine.flow import Flow, Tolerances, Trajectory, dense_evaluate
-from saltation.output.io import _Fields, _read_json, write_atomically, write_json
+from saltation.errors import ModelError, SaltationError
 from saltation.model.system import PiecewiseSystem
+from saltation.output.io import (
+    PERIOD_MAP_FORMAT,
+    SWEEP_FORMAT,
+    _Fields,
+    _read_json,
+    check_format,
+    format_header,
+    write_atomically,
+    write_json,
+)
 
 __all__ = ["PeriodMap", "SweepResult", "SweepStart", "attractor_period", "period_map", "sweep"]
 
@@ -236,7 +245,7 @@ class SweepResult:
             return float(v) if math.isfinite(v) else str(float(v))
 
         return {
-            "format": "saltation.sweep/1",
+            **format_header(SWEEP_FORMAT),
             "model": self.model,
             "parameter": self.parameter_name,
             "section": self.section,
@@ -275,10 +284,7 @@ class SweepResult:
             value's); the message names ``source`` and the field.
         """
         f = _Fields(source)
-        d = f.obj(d, "(top level)")
-        fmt = f.take(d, "", "format", lambda v, field: v)
-        if fmt != "saltation.sweep/1":
-            f.fail("format", f"expected 'saltation.sweep/1': not a saltation sweep record (format {fmt!r})")
+        d = check_format(d, SWEEP_FORMAT, f, legacy="saltation.sweep/1")  # (the one key of files before 2026-11-26)
         names = f.take(d, "", "state_names", f.strings)
         if not names:
             f.fail("state_names", "expected at least one state name")
@@ -595,7 +601,7 @@ class PeriodMap:
     def to_dict(self) -> dict:
         """A JSON-ready dictionary."""
         return {
-            "format": "saltation.period_map/1",
+            **format_header(PERIOD_MAP_FORMAT),
             "model": self.model,
             "parameter": self.parameter_name,
             "parameter2": self.parameter2_name,
@@ -632,10 +638,7 @@ class PeriodMap:
             value of ``values2``); the message names ``source`` and the field.
         """
         f = _Fields(source)
-        d = f.obj(d, "(top level)")
-        fmt = f.take(d, "", "format", lambda v, field: v)
-        if fmt != "saltation.period_map/1":
-            f.fail("format", f"expected 'saltation.period_map/1': not a saltation period map (format {fmt!r})")
+        d = check_format(d, PERIOD_MAP_FORMAT, f, legacy="saltation.period_map/1")  # (files before 2026-11-26)
         values = f.take(d, "", "values", lambda v, field: f.reals(v, field, finite=True))
         values2 = f.take(d, "", "values2", lambda v, field: f.reals(v, field, finite=True))
         max_period = f.take(d, "", "max_period", lambda v, field: f.integer(v, field, minimum=1))

@@ -29,6 +29,9 @@ class SpecialPointKind(enum.Enum):
     ADDING_SLIDING = "adding_sliding"
     #: the orbits of a branch shrink onto an equilibrium: located where their excursion extrapolates to zero
     CYCLE_COLLAPSE = "cycle_collapse"
+    #: on a two-parameter curve of special points: where two defining conditions meet (the kind of the
+    #: special point changes along the curve; :attr:`SpecialPoint.sides` names the two)
+    CODIMENSION_TWO = "codimension_two"
 
     @property
     def is_nonsmooth(self) -> bool:
@@ -152,6 +155,11 @@ class SpecialPoint:
         there (empty otherwise).
     touch_time : float
         The instant of that touch (``nan`` otherwise).
+    second_parameter : float
+        On a two-parameter curve: the second parameter's value at the point (``parameter`` is the
+        first's; ``nan`` on a one-parameter branch).
+    sides : (str, str)
+        At a CODIMENSION_TWO point: the kinds of the special point on either side along the curve.
     """
 
     kind: SpecialPointKind
@@ -179,6 +187,8 @@ class SpecialPoint:
     touch_time: float = float("nan")
     growth_exponents: tuple[float, ...] = ()
     status: SpecialPointStatus = SpecialPointStatus.BRACKETED
+    second_parameter: float = float("nan")
+    sides: tuple[str, ...] = ()
 
     def __post_init__(self):
         # names as files and older callers give them
@@ -221,6 +231,13 @@ class Branch:
         Values of every parameter (the continuation parameter at the start point).
     label : str
         A name for plots ("stable periodic", "equilibrium", ...).
+    autonomous : bool
+        Whether its orbits are of an autonomous model (their period is an unknown).
+    second_parameter_name : str
+        On a two-parameter curve of special points (:func:`saltation.special_points.loci.follow_locus`):
+        the second parameter, whose values are the column :attr:`second_parameter` (empty otherwise).
+    curve_of : SpecialPointKind or None
+        On such a curve: the kind of the special point it continues.
     """
 
     model: str
@@ -234,6 +251,8 @@ class Branch:
     fixed_parameters: dict[str, float] = field(default_factory=dict)
     label: str = ""
     autonomous: bool = False
+    second_parameter_name: str = ""
+    curve_of: SpecialPointKind | None = None
 
     def _repr_markdown_(self) -> str:
         """A summary for Jupyter (:mod:`saltation.summary`)."""
@@ -248,6 +267,11 @@ class Branch:
     @property
     def parameter(self) -> np.ndarray:
         return np.array([p.parameter for p in self.points])
+
+    @property
+    def second_parameter(self) -> np.ndarray:
+        """The second parameter's column on a two-parameter curve (``nan`` on a one-parameter branch)."""
+        return np.array([p.second_parameter for p in self.points])
 
     @property
     def amplitude(self) -> np.ndarray:

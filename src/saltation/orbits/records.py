@@ -57,6 +57,9 @@ class BranchPoint:
         Autonomous orbits: ``|M n - n|`` along the flow direction ``n``, the monodromy's accuracy figure.
     excursion : float
         ``max_i (max x_i - min x_i)`` over the period: how far the orbit moves (0 for an equilibrium).
+    second_parameter : float
+        On a two-parameter curve of special points: the value of the second parameter (``nan`` on a
+        one-parameter branch).
     """
 
     parameter: float
@@ -73,6 +76,7 @@ class BranchPoint:
     event_ids: tuple[tuple[int, int, int], ...] = ()
     trivial_error: float = float("nan")
     excursion: float = float("nan")
+    second_parameter: float = float("nan")
 
 
 #: The name of :class:`BranchPoint` where a problem describes a solved point (before a branch records it).

@@ -47,6 +47,7 @@ Reading
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io as _io
 import json
 import math
@@ -92,6 +93,8 @@ __all__ = [
 
 BRANCH_FORMAT = "saltation.branches.branch"
 DIAGRAM_FORMAT = "saltation.apps.diagram"
+SWEEP_FORMAT = "saltation.sweep"
+PERIOD_MAP_FORMAT = "saltation.period_map"
 FORMAT_VERSION = 1
 EVENT_SEPARATOR = ";"
 
@@ -466,14 +469,23 @@ def _read_json(path: PathType, *, bare_constants: bool = False) -> Any:
     return walk(doc, "")
 
 
-def _check_format(d: Any, expected: str, fields: _Fields, where: str = "") -> dict[str, Any]:
-    """``d`` as an object of format ``expected``, version :data:`FORMAT_VERSION`."""
+def format_header(name: str) -> dict[str, Any]:
+    """The first two keys of every record file the library writes (branches, diagrams, sweeps, period
+    maps): ``{"format": name, "version": FORMAT_VERSION}``."""
+    return {"format": name, "version": FORMAT_VERSION}
+
+
+def _check_format(d: Any, expected: str, fields: _Fields, where: str = "", *, legacy: str | None = None) -> dict[str, Any]:
+    """``d`` as an object of format ``expected``, version :data:`FORMAT_VERSION` (:func:`format_header`);
+    ``legacy`` is the single ``"format"`` string that files of earlier releases wrote instead of the two keys."""
     d = fields.obj(d, where or "(top level)")
     fmt = d.get("format", _MISSING)
     if fmt is _MISSING:
         fields.fail(_sub(where, "format"), f"missing: not a {expected} file")
+    if legacy is not None and fmt == legacy and "version" not in d:
+        return d
     if fmt != expected:
-        fields.fail(_sub(where, "format"), f"expected format {expected!r}, found {_show(fmt)}")
+        fields.fail(_sub(where, "format"), f"expected format {expected!r}, found {_show(fmt)}: not a {expected} record")
     version = d.get("version", _MISSING)
     if version is _MISSING:
         fields.fail(_sub(where, "version"), "missing")
@@ -481,6 +493,9 @@ def _check_format(d: Any, expected: str, fields: _Fields, where: str = "") -> di
         fields.fail(_sub(where, "version"), f"unsupported {expected} version {_show(version)} (this library reads "
                     f"{FORMAT_VERSION})")
     return d
+
+
+check_format = _check_format
 
 
 # ---------------------------------------------------------------------------
@@ -527,55 +542,162 @@ def _enc_real_array(a: np.ndarray | None) -> list[Any] | None:
 # ---------------------------------------------------------------------------
 
 
-def _point_to_dict(p: BranchPoint) -> dict[str, Any]:
-    return {
-        "parameter": _enc_float(p.parameter),
-        "state": _enc_real_array(p.state),
-        "period": _enc_float(p.period),
-        "amplitude": _enc_float(p.amplitude),
-        "half_peak_to_peak": _enc_float(p.half_peak_to_peak),
-        "multipliers": _enc_complex_array(p.multipliers),
-        "stable": bool(p.stable),
-        "event_labels": list(p.event_labels),
-        "step": _enc_float(p.step),
-        "iterations": int(p.iterations),
-        "monodromy": _enc_real_array(p.monodromy),
-        "event_ids": [[int(k), int(tr), int(m)] for k, tr, m in p.event_ids],
-        "trivial_error": _enc_float(p.trivial_error),
-        "excursion": _enc_float(p.excursion),
-    }
+# Each record type is written and read field by field from its dataclass: a codec per field, chosen by
+# the field's type annotation unless the table below names one for the field.  A field that has neither
+# stops the import (a new field cannot be left out of the files by oversight); a field missing from a
+# file takes its dataclass default (files written before it existed), and one without a default fails.
+
+Encoder = Callable[[Any], Any]
+#: ``decode(fields, value, field path, the fields decoded so far)``
+Decoder = Callable[["_Fields", Any, str, dict[str, Any]], Any]
 
 
-def _point_from_dict(v: Any, f: _Fields, where: str) -> BranchPoint:
-    d = f.obj(v, where)
-    real, finite = f.real, (lambda x, field: f.real(x, field, finite=True))
-    events_key = "event_labels" if "event_labels" in d or "events" not in d else "events"  # "events": before 2026-11-24
-    return BranchPoint(
-        parameter=f.take(d, where, "parameter", finite),
-        state=f.take(d, where, "state", lambda x, field: f.reals(x, field, finite=True)),
-        period=f.take(d, where, "period", real),
-        amplitude=f.take(d, where, "amplitude", real),
-        half_peak_to_peak=f.take(d, where, "half_peak_to_peak", real),
-        multipliers=f.take(d, where, "multipliers", f.complexes),
-        stable=f.take(d, where, "stable", f.boolean),
-        event_labels=f.take(d, where, events_key, f.strings),
-        step=f.take(d, where, "step", real),
-        iterations=f.take(d, where, "iterations", lambda x, field: f.integer(x, field, minimum=0)),
-        # files before 2026-11-25 hold the labels only
-        monodromy=f.take(d, where, "monodromy", f.nullable(lambda x, field: f.square(x, field)), None),
-        event_ids=f.take(d, where, "event_ids", lambda x, field: _event_ids(f, x, field), ()),
-        trivial_error=f.take(d, where, "trivial_error", real, math.nan),
-        excursion=f.take(d, where, "excursion", real, math.nan),
-    )
+def _dec(method: str, **kw: Any) -> Decoder:
+    """A decoder calling ``_Fields.<method>(value, field, **kw)``."""
+    return lambda f, v, field, done: getattr(f, method)(v, field, **kw)
 
 
-def _event_ids(f: _Fields, v: Any, field: str) -> tuple[tuple[int, int, int], ...]:
+def _nullable(dec: Decoder) -> Decoder:
+    return lambda f, v, field, done: None if v is None else dec(f, v, field, done)
+
+
+def _as_tuple(dec: Decoder) -> Decoder:
+    return lambda f, v, field, done: tuple(float(x) for x in dec(f, v, field, done))
+
+
+def _square_of_state(f: _Fields, v: Any, field: str, done: dict[str, Any]) -> np.ndarray:
+    """A square matrix as large as the record's state (decoded before it)."""
+    m = f.square(v, field)
+    state = done.get("state")
+    if state is not None and m.shape[0] != len(state):
+        n = len(state)
+        f.fail(field, f"expected a {n} x {n} matrix (the state has {n} components), got {m.shape[0]} x {m.shape[0]}")
+    return m
+
+
+def _event_ids_dec(f: _Fields, v: Any, field: str, done: dict[str, Any]) -> tuple[tuple[int, int, int], ...]:
     """A point's event identities: ``[[kind, transition, mode entered], ...]``."""
     if not isinstance(v, list) or not all(
             isinstance(e, list) and len(e) == 3 and all(isinstance(i, int) and not isinstance(i, bool) for i in e)
             for e in v):
         f.fail(field, f"expected a list of [kind, transition, mode] integer triples, got {v!r}")
     return tuple((e[0], e[1], e[2]) for e in v)
+
+
+def _choice(choices: Mapping[str, Any]) -> Decoder:
+    return lambda f, v, field, done: f.choice(v, field, choices)
+
+
+#: codecs by type annotation (as the dataclasses spell it)
+_BY_TYPE: dict[str, tuple[Encoder, Decoder]] = {
+    "float": (lambda x: _enc_float(x), _dec("real")),
+    "bool": (bool, _dec("boolean")),
+    "int": (int, _dec("integer")),
+    "str": (str, _dec("string")),
+    "tuple[str, ...]": (list, _dec("strings")),
+    "tuple[float, ...]": (lambda a: [_enc_float(x) for x in a], _as_tuple(_dec("reals"))),
+    "float | None": (lambda x: None if x is None else _enc_float(x), _nullable(_dec("real"))),
+    "complex | None": (lambda z: None if z is None else _enc_complex(z), _nullable(_dec("complex"))),
+}
+_REAL_ARRAY = (_enc_real_array, _nullable(_dec("reals")))
+_COMPLEX_ARRAY = (_enc_complex_array, _nullable(_dec("complexes")))
+_SQUARE = (_enc_real_array, _nullable(_square_of_state))
+_EVENT_IDS = (lambda ids: [[int(k), int(tr), int(m)] for k, tr, m in ids], _event_ids_dec)
+
+
+def _enum(cls: type) -> tuple[Encoder, Decoder]:
+    return (lambda e: e.value, _choice({k.value: k for k in cls}))
+
+
+_KINDS = {k.value: k for k in SpecialPointKind}
+_STATUSES = {k.value: k for k in SpecialPointStatus}
+
+
+class _Codec:
+    """The codec of a record dataclass: its fields, each with an encoder and a decoder.
+
+    Parameters
+    ----------
+    cls : dataclass type
+    fields : mapping
+        Codecs of fields that the type annotation does not decide (arrays, enums, checked values).
+    skip : set of str
+        Fields not written (kept in memory only).
+    old_names : mapping
+        Field -> the key files of earlier releases used for it.
+    """
+
+    def __init__(self, cls: type, fields: Mapping[str, tuple[Encoder, Decoder]], *, skip: frozenset[str] = frozenset(),
+                 old_names: Mapping[str, str] | None = None):
+        self.cls = cls
+        self.old_names = dict(old_names or {})
+        self.fields: list[tuple[str, Encoder, Decoder, bool]] = []
+        for fld in dataclasses.fields(cls):
+            if fld.name in skip:
+                continue
+            codec = fields.get(fld.name) or _BY_TYPE.get(str(fld.type))
+            if codec is None:
+                raise TypeError(f"{cls.__name__}.{fld.name} ({fld.type}) has no file codec: add one to saltation.output.io")
+            required = fld.default is dataclasses.MISSING and fld.default_factory is dataclasses.MISSING
+            self.fields.append((fld.name, *codec, required))
+
+    def encode(self, obj: Any) -> dict[str, Any]:
+        return {name: enc(getattr(obj, name)) for name, enc, _, _ in self.fields}
+
+    def decode(self, f: _Fields, v: Any, where: str, **given: Any) -> Any:
+        """The record from its object ``v`` (the field path ``where``); ``given`` are the skipped fields."""
+        d = f.obj(v, where)
+        done: dict[str, Any] = {}
+        for name, _, dec, required in self.fields:
+            key = name if name in d or self.old_names.get(name) not in d else self.old_names[name]
+            if key not in d:
+                if required:
+                    f.fail(_sub(where, name), "missing")
+                continue  # the dataclass default: a file written before the field existed
+            done[name] = dec(f, d[key], _sub(where, key), done)
+        return self.cls(**done, **given)
+
+
+_POINT_CODEC = _Codec(
+    BranchPoint,
+    {
+        "parameter": (_enc_float, _dec("real", finite=True)),
+        "state": (_enc_real_array, _dec("reals", finite=True)),
+        "multipliers": (_enc_complex_array, _dec("complexes")),
+        "iterations": (int, _dec("integer", minimum=0)),
+        "monodromy": _SQUARE,
+        "event_ids": _EVENT_IDS,
+    },
+    old_names={"event_labels": "events"},  # "events": files before 2026-11-24
+)
+
+_SPECIAL_POINT_CODEC = _Codec(
+    SpecialPoint,
+    {
+        "kind": _enum(SpecialPointKind),
+        "bracket": (lambda b: [_enc_float(x) for x in b], _as_tuple(_dec("reals", length=2))),
+        "state": _REAL_ARRAY,
+        "multipliers": _COMPLEX_ARRAY,
+        "multipliers_minus": _COMPLEX_ARRAY,
+        "multipliers_plus": _COMPLEX_ARRAY,
+        "monodromy_minus": _SQUARE,
+        "monodromy_plus": _SQUARE,
+        # written by name; read as a string, which SpecialPoint parses (with the exponents files before
+        # 2026-11-25 wrote into it)
+        "limits": (lambda e: e.value, _dec("string")),
+        # files before 2026-11-25 do not say: the dataclass default, the weaker claim (within its bracket)
+        "status": _enum(SpecialPointStatus),
+    },
+    old_names={"event_labels_minus": "events_minus", "event_labels_plus": "events_plus"},
+)
+
+
+def _point_to_dict(p: BranchPoint) -> dict[str, Any]:
+    return _POINT_CODEC.encode(p)
+
+
+def _point_from_dict(v: Any, f: _Fields, where: str) -> BranchPoint:
+    return _POINT_CODEC.decode(f, v, where)
 
 
 def _check_points(points: Sequence[BranchPoint], f: _Fields, name: Callable[[int], str]) -> None:
@@ -590,82 +712,11 @@ def _check_points(points: Sequence[BranchPoint], f: _Fields, name: Callable[[int
 
 
 def _special_point_to_dict(sp: SpecialPoint) -> dict[str, Any]:
-    return {
-        "kind": sp.kind.value,
-        "parameter": _enc_float(sp.parameter),
-        "bracket": [_enc_float(b) for b in sp.bracket],
-        "accuracy": _enc_float(sp.accuracy),
-        "index": int(sp.index),
-        "state": _enc_real_array(sp.state),
-        "period": _enc_float(sp.period),
-        "amplitude": _enc_float(sp.amplitude),
-        "multipliers": _enc_complex_array(sp.multipliers),
-        "multipliers_minus": _enc_complex_array(sp.multipliers_minus),
-        "multipliers_plus": _enc_complex_array(sp.multipliers_plus),
-        "monodromy_minus": _enc_real_array(sp.monodromy_minus),
-        "monodromy_plus": _enc_real_array(sp.monodromy_plus),
-        "crossing_q": None if sp.crossing_q is None else _enc_float(sp.crossing_q),
-        "crossing_point": None if sp.crossing_point is None else _enc_complex(sp.crossing_point),
-        "event_labels_minus": list(sp.event_labels_minus),
-        "event_labels_plus": list(sp.event_labels_plus),
-        "note": sp.note,
-        "multipliers_accuracy": _enc_float(sp.multipliers_accuracy),
-        "limits": sp.limits.value,
-        "touch_surface": sp.touch_surface,
-        "touch_mode": sp.touch_mode,
-        "touch_time": _enc_float(sp.touch_time),
-        "growth_exponents": [_enc_float(a) for a in sp.growth_exponents],
-        "status": sp.status.value,
-    }
-
-
-_KINDS = {k.value: k for k in SpecialPointKind}
-_STATUSES = {k.value: k for k in SpecialPointStatus}
+    return _SPECIAL_POINT_CODEC.encode(sp)
 
 
 def _special_point_from_dict(v: Any, f: _Fields, where: str) -> SpecialPoint:
-    d = f.obj(v, where)
-    real, opt = f.real, f.nullable
-    state = f.take(d, where, "state", opt(lambda x, field: f.reals(x, field)))
-    n = None if state is None else len(state)
-
-    def square(x: Any, field: str) -> np.ndarray:
-        m = f.square(x, field)
-        if n is not None and m.shape[0] != n:
-            f.fail(field, f"expected a {n} x {n} matrix (the state has {n} components), got {m.shape[0]} x {m.shape[0]}")
-        return m
-
-    def events(key: str, old: str) -> tuple[str, ...]:  # "events_minus", "events_plus": files before 2026-11-24
-        return f.take(d, where, key if key in d or old not in d else old, f.strings, ())
-
-    return SpecialPoint(
-        kind=f.take(d, where, "kind", lambda x, field: f.choice(x, field, _KINDS)),
-        parameter=f.take(d, where, "parameter", real),
-        bracket=tuple(float(b) for b in f.take(d, where, "bracket", lambda x, field: f.reals(x, field, 2))),  # type: ignore[arg-type]
-        accuracy=f.take(d, where, "accuracy", real),
-        index=f.take(d, where, "index", f.integer),
-        state=state,
-        period=f.take(d, where, "period", real),
-        amplitude=f.take(d, where, "amplitude", real),
-        multipliers=f.take(d, where, "multipliers", opt(f.complexes), None),
-        multipliers_minus=f.take(d, where, "multipliers_minus", opt(f.complexes), None),
-        multipliers_plus=f.take(d, where, "multipliers_plus", opt(f.complexes), None),
-        monodromy_minus=f.take(d, where, "monodromy_minus", opt(square), None),
-        monodromy_plus=f.take(d, where, "monodromy_plus", opt(square), None),
-        crossing_q=f.take(d, where, "crossing_q", opt(real), None),
-        crossing_point=f.take(d, where, "crossing_point", opt(f.complex), None),
-        event_labels_minus=events("event_labels_minus", "events_minus"),
-        event_labels_plus=events("event_labels_plus", "events_plus"),
-        note=f.take(d, where, "note", f.string, ""),
-        multipliers_accuracy=f.take(d, where, "multipliers_accuracy", real, math.nan),
-        limits=f.take(d, where, "limits", f.string, ""),
-        touch_surface=f.take(d, where, "touch_surface", f.string, ""),
-        touch_mode=f.take(d, where, "touch_mode", f.string, ""),
-        touch_time=f.take(d, where, "touch_time", real, math.nan),
-        growth_exponents=tuple(f.take(d, where, "growth_exponents", f.reals, ())),
-        # files before 2026-11-25 do not say: the weaker claim (it lies within its bracket)
-        status=f.take(d, where, "status", lambda x, field: f.choice(x, field, _STATUSES), SpecialPointStatus.BRACKETED),
-    )
+    return _SPECIAL_POINT_CODEC.decode(f, v, where)
 
 
 def _enc_stop(reason: StopReason | None) -> str | None:
@@ -677,21 +728,32 @@ _STOPS = {r.name.lower(): r for r in StopReason}
 _BRANCH_KINDS = {k.value: k for k in BranchKind}
 
 
+def _dec_fixed(f: _Fields, v: Any, field: str, done: dict[str, Any]) -> dict[str, float]:
+    return {k: f.real(x, _sub(field, k)) for k, x in f.obj(v, field).items()}
+
+
+def _dec_list(dec: Decoder) -> Decoder:
+    return lambda f, v, field, done: [dec(f, x, _item(field, k), done) for k, x in enumerate(f.list(v, field))]
+
+
+_STOP = (_enc_stop, _nullable(_choice(_STOPS)))
+_BRANCH_CODEC = _Codec(
+    Branch,
+    {
+        "kind": _enum(BranchKind),
+        "special_points": (lambda sps: [_special_point_to_dict(sp) for sp in sps],
+                           _dec_list(lambda f, v, field, done: _special_point_from_dict(v, f, field))),
+        "stop_reason": _STOP,
+        "stop_reasons": (lambda rs: [_enc_stop(r) for r in rs], _dec_list(_STOP[1])),
+        "fixed_parameters": (lambda d: {str(k): _enc_float(v) for k, v in d.items()}, _dec_fixed),
+        "curve_of": (lambda k: None if k is None else k.value, _nullable(_choice(_KINDS))),
+    },
+    skip=frozenset({"points"}),  # written beside the metadata (JSON) or as the rows of a CSV
+)
+
+
 def _metadata_to_dict(branch: Branch) -> dict[str, Any]:
-    return {
-        "format": BRANCH_FORMAT,
-        "version": FORMAT_VERSION,
-        "model": branch.model,
-        "parameter_name": branch.parameter_name,
-        "kind": branch.kind.value,
-        "backward": bool(branch.backward),
-        "autonomous": bool(branch.autonomous),
-        "label": branch.label,
-        "stop_reason": _enc_stop(branch.stop_reason),
-        "stop_reasons": [_enc_stop(r) for r in branch.stop_reasons],
-        "fixed_parameters": {str(k): _enc_float(v) for k, v in branch.fixed_parameters.items()},
-        "special_points": [_special_point_to_dict(sp) for sp in branch.special_points],
-    }
+    return {**format_header(BRANCH_FORMAT), **_BRANCH_CODEC.encode(branch)}
 
 
 def branch_to_dict(branch: Branch) -> dict[str, Any]:
@@ -714,7 +776,6 @@ def branch_to_dict(branch: Branch) -> dict[str, Any]:
 
 def _branch_from_dict(v: Any, f: _Fields, where: str = "", points: list[BranchPoint] | None = None) -> Branch:
     d = _check_format(v, BRANCH_FORMAT, f, where)
-    stop = f.nullable(lambda x, field: f.choice(x, field, _STOPS))
     if points is None:
         if "points" not in d:
             hint = " (a CSV's side file? read the CSV with load_branch_csv)" if "n_points" in d else ""
@@ -722,23 +783,7 @@ def _branch_from_dict(v: Any, f: _Fields, where: str = "", points: list[BranchPo
         items = f.list(d["points"], _sub(where, "points"))
         points = [_point_from_dict(p, f, _item(_sub(where, "points"), k)) for k, p in enumerate(items)]
         _check_points(points, f, lambda k: _item(_sub(where, "points"), k))
-    fixed = f.take(d, where, "fixed_parameters", f.obj, {})
-    specials = f.take(d, where, "special_points", f.list, [])
-    reasons = f.take(d, where, "stop_reasons", f.list, [])
-    return Branch(
-        model=f.take(d, where, "model", f.string),
-        parameter_name=f.take(d, where, "parameter_name", f.string),
-        kind=f.take(d, where, "kind", lambda x, field: f.choice(x, field, _BRANCH_KINDS)),
-        backward=f.take(d, where, "backward", f.boolean, False),
-        points=points,
-        special_points=[_special_point_from_dict(s, f, _item(_sub(where, "special_points"), k))
-                        for k, s in enumerate(specials)],
-        stop_reason=f.take(d, where, "stop_reason", stop, None),
-        stop_reasons=[stop(r, _item(_sub(where, "stop_reasons"), k)) for k, r in enumerate(reasons)],
-        fixed_parameters={k: f.real(x, _sub(_sub(where, "fixed_parameters"), k)) for k, x in fixed.items()},
-        label=f.take(d, where, "label", f.string, ""),
-        autonomous=f.take(d, where, "autonomous", f.boolean, False),
-    )
+    return _BRANCH_CODEC.decode(f, d, where, points=points)
 
 
 def branch_from_dict(d: dict[str, Any], *, points: list[BranchPoint] | None = None,
@@ -824,8 +869,7 @@ def save_diagram_json(branches: Iterable[Branch], path: PathType) -> Path:
         The file written.
     """
     obj = {
-        "format": DIAGRAM_FORMAT,
-        "version": FORMAT_VERSION,
+        **format_header(DIAGRAM_FORMAT),
         "branches": [branch_to_dict(b) for b in branches],
     }
     return _write_json(obj, path)

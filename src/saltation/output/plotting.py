@@ -57,6 +57,7 @@ SPECIAL_POINT_MARKERS: dict[SpecialPointKind, tuple[str, str]] = {
     SpecialPointKind.SWITCHING_SLIDING: (">", "switching-sliding"),
     SpecialPointKind.ADDING_SLIDING: ("d", "adding-sliding"),
     SpecialPointKind.CYCLE_COLLAPSE: ("8", "cycle collapses onto an equilibrium"),
+    SpecialPointKind.CODIMENSION_TWO: ("p", "codimension-two point of a curve"),
 }
 
 #: Axis label per amplitude measure; ``{x}`` is the name of the first state.
@@ -569,15 +570,15 @@ def plot_loci(loci, *, title: str = ""):
     fig = Figure(figsize=(6.4, 4.8), layout="constrained")
     ax = fig.add_subplot()
     for k, locus in enumerate(loci):
-        pts = np.asarray(locus.points)
-        if pts.size:
-            ax.plot(pts[:, 0], pts[:, 1], "-", color=f"C{k % 10}", label=f"curve {k}")
+        if len(locus):
+            ax.plot(locus.parameter, locus.second_parameter, "-", color=f"C{k % 10}", label=f"curve {k}")
         for c in locus.special_points:
-            ax.plot(*c.values, "o", color="k", markersize=5)
-            ax.annotate(f"{c.kinds[0]} -> {c.kinds[1]}", c.values, textcoords="offset points", xytext=(6, 6), fontsize=7)
+            at = (c.parameter, c.second_parameter)
+            ax.plot(*at, "o", color="k", markersize=5)
+            ax.annotate(" -> ".join(c.sides), at, textcoords="offset points", xytext=(6, 6), fontsize=7)
     if loci:
-        ax.set_xlabel(loci[0].param)
-        ax.set_ylabel(loci[0].param2)
+        ax.set_xlabel(loci[0].parameter_name)
+        ax.set_ylabel(loci[0].second_parameter_name)
         ax.legend(loc="best", fontsize=8)
     ax.set_title(title)
     return fig

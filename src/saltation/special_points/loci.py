@@ -44,7 +44,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from saltation.branches.branch import SpecialPoint, SpecialPointKind, SpecialPointStatus, StopReason
+from saltation.branches.branch import (
+    Branch,
+    BranchKind,
+    SpecialPoint,
+    SpecialPointKind,
+    SpecialPointStatus,
+    StopReason,
+)
 from saltation.engine.flow import EventKind, Flow
 from saltation.errors import IntegrationError, ModelError, SaltationError
 from saltation.orbits.boundary import saltation_at_corner
@@ -56,6 +63,7 @@ from saltation.orbits.conditions import (
     MultiplierCondition,
     Tangency,
 )
+from saltation.orbits.records import BranchPoint
 from saltation.orbits.shooting import ShootingProblem
 from saltation.special_points.continuation import (
     Continuation,
@@ -76,70 +84,60 @@ SLIDING_KINDS = frozenset(
 
 
 @dataclass
-class Codim2Point:
-    """A point of a curve where two conditions meet (the kind of the special point changes).
+class Locus(Branch):
+    """A curve of special points in two parameters: a :class:`~saltation.branches.branch.Branch` whose
+    points carry both parameters (``parameter`` the first, ``second_parameter`` the second), labelled with
+    :class:`~saltation.branches.branch.SpecialPoint` records of kind CODIMENSION_TWO where two defining
+    conditions meet.
 
-    Attributes
-    ----------
-    kinds : (str, str)
-        The kinds on either side along the curve.
-    values : (float, float)
-        The two parameters there.
-    accuracy : float
-        How precisely it is known, in the two parameters: the distance between the two curve points
-        around it (``bracketed``), or from the curve point to the point located on the other curve.
-    status : SpecialPointStatus
-        BRACKETED (between two curve points, at their midpoint) or LOCATED (by a defining system).
-    """
-
-    kinds: tuple[str, str]
-    values: tuple[float, float]
-    accuracy: float
-    status: SpecialPointStatus = SpecialPointStatus.BRACKETED
-
-    def record(self) -> dict:
-        return {
-            "kind": f"{self.kinds[0]} -> {self.kinds[1]}",
-            "value": [float(self.values[0]), float(self.values[1])],
-            "accuracy": float(self.accuracy),
-            "status": self.status.value,
-        }
-
-
-@dataclass
-class Locus:
-    """A curve of special points in two parameters.
-
-    Attributes
-    ----------
-    kind : SpecialPointKind
-        The kind of the special point it started from.
-    param, param2 : str
-    points : ndarray, shape (m, 2)
-        ``(value of param, value of param2)`` along the curve.
-    states : ndarray, shape (m, n)
+    Attributes (beyond a branch's)
+    ------------------------------
     stop_reason : str
-        Why each direction stopped.
-    special_points : list of Codim2Point
+        Why each direction stopped, one clause each (``"increasing f0: reached a parameter bound;
+        decreasing f0: failed after 12 points: ..."``).
     kinds : list of str
-        The kind of the special point at each curve point.
+        The kind of the special point at each curve point (grazing and corner curves, whose kind is
+        classified along the curve; empty otherwise).
     """
 
-    kind: SpecialPointKind
-    param: str
-    param2: str
-    points: np.ndarray
-    states: np.ndarray
-    stop_reason: str
-    special_points: list[Codim2Point] = field(default_factory=list)
+    stop_reason: str = ""
     kinds: list[str] = field(default_factory=list)
 
+    @property
+    def values(self) -> np.ndarray:
+        """``(first, second parameter)`` per curve point, shape (m, 2)."""
+        return np.column_stack([self.parameter, self.second_parameter]).reshape(-1, 2)
+
     def record(self) -> dict:
+        """The curve as the command line writes it (``saltation locus --json``)."""
         return {
-            "points": [[float(a), float(b)] for a, b in self.points],
+            "points": [[float(a), float(b)] for a, b in self.values],
             "stop_reason": self.stop_reason,
-            "special_points": [c.record() for c in self.special_points],
+            "special_points": [codimension_two_record(c) for c in self.special_points],
         }
+
+
+def codimension_two_record(sp: SpecialPoint) -> dict:
+    """A codimension-two point as ``saltation locus --json`` writes it."""
+    return {
+        "kind": " -> ".join(sp.sides),
+        "value": [float(sp.parameter), float(sp.second_parameter)],
+        "accuracy": float(sp.accuracy),
+        "status": sp.status.value,
+    }
+
+
+def _codimension_two(sides: tuple[str, str], values: Sequence[float], accuracy: float, index: int,
+                     near: BranchPoint, status: SpecialPointStatus = SpecialPointStatus.BRACKETED,
+                     bracket: tuple[float, float] | None = None) -> SpecialPoint:
+    """The record of a codimension-two point of a curve, near its curve point ``near`` (index ``index``)."""
+    first, second = (float(v) for v in values)
+    return SpecialPoint(
+        kind=SpecialPointKind.CODIMENSION_TWO, parameter=first, second_parameter=second,
+        bracket=bracket or (first, first), accuracy=float(accuracy), index=int(index), state=np.array(near.state),
+        period=float(near.period), amplitude=float(near.amplitude), status=status, sides=tuple(sides),
+        note=f"{sides[0]} -> {sides[1]}",
+    )
 
 
 class _Curve(ConditionedProblem):
@@ -350,8 +348,9 @@ def follow_locus(
     # the curve's own turning points and the multipliers of its orbits are not special points of the curve
     settings = replace(settings, bounds=bounds, detect=False)
     lam0 = float(p[curve.lam_index])
-    runs, reasons, kinds_by_run, events_by_run, ends = [], [], [], [], []
+    runs, records, reasons, kinds_by_run, events_by_run, ends = [], [], [], [], [], []
     start = curve.snapshot()
+    n = problem.system.n
     for direction in (1, -1):
         curve.restore(start)  # each direction starts from the special point's own guesses
         cont = Continuation(curve, settings)
@@ -367,38 +366,47 @@ def follow_locus(
                                      f"{problem.lam_name} = {point.parameter:.10g}: {exc}") from exc
             failure = f"failed after {len(cont.solutions)} points: {exc}"
         runs.append([sol.z.copy() for sol in cont.solutions])
+        # the curve's points carry both parameters: the first (an unknown of the curve) and the second
+        records.append([replace(bp, parameter=float(sol.z[n]), second_parameter=float(sol.z[-1]))
+                        for bp, sol in zip(cont.branch.points, cont.solutions)])
         kinds_by_run.append(list(getattr(curve, "kinds", [])))
         reasons.append(f"{way}: {failure or cont.branch.stop_reason.value}")
         events_by_run.append([canonical_events(e) for e in curve.event_ids])
         if isinstance(curve, MultiplierCurve) and failure is None and cont.branch.stop_reason is not StopReason.PARAMETER_BOUND:
-            end = _end_at_a_corner(problem, curve, point.kind, runs[-1])
+            end = _end_at_a_corner(problem, curve, point.kind, runs[-1], records[-1])
             if end is not None:
-                ends.append(end)
-    zs = list(reversed(runs[1]))[:-1] + runs[0]
-    n = problem.system.n
-    points = np.array([[z[n], z[-1]] for z in zs])
-    locus = Locus(kind=point.kind, param=problem.lam_name, param2=second, points=points,
-                  states=np.array([z[:n] for z in zs]), stop_reason="; ".join(reasons))
+                ends.append((len(runs) - 1, end))
+
+    def joined(by_run: list) -> list:
+        return list(reversed(by_run[1]))[:-1] + by_run[0]
+
+    zs = joined(runs)
+    locus = Locus(
+        model=problem.system.name, parameter_name=problem.lam_name, kind=BranchKind.PERIODIC,
+        points=joined(records), fixed_parameters=dict(zip(problem.system.parameter_names, map(float, p))),
+        label=f"{point.kind.value} curve", autonomous=problem.autonomous, second_parameter_name=second,
+        curve_of=point.kind, stop_reason="; ".join(reasons),
+    )
+    points = locus.values
+
+    def label(a: int, sides: tuple[str, str]) -> SpecialPoint:
+        """A codimension-two point between curve points ``a`` and ``a + 1``, at their midpoint."""
+        return _codimension_two(sides, 0.5 * (points[a] + points[a + 1]), np.linalg.norm(points[a + 1] - points[a]),
+                                a, locus.points[a], bracket=(float(points[a][0]), float(points[a + 1][0])))
+
     if classify:
-        locus.kinds = list(reversed(kinds_by_run[1]))[:-1] + kinds_by_run[0]
+        locus.kinds = joined(kinds_by_run)
         for a in range(len(zs) - 1):
             if locus.kinds[a] != locus.kinds[a + 1]:
-                mid = 0.5 * (points[a] + points[a + 1])
-                locus.special_points.append(Codim2Point(
-                    kinds=(locus.kinds[a], locus.kinds[a + 1]), values=(float(mid[0]), float(mid[1])),
-                    accuracy=float(np.linalg.norm(points[a + 1] - points[a])),
-                ))
-    events = list(reversed(events_by_run[1]))[:-1] + events_by_run[0]
+                locus.special_points.append(label(a, (locus.kinds[a], locus.kinds[a + 1])))
+    events = joined(events_by_run)
     if isinstance(curve, MultiplierCurve) and len(events) == len(zs):  # (a fold curve follows its orbits' events)
         for a in range(len(zs) - 1):
             if events[a] != events[a + 1]:
                 touch = _touch_kind(problem, curve, zs[a] if len(events[a]) <= len(events[a + 1]) else zs[a + 1])
-                mid = 0.5 * (points[a] + points[a + 1])
-                locus.special_points.append(Codim2Point(
-                    kinds=(point.kind.value, touch), values=(float(mid[0]), float(mid[1])),
-                    accuracy=float(np.linalg.norm(points[a + 1] - points[a])),
-                ))
-    locus.special_points.extend(ends)
+                locus.special_points.append(label(a, (point.kind.value, touch)))
+    # a corner that ends a run lies beyond its last point: the curve's last (increasing) or first (decreasing)
+    locus.special_points.extend(replace(e, index=(len(zs) - 1 if run == 0 else 0)) for run, e in ends)
     return locus
 
 
@@ -414,7 +422,8 @@ def _touch_of(problem: ShootingProblem, point: SpecialPoint) -> tuple[int, float
 
 
 def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: SpecialPointKind,
-                     zs: list[np.ndarray], *, gap: float = 1e-3, last: int = 12) -> Codim2Point | None:
+                     zs: list[np.ndarray], records: list[BranchPoint], *, gap: float = 1e-3,
+                     last: int = 12) -> SpecialPoint | None:
     """Where a fold or period-doubling curve stops short of its bounds because its orbit comes to touch a
     switching surface (a segment of the orbit shrinks to nothing: a smooth fold born at a corner), the
     curve ends on the corner curve.  Of its last points, the one whose orbit comes nearest to a surface
@@ -423,7 +432,7 @@ def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: Spe
     distance from the curve point to it the label's accuracy."""
     n = problem.system.n
     best = None
-    for z in zs[-last:]:
+    for z, record in zip(zs[-last:], records[-last:]):
         p = curve.parameters_at(z[:-1], z[-1])
         try:
             (transition, t_g), *_ = grazed_transitions(problem.flow, z[:n], p, t0=problem.t0,
@@ -434,19 +443,19 @@ def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: Spe
             continue
         g = abs(problem.flow.indicator(surface, t_g, x, p)) / (1.0 + float(np.linalg.norm(x)))
         if g <= gap and (best is None or g < best[0]):
-            best = (g, z, p, transition, t_g)
+            best = (g, z, p, transition, t_g, record)
     if best is None:
         return None
-    _, z, p, transition, t_g = best
+    _, z, p, transition, t_g, record = best
     try:
         corner = locate_grazing(problem.flow, z[:n], float(z[n]), problem.lam_name, transition, t_g, parameters=p,
                                 t0=problem.t0, tolerances=problem.tolerances)
     except SaltationError:
         return None
     at = np.concatenate([corner.state0, [corner.parameter, z[-1]]])
-    return Codim2Point(kinds=(kind.value, _touch_kind(problem, curve, at)), values=(corner.parameter, float(z[-1])),
-                       accuracy=max(abs(corner.parameter - float(z[n])), corner.accuracy),
-                       status=SpecialPointStatus.LOCATED)
+    return _codimension_two((kind.value, _touch_kind(problem, curve, at)), (corner.parameter, float(z[-1])),
+                            max(abs(corner.parameter - float(z[n])), corner.accuracy), 0, record,
+                            status=SpecialPointStatus.LOCATED)
 
 
 def _touch_kind(problem: ShootingProblem, curve: _Curve, z: np.ndarray) -> str:
@@ -538,6 +547,6 @@ class MultiplierCurve(_Curve):
 
 
 __all__ = [
-    "SLIDING_KINDS", "Codim2Point", "GrazingCurve", "Locus", "MultiplierCurve", "SlidingCurve", "arrival_identity",
+    "SLIDING_KINDS", "GrazingCurve", "Locus", "MultiplierCurve", "SlidingCurve", "arrival_identity",
     "follow_locus", "grazed_transitions",
 ]
