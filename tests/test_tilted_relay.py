@@ -243,3 +243,23 @@ def test_switching_sliding_curve_reaches_its_bounds(switching_sliding_locus):
 def test_switching_sliding_curve_has_no_codimension_two_point(switching_sliding_locus):
     """Nothing happens to the switching-sliding along kappa in [0.3, 0.7] (see the reference's check)."""
     assert switching_sliding_locus.special_points == []
+
+
+# -- the same curves by multiple shooting ---------------------------------------------------------------------------
+@pytest.mark.parametrize("kind", [SpecialPointKind.SWITCHING_SLIDING, SpecialPointKind.GRAZING_SLIDING])
+def test_curves_by_multiple_shooting_against_the_references(branch, kind):
+    """The defining systems with the orbit cut into 3 segments (the arrival tangency and the grazing read
+    from the segment that holds their instant): every point against the same closed forms, to the same
+    1e-9, over the whole range."""
+    from saltation.orbits.shooting import MultipleShootingProblem
+
+    br, problem = branch
+    locus = follow_locus(MultipleShootingProblem(problem, 3), _the(br, kind), "kappa", KAPPA_RANGE,
+                         settings=CURVE_SETTINGS)
+    _reaches_both_bounds(locus)
+    v, kappa = locus.values.T
+    assert len(v) > 10
+    reference = (R.switching_sliding(kappa) if kind is SpecialPointKind.SWITCHING_SLIDING
+                 else np.array([R.grazing_sliding(k)[0] for k in kappa]))
+    np.testing.assert_allclose(v, reference, rtol=0, atol=1e-9)
+    assert locus.special_points == []

@@ -1010,8 +1010,8 @@ def cmd_locus(args: argparse.Namespace) -> int:
         points = [sp for sp in cont.branch.special_points if sp.kind is kind]
         curve_settings = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(min(lo2, hi2), max(lo2, hi2)))
         counter2 = (lambda point: update(f"{args.model}: {kind.value} over {args.param2}", 0)) if update else None
-        single = getattr(problem, "problem", problem)  # the curves' defining systems shoot once per period
-        loci = [follow_locus(single, sp, args.param2, curve_settings.bounds, settings=curve_settings, progress=counter2)
+        # with --segments the curves' defining systems shoot by segments too
+        loci = [follow_locus(problem, sp, args.param2, curve_settings.bounds, settings=curve_settings, progress=counter2)
                 for sp in points]
     finally:
         close()

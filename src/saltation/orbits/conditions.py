@@ -35,7 +35,7 @@ from __future__ import annotations
 import abc
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -84,6 +84,9 @@ class Shot:
         The shot at the split instant, when a condition asked for one.
     flow, t0, sign, tolerances, disabled :
         How the shot was run, for conditions that need a further partial run.
+    mode0 : str or None
+        With multiple shooting: the mode the segment from ``x0`` at ``t0`` starts in (the conditions'
+        derivatives by ``x0`` are then by that segment's node); None: the trajectory's.
     """
 
     x0: np.ndarray
@@ -97,10 +100,12 @@ class Shot:
     sign: float
     tolerances: object
     disabled: tuple[int, ...] = ()
+    mode0: str | None = None
 
     def run_to(self, t: float, params: Sequence[int]) -> Piece:
         """A partial run from ``t0`` to ``t`` with the sensitivities of ``params`` (one integration each)."""
-        runs = [self.flow.run(self.x0, self.t0, t, self.parameters, mode0=self.trajectory.mode0, variational=True,
+        mode0 = self.mode0 if self.mode0 is not None else self.trajectory.mode0
+        runs = [self.flow.run(self.x0, self.t0, t, self.parameters, mode0=mode0, variational=True,
                               sensitivity=j, disabled=self.disabled, tolerances=self.tolerances)
                 for j in (list(params) or [-1])]
         first = runs[0]
@@ -516,6 +521,9 @@ class ConditionedProblem:
                  continuation: str | None = None, parameters: np.ndarray | None = None):
         if getattr(problem, "periods", 1) != 1:
             raise ModelError("a special point's defining system is written over one forcing period")
+        #: with multiple shooting (a MultipleShootingProblem): the number of segments, and the single problem
+        self.segments = int(getattr(problem, "segments", 1))
+        self.single = problem.problem if self.segments > 1 else problem
         self.base = problem
         self.flow = problem.flow
         self.system = problem.system
@@ -531,7 +539,8 @@ class ConditionedProblem:
         self.lam_index = -1 if continuation is None else self.system.parameter_index(continuation)
         self.lam_name = continuation
         n = self.system.n
-        self.n_base = n + (1 if self.autonomous else 0)
+        self.n_nodes = self.segments * n
+        self.n_base = self.n_nodes + (1 if self.autonomous else 0)
         self.n_extra = sum(c.extras for c in self.conditions)
         rows = self.n_base + sum(c.size for c in self.conditions)
         if rows != self.dimension:
@@ -540,6 +549,8 @@ class ConditionedProblem:
                              "conditions do not balance them")
         self.disabled = tuple(sorted({k for c in self.conditions for k in c.disabled}))
         self._last: tuple | None = None
+        self._segs: list[Trajectory] = []  # multiple shooting: the last evaluation's segments
+        self._shots: list[Shot] = []  # multiple shooting: the last evaluation's shot of each condition
         self.event_ids: list[tuple] = []  # the orbit's event sequence (by identity) at every accepted point
 
     # -- the layout ---------------------------------------------------------------------
@@ -548,8 +559,24 @@ class ConditionedProblem:
         return self.n_base + len(self.free) + self.n_extra
 
     def pack(self, state0: np.ndarray, *, period: float | None = None, extras: np.ndarray | None = None) -> np.ndarray:
-        """Unknowns from a state (the period of an autonomous orbit) and the freed parameters' values."""
-        head = [np.asarray(state0, dtype=float)]
+        """Unknowns from a state (the period of an autonomous orbit) and the freed parameters' values.
+
+        With multiple shooting ``state0`` is every node, shape ``(m, n)`` or flat, or one state (the nodes
+        are then its trajectory's states at the segments' starts)."""
+        state0 = np.asarray(state0, dtype=float).ravel()
+        if self.segments > 1 and state0.size == self.system.n:  # the nodes along the (virtual) orbit from it
+            T = float(period) if self.autonomous else self.system.forcing_period(self.p)
+            times = self.t0 + self.sign * T * np.arange(self.segments) / self.segments
+            nodes, mode = [state0], None
+            for a, b in zip(times[:-1], times[1:]):
+                run = self.flow.run(nodes[-1], a, b, self.p, mode0=mode, disabled=self.disabled,
+                                    tolerances=self.tolerances)
+                nodes.append(run.x1)
+                mode = run.mode1
+            state0 = np.concatenate(nodes)
+        if state0.size != self.n_nodes:
+            raise ModelError(f"expected {self.n_nodes} node values ({self.segments} x {self.system.n}), got {state0.size}")
+        head = [state0]
         if self.autonomous:
             head.append([float(period)])
         head.append(self.p[self.free])
@@ -568,7 +595,7 @@ class ConditionedProblem:
 
     def period_at(self, shot_or_u, p: np.ndarray) -> float:
         if self.autonomous:
-            return shot_or_u.period if isinstance(shot_or_u, Shot) else float(shot_or_u[self.system.n])
+            return shot_or_u.period if isinstance(shot_or_u, Shot) else float(shot_or_u[self.n_nodes])
         return self.system.forcing_period(p)
 
     def _extras(self, u: np.ndarray) -> list[np.ndarray]:
@@ -658,6 +685,8 @@ class ConditionedProblem:
     def equations(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, Shot]:
         """Residual, ``d/du``, ``d/dlam`` and the shot at ``(u, lam)``."""
+        if self.segments > 1:
+            return self._segmented_equations(u, lam, need_lam=need_lam)
         n, nb, k = self.system.n, self.n_base, len(self.free)
         p = self.parameters_at(u, lam)
         x0 = np.ascontiguousarray(u[:n])
@@ -702,6 +731,201 @@ class ConditionedProblem:
         self._last = (shot, extras)
         return r, J, jl, shot
 
+    # -- multiple shooting ----------------------------------------------------------------
+    def _segment_of(self, t: float, times: np.ndarray) -> int:
+        """The segment whose interval holds the instant ``t`` (the nearest, for an instant just outside)."""
+        m = self.segments
+        pos = (t - times[0]) / (times[-1] - times[0]) * m
+        return int(min(max(math.floor(pos), 0), m - 1))
+
+    def _instant(self, c: Condition, e: np.ndarray) -> float | None:
+        """The instant at which condition ``c`` reads the orbit (its split, event or own instant)."""
+        t = c.split(e)
+        if t is not None:
+            return t
+        if isinstance(c, ArrivalTangency):
+            return c._t_last_eval
+        if isinstance(c, CubicTangency):
+            return float(e[0])
+        return None
+
+    def _segmented_equations(self, u: np.ndarray, lam: float | None, *, need_lam: bool = True
+                             ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, Shot]:
+        """:meth:`equations` with multiple shooting: the matching equations of the segments (the base
+        problem's, :class:`~saltation.orbits.shooting.MultipleShootingProblem`), and each condition read
+        from the segment that holds its instant, its derivatives by that segment's node.
+
+        A segment ``i`` starts at ``t_i = t0 + s i T / m``: where ``T`` moves (an autonomous orbit's unknown
+        period, a forcing period that depends on a parameter), so does ``x(t)`` at a fixed instant ``t`` of
+        the segment, by ``-Phi(t, t_i) f(t_i, x_i) dt_i``; the rows get that term.
+        """
+        n, m, nb, k = self.system.n, self.segments, self.n_base, len(self.free)
+        nodes_n = self.n_nodes
+        p = self.parameters_at(u, lam)
+        U = np.ascontiguousarray(u[:nodes_n])
+        T = float(u[nodes_n]) if self.autonomous else self.system.forcing_period(p)
+        if not (T > 0 and math.isfinite(T)):
+            raise ConvergenceError(f"the period must be positive and finite, got {T}")
+        params = list(self.free) + ([self.lam_index] if (need_lam and lam is not None and self.lam_index >= 0) else [])
+        extras = self._extras(u)
+        times = self.t0 + self.sign * T * np.arange(m + 1) / m
+        split = self._split_time(extras)
+        flow, tol = self.flow, self.tolerances
+        for _ in range(3):
+            split_seg = None if split is None else self._segment_of(split, times)
+            segs: list[list[Trajectory]] = []  # per parameter column (or one without), the segments
+            pieces: dict[int, Trajectory] = {}
+            for j in params or [-1]:
+                mode, row = None, []
+                for i in range(m):
+                    x = np.ascontiguousarray(U[i * n:(i + 1) * n])
+                    if i == split_seg and min(times[i], times[i + 1]) < split < max(times[i], times[i + 1]):
+                        a = flow.run(x, times[i], split, p, mode0=mode, variational=True, sensitivity=j,
+                                     disabled=self.disabled, tolerances=tol)
+                        b = flow.run(a.x1, split, times[i + 1], p, mode0=a.mode1, variational=True, sensitivity=j,
+                                     phi0=a.monodromy, psi0=a.parameter_sensitivity if j >= 0 else None,
+                                     disabled=self.disabled, tolerances=tol)
+                        traj = _joined(a, b)
+                        pieces[j] = a
+                    else:
+                        traj = flow.run(x, times[i], times[i + 1], p, mode0=mode, variational=True, sensitivity=j,
+                                        disabled=self.disabled, tolerances=tol)
+                    row.append(traj)
+                    mode = traj.mode1
+                segs.append(row)
+            first = segs[0]
+            whole = join(first)
+            shots = []
+            for c, e in zip(self.conditions, extras):
+                t_c = self._instant(c, e)
+                i = 0 if t_c is None else self._segment_of(t_c, times)
+                piece = None
+                if split_seg is not None and i == split_seg and pieces:
+                    a0 = pieces[(params or [-1])[0]]
+                    piece = Piece(t=float(a0.t1), x=a0.x1, mode=a0.mode1, fundamental=a0.monodromy,
+                                  sensitivities={j: pieces[j].parameter_sensitivity for j in params},
+                                  sliding=a0.sliding_at_end, velocity=a0.velocity_end)
+                shots.append((i, Shot(
+                    x0=np.array(U[i * n:(i + 1) * n]), period=T, parameters=p, trajectory=whole,
+                    sensitivities={}, piece=piece, flow=flow, t0=float(times[i]), sign=self.sign, tolerances=tol,
+                    disabled=self.disabled, mode0=first[i].mode0)))
+            try:
+                blocks = []
+                for c, e, (i, shot) in zip(self.conditions, extras, shots):
+                    if isinstance(c, MultiplierCondition):
+                        blocks.append(self._multiplier_rows(c, U, T, p, params, first, times))
+                    else:
+                        blocks.append(c.rows(shot, e, params, self))
+                break
+            except _Resplit as again:
+                split = again.t - self.sign * ArrivalTangency.LEAD * max(T, 1.0)
+        else:
+            raise ConvergenceError("the shot could not be split before the condition's event")
+        dim = self.dimension
+        r, J = np.zeros(dim), np.zeros((dim, dim))
+        jp = np.zeros((nb, len(params)))
+        for i, seg in enumerate(first):
+            nxt = (i + 1) % m
+            rows = slice(i * n, (i + 1) * n)
+            r[rows] = seg.x1 - U[nxt * n:(nxt + 1) * n]
+            J[rows, i * n:(i + 1) * n] += seg.monodromy
+            J[rows, nxt * n:(nxt + 1) * n] -= np.eye(n)
+            if self.autonomous:
+                J[rows, nodes_n] = (self.sign / m) * seg.velocity_end
+            for c, j in enumerate(params):
+                jp[rows, c] = segs[c][i].parameter_sensitivity
+                dT = 0.0 if self.autonomous else self.system.period_derivative(p, j)
+                if dT:
+                    f_start = flow.vector_field(seg.mode0, seg.t0, seg.x0, p)
+                    jp[rows, c] += (self.sign * dT / m) * ((i + 1) * seg.velocity_end - i * (seg.monodromy @ f_start))
+        if self.autonomous:
+            single = self.single
+            if single.x_ref is None:
+                single.anchor_phase(U[:n].copy(), p)
+            r[nodes_n] = single.f_ref @ (U[:n] - single.x_ref)
+            J[nodes_n, :n] = single.f_ref
+        J[:nb, nb:nb + k] = jp[:, :k]
+        jl = np.append(jp[:, k], np.zeros(dim - nb)) if len(params) > k else None
+        row, col = nb, nb + k
+        for c, b, (i, shot) in zip(self.conditions, blocks, shots):
+            rows = slice(row, row + c.size)
+            r[rows] = b.value
+            if b.d_x0.shape[1] == nodes_n:  # already by every node (a multiplier condition)
+                J[rows, :nodes_n] = b.d_x0
+                if self.autonomous:
+                    J[rows, nodes_n] = b.d_period
+                dp = b.d_parameters
+            else:
+                J[rows, i * n:(i + 1) * n] = b.d_x0
+                # the segment's start moves with T: x(t) at a fixed t moves by -Phi f(t_i, x_i) dt_i
+                f_i = flow.vector_field(first[i].mode0, float(times[i]), shot.x0, p)
+                moves = -(b.d_x0 @ f_i) * (self.sign * i / m)
+                dp = b.d_parameters.copy()
+                if self.autonomous:
+                    J[rows, nodes_n] = b.d_period + moves
+                else:
+                    for cc, j in enumerate(params):
+                        dp[:, cc] += moves * self.system.period_derivative(p, j)
+            J[rows, nb:nb + k] = dp[:, :k]
+            J[rows, col:col + c.extras] = b.d_extra
+            if jl is not None:
+                jl[rows] = dp[:, k]
+            row += c.size
+            col += c.extras
+        whole_shot = Shot(x0=np.array(U[:n]), period=T, parameters=p, trajectory=whole, sensitivities={}, piece=None,
+                          flow=flow, t0=self.t0, sign=self.sign, tolerances=tol, disabled=self.disabled)
+        self._segs = first
+        self._last = (whole_shot, extras)
+        self._shots = [shot for _, shot in shots]
+        return r, J, jl, whole_shot
+
+    def _multiplier_rows(self, c: MultiplierCondition, U: np.ndarray, T: float, p: np.ndarray, params: Sequence[int],
+                         segs: list[Trajectory], times: np.ndarray) -> Rows:
+        """A multiplier condition under multiple shooting: ``g`` of the product of the segments' matrices,
+        its derivatives by every node (one segment rerun per entry), the period and the parameters by
+        central differences."""
+        n, m = self.system.n, self.segments
+        out = Rows(np.zeros(1), np.zeros((1, self.n_nodes)), np.zeros(1), np.zeros((1, len(params))), np.zeros((1, 0)))
+        factors = [seg.monodromy for seg in segs]
+
+        def product(fs):
+            M = fs[0]
+            for F in fs[1:]:
+                M = F @ M
+            return M
+
+        def segment(i, x, t_a, t_b, q):
+            return self.flow.run(x, t_a, t_b, q, mode0=segs[i].mode0, variational=True, disabled=self.disabled,
+                                 tolerances=self.tolerances).monodromy
+
+        def whole(TT, q):
+            ts = self.t0 + self.sign * TT * np.arange(m + 1) / m
+            return product([segment(i, U[i * n:(i + 1) * n], ts[i], ts[i + 1], q) for i in range(m)])
+
+        out.value[0] = c.g(product(factors))
+        for i in range(m):
+            x = U[i * n:(i + 1) * n]
+            for a in range(n):
+                d = c.h * max(1.0, abs(x[a]))
+                e = np.zeros(n)
+                e[a] = d
+                up, down = list(factors), list(factors)
+                up[i] = segment(i, x + e, times[i], times[i + 1], p)
+                down[i] = segment(i, x - e, times[i], times[i + 1], p)
+                out.d_x0[0, i * n + a] = (c.g(product(up)) - c.g(product(down))) / (2 * d)
+        if self.autonomous:
+            d = c.h * max(1.0, T)
+            out.d_period[0] = (c.g(whole(T + d, p)) - c.g(whole(T - d, p))) / (2 * d)
+        for cc, j in enumerate(params):
+            d = c.h * max(1.0, abs(p[j]))
+            q = p.copy()
+            q[j] += d
+            up = c.g(whole(T if self.autonomous else self.system.forcing_period(q), q))
+            q[j] -= 2 * d
+            down = c.g(whole(T if self.autonomous else self.system.forcing_period(q), q))
+            out.d_parameters[0, cc] = (up - down) / (2 * d)
+        return out
+
     # -- the continuation protocol --------------------------------------------------------
     def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
         r, J, jl, shot = self.equations(u, self.lam0() if (lam is None and self.lam_index >= 0) else lam,
@@ -711,11 +935,15 @@ class ConditionedProblem:
     def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> BranchPoint:
         """A curve point's summary: its orbit's multipliers (forward time), amplitude and events."""
         traj = ev.trajectory
-        mu = multipliers_from_monodromy(traj.monodromy, backward=self.backward)
         n = self.system.n
+        if self.segments > 1:  # the multipliers from the segments' matrices (periodic Schur)
+            U = np.append(u[: self.n_nodes], u[self.n_nodes]) if self.autonomous else np.array(u[: self.n_nodes])
+            mu, _ = self.base.multipliers(U, lam, self._segs)
+        else:
+            mu = multipliers_from_monodromy(traj.monodromy, backward=self.backward)
         return BranchPoint(
             parameter=math.nan if lam is None else float(lam),
-            state=np.array(u[:n]), period=float(u[n]) if self.autonomous else self.system.forcing_period(
+            state=np.array(u[:n]), period=float(u[self.n_nodes]) if self.autonomous else self.system.forcing_period(
                 self.parameters_at(u, lam)),
             multipliers=mu, stable=is_stable(mu, autonomous=self.autonomous), event_labels=event_labels(traj),
             monodromy=traj.monodromy, event_ids=event_ids(traj), **amplitude_measures(traj),
@@ -724,11 +952,12 @@ class ConditionedProblem:
     def accept(self, u: np.ndarray, lam: float | None) -> None:
         if self._last is not None:
             shot, extras = self._last
-            for c, e in zip(self.conditions, extras):
-                c.accept(shot, e)
-            self.event_ids.append(event_ids(shot.trajectory))
+            shots = self._shots if self.segments > 1 else [shot] * len(self.conditions)
+            for c, e, sh in zip(self.conditions, extras, shots):
+                c.accept(sh, e)
+            self.event_ids.append(event_ids((shots[0] if shots else shot).trajectory))
         if self.autonomous:
-            self.base.anchor_phase(np.asarray(u[: self.system.n], dtype=float), self.parameters_at(u, lam))
+            self.single.anchor_phase(np.asarray(u[: self.system.n], dtype=float), self.parameters_at(u, lam))
 
     # -- location -------------------------------------------------------------------------
     def solve(self, u0: np.ndarray, *, tol: float = 1e-12, max_iter: int = 20, what: str = "special point",
@@ -748,8 +977,8 @@ class ConditionedProblem:
         u = np.asarray(u0, dtype=float).copy()
         history = [] if history is None else history
         n, nb, k = self.system.n, self.n_base, len(self.free)
-        if self.autonomous and self.base.x_ref is None:
-            self.base.anchor_phase(u[:n].copy(), self.parameters_at(u))
+        if self.autonomous and self.single.x_ref is None:
+            self.single.anchor_phase(u[:n].copy(), self.parameters_at(u))
         for it in range(max_iter + 1):
             try:
                 r, J, _, shot = self.equations(u, need_lam=False)
@@ -774,7 +1003,8 @@ class ConditionedProblem:
                 rows = inverse[nb : nb + k]
                 accuracy = (np.abs(du[nb : nb + k]) + np.abs(rows).sum(axis=1) * error
                             + 4e-16 * np.maximum(1.0, np.abs(u[nb : nb + k])))
-                return Located(unknowns=u, state0=u[:n].copy(), period=shot.period, parameters=shot.parameters,
+                return Located(unknowns=u, state0=u[:n].copy(), period=self.period_at(u, shot.parameters),
+                               parameters=shot.parameters,
                                shot=shot, accuracy=accuracy, residuals=history)
             if it == max_iter:
                 break
@@ -782,9 +1012,26 @@ class ConditionedProblem:
         raise ConvergenceError(f"{what} did not converge in {max_iter} iterations", history)
 
 
+def join(segs: Sequence[Trajectory]) -> Trajectory:
+    """One trajectory from consecutive segments: their events in order, the product of their transfer
+    matrices as its monodromy (assembled: its eigenvalues are not the multipliers' best values)."""
+    first, last = segs[0], segs[-1]
+    logs = [seg.event_log for seg in segs]
+    event_log = tuple(np.concatenate([log[k] for log in logs]) for k in range(len(first.event_log)))
+    M = first.monodromy
+    for seg in segs[1:]:
+        M = seg.monodromy @ M
+    return replace(
+        first, t1=last.t1, x1=last.x1, mode1=last.mode1, event_log=event_log, monodromy=M,
+        parameter_sensitivity=None, x_min=np.min([s.x_min for s in segs], axis=0),
+        x_max=np.max([s.x_max for s in segs], axis=0), sliding_at_end=last.sliding_at_end,
+        velocity_end=last.velocity_end, n_steps=sum(s.n_steps for s in segs),
+        n_rejected=sum(s.n_rejected for s in segs), _steps=None,
+    )
+
+
 def _joined(a: Trajectory, b: Trajectory) -> Trajectory:
     """Two consecutive pieces as one trajectory: ``b`` carried on from ``a`` (its matrices include ``a``'s)."""
-    from dataclasses import replace
 
     event_log = tuple(np.concatenate([x, y]) for x, y in zip(a.event_log, b.event_log))
     return replace(b, t0=a.t0, x0=a.x0, mode0=a.mode0, event_log=event_log, x_min=np.minimum(a.x_min, b.x_min),
@@ -794,5 +1041,5 @@ def _joined(a: Trajectory, b: Trajectory) -> Trajectory:
 
 __all__ = [
     "ArrivalTangency", "Condition", "ConditionedProblem", "CubicTangency", "EventIdentity", "Located",
-    "MultiplierCondition", "Piece", "Rows", "Shot", "Tangency",
+    "MultiplierCondition", "Piece", "Rows", "Shot", "Tangency", "join",
 ]

@@ -55,7 +55,7 @@ from saltation.errors import (
     StationaryStateError,
 )
 from saltation.model.system import PiecewiseSystem
-from saltation.orbits.conditions import Condition, ConditionedProblem
+from saltation.orbits.conditions import Condition, ConditionedProblem, join
 from saltation.orbits.floquet import (
     autonomous_multipliers,
     is_stable,
@@ -1067,6 +1067,15 @@ class MultipleShootingProblem:
             J[-1, :n] = prob.f_ref
         return r, J, segs
 
+    def with_conditions(
+        self, conditions: Sequence[Condition], free: Sequence[str], *, continuation: str | None = None,
+        parameters: np.ndarray | None = None,
+    ) -> ConditionedProblem:
+        """The defining system of a special point (or a two-parameter curve of one) by multiple shooting:
+        the unknowns are ``(x_1..x_m[, T], freed parameters, the conditions' own)``, each condition is read
+        from the segment that holds its instant (see :meth:`ShootingProblem.with_conditions`)."""
+        return ConditionedProblem(self, conditions, free, continuation=continuation, parameters=parameters)
+
     # -- the continuation protocol ----------------------------------------------------------
     def parameters_at(self, lam: float | None) -> np.ndarray:
         return self.problem.parameters_at(lam)
@@ -1191,25 +1200,6 @@ class MultipleShootingProblem:
             residual_norm=float(history[-1]), residuals=list(history), trivial_error=trivial_error, problem=prob,
             segments=self.segments, nodes=np.array(U[: self.segments * n]).reshape(self.segments, n),
         )
-
-
-def join(segs: Sequence[Trajectory]) -> Trajectory:
-    """One trajectory from consecutive segments: their events in order, the product of their transfer
-    matrices as its monodromy (assembled: its eigenvalues are not the multipliers' best values)."""
-    first, last = segs[0], segs[-1]
-    logs = [seg.event_log for seg in segs]
-    event_log = tuple(np.concatenate([log[k] for log in logs]) for k in range(len(first.event_log)))
-    M = first.monodromy
-    for seg in segs[1:]:
-        M = seg.monodromy @ M
-    return replace(
-        first, t1=last.t1, x1=last.x1, mode1=last.mode1, event_log=event_log, monodromy=M,
-        parameter_sensitivity=None, x_min=np.min([s.x_min for s in segs], axis=0),
-        x_max=np.max([s.x_max for s in segs], axis=0), sliding_at_end=last.sliding_at_end,
-        velocity_end=last.velocity_end, n_steps=sum(s.n_steps for s in segs),
-        n_rejected=sum(s.n_rejected for s in segs), _steps=None,
-    )
-
 
 
 @dataclass(frozen=True)

@@ -317,21 +317,24 @@ def follow_locus(
     """
     if problem.autonomous or problem.backward or problem.periods != 1:
         raise ModelError("two-parameter curves are implemented for forced models in forward time, over one forcing period")
+    # with multiple shooting the curve's defining system shoots by segments; what is read off a curve point
+    # (the kind of a corner, the grazing that ends a fold curve) is computed on the single problem
+    single = getattr(problem, "problem", problem)
     p = problem.parameters_at(point.parameter)
     state = np.asarray(point.state, dtype=float)
     if point.kind in SLIDING_KINDS:
         curve = SlidingCurve(problem, p, second, point)
         classify = False
     elif point.kind.is_nonsmooth:
-        touched = _touch_of(problem, point)
+        touched = _touch_of(single, point)
         if point.kind is SpecialPointKind.GRAZING_SLIDING and touched is not None:
             # the located orbit touches the sliding region's boundary: its run may slide for a rounding
             # there, so the transition and instant come from the point itself
             transition, t_g, others = *touched, []
         else:
             try:
-                (transition, t_g), *others = grazed_transitions(problem.flow, state, p, t0=problem.t0,
-                                                                tolerances=problem.tolerances)
+                (transition, t_g), *others = grazed_transitions(single.flow, state, p, t0=single.t0,
+                                                                tolerances=single.tolerances)
             except SaltationError:
                 if touched is None:
                     raise
@@ -365,15 +368,16 @@ def follow_locus(
                 raise SaltationError(f"the {point.kind.value} curve in {second} cannot start from the point at "
                                      f"{problem.lam_name} = {point.parameter:.10g}: {exc}") from exc
             failure = f"failed after {len(cont.solutions)} points: {exc}"
-        runs.append([sol.z.copy() for sol in cont.solutions])
+        # the curve's points in the single-shooting layout (x0, the first parameter, extras, the second)
+        runs.append([np.concatenate([sol.z[:n], sol.z[curve.n_base:]]) for sol in cont.solutions])
         # the curve's points carry both parameters: the first (an unknown of the curve) and the second
-        records.append([replace(bp, parameter=float(sol.z[n]), second_parameter=float(sol.z[-1]))
+        records.append([replace(bp, parameter=float(sol.z[curve.n_base]), second_parameter=float(sol.z[-1]))
                         for bp, sol in zip(cont.branch.points, cont.solutions)])
         kinds_by_run.append(list(getattr(curve, "kinds", [])))
         reasons.append(f"{way}: {failure or cont.branch.stop_reason.value}")
         events_by_run.append([canonical_events(e) for e in curve.event_ids])
         if isinstance(curve, MultiplierCurve) and failure is None and cont.branch.stop_reason is not StopReason.PARAMETER_BOUND:
-            end = _end_at_a_corner(problem, curve, point.kind, runs[-1], records[-1])
+            end = _end_at_a_corner(single, curve, point.kind, runs[-1], records[-1])
             if end is not None:
                 ends.append((len(runs) - 1, end))
 
@@ -403,7 +407,7 @@ def follow_locus(
     if isinstance(curve, MultiplierCurve) and len(events) == len(zs):  # (a fold curve follows its orbits' events)
         for a in range(len(zs) - 1):
             if events[a] != events[a + 1]:
-                touch = _touch_kind(problem, curve, zs[a] if len(events[a]) <= len(events[a + 1]) else zs[a + 1])
+                touch = _touch_kind(single, curve, zs[a] if len(events[a]) <= len(events[a + 1]) else zs[a + 1])
                 locus.special_points.append(label(a, (point.kind.value, touch)))
     # a corner that ends a run lies beyond its last point: the curve's last (increasing) or first (decreasing)
     locus.special_points.extend(replace(e, index=(len(zs) - 1 if run == 0 else 0)) for run, e in ends)
@@ -433,7 +437,7 @@ def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: Spe
     n = problem.system.n
     best = None
     for z, record in zip(zs[-last:], records[-last:]):
-        p = curve.parameters_at(z[:-1], z[-1])
+        p = _parameters_of(curve, z)
         try:
             (transition, t_g), *_ = grazed_transitions(problem.flow, z[:n], p, t0=problem.t0,
                                                        tolerances=problem.tolerances)
@@ -458,12 +462,21 @@ def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: Spe
                             status=SpecialPointStatus.LOCATED)
 
 
+def _parameters_of(curve: _Curve, z: np.ndarray) -> np.ndarray:
+    """Every parameter's value at a curve point in the single-shooting layout ``(x0, first, extras, second)``."""
+    n = curve.system.n
+    p = curve.p.copy()
+    p[curve.free] = z[n : n + len(curve.free)]
+    p[curve.lam_index] = z[-1]
+    return p
+
+
 def _touch_kind(problem: ShootingProblem, curve: _Curve, z: np.ndarray) -> str:
     """The kind of the non-smooth point a curve's orbit meets where its event sequence changes (a smooth
     fold born at a corner, a fold curve ended by a grazing): classified at the curve point on the side
     without the extra events, as on a corner curve; ``"nonsmooth"`` when that fails."""
     n = problem.system.n
-    p = curve.parameters_at(z[:-1], z[-1])
+    p = _parameters_of(curve, z)
     try:
         (transition, t_g), *others = grazed_transitions(problem.flow, z[:n], p, t0=problem.t0,
                                                         tolerances=problem.tolerances)
