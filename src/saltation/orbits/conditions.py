@@ -143,6 +143,10 @@ class Condition(abc.ABC):
     extras: int = 0
     disabled: tuple[int, ...] = ()
     name: str = "condition"
+    #: the mode the shot starts in (None: the model's initial-mode rule at ``x0``)
+    start_mode: str | None = None
+    #: it fixes the phase of an autonomous orbit, whose phase condition it then replaces
+    anchors_phase: bool = False
 
     def start(self) -> np.ndarray:
         """The initial values of its extra unknowns."""
@@ -217,6 +221,45 @@ class Tangency(Condition):
 
     def accept(self, shot: Shot, extra: np.ndarray) -> None:
         self.t_guess = float(extra[0])
+
+
+class ReturnTangency(Condition):
+    """A tangential return (the fold of a stick-slip cycle): the orbit starts where it touches the surface
+    of ``transition``, in that transition's target mode (a stick phase), and returns there along the
+    source mode's field tangent to the surface, entering the transition: ``h(t0, x0) = 0`` and
+    ``L(t0, x0) = h_x f_source + h_t = 0``.
+
+    The shot passes the transition (disabled), so it ends at the touch in the source mode.  The two
+    equations read the state at ``t0`` itself (derivatives ``h_x``, ``L_x``, ``h_p``, ``L_p``, exact, no
+    integration), and the first fixes the phase: it replaces the phase condition of the autonomous
+    orbit, whose period stays an unknown.
+    """
+
+    size = 2
+    name = "return tangency"
+    anchors_phase = True
+
+    def __init__(self, flow: Flow, transition: int):
+        system = flow.system
+        tr = system.transitions[int(transition)]
+        self.flow = flow
+        self.transition = int(transition)
+        self.surface = system.surface_index(tr.surface)
+        self.source = tr.source
+        self.start_mode = tr.target
+        self.disabled = (self.transition,)
+
+    def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
+        flow, p, t, x = self.flow, shot.parameters, shot.t0, shot.x0
+        out = _rows(2, len(x), len(params), 0)
+        hx, _, hp = flow.indicator_gradient(self.surface, t, x, p)
+        L, Lx, Lp, _ = flow.lie_derivative(self.source, self.surface, t, x, p)
+        out.value[:] = (flow.indicator(self.surface, t, x, p), L)
+        out.d_x0[0] = hx
+        out.d_x0[1] = Lx
+        for c, j in enumerate(params):
+            out.d_parameters[:, c] = (hp[j], Lp[j])
+        return out
 
 
 @dataclass(frozen=True)
@@ -542,9 +585,20 @@ class ConditionedProblem:
         self.n_nodes = self.segments * n
         self.n_base = self.n_nodes + (1 if self.autonomous else 0)
         self.n_extra = sum(c.extras for c in self.conditions)
-        rows = self.n_base + sum(c.size for c in self.conditions)
+        anchored = any(c.anchors_phase for c in self.conditions)
+        if anchored and not self.autonomous:
+            raise ModelError("a condition that fixes the phase needs an autonomous orbit (a forced orbit's phase is its t0)")
+        #: rows of the orbit's own equations: periodicity (or matching), and the phase condition unless a
+        #: condition fixes the phase
+        self.n_orbit_rows = self.n_nodes + (1 if self.autonomous and not anchored else 0)
+        modes = {c.start_mode for c in self.conditions if c.start_mode is not None}
+        if len(modes) > 1:
+            raise ModelError(f"the conditions ask the orbit to start in different modes: {sorted(modes)}")
+        self.mode0 = modes.pop() if modes else None
+        rows = self.n_orbit_rows + sum(c.size for c in self.conditions)
         if rows != self.dimension:
-            raise ModelError(f"{sum(c.size for c in self.conditions)} condition equations need as many unknowns: "
+            raise ModelError(f"{sum(c.size for c in self.conditions)} condition equations need as many unknowns"
+                             f"{' (one of them fixes the phase)' if anchored else ''}: "
                              f"{len(self.free)} freed parameter(s) {list(free)} and {self.n_extra} unknown(s) of the "
                              "conditions do not balance them")
         self.disabled = tuple(sorted({k for c in self.conditions for k in c.disabled}))
@@ -623,7 +677,7 @@ class ConditionedProblem:
         if split is not None and not (min(t0, t1) < split < max(t0, t1)):
             split = None
         base = self.base
-        mode0 = None
+        mode0 = self.mode0
         for _ in range(2):
             runs, pieces = [], []
             for j in list(params) or [-1]:
@@ -639,7 +693,7 @@ class ConditionedProblem:
                                  disabled=self.disabled, tolerances=tol)
                     traj = _joined(a, b)
                     pieces.append(a)
-                closed = base.close_period(traj, p, j)
+                closed = base.close_period(traj, p, j, disabled=self.disabled)
                 if closed.mode0 != traj.mode0 and split is not None:
                     mode0 = closed.mode0  # the seam's crossing is run again from the mode it enters: so the pieces
                     break
@@ -657,29 +711,11 @@ class ConditionedProblem:
                     sensitivities={j: r.parameter_sensitivity for j, r in zip(params, runs)}, piece=piece, flow=flow,
                     t0=t0, sign=self.sign, tolerances=tol, disabled=self.disabled)
 
-    def _runs(self, x0, t0, t1, p, params, split, mode0):
-        flow, tol = self.flow, self.tolerances
-        runs, pieces = [], []
-        for j in list(params) or [-1]:
-            if split is None:
-                traj = flow.run(x0, t0, t1, p, mode0=mode0, variational=True, sensitivity=j, disabled=self.disabled,
-                                tolerances=tol)
-                pieces.append(None)
-            else:
-                a = flow.run(x0, t0, split, p, mode0=mode0, variational=True, sensitivity=j, disabled=self.disabled,
-                             tolerances=tol)
-                b = flow.run(a.x1, split, t1, p, mode0=a.mode1, variational=True, sensitivity=j, phi0=a.monodromy,
-                             psi0=a.parameter_sensitivity if j >= 0 else None, disabled=self.disabled, tolerances=tol)
-                traj = _joined(a, b)
-                pieces.append(a)
-            runs.append(self.base.close_period(traj, p, j))
-        return runs, pieces
-
     def monodromy(self, x0: np.ndarray, T: float, p: np.ndarray) -> np.ndarray:
         """The monodromy of the period from ``x0`` (finite differences of multiplier conditions)."""
-        traj = self.flow.run(x0, self.t0, self.t0 + self.sign * T, p, variational=True, disabled=self.disabled,
-                             tolerances=self.tolerances)
-        return self.base.close_period(traj, p).monodromy
+        traj = self.flow.run(x0, self.t0, self.t0 + self.sign * T, p, mode0=self.mode0, variational=True,
+                             disabled=self.disabled, tolerances=self.tolerances)
+        return self.single.close_period(traj, p, disabled=self.disabled).monodromy
 
     # -- the equations ------------------------------------------------------------------
     def equations(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True
@@ -706,16 +742,17 @@ class ConditionedProblem:
         else:
             raise ConvergenceError("the shot could not be split before the condition's event")
         r0, J0, jp = self.base.periodicity(x0, shot.trajectory, p, shot.sensitivities)
+        no = self.n_orbit_rows  # (without the phase condition where a condition fixes the phase)
         m = self.dimension
         r = np.zeros(m)
         J = np.zeros((m, m))
-        r[:nb] = r0
-        J[:nb, :nb] = J0
-        J[:nb, nb : nb + k] = jp[:, :k]
-        jl = jp[:, k].copy() if len(params) > k else None
+        r[:no] = r0[:no]
+        J[:no, :nb] = J0[:no]
+        J[:no, nb : nb + k] = jp[:no, :k]
+        jl = jp[:no, k].copy() if len(params) > k else None
         if jl is not None:
-            jl = np.append(jl, np.zeros(m - nb))
-        row, col = nb, nb + k
+            jl = np.append(jl, np.zeros(m - no))
+        row, col = no, nb + k
         for c, b in zip(self.conditions, blocks):
             rows = slice(row, row + c.size)
             r[rows] = b.value
@@ -776,7 +813,7 @@ class ConditionedProblem:
             segs: list[list[Trajectory]] = []  # per parameter column (or one without), the segments
             pieces: dict[int, Trajectory] = {}
             for j in params or [-1]:
-                mode, row = None, []
+                mode, row = self.mode0, []
                 for i in range(m):
                     x = np.ascontiguousarray(U[i * n:(i + 1) * n])
                     if i == split_seg and min(times[i], times[i + 1]) < split < max(times[i], times[i + 1]):
@@ -838,15 +875,16 @@ class ConditionedProblem:
                 if dT:
                     f_start = flow.vector_field(seg.mode0, seg.t0, seg.x0, p)
                     jp[rows, c] += (self.sign * dT / m) * ((i + 1) * seg.velocity_end - i * (seg.monodromy @ f_start))
-        if self.autonomous:
+        no = self.n_orbit_rows
+        if no > nodes_n:  # the phase condition (unless a condition fixes the phase)
             single = self.single
             if single.x_ref is None:
                 single.anchor_phase(U[:n].copy(), p)
             r[nodes_n] = single.f_ref @ (U[:n] - single.x_ref)
             J[nodes_n, :n] = single.f_ref
-        J[:nb, nb:nb + k] = jp[:, :k]
-        jl = np.append(jp[:, k], np.zeros(dim - nb)) if len(params) > k else None
-        row, col = nb, nb + k
+        J[:no, nb:nb + k] = jp[:no, :k]
+        jl = np.append(jp[:no, k], np.zeros(dim - no)) if len(params) > k else None
+        row, col = no, nb + k
         for c, b, (i, shot) in zip(self.conditions, blocks, shots):
             rows = slice(row, row + c.size)
             r[rows] = b.value
@@ -956,7 +994,7 @@ class ConditionedProblem:
             for c, e, sh in zip(self.conditions, extras, shots):
                 c.accept(sh, e)
             self.event_ids.append(event_ids((shots[0] if shots else shot).trajectory))
-        if self.autonomous:
+        if self.n_orbit_rows > self.n_nodes:
             self.single.anchor_phase(np.asarray(u[: self.system.n], dtype=float), self.parameters_at(u, lam))
 
     # -- location -------------------------------------------------------------------------
@@ -977,7 +1015,7 @@ class ConditionedProblem:
         u = np.asarray(u0, dtype=float).copy()
         history = [] if history is None else history
         n, nb, k = self.system.n, self.n_base, len(self.free)
-        if self.autonomous and self.single.x_ref is None:
+        if self.n_orbit_rows > self.n_nodes and self.single.x_ref is None:
             self.single.anchor_phase(u[:n].copy(), self.parameters_at(u))
         for it in range(max_iter + 1):
             try:

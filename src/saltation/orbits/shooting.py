@@ -471,7 +471,8 @@ class ShootingProblem:
         """
         return ConditionedProblem(self, conditions, free, continuation=continuation, parameters=parameters)
 
-    def close_period(self, traj: Trajectory, p: np.ndarray, sensitivity: int = -1) -> Trajectory:
+    def close_period(self, traj: Trajectory, p: np.ndarray, sensitivity: int = -1, *,
+                     disabled: Sequence[int] = ()) -> Trajectory:
         """The shot with the crossing at the seam ``t0 = t0 + T`` counted once, as the orbit crosses there.
 
         A shooting state on a switching surface (wherever the phase condition, or a forced orbit's
@@ -487,7 +488,8 @@ class ShootingProblem:
           surface of a transition from its final mode ``b`` back to ``a``): that transition is
           applied at the end (reset, saltation matrix of eq. 9, parameter sensitivity) and logged.
 
-        Any other shot is returned as it is.
+        Any other shot is returned as it is; the transitions in ``disabled`` (passed by a virtual orbit)
+        are never applied at the seam.
 
         Raises
         ------
@@ -512,7 +514,8 @@ class ShootingProblem:
                         "ambiguous (before or after the reset); shoot from another t0"
                     )
                 traj = self.flow.run(traj.x0, traj.t0, traj.t1, p, mode0=first.mode_to, variational=True,
-                                     sensitivity=sensitivity, tolerances=self.tolerances)  # then as below
+                                     sensitivity=sensitivity, tolerances=self.tolerances,
+                                     disabled=disabled)  # then as below
             elif (len(ev_t) >= 3 and ev_int[0, 0] == EventKind.SLIDING_START and ev_int[1, 0] == EventKind.SLIDING_END
                   and ev_int[-1, 0] == EventKind.SLIDING_END and ev_int[1, 4] == ev_int[-1, 4]
                   and abs(ev_t[0] - traj.t0) <= delta and abs(ev_t[1] - traj.t0) <= delta
@@ -533,7 +536,7 @@ class ShootingProblem:
         flow, t1, x1 = self.flow, traj.t1, traj.x1
         scale = 1.0 + float(np.abs(x1).max())
         for k, tr in enumerate(sys_.transitions):
-            if tr.source != traj.mode1 or tr.target != traj.mode0:
+            if tr.source != traj.mode1 or tr.target != traj.mode0 or k in disabled:
                 continue
             h = flow.indicator(tr.surface, t1, x1, p)
             hx, _, _ = flow.indicator_gradient(tr.surface, t1, x1, p)

@@ -33,7 +33,7 @@ from scipy.optimize import brentq
 
 from saltation.engine.flow import Flow, Trajectory
 from saltation.errors import ConvergenceError, ModelError
-from saltation.orbits.conditions import ConditionedProblem, Tangency
+from saltation.orbits.conditions import ConditionedProblem, ReturnTangency, Tangency
 from saltation.orbits.shooting import ShootingProblem
 
 
@@ -243,89 +243,49 @@ def locate_tangential_return(
     parameters=None,
     tol: float = 1e-12,
     max_iter: int = 30,
-    fd_step: float = 1e-7,
     tolerances=None,
 ) -> TangentialReturn:
     """Locate an orbit whose return to a surface is tangential, for an autonomous model.
 
-    The defining system of the fold of a stick-slip cycle (the slip arc that
-    leaves the stick band returns to it tangentially).  The unknowns are the
-    touching point ``x_g``, kept on the surface (coordinates ``y`` in the
-    surface's tangent plane at the guess, projected back onto the surface
-    along ``h_x``), and the parameter.  From ``x_g``, in the target mode of
-    ``transition``, the orbit is integrated (that transition disabled) until
-    its indicator reaches its next extremum, at ``t_r``; the equations are
-    ``x(t_r) - x_g = 0``.  Newton's method with a Jacobian by central
-    differences (the extremum time moves with the unknowns).
+    The defining system of the fold of a stick-slip cycle (the slip arc that leaves the stick band
+    returns to it tangentially): the orbit's problem with a
+    :class:`~saltation.orbits.conditions.ReturnTangency` attached and the parameter freed.  The orbit
+    starts at the touching point, in the target mode of ``transition`` (the stick phase), and returns
+    there with the transition passed; ``h = 0`` and ``L = h_x f_source + h_t = 0`` at the start fix the
+    touching point and the phase, and the period is an unknown.  Solved by the one Newton of
+    :class:`~saltation.orbits.conditions.ConditionedProblem`, its Jacobian exact (variational equations
+    and the model's Lie derivatives).
+
+    Parameters
+    ----------
+    x_touch : array_like
+        Guess of the touching point (the state where the orbit enters the transition).
+    lam, lam_name :
+        Guess of the parameter, and its name.
+    transition : int
+        The transition entered at the touch.
+    period : float
+        Guess of the period.
 
     Raises
     ------
     ConvergenceError
-        If Newton's method does not converge or no return is found.
+        If Newton's method does not converge (with the residual history).
     """
     system = flow.system
     tolerances = location_tolerances(flow, tolerances)
     tr = system.transitions[transition]
-    surface = system.surface_index(tr.surface)
-    j = system.parameter_index(lam_name)
     p = flow.parameters(parameters).copy()
-    n = system.n
-    disabled = (int(transition),)
-    history: list[float] = []
-    base = np.asarray(x_touch, dtype=float)
-    hx0, _, _ = flow.indicator_gradient(surface, 0.0, base, p)
-    tangent = np.linalg.svd(hx0.reshape(1, -1))[2][1:].T  # (n, n-1): an orthonormal basis of the tangent plane
-    t_r = float(period)
-
-    def touch_point(w: np.ndarray, q: np.ndarray) -> np.ndarray:
-        x = base + tangent @ w[:-1]
-        for _ in range(8):  # onto the surface, along its gradient
-            h = flow.indicator(surface, 0.0, x, q)
-            hx, _, _ = flow.indicator_gradient(surface, 0.0, x, q)
-            x = x - h * hx / (hx @ hx)
-            if abs(h) <= 1e-15 * (1.0 + float(np.linalg.norm(x))):
-                break
-        return x
-
-    def residual(w: np.ndarray, t_guess: float) -> tuple[np.ndarray, float, np.ndarray]:
-        q = p.copy()
-        q[j] = w[-1]
-        x = touch_point(w, q)
-        found = tangency_time(flow, x, 0.0, q, surface, t_guess, 1.5 * t_guess, mode0=tr.target, disabled=disabled,
-                              tolerances=tolerances)
-        if found is None:
-            raise ConvergenceError(f"tangential return to surface {tr.surface!r}: no return found", history)
-        end = flow.run(x, 0.0, found, q, mode0=tr.target, disabled=disabled, tolerances=tolerances)
-        return end.x1 - x, found, x
-
-    w = np.append(np.zeros(n - 1), float(lam))
-    for it in range(max_iter + 1):
-        r, t_r, x = residual(w, t_r)
-        rn = float(np.linalg.norm(r))
-        history.append(rn)
-        J = np.empty((n, n))
-        for i in range(n):
-            step = fd_step * max(1.0, abs(w[i]))
-            e = np.zeros(n)
-            e[i] = step
-            J[:, i] = (residual(w + e, t_r)[0] - residual(w - e, t_r)[0]) / (2 * step)
-        try:
-            dw = np.linalg.solve(J, -r)
-        except np.linalg.LinAlgError:
-            raise ConvergenceError("tangential return: singular Jacobian", history) from None
-        if rn <= tol * (1.0 + float(np.linalg.norm(x))):
-            q = p.copy()
-            q[j] = w[-1]
-            orbit = flow.run(x, 0.0, t_r, q, mode0=tr.target, disabled=disabled, tolerances=tolerances)
-            carried = float(np.abs(np.linalg.inv(J)[-1]).sum()) * flow.integration_error(orbit, tolerances)
-            return TangentialReturn(
-                parameter=float(w[-1]), state=x, period=t_r, transition=int(transition),
-                accuracy=abs(float(dw[-1])) + carried + 4e-16 * max(1.0, abs(float(w[-1]))), residuals=history,
-            )
-        if it == max_iter:
-            break
-        w = w + dw
-    raise ConvergenceError(f"tangential return to surface {tr.surface!r} did not converge", history)
+    p[system.parameter_index(lam_name)] = float(lam)
+    base = ShootingProblem(flow, p, tolerances=tolerances)
+    problem = ConditionedProblem(base, [ReturnTangency(flow, transition)], free=(lam_name,))
+    found = problem.solve(problem.pack(np.asarray(x_touch, dtype=float), period=float(period)), tol=tol,
+                          max_iter=max_iter, what=f"tangential return to surface {tr.surface!r}")
+    return TangentialReturn(
+        parameter=float(found.parameters[system.parameter_index(lam_name)]), state=found.state0.copy(),
+        period=float(found.period), transition=int(transition), accuracy=float(found.accuracy[0]),
+        residuals=found.residuals,
+    )
 
 
 def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_gap: float = 1e-2) -> list[tuple[int, float]]:
