@@ -97,3 +97,61 @@ def test_unbalanced_conditions_are_refused():
     base = ShootingProblem(flow)
     with pytest.raises(ModelError, match="do not balance"):
         ConditionedProblem(base, [Tangency(flow, 0, 0.3)], free=("s", "omega"))
+
+
+def test_return_tangency_rows_of_the_stick_slip_fold():
+    """The block on the belt's fold in (v_dr, c): h = 0 and L = 0 at the start, in the stick mode, the
+    phase fixed by them (no phase condition), the period an unknown."""
+    from saltation.models import block_on_belt
+    from saltation.orbits.conditions import ReturnTangency
+    from saltation.special_points.grazing import locate_tangential_return
+
+    flow = Flow(block_on_belt())
+    (k,) = [i for i, tr in enumerate(flow.system.transitions)
+            if (tr.source, tr.surface, tr.target) == ("slip_minus", "band_lower", "stick")]
+    found = locate_tangential_return(flow, [0.8902, 1.0981], 1.0982, "v_dr", k, 6.5)
+    base = ShootingProblem(flow, {"v_dr": found.parameter}, tolerances=TOL)
+    problem = ConditionedProblem(base, [ReturnTangency(flow, k)], free=("v_dr",), continuation="c")
+    # the touch lies on the band's edge; the point is moved 3e-5 into the band (v - v_dr + eta = 3e-5), so
+    # that the differences' steps (1e-6) start every shot in the stick mode's own domain
+    u = problem.pack(found.state, period=found.period) + np.array([1e-4, 2e-5, 1e-3, -1e-5])
+    compare_with_differences(problem, u, flow.system.defaults["c"] + 1e-3)
+
+
+def test_tangency_rows_by_multiple_shooting():
+    """The grazing curve of the impact oscillator on 3 segments: the condition read on the segment that
+    holds t_g, its rows by that node, and the segments' starts moving with the forcing period 2 pi / omega."""
+    from saltation.orbits.shooting import MultipleShootingProblem
+
+    flow = Flow(impact_oscillator())
+    w = flow.system.defaults["omega"]
+    det = (1 - w**2) ** 2 + (0.1 * w) ** 2
+    g = locate_grazing(flow, [(1 - w**2) / det, 0.1 * w * w / det], 2.9, "s", 0, 0.3, parameters={"s": 2.9})
+    # shot from t0 = t_g - T/2, so that the touch lies in the middle segment, whose start moves with omega
+    T = 2 * np.pi / w
+    t0 = g.t_graze - T / 2
+    p = flow.parameters({"s": g.parameter})
+    x_t0 = flow.run(g.state0, 0.0, g.t_graze + T / 2, p, disabled=[0], tolerances=TOL).x1
+    base = MultipleShootingProblem(ShootingProblem(flow, {"s": g.parameter}, t0=t0, tolerances=TOL), 3)
+    problem = ConditionedProblem(base, [Tangency(flow, 0, g.t_graze)], free=("s",), continuation="omega")
+    u = problem.pack(x_t0, extras=np.array([g.t_graze]))
+    u = u + 1e-3 * np.sin(np.arange(len(u)) + 1.0)
+    compare_with_differences(problem, u, w + 1e-3)
+
+
+def test_multiplier_rows_by_multiple_shooting():
+    """A fold of the trilinear oscillator on 2 segments, in (omega, f0): g of the product of the segments'
+    matrices and its central differences by node (their step 1e-6 inside the rows; here compared with
+    steps of 1e-6 of the whole residual: the two agree to the second differences' 1e-6 relative)."""
+    from saltation.apps.paper import linear_response_state
+    from saltation.models import trilinear
+    from saltation.models.trilinear import DEFAULTS as TRI
+    from saltation.orbits.conditions import MultiplierCondition
+    from saltation.orbits.shooting import MultipleShootingProblem
+
+    flow = Flow(trilinear())
+    state = linear_response_state(dict(TRI, omega=1.2))
+    base = MultipleShootingProblem(ShootingProblem(flow, {"omega": 1.2}, tolerances=TOL), 2)
+    problem = ConditionedProblem(base, [MultiplierCondition(1.0)], free=("omega",), continuation="f0")
+    u = problem.pack(state)
+    compare_with_differences(problem, u, TRI["f0"])
