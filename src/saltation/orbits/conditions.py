@@ -860,21 +860,10 @@ class ConditionedProblem:
             raise ConvergenceError("the shot could not be split before the condition's event")
         dim = self.dimension
         r, J = np.zeros(dim), np.zeros((dim, dim))
-        jp = np.zeros((nb, len(params)))
-        for i, seg in enumerate(first):
-            nxt = (i + 1) % m
-            rows = slice(i * n, (i + 1) * n)
-            r[rows] = seg.x1 - U[nxt * n:(nxt + 1) * n]
-            J[rows, i * n:(i + 1) * n] += seg.monodromy
-            J[rows, nxt * n:(nxt + 1) * n] -= np.eye(n)
-            if self.autonomous:
-                J[rows, nodes_n] = (self.sign / m) * seg.velocity_end
-            for c, j in enumerate(params):
-                jp[rows, c] = segs[c][i].parameter_sensitivity
-                dT = 0.0 if self.autonomous else self.system.period_derivative(p, j)
-                if dT:
-                    f_start = flow.vector_field(seg.mode0, seg.t0, seg.x0, p)
-                    jp[rows, c] += (self.sign * dT / m) * ((i + 1) * seg.velocity_end - i * (seg.monodromy @ f_start))
+        rows_m, block, jp = self.base.matching(
+            U, p, first, [(j, [seg.parameter_sensitivity for seg in segs[c]]) for c, j in enumerate(params)])
+        r[:nodes_n] = rows_m
+        J[:nodes_n, : block.shape[1]] = block
         no = self.n_orbit_rows
         if no > nodes_n:  # the phase condition (unless a condition fixes the phase)
             single = self.single
@@ -882,8 +871,8 @@ class ConditionedProblem:
                 single.anchor_phase(U[:n].copy(), p)
             r[nodes_n] = single.f_ref @ (U[:n] - single.x_ref)
             J[nodes_n, :n] = single.f_ref
-        J[:no, nb:nb + k] = jp[:no, :k]
-        jl = np.append(jp[:no, k], np.zeros(dim - no)) if len(params) > k else None
+        J[:nodes_n, nb:nb + k] = jp[:, :k]
+        jl = np.append(jp[:, k], np.zeros(dim - nodes_n)) if len(params) > k else None
         row, col = no, nb + k
         for c, b, (i, shot) in zip(self.conditions, blocks, shots):
             rows = slice(row, row + c.size)

@@ -1050,19 +1050,14 @@ class MultipleShootingProblem:
     def residual(self, U: np.ndarray, lam: float | None = None, *, sensitivity: int = -1
                  ) -> tuple[np.ndarray, np.ndarray, list[Trajectory]]:
         """``(r, J, segments)``: the matching equations (and phase condition) and their exact Jacobian."""
-        prob, n, m = self.problem, self.n, self.segments
+        prob, n = self.problem, self.n
         segs = self.shoot(U, lam, sensitivity)
         dim = self.dimension
         r = np.zeros(dim)
         J = np.zeros((dim, dim))
-        for i, seg in enumerate(segs):
-            j = (i + 1) % m
-            rows = slice(i * n, (i + 1) * n)
-            r[rows] = seg.x1 - U[j * n:(j + 1) * n]
-            J[rows, i * n:(i + 1) * n] += seg.monodromy
-            J[rows, j * n:(j + 1) * n] -= np.eye(n)
-            if prob.autonomous:
-                J[rows, -1] = (prob.sign / m) * seg.velocity_end
+        rows, block, _ = self.matching(U, prob.parameters_at(lam), segs)
+        r[: len(rows)] = rows
+        J[: len(rows), : block.shape[1]] = block
         if prob.autonomous:
             if prob.x_ref is None:
                 prob.set_phase_reference(U[:n], lam)
@@ -1079,6 +1074,51 @@ class MultipleShootingProblem:
         from the segment that holds its instant (see :meth:`ShootingProblem.with_conditions`)."""
         return ConditionedProblem(self, conditions, free, continuation=continuation, parameters=parameters)
 
+    def matching(self, U: np.ndarray, p: np.ndarray, segs: Sequence[Trajectory],
+                 columns: Sequence[tuple[int, Sequence[np.ndarray]]] = ()) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The matching equations ``x_i(t_{i+1}) - x_{i+1} = 0``: the one place they are written.
+
+        Parameters
+        ----------
+        U : ndarray
+            The nodes (and the period of an autonomous orbit).
+        p : ndarray
+            The parameters.
+        segs : sequence of Trajectory
+            The segments from the nodes, with their transfer matrices.
+        columns : sequence of (int, sequence of ndarray)
+            Per parameter ``j``: the segments' sensitivities to it.
+
+        Returns
+        -------
+        r : ndarray, shape (m n,)
+        J : ndarray, shape (m n, m n [+ 1])
+            By the nodes (and the period: segment ``i`` ends at ``t0 + s (i + 1) T / m``).
+        jp : ndarray, shape (m n, len(columns))
+            By the parameters: ``psi_i + s dT/dp ((i + 1) f(end_i) - i Phi_i f(t_i, x_i)) / m`` where the
+            forcing period ``T`` moves with ``p_j`` (both ends of every segment move).
+        """
+        prob, n, m = self.problem, self.n, self.segments
+        nn = m * n
+        r = np.zeros(nn)
+        J = np.zeros((nn, nn + (1 if prob.autonomous else 0)))
+        jp = np.zeros((nn, len(columns)))
+        for i, seg in enumerate(segs):
+            nxt = (i + 1) % m
+            rows = slice(i * n, (i + 1) * n)
+            r[rows] = seg.x1 - U[nxt * n:(nxt + 1) * n]
+            J[rows, i * n:(i + 1) * n] += seg.monodromy
+            J[rows, nxt * n:(nxt + 1) * n] -= np.eye(n)
+            if prob.autonomous:
+                J[rows, nn] = (prob.sign / m) * seg.velocity_end
+            for c, (j, psis) in enumerate(columns):
+                jp[rows, c] = psis[i]
+                dT = 0.0 if prob.autonomous else prob.system.period_derivative(p, j)
+                if dT:
+                    f_start = prob.flow.vector_field(seg.mode0, seg.t0, seg.x0, p)
+                    jp[rows, c] += (prob.sign * dT / m) * ((i + 1) * seg.velocity_end - i * (seg.monodromy @ f_start))
+        return r, J, jp
+
     # -- the continuation protocol ----------------------------------------------------------
     def parameters_at(self, lam: float | None) -> np.ndarray:
         return self.problem.parameters_at(lam)
@@ -1093,20 +1133,14 @@ class MultipleShootingProblem:
         ``lam``, its start and end move too, ``d/dlam = psi_i + s dT/dlam ((i + 1) f(end_i) - i Phi_i
         f(t_i, x_i)) / m``.
         """
-        prob, n, m = self.problem, self.n, self.segments
         pidx = self.lam_index if (need_lam and lam is not None) else -1
         r, J, segs = self.residual(U, lam, sensitivity=pidx)
         jl = None
         if pidx >= 0:
             jl = np.zeros(self.dimension)
-            p = self.parameters_at(lam)
-            dT = 0.0 if prob.autonomous else prob.system.period_derivative(p, pidx)
-            for i, seg in enumerate(segs):
-                rows = slice(i * n, (i + 1) * n)
-                jl[rows] = seg.parameter_sensitivity
-                if dT:
-                    f_start = prob.flow.vector_field(seg.mode0, seg.t0, seg.x0, p)
-                    jl[rows] += (prob.sign * dT / m) * ((i + 1) * seg.velocity_end - i * (seg.monodromy @ f_start))
+            _, _, jp = self.matching(U, self.parameters_at(lam), segs,
+                                     [(pidx, [seg.parameter_sensitivity for seg in segs])])
+            jl[: len(jp)] = jp[:, 0]
         self._segs = (np.array(U, dtype=float), lam, segs)
         return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=join(segs))
 
