@@ -278,8 +278,17 @@ def locate_tangential_return(
     p = flow.parameters(parameters).copy()
     p[system.parameter_index(lam_name)] = float(lam)
     base = ShootingProblem(flow, p, tolerances=tolerances)
-    problem = ConditionedProblem(base, [ReturnTangency(flow, transition)], free=(lam_name,))
-    found = problem.solve(problem.pack(np.asarray(x_touch, dtype=float), period=float(period)), tol=tol,
+    condition = ReturnTangency(flow, transition)
+    # the guess onto the surface (along its gradient): a start off it may lie outside the stick mode's domain
+    x = np.asarray(x_touch, dtype=float).copy()
+    for _ in range(8):
+        h = flow.indicator(condition.surface, 0.0, x, p)
+        hx, _, _ = flow.indicator_gradient(condition.surface, 0.0, x, p)
+        if abs(h) <= 1e-15 * (1.0 + float(np.linalg.norm(x))) or not float(hx @ hx) > 0:
+            break
+        x = x - h * hx / float(hx @ hx)
+    problem = ConditionedProblem(base, [condition], free=(lam_name,))
+    found = problem.solve(problem.pack(x, period=float(period)), tol=tol,
                           max_iter=max_iter, what=f"tangential return to surface {tr.surface!r}")
     return TangentialReturn(
         parameter=float(found.parameters[system.parameter_index(lam_name)]), state=found.state0.copy(),
