@@ -303,7 +303,10 @@ def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_
     Along a period of ``traj`` (computed with ``dense=True``), an indicator of
     a transition of the current mode that comes within ``relative_gap`` of
     zero (relative to its range over the period) at a local extremum, from
-    the side it would cross from, is a candidate for grazing.
+    the side it would cross from, is a candidate for grazing.  Of a stretch of
+    consecutive samples that all qualify (an indicator that stays flat near
+    zero, as in a stick phase), the one nearest zero is the candidate.  The
+    candidates come nearest first.
     """
     system = flow.system
     t, x = traj.sample(16)
@@ -312,7 +315,7 @@ def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_
     for e in events:
         after = (t > e.t) if traj.t1 >= traj.t0 else (t < e.t)
         modes[after] = system.mode_index(e.mode_to)
-    found = []
+    found: list[tuple[float, int, float]] = []  # (relative gap, transition, time)
     for k, tr in enumerate(system.transitions):
         s = system.surface_index(tr.surface)
         h = np.array([flow.indicator(s, ti, xi, p) for ti, xi in zip(t, x)])
@@ -321,15 +324,26 @@ def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_
             continue
         src = system.mode_index(tr.source)
         sign = int(tr.direction)  # it fires when h becomes of this sign
+        best, last = None, -2
         for i in range(1, len(t) - 1):
             if modes[i] != src:
                 continue
             extremum = (h[i] >= h[i - 1] and h[i] >= h[i + 1]) if sign >= 0 else (h[i] <= h[i - 1] and h[i] <= h[i + 1])
             approaching_from_other_side = h[i] * sign < 0 if sign != 0 else True
-            if extremum and approaching_from_other_side and abs(h[i]) <= relative_gap * rng:
-                if not found or found[-1][0] != k or abs(found[-1][1] - t[i]) > 1e-6 * max(1.0, abs(t[i])):
-                    found.append((k, float(t[i])))
-    return found
+            if not (extremum and approaching_from_other_side and abs(h[i]) <= relative_gap * rng):
+                continue
+            gap = abs(h[i]) / rng
+            if i == last + 1 and best is not None:  # the same stretch: keep its sample nearest zero
+                if gap < best[0]:
+                    best = (gap, k, float(t[i]))
+            else:
+                if best is not None:
+                    found.append(best)
+                best = (gap, k, float(t[i]))
+            last = i
+        if best is not None:
+            found.append(best)
+    return [(k, t_k) for _, k, t_k in sorted(found, key=lambda c: c[0])]
 
 
 def growth_exponent(distances: np.ndarray, magnitudes: np.ndarray) -> float:
