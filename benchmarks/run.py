@@ -16,7 +16,12 @@ multipliers must agree to 1e-8, or the run stops.
 Benchmarks
 ----------
 orbit       one periodic orbit of the trilinear system at omega = 1.0 (and 0.7) from a
-            guess 1e-3 away, Newton to 1e-10, with monodromy and multipliers
+            guess 1e-3 away, Newton to 1e-10, with monodromy and multipliers; against it, the
+            limit of the affine path: the matrix exponentials alone (one per segment between
+            events, compiled, times the period maps shooting took), and the cost of one call
+            of the engine that takes no step
+nonlinear   one orbit of a Duffing oscillator with an impact stop (not piecewise affine: the
+            DOP853 path), against the same algorithm with solve_ivp (``nonlinear_baseline.py``)
 fig3        the response curve of Fig. 3 (``paper.trilinear_diagram``, >= 400 points,
             special points located); baseline: pseudo-arclength over the same curve
 fig7        the block-on-belt diagram of Fig. 7 (``paper.block_on_belt_diagram``); no baseline
@@ -24,7 +29,7 @@ paper       ``python -m saltation paper`` in a fresh process, empty and warm ker
             (full runs only: the empty-cache run compiles every kernel)
 multipliers Floquet multipliers on the no-contact branch vs eig(expm(A T)), default tolerances
 events      event times of a piecewise-linear flow vs closed form
-chain       the chain of n masses, n = 1 ... 32: time per orbit, fitted growth exponent
+chain       the chain of n masses, n = 1 ... 64 (32 with --quick): time per orbit, fitted growth exponent
 sweep       brute-force diagram, 161 values of omega x 200 forcing periods (100 transient,
             100 sampled), on every core; baseline: the same simulation with solve_ivp
 
@@ -62,19 +67,94 @@ from saltation.apps.sweeps import sweep  # noqa: E402
 
 TARGETS = {
     "orbit_ms": 0.3,
-    "orbit_ratio_vs_scipy": 100.0,
+    "orbit_ratio_vs_scipy": 150.0,
+    "orbit_over_limit": 3.0,
+    "orbit_nonlinear_ratio_vs_scipy": 50.0,
     "fig3_s": 0.3,
+    "fig3_ratio_vs_scipy": 150.0,
     "fig7_s": 0.3,
-    "paper_cold_s": 60.0,
+    "paper_cold_s": 30.0,
     "paper_warm_s": 5.0,
     "multiplier_error": 1e-9,
     "event_time_error": 1e-12,
-    "chain_exponent": 3.0,
+    "chain_exponent": 2.0,
     "sweep_s": 1.0,
-    "corner_curve_s_per_200_points": 1.0,
-    "fold_curve_s_per_200_points": 1.0,
+    "sweep_ratio_vs_scipy": 80.0,
+    "corner_curve_s_per_200_points": 0.5,
+    "fold_curve_s_per_200_points": 0.3,
     "sliding_curve_s_per_200_points": 1.0,
 }
+
+
+# -- the limit of the affine path: the matrix exponentials alone -----------------------------------
+def _compiled_expm():
+    """A compiled ``expm`` (scaling and squaring of a degree-18 Taylor series, full double precision for
+    the small matrices here), and a loop over a period's segments in compiled code: what one period map
+    of a piecewise-affine orbit cannot do without."""
+    from numba import njit
+
+    @njit(cache=True)
+    def expm(A):
+        n = A.shape[0]
+        norm = 0.0
+        for i in range(n):
+            row = 0.0
+            for j in range(n):
+                row += abs(A[i, j])
+            norm = max(norm, row)
+        s = 0
+        while norm > 0.5:
+            norm *= 0.5
+            s += 1
+        B = A / 2.0**s
+        E = np.eye(n)
+        term = np.eye(n)
+        for k in range(1, 19):
+            term = term @ B / k
+            E = E + term
+        for _ in range(s):
+            E = E @ E
+        return E
+
+    @njit(cache=True)
+    def period_exponentials(generators, spans):
+        out = np.zeros((generators.shape[1], generators.shape[1]))
+        for i in range(generators.shape[0]):
+            out += expm(generators[i] * spans[i])
+        return out
+
+    return expm, period_exponentials
+
+
+def orbit_limit(orbit, system_params: dict, quick: bool) -> tuple[float, np.ndarray, np.ndarray]:
+    """The time of the matrix exponentials of an orbit of the trilinear system: one per segment between
+    its events (the augmented generator of ``(x, 1, cos w t, sin w t)``, size 5), as many times as the
+    orbit's shooting took period maps.  Returns (ms, the generators, the spans)."""
+    from saltation.models.trilinear import DEFAULTS as TRI
+
+    q = TRI | system_params
+    m, c, k, kf, cf, xc, f0, w = (q[a] for a in ("m", "c", "k", "k_f", "c_f", "x_c", "f0", "omega"))
+    traj = orbit.trajectory
+    times = [traj.t0] + [e.t for e in traj.events] + [traj.t1]
+    modes = [traj.mode0] + [e.mode_to for e in traj.events]
+    generators = []
+    for mode in modes:
+        G = np.zeros((5, 5))
+        G[0, 1] = 1.0
+        contact = mode != "free"
+        G[1, 0] = -(k + (kf if contact else 0.0)) / m
+        G[1, 1] = -(c + (cf if contact else 0.0)) / m
+        if contact:  # the support's offset, on the constant component
+            G[1, 2] = (kf * xc if "1" in mode else -kf * xc) / m
+        G[1, 4] = f0 / m  # the forcing on sin(w t) (its phase does not change the cost)
+        G[3, 4], G[4, 3] = -w, w
+        generators.append(G)
+    generators = np.array(generators)
+    spans = np.diff(np.array(times))
+    _, period_exponentials = _compiled_expm()
+    maps = orbit.iterations + 1
+    t = median_time(lambda: period_exponentials(generators, spans), 200 if quick else 2000)
+    return t * maps * 1e3, generators, spans
 
 
 def log(msg: str) -> None:
@@ -134,6 +214,16 @@ def bench_orbit(quick: bool) -> dict:
         t_s = median_time(lambda: find_periodic_orbit(flow, guess, parameters={"omega": omega}, tol=1e-10),
                           20 if quick else 200)
         t_b = median_time(lambda: base.shoot(guess, tol=1e-10), 3 if quick else 15)
+        t_map = median_time(lambda: flow.run(orb.state0, 0.0, orb.period, p, variational=True), 50 if quick else 500)
+        t_call = median_time(lambda: flow.run(orb.state0, 0.0, 0.0, p, variational=True), 50 if quick else 500)
+        limit_ms, _, spans = orbit_limit(orb, {"omega": omega}, quick)
+        out |= {
+            f"orbit{tag}_limit_ms": limit_ms,
+            f"orbit{tag}_over_limit": t_s * 1e3 / limit_ms,
+            f"orbit{tag}_segments": len(spans),
+            f"orbit{tag}_period_map_ms": t_map * 1e3,
+            f"orbit{tag}_call_overhead_ms": t_call * 1e3,
+        }
         out |= {
             f"orbit{tag}_ms": t_s * 1e3,
             f"orbit{tag}_scipy_ms": t_b * 1e3,
@@ -272,7 +362,7 @@ def linear_amplitude_of_last_mass(n: int, omega: float, d: dict) -> float:
 def bench_chain(quick: bool) -> dict:
     """Chains of n masses at omega = 1 with the supports at 0.7 times the free amplitude of the last
     mass, so that every orbit touches both supports (four events per period) whatever n."""
-    ns = (1, 2, 4, 8, 16, 32)
+    ns = (1, 2, 4, 8, 16, 32) if quick else (1, 2, 4, 8, 16, 32, 64)
     omega = 1.0
     T = 2 * math.pi / omega
     rows = []
@@ -413,7 +503,39 @@ def _sliding_locations(quick: bool) -> dict:
     return out
 
 
+def bench_nonlinear(quick: bool) -> dict:
+    """One orbit of the Duffing impact oscillator (not piecewise affine: the DOP853 path) against the same
+    algorithm written with solve_ivp (``nonlinear_baseline.py``)."""
+    import nonlinear_baseline as nb
+
+    flow = Flow(nb.model())
+    p = flow.parameters({})
+    T = 2 * math.pi / nb.DEFAULTS["omega"]
+    start = flow.run([0.0, 0.0], 0.0, 200 * T, p).x1
+    ref = find_periodic_orbit(flow, start)
+    guess = ref.state0 + 1e-3
+    orb = find_periodic_orbit(flow, guess, tol=1e-10)
+    base = nb.DuffingImpact()
+    x_sp, _, mu_sp, _, impacts = base.shoot(guess, tol=1e-10)
+    dx = float(np.max(np.abs(x_sp - orb.state0)))
+    dmu = float(np.max(np.abs(sorted_multipliers(mu_sp) - sorted_multipliers(orb.multipliers))))
+    assert dx < 1e-8 and dmu < 1e-8, f"the nonlinear baseline disagrees: |dx|={dx:.2e}, |dmu|={dmu:.2e}"
+    assert len(impacts) == len(orb.events), (impacts, orb.event_labels)
+    t_s = median_time(lambda: find_periodic_orbit(flow, guess, tol=1e-10), 20 if quick else 200)
+    t_b = median_time(lambda: base.shoot(guess, tol=1e-10), 3 if quick else 15)
+    traj = flow.run(orb.state0, 0.0, T, p, variational=True)
+    return {
+        "orbit_nonlinear_ms": t_s * 1e3,
+        "orbit_nonlinear_scipy_ms": t_b * 1e3,
+        "orbit_nonlinear_ratio_vs_scipy": t_b / t_s,
+        "orbit_nonlinear_agreement": max(dx, dmu),
+        "orbit_nonlinear_steps_per_period": traj.n_steps,
+        "orbit_nonlinear_newton_iterations": orb.iterations,
+    }
+
+
 BENCHMARKS = {
+    "nonlinear": bench_nonlinear,
     "loci": bench_loci,
     "orbit": bench_orbit,
     "fig3": bench_fig3,
@@ -478,6 +600,12 @@ def table(results: dict) -> str:
         ("one orbit, omega=1.0 (ms)", "orbit_ms", "orbit_scipy_ms", "orbit_ratio_vs_scipy"),
         ("one orbit, omega=0.7 (ms)", "orbit_no_contact_ms", "orbit_no_contact_scipy_ms",
          "orbit_no_contact_ratio_vs_scipy"),
+        ("  omega=1.0: its matrix exponentials alone (ms)", "orbit_limit_ms", None, None),
+        ("  omega=1.0: orbit / its exponentials", "orbit_over_limit", None, None),
+        ("  omega=1.0: one period map (ms)", "orbit_period_map_ms", None, None),
+        ("  one call of the engine, no step (ms)", "orbit_call_overhead_ms", None, None),
+        ("one orbit, Duffing impact (ms)", "orbit_nonlinear_ms", "orbit_nonlinear_scipy_ms",
+         "orbit_nonlinear_ratio_vs_scipy"),
         ("Fig. 3 diagram (s)", "fig3_s", "fig3_scipy_s", "fig3_ratio_vs_scipy"),
         ("Fig. 7 diagram (s)", "fig7_s", None, None),
         ("paper, empty cache (s)", "paper_cold_s", None, None),

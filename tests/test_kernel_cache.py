@@ -448,3 +448,41 @@ def test_a_folder_made_read_only_with_chmod(cache, tmp_path, capsys):
         for f in reversed(folders):
             f.chmod(0o755)
     assert capsys.readouterr().err.count("cannot be written") == 1
+
+
+def test_only_long_generated_functions_skip_llvm_optimization():
+    """Functions longer than UNOPTIMIZED_FUNCTION_LINES are compiled unoptimized (their optimization time
+    grows faster than their length); the paper's models and small chains keep every function optimized,
+    and so their modules (named by the hash of their source) are unchanged."""
+    from saltation.engine.codegen import UNOPTIMIZED_FUNCTION_LINES, _skip_optimization_of_long_functions, generate_source
+    from saltation.models import block_on_belt, chain, trilinear
+
+    short = ["@njit(MODEL_SIGNATURES['f'], cache=True)", "def f(x):", "    return x"]
+    long = ["@njit(MODEL_SIGNATURES['g'], cache=True)", "def g(x):"] + ["    y = x"] * UNOPTIMIZED_FUNCTION_LINES
+    out = _skip_optimization_of_long_functions(short + long)
+    assert out[0] == short[0]
+    assert out[len(short)] == "@njit(MODEL_SIGNATURES['g'], cache=True, _dbg_optnone=True)"
+    for system in (trilinear(), block_on_belt(), chain(8)):
+        assert "_dbg_optnone" not in generate_source(system)
+    assert "_dbg_optnone" in generate_source(chain(16))
+
+
+def test_a_model_compiled_without_optimization_computes_the_same(monkeypatch):
+    """Every function of a model left unoptimized (the threshold lowered to 3 lines): its orbit's
+    multipliers are still the eigenvalues of expm(A T) of the damped linear oscillator, to 1e-10."""
+    from scipy.linalg import expm
+
+    from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition, find_periodic_orbit
+    from saltation.engine import codegen
+
+    monkeypatch.setattr(codegen, "UNOPTIMIZED_FUNCTION_LINES", 3)
+    system = PiecewiseSystem(
+        name="test_unoptimized_oscillator", states=["x", "v"], parameters={"c": 0.3, "k": 2.0, "w": 1.7, "xc": 50.0},
+        modes=[Mode("free", ["v", "-c*v - k*x + cos(w*t)"])], surfaces={"wall": "x - xc"},
+        transitions=[Transition("free", "wall", Crossing.RISING, "free", reset=["x", "-v"])], period="2*pi/w",
+    )
+    assert "_dbg_optnone" in codegen.generate_source(system)
+    orbit = find_periodic_orbit(Flow(system), [0.0, 0.0])
+    T = 2 * np.pi / 1.7
+    expected = np.linalg.eigvals(expm(np.array([[0.0, 1.0], [-2.0, -0.3]]) * T))
+    np.testing.assert_allclose(np.sort_complex(orbit.multipliers), np.sort_complex(expected), rtol=0, atol=1e-10)

@@ -143,6 +143,28 @@ def _decorator(name: str) -> str:
     return f"@njit(MODEL_SIGNATURES[{name!r}], cache=True)"
 
 
+#: A generated function longer than this (lines) is compiled without LLVM's optimization passes
+#: (numba's ``_dbg_optnone``, a flag of numba >= 0.58): their time grows faster than the code's length.
+#: On the 128-state chain (functions of 200 to 800 straight lines) the first orbit in a fresh process
+#: came in 73 s with them and 34 s without, and the warm orbit took the same 130 ms: its steps are the
+#: engine's exact affine steps, which stay optimized.  Small models (every function shorter) are not
+#: affected.
+UNOPTIMIZED_FUNCTION_LINES = 200
+
+
+def _skip_optimization_of_long_functions(src: list[str]) -> list[str]:
+    """The generated lines, with the decorators of functions longer than :data:`UNOPTIMIZED_FUNCTION_LINES`
+    asking numba to leave them unoptimized (not ``initial_mode``, which calls another model function:
+    unoptimized, that call is a dynamic global that numba cannot cache)."""
+    starts = [i for i, line in enumerate(src) if line.startswith("@njit(MODEL_SIGNATURES[")] + [len(src)]
+    out = list(src)
+    for a, b in zip(starts[:-1], starts[1:]):
+        if (b - a > UNOPTIMIZED_FUNCTION_LINES and out[a].endswith("cache=True)")
+                and "['initial_mode']" not in out[a]):
+            out[a] = out[a][: -len(")")] + ", _dbg_optnone=True)"
+    return out
+
+
 def _dispatch(name: str, args: str, index: str, cases: list[tuple[int, list[str]]], default: str) -> list[str]:
     lines = [_decorator(name), f"def {name}({args}):"]
     for k, body in cases:
@@ -302,7 +324,7 @@ def generate_source(system: PiecewiseSystem) -> str:
     ]
     src += _period_source(system, em)
     src.append("MODEL = (" + ", ".join(MODEL_FUNCTIONS) + ", affine_modes)  # the engine's first argument")
-    return "\n".join(src) + "\n"
+    return "\n".join(_skip_optimization_of_long_functions(src)) + "\n"
 
 
 def _period_source(system: PiecewiseSystem, em: _Emitter) -> list[str]:
