@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.linalg import expm
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from saltation import EventKind
 from saltation.orbits.shooting import EquilibriumProblem, find_periodic_orbit
@@ -188,3 +190,33 @@ def test_eigenvalues_of_a_non_finite_matrix_raise():
 
     with pytest.raises(np.linalg.LinAlgError, match="infs or NaNs"):
         eigenvalues(np.array([[1.0, np.nan], [0.0, 1.0]]))
+
+
+def _greedy_reference(prev, new):
+    """Greedy nearest-neighbour matching, written plainly: each multiplier of ``prev`` in turn takes the
+    nearest of the values left (the first of equally near ones)."""
+    left = list(range(len(new)))
+    out = []
+    for m in prev:
+        j = min(left, key=lambda jj: abs(new[jj] - m))
+        out.append(new[j])
+        left.remove(j)
+    return np.array(out)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(min_value=1, max_value=4), st.integers(min_value=0, max_value=2**32 - 1))
+def test_set_valued_paths_follow_greedy_nearest_neighbours(n, seed):
+    """The paths of the set-valued multipliers are the eigenvalues along the hull, each row matched to
+    the row before by greedy nearest neighbours (the fast path for two multipliers included)."""
+    from saltation.orbits.floquet import set_valued_multipliers, sort_multipliers
+
+    rng = np.random.default_rng(seed)
+    m_minus, m_plus = rng.normal(size=(2, n, n))
+    sv = set_valued_multipliers(m_minus, m_plus, num=41)
+    hull = (1.0 - sv.q)[:, None, None] * m_minus + sv.q[:, None, None] * m_plus
+    eig = np.linalg.eigvals(hull).astype(complex)
+    expected = [sort_multipliers(eig[0])]
+    for row in eig[1:]:
+        expected.append(_greedy_reference(expected[-1], row))
+    np.testing.assert_array_equal(sv.paths, np.array(expected))

@@ -178,12 +178,13 @@ def set_valued_multipliers(
     n = m_minus.shape[0]
     hull = (1.0 - q)[:, None, None] * m_minus + q[:, None, None] * m_plus
     eigenvalues = np.linalg.eigvals(hull).astype(complex)  # one stacked call
-    paths = np.empty((num, n), dtype=complex)
-    prev = None
-    for k in range(num):
-        mu = sort_multipliers(eigenvalues[k]) if prev is None else _match(prev, eigenvalues[k])
-        paths[k] = mu
-        prev = mu
+    rows = eigenvalues.tolist()  # Python complex numbers: the matching below touches each a few times
+    prev = sort_multipliers(eigenvalues[0]).tolist()
+    matched = [prev]
+    for row in rows[1:]:
+        prev = _match_list(prev, row)
+        matched.append(prev)
+    paths = np.array(matched, dtype=complex).reshape(num, n)
     if backward:
         paths = np.array([reciprocal(row) for row in paths])
     return SetValuedMultipliers(q=q, paths=paths)
@@ -191,12 +192,19 @@ def set_valued_multipliers(
 
 def _match(prev: np.ndarray, new: np.ndarray) -> np.ndarray:
     """Reorder ``new`` to follow ``prev`` (greedy nearest neighbour)."""
-    out = np.empty_like(prev)
-    left = list(range(len(new)))
-    for i, m in enumerate(prev):
-        j = min(left, key=lambda jj: abs(new[jj] - m))
-        out[i] = new[j]
-        left.remove(j)
+    return np.array(_match_list(np.asarray(prev).tolist(), np.asarray(new).tolist()), dtype=complex)
+
+
+def _match_list(prev: list[complex], new: list[complex]) -> list[complex]:
+    """:func:`_match` on lists of Python complex numbers (each takes the nearest of those left, in order)."""
+    if len(prev) == 2:  # the common case, written out (the first of equally near ones is taken, as below)
+        a, b = new
+        return [a, b] if abs(a - prev[0]) <= abs(b - prev[0]) else [b, a]
+    left = list(new)
+    out = []
+    for m in prev:
+        j = min(range(len(left)), key=lambda jj: abs(left[jj] - m))
+        out.append(left.pop(j))
     return out
 
 
