@@ -316,9 +316,15 @@ def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_
         after = (t > e.t) if traj.t1 >= traj.t0 else (t < e.t)
         modes[after] = system.mode_index(e.mode_to)
     found: list[tuple[float, int, float]] = []  # (relative gap, transition, time)
+    present = set(modes.tolist())
+    values: dict[int, np.ndarray] = {}  # per surface: its indicator along the samples (transitions share them)
     for k, tr in enumerate(system.transitions):
+        if system.mode_index(tr.source) not in present:
+            continue  # the orbit never is in the mode this transition leaves
         s = system.surface_index(tr.surface)
-        h = np.array([flow.indicator(s, ti, xi, p) for ti, xi in zip(t, x)])
+        if s not in values:
+            values[s] = np.array([flow.indicator(s, ti, xi, p) for ti, xi in zip(t.tolist(), x)])
+        h = values[s]
         rng = float(h.max() - h.min())
         if rng == 0.0:
             continue
