@@ -3,9 +3,9 @@
 The engine of a state dimension (about half a minute) and a model's functions
 (seconds) compile on first use and are cached per machine.  A process that
 needs several (the paper's figures, the test suite) compiles them here in
-parallel, one fresh interpreter each: first the engines of the dimensions not
-yet compiled, then the models' functions, and then loads them all from the
-cache.
+parallel, one fresh interpreter each, the engines of the dimensions not yet
+compiled started first and the models' functions beside them, and then loads
+them all from the cache.
 """
 
 from __future__ import annotations
@@ -74,8 +74,10 @@ def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = No
     if engines:
         print(f"saltation: compiling the integrator for {len(engines)} state dimension(s) and the functions of "
               f"{len(todo)} model(s), once for this machine", file=sys.stderr, flush=True)
-        _run_in_processes(engines, min(workers, len(engines)))
-    _run_in_processes([("model", s) for s in todo], min(workers, len(todo)))
+    # one pool, the engines first: the models' functions do not need an engine to compile, so they take
+    # the other cores while an engine (the longest job by far) compiles
+    jobs = engines + [("model", s) for s in todo]
+    _run_in_processes(jobs, min(workers, len(jobs)))
     return [s.name for s in todo]
 
 
