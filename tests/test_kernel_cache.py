@@ -486,3 +486,28 @@ def test_a_model_compiled_without_optimization_computes_the_same(monkeypatch):
     T = 2 * np.pi / 1.7
     expected = np.linalg.eigvals(expm(np.array([[0.0, 1.0], [-2.0, -0.3]]) * T))
     np.testing.assert_allclose(np.sort_complex(orbit.multipliers), np.sort_complex(expected), rtol=0, atol=1e-10)
+
+
+def test_a_build_says_what_it_builds_and_keeps_moving_on_a_terminal():
+    """On a terminal the notice is rewritten with the seconds elapsed until the build is done; elsewhere
+    (a log, a pipe) it is one line."""
+    import io
+    import time
+
+    from saltation.engine.codegen import building
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    term = Terminal()
+    with building("compiling the integrator", stream=term, interval=0.02):
+        time.sleep(0.2)
+    text = term.getvalue()
+    assert text.startswith("saltation: compiling the integrator")
+    assert text.count("\rsaltation: compiling the integrator ... ") >= 2  # at least one tick, then "done"
+    assert text.endswith(" s\n") and "... done in " in text
+    log = io.StringIO()
+    with building("compiling the integrator", stream=log, interval=0.02):
+        time.sleep(0.05)
+    assert log.getvalue() == "saltation: compiling the integrator\n"

@@ -60,6 +60,7 @@ import stat
 import sys
 import tempfile
 import threading
+import time
 import uuid
 import weakref
 from dataclasses import dataclass
@@ -825,6 +826,36 @@ def _load(stem: str, source: str, modname: str, what: str) -> ModuleType:
         return module
 
 
+@contextlib.contextmanager
+def building(message: str, *, stream=None, interval: float = 1.0):
+    """Say on standard error what is being built, and, on a terminal, keep the line moving with the
+    seconds elapsed until it is done (a compile of a minute should not look like a hang)."""
+    stream = sys.stderr if stream is None else stream
+    live = bool(getattr(stream, "isatty", lambda: False)())
+    stream.write(f"saltation: {message}" + ("" if live else "\n"))
+    stream.flush()
+    if not live:
+        yield
+        return
+    done = threading.Event()
+    start = time.monotonic()
+
+    def tick() -> None:
+        while not done.wait(interval):
+            stream.write(f"\rsaltation: {message} ... {time.monotonic() - start:.0f} s")
+            stream.flush()
+
+    ticker = threading.Thread(target=tick, name="saltation-build-notice", daemon=True)
+    ticker.start()
+    try:
+        yield
+    finally:
+        done.set()
+        ticker.join()
+        stream.write(f"\rsaltation: {message} ... done in {time.monotonic() - start:.0f} s\n")
+        stream.flush()
+
+
 def load_engine(n: int) -> ModuleType:
     """Import the engine that integrates models of ``n`` states, compiling it first if this machine has
     not yet (once; it says so on standard error, since it takes a while)."""
@@ -833,11 +864,9 @@ def load_engine(n: int) -> ModuleType:
     modname = f"_saltation_engine_{stem}"
     if modname not in _LOADED and not is_engine_compiled(n):
         which = f"{n_state}-state models" if n_state else f"models of {min(SPECIALIZED_DIMENSIONS.stop, n)} or more states"
-        print(
-            f"saltation: compiling the integrator for {which}, once for this machine (about a minute; "
-            f"cached in {active_cache_directory()})",
-            file=sys.stderr, flush=True,
-        )
+        with building(f"compiling the integrator for {which}, once for this machine (about a minute; "
+                      f"cached in {active_cache_directory()})"):
+            return _load(stem, source, modname, f"the integrator for N_STATE = {n_state}")
     return _load(stem, source, modname, f"the integrator for N_STATE = {n_state}")
 
 

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from saltation.engine.codegen import (
     SPECIALIZED_DIMENSIONS,
+    building,
     engine_dimension,
     is_compiled,
     is_engine_compiled,
@@ -71,13 +72,13 @@ def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = No
     workers = workers or os.cpu_count() or 1
     if len(todo) + len(engines) <= 1 or workers <= 1:
         return []
-    if engines:
-        print(f"saltation: compiling the integrator for {len(engines)} state dimension(s) and the functions of "
-              f"{len(todo)} model(s), once for this machine", file=sys.stderr, flush=True)
     # one pool, the engines first: the models' functions do not need an engine to compile, so they take
     # the other cores while an engine (the longest job by far) compiles
     jobs = engines + [("model", s) for s in todo]
-    _run_in_processes(jobs, min(workers, len(jobs)))
+    what = (f"compiling the integrator for {len(engines)} state dimension(s) and the functions of {len(todo)} "
+            "model(s), once for this machine" if engines else f"compiling the functions of {len(todo)} model(s)")
+    with building(what):
+        _run_in_processes(jobs, min(workers, len(jobs)))
     return [s.name for s in todo]
 
 
