@@ -156,6 +156,11 @@ class Condition(abc.ABC):
         """The instant to split the shot at (its fundamental matrix there is then free), or None."""
         return None
 
+    def instant(self, extra: np.ndarray) -> float | None:
+        """The instant at which it reads the orbit (multiple shooting reads it from the segment that holds
+        it), or None (the start, or the whole period)."""
+        return self.split(extra)
+
     @abc.abstractmethod
     def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
         """Its values and derivatives at the shot (``extra``: its own unknowns; ``params``: the parameter
@@ -331,6 +336,9 @@ class ArrivalTangency(Condition):
     def split(self, extra: np.ndarray) -> float | None:
         return None  # decided by the problem from the last evaluation (see ConditionedProblem._split_time)
 
+    def instant(self, extra: np.ndarray) -> float | None:
+        return self._t_last_eval
+
     def arrival(self, shot: Shot) -> SwitchingEvent:
         return self.identity.find(shot.trajectory.events, self._t_last_eval, shot.period)
 
@@ -401,6 +409,9 @@ class CubicTangency(Condition):
 
     def start(self) -> np.ndarray:
         return np.array([self.t_guess])
+
+    def instant(self, extra: np.ndarray) -> float | None:
+        return float(extra[0])
 
     def _g(self, t: float, x: np.ndarray, p: np.ndarray) -> np.ndarray:
         L, Lx, _, Lt = self.flow.lie_derivative(self.exit_mode, self.surface, t, x, p)
@@ -775,17 +786,6 @@ class ConditionedProblem:
         pos = (t - times[0]) / (times[-1] - times[0]) * m
         return int(min(max(math.floor(pos), 0), m - 1))
 
-    def _instant(self, c: Condition, e: np.ndarray) -> float | None:
-        """The instant at which condition ``c`` reads the orbit (its split, event or own instant)."""
-        t = c.split(e)
-        if t is not None:
-            return t
-        if isinstance(c, ArrivalTangency):
-            return c._t_last_eval
-        if isinstance(c, CubicTangency):
-            return float(e[0])
-        return None
-
     def _segmented_equations(self, u: np.ndarray, lam: float | None, *, need_lam: bool = True
                              ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, Shot]:
         """:meth:`equations` with multiple shooting: the matching equations of the segments (the base
@@ -834,7 +834,7 @@ class ConditionedProblem:
             whole = join(first)
             shots = []
             for c, e in zip(self.conditions, extras):
-                t_c = self._instant(c, e)
+                t_c = c.instant(e)
                 i = 0 if t_c is None else self._segment_of(t_c, times)
                 piece = None
                 if split_seg is not None and i == split_seg and pieces:
