@@ -511,3 +511,16 @@ def test_a_build_says_what_it_builds_and_keeps_moving_on_a_terminal():
     with building("compiling the integrator", stream=log, interval=0.02):
         time.sleep(0.05)
     assert log.getvalue() == "saltation: compiling the integrator\n"
+
+
+def test_the_parallel_build_names_what_it_builds(monkeypatch, capsys):
+    """The notice of a cold build names the models' sizes ("2-state models"), not a count of dimensions."""
+    from saltation.engine import precompile
+    from saltation.models import block_on_belt, trilinear
+
+    monkeypatch.setattr(precompile, "is_compiled", lambda system: False)
+    monkeypatch.setattr(precompile, "is_engine_compiled", lambda n: False)
+    monkeypatch.setattr(precompile, "_run_in_processes", lambda jobs, workers: None)
+    assert precompile.compile_in_parallel([trilinear(), block_on_belt()], workers=2) == ["trilinear", "block_on_belt"]
+    err = capsys.readouterr().err
+    assert "compiling the integrator for 2-state models" in err and "the functions of 2 models" in err

@@ -75,8 +75,10 @@ def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = No
     # one pool, the engines first: the models' functions do not need an engine to compile, so they take
     # the other cores while an engine (the longest job by far) compiles
     jobs = engines + [("model", s) for s in todo]
-    what = (f"compiling the integrator for {len(engines)} state dimension(s) and the functions of {len(todo)} "
-            "model(s), once for this machine" if engines else f"compiling the functions of {len(todo)} model(s)")
+    sizes = [f"{d}-state models" if d else f"models of {SPECIALIZED_DIMENSIONS.stop} or more states" for d in dims]
+    models = f"{len(todo)} model{'s' if len(todo) != 1 else ''}"
+    what = (f"compiling the integrator for {' and '.join(sizes)} (about a minute each, side by side on the cores) and "
+            f"the functions of {models}, once for this machine" if engines else f"compiling the functions of {models}")
     with building(what):
         _run_in_processes(jobs, min(workers, len(jobs)))
     return [s.name for s in todo]
