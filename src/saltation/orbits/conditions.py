@@ -729,19 +729,25 @@ class ConditionedProblem:
         return self.single.close_period(traj, p, disabled=self.disabled).monodromy
 
     # -- the equations ------------------------------------------------------------------
+    def _point(self, u: np.ndarray, lam: float | None, need_lam: bool
+               ) -> tuple[np.ndarray, float, list[int], list[np.ndarray]]:
+        """What the equations at ``(u, lam)`` are evaluated with: the parameters, the period, the
+        parameters of the derivative columns (the freed ones, then ``lam``'s) and the conditions' unknowns."""
+        p = self.parameters_at(u, lam)
+        T = float(u[self.n_nodes]) if self.autonomous else self.system.forcing_period(p)
+        if not (T > 0 and math.isfinite(T)):
+            raise ConvergenceError(f"the period must be positive and finite, got {T}")
+        params = list(self.free) + ([self.lam_index] if (need_lam and lam is not None and self.lam_index >= 0) else [])
+        return p, T, params, self._extras(u)
+
     def equations(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, Shot]:
         """Residual, ``d/du``, ``d/dlam`` and the shot at ``(u, lam)``."""
         if self.segments > 1:
             return self._segmented_equations(u, lam, need_lam=need_lam)
         n, nb, k = self.system.n, self.n_base, len(self.free)
-        p = self.parameters_at(u, lam)
+        p, T, params, extras = self._point(u, lam, need_lam)
         x0 = np.ascontiguousarray(u[:n])
-        T = float(u[n]) if self.autonomous else self.system.forcing_period(p)
-        if not (T > 0 and math.isfinite(T)):
-            raise ConvergenceError(f"the period must be positive and finite, got {T}")
-        params = list(self.free) + ([self.lam_index] if (need_lam and lam is not None and self.lam_index >= 0) else [])
-        extras = self._extras(u)
         split = self._split_time(extras)
         for _ in range(3):
             shot = self.shoot(x0, T, p, params, split)
@@ -798,13 +804,8 @@ class ConditionedProblem:
         """
         n, m, nb, k = self.system.n, self.segments, self.n_base, len(self.free)
         nodes_n = self.n_nodes
-        p = self.parameters_at(u, lam)
+        p, T, params, extras = self._point(u, lam, need_lam)
         U = np.ascontiguousarray(u[:nodes_n])
-        T = float(u[nodes_n]) if self.autonomous else self.system.forcing_period(p)
-        if not (T > 0 and math.isfinite(T)):
-            raise ConvergenceError(f"the period must be positive and finite, got {T}")
-        params = list(self.free) + ([self.lam_index] if (need_lam and lam is not None and self.lam_index >= 0) else [])
-        extras = self._extras(u)
         times = self.t0 + self.sign * T * np.arange(m + 1) / m
         split = self._split_time(extras)
         flow, tol = self.flow, self.tolerances
