@@ -678,7 +678,15 @@ def _bracket_root(model, kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp,
 
 @njit(cache=True)
 def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, lo, hi, exact, TC):
-    """Golden-section search for the minimum of ``sgn * event`` on ``[lo, hi]`` of the step; returns (s, value)."""
+    """Golden-section search for the minimum of ``sgn * event`` on ``[lo, hi]`` of the step; returns (s, value).
+
+    It stops at the first value <= 0 (the dip crosses), or where the minimum is certainly positive: once
+    the bracket is below 1 % of the range, the three last points give the curvature ``f''`` (a divided
+    difference), and ``min(fc, fd) > 4 |f''| (b - a)^2`` bounds ``f(x*) >= f(x_best) - f''(xi) (x_best -
+    x*)^2 / 2`` away from zero with a factor 8 to spare on the curvature; the value returned is then a
+    point's, not the minimum.  A shallow dip (a near-grazing) never passes that test and is searched to
+    1e-12 of the step, as every dip was before.
+    """
     invphi = 0.6180339887498949
     a = lo
     b = hi
@@ -686,6 +694,9 @@ def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, 
     d = a + invphi * (b - a)
     fc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp, exact, TC)
     fd = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp, exact, TC)
+    xo = 0.0  # the bracket's end the last move dropped an inner point to, and its value
+    fo = 0.0
+    have_old = False
     for _ in range(60):
         if fc <= 0.0:
             return c, fc
@@ -693,18 +704,31 @@ def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, 
             return d, fd
         if b - a < 1e-12:
             break
+        if have_old and b - a < 1e-2 * (hi - lo):
+            # the second divided difference of the three points c < d and xo (an end of the bracket)
+            x0, x1, x2, f0, f1, f2 = (xo, c, d, fo, fc, fd) if xo < c else (c, d, xo, fc, fd, fo)
+            curvature = abs(2.0 * ((f2 - f1) / (x2 - x1) - (f1 - f0) / (x1 - x0)) / (x2 - x0))
+            if min(fc, fd) > 4.0 * curvature * (b - a) * (b - a):
+                if fc < fd:
+                    return c, fc
+                return d, fd
         if fc < fd:
+            xo = d
+            fo = fd
             b = d
             d = c
             fd = fc
             c = b - invphi * (b - a)
             fc = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, c, p, xtmp, gtmp, gptmp, exact, TC)
         else:
+            xo = c
+            fo = fc
             a = c
             c = d
             fc = fd
             d = a + invphi * (b - a)
             fd = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, d, p, xtmp, gtmp, gptmp, exact, TC)
+        have_old = True
     if fc < fd:
         return c, fc
     return d, fd
