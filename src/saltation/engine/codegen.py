@@ -153,10 +153,22 @@ def _decorator(name: str) -> str:
 UNOPTIMIZED_FUNCTION_LINES = 200
 
 
+def _numba_can_skip_optimization() -> bool:
+    """Whether this numba takes the ``_dbg_optnone`` option (a numba without it compiles every function
+    optimized, as before)."""
+    try:
+        from numba.core.cpu import CPUTargetOptions
+    except ImportError:  # pragma: no cover - numba's layout changed
+        return False
+    return hasattr(CPUTargetOptions, "_dbg_optnone")
+
+
 def _skip_optimization_of_long_functions(src: list[str]) -> list[str]:
     """The generated lines, with the decorators of functions longer than :data:`UNOPTIMIZED_FUNCTION_LINES`
     asking numba to leave them unoptimized (not ``initial_mode``, which calls another model function:
     unoptimized, that call is a dynamic global that numba cannot cache)."""
+    if not _numba_can_skip_optimization():
+        return list(src)
     starts = [i for i, line in enumerate(src) if line.startswith("@njit(MODEL_SIGNATURES[")] + [len(src)]
     out = list(src)
     for a, b in zip(starts[:-1], starts[1:]):
