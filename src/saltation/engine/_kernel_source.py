@@ -77,6 +77,7 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         INFO_STATUS,
         INFO_STEPS,
         INITIAL_MODE,
+        INTEGRATOR_ROW,
         LIE_DERIVATIVE,
         LIE_DERIVATIVE_DT,
         MODEL_TYPE,
@@ -116,6 +117,11 @@ _R, _I, _B = nt.float64, nt.int64, nt.boolean
 _V, _M, _T = nt.float64[::1], nt.float64[:, ::1], nt.int64[:, ::1]
 _A = (nt.int64[:, ::1], nt.boolean[::1])  # the model: addresses of its functions, affine-mode flags
 INTEGRATE_SIGNATURE = (*_A, _R, _R, _V, _I, _V, _B, _I, _R, _R, _R, _R, _I, _I, _T, _I, _B, _M, _V, _B, _B)
+INTEGRATE_RESULT = nt.Tuple((nt.int64[::1], nt.float64[::1]))  # (ints, floats): see ``_pack_result``
+# ``correct_periodic`` calls the integrator through its address (the row INTEGRATOR_ROW of ``addresses``,
+# after the model's functions), as a first-class function: it neither links nor compiles the integrator,
+# so the two entry points compile side by side, each in its own process, on a cold cache.
+INTEGRATOR_TYPE = nt.FunctionType(INTEGRATE_RESULT(*INTEGRATE_SIGNATURE))
 CORRECT_SIGNATURE = (*_A, _V, _V, _R, _R, _B, _I, _R, _V, _V, _V, _R, _I, _R, _B, _R, _R, _R, _I, _I, _T, _I, _M, _V, _B,
                      _B)
 
@@ -1756,15 +1762,28 @@ def _needs_extrema(K, xmin):
     return False
 
 
-@njit(cache=True)
-def _integrate(
-    model, t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step, max_events, max_steps,
+# --------------------------------------------------------------------------------------------------
+# The entry points, ``integrate_kernel`` here and ``correct_periodic`` below, are each compiled with its
+# signature from the contract. Python passes the model as the addresses of its compiled functions (an
+# integer array, two per function: the C wrapper and the numba entry, as ``Flow`` takes them from the
+# dispatchers once) and the affine-mode flags: arrays are typed at once, where a tuple of dispatchers
+# would be typed and converted to function types on every call (some 200 microseconds).  They are the
+# integrator and the Newton themselves, not wrappers around them: numba links and re-optimizes every
+# callee into each caller's library, so a wrapper level costs the integrator's optimization once more
+# (some 4 s each on the one-time build).
+# --------------------------------------------------------------------------------------------------
+
+@njit(cache=True, nogil=True)  # compiled for INTEGRATE_SIGNATURE only, by saltation.engine.codegen.load_engine
+def integrate_kernel(
+    addresses, affine_modes, t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step, max_events, max_steps,
     tr_table, n_surfaces, record, phi0, psi0, control_variational, exact_affine,
 ):
     """Integrate from ``t0`` to ``t_end`` (either direction), event by event.
 
-    Returns ``(ints, floats)``, two packed arrays (see ``saltation.engine.flow.Flow._unpack``).
+    The model comes as the addresses of its compiled functions (see the note above).  Returns
+    ``(ints, floats)``, two packed arrays (see ``saltation.engine.flow.Flow._unpack``).
     """
+    model = model_from_addresses(addresses, affine_modes)  # noqa: F821
     n = N_STATE or x0.shape[0]
     npar = p.shape[0]
     N = n + n * n + n if var else n
@@ -2261,14 +2280,14 @@ def _integrate(
 
 
 @njit(cache=True, inline="always")  # inlined: each library level links and re-optimizes the integrator
-def _shot(model, x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0,
-          control_variational, exact_affine):
+def _shot(model, integrate, addresses, affine_modes, x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps, tr_table,
+          n_surfaces, phi0, psi0, control_variational, exact_affine):
     """One shot ``x -> x(t1)`` with the fundamental solution matrix (and ``psi`` of parameter ``pidx``);
     status != 0 on failure (also for a state in no mode)."""
     mode = model[INITIAL_MODE](t0, x, p)
     failed = mode < 0  # in no mode: not integrated, the caller sees the failure in info[0]
-    res = _integrate(
-        model, t0, t0 if failed else t1, x, max(mode, NONE + 1), p, ON, pidx, rtol, atol, 0.0, max_step, max_events,
+    res = integrate(
+        addresses, affine_modes, t0, t0 if failed else t1, x, max(mode, NONE + 1), p, ON, pidx, rtol, atol, 0.0, max_step, max_events,
         max_steps, tr_table, n_surfaces, OFF, phi0, psi0, control_variational, exact_affine,
     )
     if failed:
@@ -2277,7 +2296,7 @@ def _shot(model, x, t0, t1, p, pidx, rtol, atol, max_step, max_events, max_steps
 
 
 @njit(cache=True, inline="always")  # inlined: see _shot
-def _periodic_shot(model, z, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step, max_events, max_steps,
+def _periodic_shot(model, integrate, addresses, affine_modes, z, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step, max_events, max_steps,
                    tr_table, n_surfaces, phi0, psi0, control_variational, exact_affine):
     """The shot of one Newton iterate ``z = (x0[, T][, lam])`` over its period (forced: ``span``, or the
     forcing period at ``lam`` when ``span`` is 0); returns ``(ok, result)``, ``ok`` False for a period
@@ -2293,7 +2312,7 @@ def _periodic_shot(model, z, t0, sign, autonomous, lam_index, span, p, x, rtol, 
     for i in range(n):
         x[i] = z[i]
     span = period if period > 0.0 else 0.0  # (also for nan)
-    res = _shot(model, x, t0, t0 + sign * span, p, lam_index, rtol, atol, max_step, max_events, max_steps,
+    res = _shot(model, integrate, addresses, affine_modes, x, t0, t0 + sign * span, p, lam_index, rtol, atol, max_step, max_events, max_steps,
                 tr_table, n_surfaces, phi0, psi0, control_variational, exact_affine)
     return period > 0.0, res
 
@@ -2371,8 +2390,8 @@ def _newton_result(code, it, z, history, n_history, jac, res):
     return code, it, packed, res[0], res[1]
 
 
-@njit(cache=True)
-def _correct_periodic(model, z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref, tol, max_newton,
+@njit(cache=True, nogil=True)  # compiled for CORRECT_SIGNATURE only, by saltation.engine.codegen.load_engine
+def correct_periodic(addresses, affine_modes, z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref, tol, max_newton,
                      max_correction, damped, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
                      phi0, psi0, control_variational, exact_affine):
     """Newton on the periodic-orbit equations of a shooting problem, compiled.
@@ -2394,6 +2413,8 @@ def _correct_periodic(model, z_pred, normal, t0, sign, autonomous, lam_index, sp
     residual history | r, J_u, J_lam by rows], ints, floats)``, the last two the
     kernel result at z (see :func:`_newton_result`).
     """
+    model = model_from_addresses(addresses, affine_modes)  # noqa: F821
+    integrate = _function_at(INTEGRATOR_TYPE, addresses[INTEGRATOR_ROW, 0], addresses[INTEGRATOR_ROW, 1])
     n = N_STATE or phi0.shape[0]
     m_u = n_u = n + (1 if autonomous else 0)  # unknowns u (and rows of r)
     m_z = z_pred.shape[0]  # m_u, or m_u + 1 with lam
@@ -2417,7 +2438,7 @@ def _correct_periodic(model, z_pred, normal, t0, sign, autonomous, lam_index, sp
     # one call site of the shot: the integrator is compiled into this function once
     while True:
         cand = zt if trial > 0 else z
-        ok, res_c = _periodic_shot(model, cand, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step,
+        ok, res_c = _periodic_shot(model, integrate, addresses, affine_modes, cand, t0, sign, autonomous, lam_index, span, p, x, rtol, atol, max_step,
                                    max_events, max_steps, tr_table, n_surfaces, phi0, psi0, control_variational,
                                    exact_affine)
         if trial > 0:
@@ -2504,29 +2525,3 @@ def _correct_periodic(model, z_pred, normal, t0, sign, autonomous, lam_index, sp
     # one call of the result (each literal code as an argument would compile it once more)
     return _newton_result(code, it, z, history, n_history, jac, res)
 
-
-# --------------------------------------------------------------------------------------------------
-# The entry points. Python passes the model as the addresses of its compiled functions (an integer
-# array, two per function: the C wrapper and the numba entry, as ``Flow`` takes them from the
-# dispatchers once) and the affine-mode flags: arrays are typed at once, where a tuple of dispatchers
-# would be typed and converted to function types on every call (some 200 microseconds).
-# --------------------------------------------------------------------------------------------------
-
-@njit(INTEGRATE_SIGNATURE, cache=True, nogil=True)
-def integrate_kernel(addresses, affine_modes, t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step,
-                     max_events, max_steps, tr_table, n_surfaces, record, phi0, psi0, control_variational, exact_affine):
-    """Integrate from ``t0`` to ``t_end`` (either direction), event by event (see ``_integrate``)."""
-    return _integrate(model_from_addresses(addresses, affine_modes), t0, t_end, x0, mode0, p, var, pidx, rtol, atol,  # noqa: F821
-                      h_init, max_step, max_events, max_steps, tr_table, n_surfaces, record, phi0, psi0,
-                      control_variational, exact_affine)
-
-
-@njit(CORRECT_SIGNATURE, cache=True, nogil=True)
-def correct_periodic(addresses, affine_modes, z_pred, normal, t0, sign, autonomous, lam_index, span, p0, x_ref, f_ref,
-                     tol, max_newton, max_correction, damped, rtol, atol, max_step, max_events, max_steps, tr_table,
-                     n_surfaces, phi0, psi0, control_variational, exact_affine):
-    """Newton on the periodic-orbit equations of a shooting problem (see ``_correct_periodic``)."""
-    return _correct_periodic(model_from_addresses(addresses, affine_modes), z_pred, normal, t0, sign, autonomous,  # noqa: F821
-                             lam_index, span, p0, x_ref, f_ref, tol, max_newton, max_correction, damped, rtol, atol,
-                             max_step, max_events, max_steps, tr_table, n_surfaces, phi0, psi0, control_variational,
-                             exact_affine)

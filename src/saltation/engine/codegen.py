@@ -8,7 +8,7 @@ compiles once per machine:
   state dimension up to 4 (``N_STATE`` a compile-time constant) and one for
   every larger dimension; it takes the model as a tuple of first-class
   functions, so it does not depend on the model and is compiled once, not
-  once per model (about a minute, the first time a dimension is used);
+  once per model (about 40 s, the first time a dimension is used);
 * the **model functions**: the model's exact derivatives printed as Python
   source (with common subexpressions eliminated), each compiled eagerly with
   its signature from the contract (``_contract.py``); a new or changed model
@@ -63,6 +63,7 @@ import threading
 import time
 import uuid
 import weakref
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -464,17 +465,22 @@ def _model_from_addresses_source() -> str:
     return "\n".join(lines)
 
 
-def model_addresses(model: tuple) -> np.ndarray:
+def model_addresses(model: tuple, engine: ModuleType | None = None) -> np.ndarray:
     """The addresses the engine takes for a model tuple's functions: per function (in the contract's
-    order) its C wrapper and its numba entry point, from numba's own helpers for first-class functions.
+    order) its C wrapper and its numba entry point, from numba's own helpers for first-class functions;
+    with an ``engine``, a last row (``INTEGRATOR_ROW``) for its integrator, which its Newton calls.
     They stay valid while the functions live (:class:`~saltation.engine.flow.Flow` keeps them)."""
     from numba.experimental.function_type import _get_jit_address, _get_wrapper_address
 
-    rows = [
-        (_get_wrapper_address(f, sig), _get_jit_address(f, sig))
-        for f, sig in zip(model[: len(MODEL_FUNCTIONS)], MODEL_SIGNATURES.values())
-    ]
-    addresses = np.array(rows, dtype=np.int64)
+    pairs = list(zip(model[: len(MODEL_FUNCTIONS)], MODEL_SIGNATURES.values()))
+    if engine is not None:
+        integrator = engine.integrate_kernel
+        signature = engine.INTEGRATOR_TYPE.signature
+        if integrator.nopython_signatures != [signature]:
+            raise RuntimeError(f"the engine's integrator is compiled as {integrator.nopython_signatures}, "
+                               f"not as its Newton calls it ({signature})")
+        pairs.append((integrator, signature))
+    addresses = np.array([(_get_wrapper_address(f, sig), _get_jit_address(f, sig)) for f, sig in pairs], dtype=np.int64)
     if (addresses <= 0).any():
         raise RuntimeError("a model function has no compiled entry point for its signature in the contract")
     return addresses
@@ -676,9 +682,13 @@ def _cached(stem: str, function: str) -> bool:
 
 
 def is_engine_compiled(n: int) -> bool:
-    """Whether the engine that integrates models of ``n`` states is compiled on this machine."""
+    """Whether the engine that integrates models of ``n`` states is compiled on this machine (or loaded
+    in this process)."""
     stem = _engine_module(engine_dimension(n))[0]
-    return _cached(stem, "integrate_kernel") and _cached(stem, "correct_periodic")
+    loaded = _LOADED.get(f"_saltation_engine_{stem}")
+    if loaded is not None and all(getattr(loaded, name).overloads for name in ENTRY_POINTS):
+        return True
+    return all(_cached(stem, name) for name in ENTRY_POINTS)
 
 
 def is_compiled(system: PiecewiseSystem) -> bool:
@@ -792,11 +802,13 @@ def _environment_failure(exc: BaseException) -> bool:
     return isinstance(exc, OSError) or (isinstance(exc, RuntimeError) and "no locator" in str(exc))
 
 
-def _load(stem: str, source: str, modname: str, what: str) -> ModuleType:
+def _load(stem: str, source: str, modname: str, what: str, after: Callable[[ModuleType], None] | None = None) -> ModuleType:
     """Import the generated module ``stem`` (``source``) from the active cache folder, once per process.
 
     A module or numba cache file that is damaged is rebuilt; a module that does not load from what
-    was cached (a damaged file that still looked whole) is rebuilt from scratch, once.
+    was cached (a damaged file that still looked whole) is rebuilt from scratch, once.  ``after(module)``
+    runs once the module is imported (each call), under the same rebuild: the engine compiles its entry
+    points there.
 
     Raises
     ------
@@ -805,6 +817,8 @@ def _load(stem: str, source: str, modname: str, what: str) -> ModuleType:
     """
     with _IMPORT_LOCK:
         if modname in _LOADED:
+            if after is not None:
+                after(_LOADED[modname])
             return _LOADED[modname]
         directory = active_cache_directory()
         path = directory / f"{stem}.py"
@@ -816,6 +830,8 @@ def _load(stem: str, source: str, modname: str, what: str) -> ModuleType:
                                    f"({type(exc).__name__}: {exc}); free space or make it writable, or {delete}") from exc
         try:
             module = _execute(path, modname)
+            if after is not None:
+                after(module)
         except Exception as exc:
             if not prior:  # a fresh build failed: the cache did not cause it
                 if _environment_failure(exc):
@@ -829,6 +845,8 @@ def _load(stem: str, source: str, modname: str, what: str) -> ModuleType:
                 _remove(_numba_files(numba_dir, stem) + list((directory / "__pycache__").glob(f"{stem}.*.pyc")))
                 _write_atomic(path, source.encode())
                 module = _execute(path, modname)
+                if after is not None:
+                    after(module)
             except Exception as again:
                 if _environment_failure(again) or _environment_failure(exc):
                     raise KernelCacheError(f"{what} cannot be rebuilt in the kernel cache {directory} "
@@ -868,18 +886,40 @@ def building(message: str, *, stream=None, interval: float = 1.0):
         stream.flush()
 
 
-def load_engine(n: int) -> ModuleType:
-    """Import the engine that integrates models of ``n`` states, compiling it first if this machine has
-    not yet (once; it says so on standard error, since it takes a while)."""
+ENTRY_POINTS = {"integrate_kernel": "INTEGRATE_SIGNATURE", "correct_periodic": "CORRECT_SIGNATURE"}
+"""The engine's entry points and the names of their signatures in its module.  Each is compiled for that
+signature alone, and on its own: ``correct_periodic`` calls the integrator through its address, so a
+cold cache compiles the two side by side (:func:`saltation.engine.precompile.compile_in_parallel`)."""
+
+
+def _entry_points(names: tuple[str, ...]) -> Callable[[ModuleType], None]:
+    def compile_them(module: ModuleType) -> None:
+        for name in names:
+            dispatcher = getattr(module, name)
+            if not dispatcher.overloads:
+                dispatcher.compile(getattr(module, ENTRY_POINTS[name]))  # (numba loads it from its cache if there)
+            dispatcher.disable_compile()  # one signature: a call with other types is an error, not a new compile
+
+    return compile_them
+
+
+def load_engine(n: int, entry_points: tuple[str, ...] = tuple(ENTRY_POINTS)) -> ModuleType:
+    """Import the engine that integrates models of ``n`` states with its ``entry_points`` compiled,
+    compiling them first if this machine has not yet (once; it says so on standard error, since it
+    takes a while)."""
     n_state = engine_dimension(n)
     stem, source = _engine_module(n_state)
     modname = f"_saltation_engine_{stem}"
-    if modname not in _LOADED and not is_engine_compiled(n):
+    what = f"the integrator for N_STATE = {n_state}"
+    loaded = _LOADED.get(modname)
+    if not (loaded is not None and all(getattr(loaded, name).overloads for name in entry_points)) and not all(
+        _cached(stem, name) for name in entry_points
+    ):
         which = f"{n_state}-state models" if n_state else f"models of {min(SPECIALIZED_DIMENSIONS.stop, n)} or more states"
-        with building(f"compiling the integrator for {which}, once for this machine (about a minute; "
+        with building(f"compiling the integrator for {which}, once for this machine (about 40 s; "
                       f"cached in {active_cache_directory()})"):
-            return _load(stem, source, modname, f"the integrator for N_STATE = {n_state}")
-    return _load(stem, source, modname, f"the integrator for N_STATE = {n_state}")
+            return _load(stem, source, modname, what, _entry_points(entry_points))
+    return _load(stem, source, modname, what, _entry_points(entry_points))
 
 
 _LOADED_COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # CompiledSystem -> model tuple

@@ -18,6 +18,7 @@ import numpy as np
 
 from saltation.engine import _contract as kc
 from saltation.engine.codegen import (
+    is_engine_compiled,
     load_engine,
     load_model_functions,
     model_addresses,
@@ -345,9 +346,13 @@ class Flow:
     def __init__(self, system: PiecewiseSystem, tolerances: Tolerances | None = None):
         self.system = system
         self.tolerances = tolerances or Tolerances()
+        if not is_engine_compiled(system.n):  # a cold cache: the integrator, the Newton and the model side by side
+            from saltation.engine.precompile import compile_in_parallel
+
+            compile_in_parallel([system])
         self._model = load_model_functions(system)  # the engine's first argument (see saltation.engine._contract)
         self._engine = load_engine(system.n)
-        self._addresses = model_addresses(self._model)  # how the engine takes the model (see the engine)
+        self._addresses = model_addresses(self._model, self._engine)  # how the engine takes the model (see the engine)
         self._affine_modes = self._model[kc.AFFINE_MODES]
         self._table = transition_table(system)
         self._n_surfaces = len(system.surface_names)

@@ -1,6 +1,6 @@
 """Compiling the engines and model functions several models need at once (a cold cache only).
 
-The engine of a state dimension (about half a minute) and a model's functions
+The engine of a state dimension (about 40 s) and a model's functions
 (seconds) compile on first use and are cached per machine.  A process that
 needs several (the paper's figures, the test suite) compiles them here in
 parallel, one fresh interpreter each, the engines of the dimensions not yet
@@ -19,6 +19,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from saltation.engine.codegen import (
+    ENTRY_POINTS,
     SPECIALIZED_DIMENSIONS,
     building,
     engine_dimension,
@@ -31,10 +32,11 @@ from saltation.model.system import PiecewiseSystem
 
 
 def _compile_in_worker(job: tuple[str, object]) -> None:
-    """Run in a fresh interpreter: import (and so compile) one engine or one model's functions."""
+    """Run in a fresh interpreter: compile one entry point of an engine, or one model's functions."""
     kind, what = job
     if kind == "engine":
-        load_engine(int(what))
+        dimension, entry_point = what
+        load_engine(int(dimension), (entry_point,))
     else:
         load_model_functions(what)
 
@@ -67,8 +69,9 @@ def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = No
     the caller's first use compiles it as fast).
     """
     todo = [s for s in systems if isinstance(s, PiecewiseSystem) and not is_compiled(s)]  # (not callables)
-    dims = sorted({engine_dimension(s.n) for s in todo if not is_engine_compiled(s.n)})
-    engines = [("engine", d or SPECIALIZED_DIMENSIONS.stop) for d in dims]  # (0: any larger dimension)
+    dims = sorted({engine_dimension(s.n) for s in systems if not is_engine_compiled(s.n)})  # (callables' too)
+    # each entry point of an engine compiles on its own (the integrator is most of the time), 0: any larger dimension
+    engines = [("engine", (d or SPECIALIZED_DIMENSIONS.stop, name)) for d in dims for name in ENTRY_POINTS]
     workers = workers or os.cpu_count() or 1
     if len(todo) + len(engines) <= 1 or workers <= 1:
         return []
@@ -77,8 +80,12 @@ def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = No
     jobs = engines + [("model", s) for s in todo]
     sizes = [f"{d}-state models" if d else f"models of {SPECIALIZED_DIMENSIONS.stop} or more states" for d in dims]
     models = f"{len(todo)} model{'s' if len(todo) != 1 else ''}"
-    what = (f"compiling the integrator for {' and '.join(sizes)} (about a minute each, side by side on the cores) and "
-            f"the functions of {models}, once for this machine" if engines else f"compiling the functions of {models}")
+    functions = f"the functions of {models}"
+    if engines:
+        what = f"compiling the integrator for {' and '.join(sizes)} (about 40 s each, side by side on the cores)"
+        what += (f" and {functions}" if todo else "") + ", once for this machine"
+    else:
+        what = f"compiling {functions}"
     with building(what):
         _run_in_processes(jobs, min(workers, len(jobs)))
     return [s.name for s in todo]
