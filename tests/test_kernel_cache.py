@@ -89,6 +89,7 @@ def cache(tmp_path, monkeypatch, engine) -> Path:
     monkeypatch.setattr(codegen, "_LOADED", engines)
     monkeypatch.setattr(codegen, "_ACTIVE", {})
     monkeypatch.setattr(codegen, "_NOTICES", set())
+    monkeypatch.setattr(codegen, "_FOUND", set())
     monkeypatch.setattr(codegen, "fallback_directory", lambda: tmp_path / "fallback")
     return primary
 
@@ -524,3 +525,18 @@ def test_the_parallel_build_names_what_it_builds(monkeypatch, capsys):
     assert precompile.compile_in_parallel([trilinear(), block_on_belt()], workers=2) == ["trilinear", "block_on_belt"]
     err = capsys.readouterr().err
     assert "compiling the integrator for 2-state models" in err and "the functions of 2 models" in err
+
+
+def test_the_newton_compiles_without_the_integrator(tmp_path):
+    """The engine's Newton calls the integrator through its address, so on an empty cache it compiles on its own
+    (in seconds, beside the integrator's build): after compiling only ``correct_periodic`` the cache holds no
+    integrator.  (That the two, compiled in separate processes, work together is what every orbit test runs on
+    after the suite's parallel build of a cold cache, ``tests/conftest.py``.)"""
+    env = dict(os.environ, SALTATION_CACHE_DIR=str(tmp_path))
+    newton_only = (
+        "from saltation.engine import codegen; codegen.load_engine(2, ('correct_periodic',)); "
+        "stem = codegen._engine_module(2)[0]; "
+        "print(codegen._cached(stem, 'correct_periodic'), codegen._cached(stem, 'integrate_kernel'))"
+    )
+    out = subprocess.run([sys.executable, "-c", newton_only], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["True", "False"], out.stderr

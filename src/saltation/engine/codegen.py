@@ -674,11 +674,20 @@ def _numba_files(numba_dir: Path, stem: str) -> list[Path]:
     return sorted(set(files))
 
 
+_FOUND: set[tuple[frozenset[Path], str, str]] = set()  # what _cached found in this process (a listing of a large
+#                                                       cache takes some 50 ms)
+
+
 def _cached(stem: str, function: str) -> bool:
     """Whether numba's on-disk cache holds ``function`` of the module ``stem`` (in the active folder, or
     in the configured one it would be copied from)."""
-    folders = {active_cache_directory(), cache_directory()}
-    return any(any(_numba_cache_dir(d).glob(f"{stem}.{function}-*.nbi")) for d in folders)
+    folders = frozenset({active_cache_directory(), cache_directory()})
+    if (folders, stem, function) in _FOUND:
+        return True
+    found = any(any(_numba_cache_dir(d).glob(f"{stem}.{function}-*.nbi")) for d in folders)
+    if found:
+        _FOUND.add((folders, stem, function))
+    return found
 
 
 def is_engine_compiled(n: int) -> bool:
