@@ -155,3 +155,47 @@ def test_multiplier_rows_by_multiple_shooting():
     problem = ConditionedProblem(base, [MultiplierCondition(1.0)], free=("omega",), continuation="f0")
     u = problem.pack(state)
     compare_with_differences(problem, u, TRI["f0"])
+
+
+def test_kept_multiplier_derivatives_locate_the_same_fold_with_fewer_shots():
+    """The multiplier condition keeps its finite-difference derivatives while the Newton stays near where they
+    were taken (and they predict ``g``): the fold of the trilinear oscillator in omega, at f0 = 0.2, is the same
+    to the Newton's tolerance as with derivatives taken at every iterate, for fewer period maps; and it has a
+    multiplier +1 (the kept derivatives change the Newton's path, never its equations)."""
+    from saltation.apps.paper import linear_response_state
+    from saltation.models import trilinear
+    from saltation.models.trilinear import DEFAULTS as TRI
+    from saltation.orbits.conditions import MultiplierCondition
+
+    from saltation.branches.branch import SpecialPointKind
+    from saltation.special_points.continuation import ContinuationSettings, continue_branch
+
+    flow = Flow(trilinear())
+    branch = continue_branch(ShootingProblem(flow, {"omega": 0.6}, continuation_parameter="omega"),
+                             linear_response_state(dict(TRI, omega=0.6)), 0.6,
+                             settings=ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(0.6, 1.6)), directions=(1,))
+    (fold,) = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.FOLD]
+    w0 = fold.parameter - 1e-3  # a start off the fold: Newton has to move in omega and in the state
+    guess = find_periodic_orbit(flow, fold.state, parameters={"omega": w0})
+    counts, found = {}, {}
+    run = flow.run
+    for reuse in (0.0, 1e-3):
+        calls = []
+
+        def counted(*args, **kwargs):
+            calls.append(1)
+            return run(*args, **kwargs)
+
+        flow.run = counted
+        try:
+            problem = ConditionedProblem(ShootingProblem(flow, {"omega": w0}), [MultiplierCondition(1.0, reuse=reuse)],
+                                         free=("omega",))
+            found[reuse] = problem.solve(problem.pack(guess.state0), tol=1e-11)
+        finally:
+            flow.run = run
+        counts[reuse] = len(calls)
+    fresh, kept = found[0.0], found[1e-3]
+    assert counts[1e-3] < counts[0.0], counts
+    np.testing.assert_allclose(kept.unknowns, fresh.unknowns, rtol=0, atol=1e-9)
+    orbit = find_periodic_orbit(flow, kept.state0, parameters=kept.parameters)
+    assert np.min(np.abs(orbit.multipliers - 1.0)) < 1e-7

@@ -82,13 +82,18 @@ def test_the_fold_curve_is_born_at_a_corner(trilinear_loci):
     assert births
     fold = loci[SpecialPointKind.FOLD]
     assert "the corrector failed" in fold.stop_reason  # the fold curve ends: it does not go on past the corner
-    end = fold.values[np.argmin(fold.values[:, 1])]  # its low-forcing end
+    # on the fold curve itself: its end is labelled where it meets the corner curve (the corner located at
+    # the f0 of the curve point whose orbit comes nearest to touching), within the stated accuracy of that
+    # point, which is an end of the curve (near the corner the curve turns back in f0: its end is not its
+    # lowest forcing), and of the birth
+    (label,) = fold.special_points
+    at = np.array([label.parameter, label.second_parameter])
+    i_end = int(np.argmin(np.linalg.norm(fold.values - at, axis=1)))
+    assert i_end in (0, len(fold) - 1)
+    end = fold.values[i_end]
     nearest = min(births, key=lambda c: np.hypot(*(np.array([c.parameter, c.second_parameter]) - end)))
     step = np.max(np.linalg.norm(np.diff(fold.values, axis=0), axis=1))
     assert np.hypot(*(np.array([nearest.parameter, nearest.second_parameter]) - end)) <= nearest.accuracy + step
-    # and on the fold curve itself: its end is labelled where it meets the corner curve (the corner located
-    # at the f0 of its nearest point), within the stated accuracy of that point and of the birth
-    (label,) = fold.special_points
     assert label.sides[0] == "fold" and label.sides[1] in ("nonsmooth_no_crossing", "discontinuous_fold")
     assert np.hypot(*(np.array([label.parameter, label.second_parameter]) - end)) <= label.accuracy * (1 + 1e-9)
     assert label.second_parameter == pytest.approx(XC * np.sqrt((K - M * label.parameter ** 2) ** 2 + (C * label.parameter) ** 2),

@@ -456,15 +456,45 @@ class MultiplierCondition(Condition):
     ``g`` solves ``[[M - mu I, b], [c^T, 0]] [v; g] = [0; 1]`` with ``b``, ``c`` the singular vectors of
     ``M - mu I`` at the first evaluation (kept): ``g = 0`` exactly where ``M - mu I`` is singular.  Its
     derivatives are central differences over further shots (the second derivatives of the flow are
-    not carried by the engine).
+    not carried by the engine): ``2 (n + 1 + k)`` period maps for ``n`` states, the period and ``k``
+    parameters.  They are kept, and used again at a point within ``reuse`` (relative, in each of the
+    state, the period and the parameters) of where they were taken, if they predict ``g`` there: the
+    linearization from the kept point must agree with the new ``g`` to a tenth of the change of ``g``
+    (or 1e-12).  The Newton iterations of one continuation step stay that close to its predicted point,
+    so a step mostly takes them once; near a corner, where ``g`` bends sharply, the check fails and they
+    are taken again.  The residual, ``g`` itself, is always exact: only the Newton's rate depends on
+    them.  ``reuse=0`` takes them at every evaluation.
     """
 
     name = "multiplier"
 
-    def __init__(self, mu: float, *, h: float = 1e-6):
+    def __init__(self, mu: float, *, h: float = 1e-6, reuse: float = 1e-3):
         self.mu = float(mu)
         self.h = float(h)
+        self.reuse = float(reuse)
         self._border: tuple[np.ndarray, np.ndarray] | None = None
+        self._kept: tuple[np.ndarray, tuple, Rows] | None = None
+
+    def kept_derivatives(self, point: np.ndarray, params: Sequence[int], value: float, n_x: int) -> Rows | None:
+        """The derivatives taken last, if ``point`` (``(x0 or nodes, T, parameters)``, the first ``n_x`` the
+        state or nodes) is within ``reuse`` of where they were taken, with the same free parameters, and
+        they predict ``g`` there (``value``) to a tenth of its change; otherwise None."""
+        kept = self._kept
+        if kept is None or self.reuse <= 0 or kept[0].shape != point.shape or kept[1] != tuple(params):
+            return None
+        z0, _, rows = kept
+        step = point - z0
+        if np.any(np.abs(step) > self.reuse * (1.0 + np.abs(z0))):
+            return None
+        predicted = (rows.value[0] + rows.d_x0[0] @ step[:n_x] + rows.d_period[0] * step[n_x]
+                     + rows.d_parameters[0] @ step[n_x + 1:][list(params)])
+        if abs(value - predicted) > max(0.1 * abs(value - rows.value[0]), 1e-12):
+            return None
+        return rows
+
+    def keep_derivatives(self, point: np.ndarray, params: Sequence[int], rows: Rows) -> None:
+        self._kept = (point.copy(), tuple(params), Rows(rows.value.copy(), rows.d_x0.copy(), rows.d_period.copy(),
+                                                        rows.d_parameters.copy(), rows.d_extra.copy()))
 
     def g(self, M: np.ndarray) -> float:
         n = M.shape[0]
@@ -488,6 +518,11 @@ class MultiplierCondition(Condition):
         n = len(shot.x0)
         out = _rows(1, n, len(params), 0)
         out.value[0] = self.g(shot.trajectory.monodromy)
+        point = np.concatenate([shot.x0, [shot.period], shot.parameters])
+        kept = self.kept_derivatives(point, params, out.value[0], n)
+        if kept is not None:
+            out.d_x0[:], out.d_period[:], out.d_parameters[:] = kept.d_x0, kept.d_period, kept.d_parameters
+            return out
         for i in range(n):
             d = self.h * max(1.0, abs(shot.x0[i]))
             e = np.zeros(n)
@@ -506,6 +541,7 @@ class MultiplierCondition(Condition):
             q[j] -= 2 * d
             down = self.g(problem.monodromy(shot.x0, problem.period_at(shot, q), q))
             out.d_parameters[0, c] = (up - down) / (2 * d)
+        self.keep_derivatives(point, params, out)
         return out
 
 
@@ -931,6 +967,11 @@ class ConditionedProblem:
             return product([segment(i, U[i * n:(i + 1) * n], ts[i], ts[i + 1], q) for i in range(m)])
 
         out.value[0] = c.g(product(factors))
+        point = np.concatenate([U[: self.n_nodes], [T], p])
+        kept = c.kept_derivatives(point, params, out.value[0], self.n_nodes)
+        if kept is not None:
+            out.d_x0[:], out.d_period[:], out.d_parameters[:] = kept.d_x0, kept.d_period, kept.d_parameters
+            return out
         for i in range(m):
             x = U[i * n:(i + 1) * n]
             for a in range(n):
@@ -952,6 +993,7 @@ class ConditionedProblem:
             q[j] -= 2 * d
             down = c.g(whole(T if self.autonomous else self.system.forcing_period(q), q))
             out.d_parameters[0, cc] = (up - down) / (2 * d)
+        c.keep_derivatives(point, params, out)
         return out
 
     # -- the continuation protocol --------------------------------------------------------

@@ -438,16 +438,20 @@ def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: Spe
     best = None
     for z, record in zip(zs[-last:], records[-last:]):
         p = _parameters_of(curve, z)
+        touches = []
         try:
             (transition, t_g), *_ = grazed_transitions(problem.flow, z[:n], p, t0=problem.t0,
                                                        tolerances=problem.tolerances)
             surface = problem.system.transitions[transition].surface
             x = problem.flow.run(z[:n], problem.t0, t_g, p, tolerances=problem.tolerances).x1
+            touches.append((abs(problem.flow.indicator(surface, t_g, x, p)) / (1.0 + float(np.linalg.norm(x))),
+                            transition, t_g))
         except SaltationError:
-            continue
-        g = abs(problem.flow.indicator(surface, t_g, x, p)) / (1.0 + float(np.linalg.norm(x)))
-        if g <= gap and (best is None or g < best[0]):
-            best = (g, z, p, transition, t_g, record)
+            pass
+        touches += short_excursions(problem.flow, z[:n], p, t0=problem.t0, tolerances=problem.tolerances)
+        for g, transition, t_g in touches:
+            if g <= gap and (best is None or g < best[0]):
+                best = (g, z, p, transition, t_g, record)
     if best is None:
         return None
     _, z, p, transition, t_g, record = best
@@ -460,6 +464,35 @@ def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: Spe
     return _codimension_two((kind.value, _touch_kind(problem, curve, at)), (corner.parameter, float(z[-1])),
                             max(abs(corner.parameter - float(z[n])), corner.accuracy), 0, record,
                             status=SpecialPointStatus.LOCATED)
+
+
+def short_excursions(flow: Flow, state: np.ndarray, p: np.ndarray, *, t0: float = 0.0, tolerances=None,
+                     samples: int = 32) -> list[tuple[float, int, float]]:
+    """The orbit's excursions into a mode and back (a transition into a mode, then one out of it to the
+    mode it came from, across the same surface or another, as contact made on one surface and lost on
+    another): ``(depth, transition in, time of the depth)``, the depth the largest ``|h|`` of the
+    surface crossed in, reached in between (from ``samples`` points of the dense output), relative to
+    ``1 + |x|``.  An excursion that shrinks to nothing is the other side of a grazing: where the orbit
+    without that transition would touch the surface."""
+    system = flow.system
+    T = system.forcing_period(p)
+    try:
+        traj = flow.run(state, t0, t0 + T, p, dense=True, tolerances=tolerances)
+    except SaltationError:
+        return []
+    events = [e for e in traj.events if e.kind is EventKind.TRANSITION]
+    found = []
+    for into, back in zip(events, events[1:]):
+        if not (into.mode_to == back.mode_from and back.mode_to == into.mode_from):
+            continue
+        times = np.linspace(into.t, back.t, samples + 2)[1:-1]
+        if times.size == 0 or not np.all(np.isfinite(times)):
+            continue
+        xs = traj.at(times)
+        h = np.array([abs(flow.indicator(into.surface, t, x, p)) for t, x in zip(times.tolist(), xs)])
+        i = int(np.argmax(h))
+        found.append((float(h[i]) / (1.0 + float(np.linalg.norm(xs[i]))), into.transition, float(times[i])))
+    return found
 
 
 def _parameters_of(curve: _Curve, z: np.ndarray) -> np.ndarray:
