@@ -178,16 +178,34 @@ def set_valued_multipliers(
     n = m_minus.shape[0]
     hull = (1.0 - q)[:, None, None] * m_minus + q[:, None, None] * m_plus
     eigenvalues = np.linalg.eigvals(hull).astype(complex)  # one stacked call
-    rows = eigenvalues.tolist()  # Python complex numbers: the matching below touches each a few times
-    prev = sort_multipliers(eigenvalues[0]).tolist()
-    matched = [prev]
-    for row in rows[1:]:
-        prev = _match_list(prev, row)
-        matched.append(prev)
-    paths = np.array(matched, dtype=complex).reshape(num, n)
+    if n == 2:
+        paths = _match_pairs(eigenvalues, sort_multipliers(eigenvalues[0]))
+    else:
+        rows = eigenvalues.tolist()  # Python complex numbers: the matching below touches each a few times
+        prev = sort_multipliers(eigenvalues[0]).tolist()
+        matched = [prev]
+        for row in rows[1:]:
+            prev = _match_list(prev, row)
+            matched.append(prev)
+        paths = np.array(matched, dtype=complex).reshape(num, n)
     if backward:
         paths = np.array([reciprocal(row) for row in paths])
     return SetValuedMultipliers(q=q, paths=paths)
+
+
+def _match_pairs(rows: np.ndarray, first: np.ndarray) -> np.ndarray:
+    """:func:`_match_list` down the rows of pairs ``rows`` (shape (m, 2)), the first row ordered as ``first``.
+
+    Row ``k`` keeps its order or is swapped; which depends only on whether row ``k - 1`` was, through two
+    comparisons computed for all rows at once (the distances from each of the previous row's two values),
+    so only a loop over booleans remains."""
+    a, b = rows[:, 0], rows[:, 1]
+    keep_after_kept = np.abs(a[1:] - a[:-1]) <= np.abs(b[1:] - a[:-1])  # the previous row's first is a
+    keep_after_swapped = np.abs(a[1:] - b[:-1]) <= np.abs(b[1:] - b[:-1])  # ... is b
+    swapped = [not (first[0] == a[0] and first[1] == b[0])]
+    for kept_k, swapped_k in zip(keep_after_kept.tolist(), keep_after_swapped.tolist()):
+        swapped.append(not (swapped_k if swapped[-1] else kept_k))
+    return np.where(np.array(swapped)[:, None], rows[:, ::-1], rows)
 
 
 def _match(prev: np.ndarray, new: np.ndarray) -> np.ndarray:

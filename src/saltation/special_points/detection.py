@@ -28,7 +28,7 @@ from saltation.orbits.boundary import one_sided_limits, saltation_at_corner, zer
 from saltation.branches.branch import Branch, BranchKind, Limits, SpecialPoint, SpecialPointKind, SpecialPointStatus
 from saltation.branches.corrector import Corrector, Solution, canonical_events
 from saltation.errors import SaltationError
-from saltation.orbits.floquet import multipliers_from_monodromy, set_valued_multipliers
+from saltation.orbits.floquet import eigenvalues, multipliers_from_monodromy, set_valued_multipliers
 from saltation.special_points.grazing import grazing_candidates, locate_grazing
 from saltation.engine.flow import EventKind
 from saltation.orbits.shooting import ShootingProblem
@@ -122,7 +122,7 @@ def _refine_crossing(m_minus, m_plus, guide: complex, q0: float, qa: float, qb: 
     """Refine the crossing ``|mu(q)| = 1`` of the eigenvalue path near ``guide`` by bisection."""
 
     def mu_at(q: float, near: complex) -> complex:
-        ev = np.linalg.eigvals((1.0 - q) * m_minus + q * m_plus)
+        ev = eigenvalues((1.0 - q) * m_minus + q * m_plus)  # (LAPACK's dgeev as numpy's eigvals, without its dispatch)
         return complex(ev[np.argmin(np.abs(ev - near))])
 
     ma = mu_at(qa, guide)
