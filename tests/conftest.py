@@ -8,11 +8,20 @@ recompile.
 
 from __future__ import annotations
 
-import numpy as np
-import pytest
+import os
+from pathlib import Path
 
-from saltation import Crossing, Flow, Mode, PiecewiseSystem, Tolerances, Transition
-from saltation.models import block_on_belt, trilinear
+#: The suite compiles into a kernel cache of its own (kept between runs, beside the tests), never into
+#: the user's ($SALTATION_CACHE_DIR or ~/.cache/saltation): set before anything compiles, and inherited
+#: by the command-line runs the tests start.  SALTATION_TEST_CACHE_DIR chooses another folder.
+TEST_CACHE = Path(os.environ.get("SALTATION_TEST_CACHE_DIR") or Path(__file__).parents[1] / ".test-kernel-cache")
+os.environ["SALTATION_CACHE_DIR"] = str(TEST_CACHE.resolve())
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from saltation import Crossing, Flow, Mode, PiecewiseSystem, Tolerances, Transition  # noqa: E402
+from saltation.models import block_on_belt, trilinear  # noqa: E402
 
 RISING, FALLING = Crossing.RISING, Crossing.FALLING
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 
@@ -325,6 +326,16 @@ def test_paper_end_to_end(tmp_path, capsys):
     branch = io.load_branch_json(tmp_path / "trilinear_branch.json")
     assert len(branch) > 20
     assert len(io.load_diagram_json(tmp_path / "block_on_belt_branches.json")) == 3
+    # every PDF embeds its fonts as TrueType (Type 42, as a CID-keyed font), none as Type 3 (refused by journals)
+    pdfs = sorted(tmp_path.glob("*.pdf"))
+    assert len(pdfs) >= 5
+    for pdf in pdfs:
+        data = pdf.read_bytes()
+        assert b"/Subtype /Type3" not in data and b"/Type3" not in data, pdf.name
+        assert b"/CIDFontType2" in data, pdf.name  # (matplotlib's Type 42 in PDF)
+    # the count of files written that the command prints is the count of files in the folder
+    written = re.search(r"(\d+) files written", capsys.readouterr().out)
+    assert written and int(written.group(1)) == len(list(tmp_path.iterdir()))
 
 
 def test_sweep_end_to_end(tmp_path, capsys):

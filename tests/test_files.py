@@ -326,8 +326,11 @@ def test_round_trip_of_every_file_kind(tmp_path, monkeypatch):
     fig.add_subplot().plot([0, 1, 2], [1, 0, 2], "o-")
     png, pdf = plotting.save_figure(fig, tmp_path / "fig.v1", dpi=60)
     assert (png.name, pdf.name) == ("fig.v1.png", "fig.v1.pdf")
-    fig.savefig(tmp_path / "reference.png", dpi=60)
-    fig.savefig(tmp_path / "reference.pdf")
+    import matplotlib
+
+    with matplotlib.rc_context(plotting.PUBLICATION_RC):  # what save_figure writes with (TrueType fonts)
+        fig.savefig(tmp_path / "reference.png", dpi=60)
+        fig.savefig(tmp_path / "reference.pdf")
     assert png.read_bytes() == (tmp_path / "reference.png").read_bytes()
     assert pdf.read_bytes() == (tmp_path / "reference.pdf").read_bytes()
     assert leftovers(tmp_path) == []

@@ -58,3 +58,39 @@ def test_the_corner_is_where_the_free_orbit_reaches_the_support(tutorial):
     sides = [np.sort_complex(np.asarray(mu)) for mu in (corner.multipliers_minus, corner.multipliers_plus)]
     assert np.isfinite(corner.multipliers_accuracy)
     assert min(np.abs(side - free).max() for side in sides) <= corner.multipliers_accuracy
+
+
+def _executed(cells_after: list[str] = ()) -> list:
+    """The notebook run by a Jupyter kernel (nbclient, the default inline backend), with ``cells_after``
+    appended (not saved); its code cells, outputs included."""
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    notebook = nbformat.read(NOTEBOOK, as_version=4)
+    notebook.cells += [nbformat.v4.new_code_cell(source) for source in cells_after]
+    nbclient.NotebookClient(notebook, timeout=300, kernel_name="python3",
+                            resources={"metadata": {"path": str(NOTEBOOK.parent)}}).execute()
+    return [cell for cell in notebook.cells if cell.cell_type == "code"]
+
+
+def _images(cell) -> int:
+    return sum("image/png" in output.get("data", {}) for output in cell.outputs)
+
+
+def test_the_executed_notebook_shows_each_figure_once():
+    """A plotting function's figure, as a cell's last expression, is shown exactly once by Jupyter: made
+    without pyplot (no backend shows it on its own) it draws itself as PNG; drawn on the caller's pyplot
+    axes, the backend shows it and IPython's formatter is told not to show it again."""
+    on_pyplot_axes = (
+        "import matplotlib.pyplot as plt\n"
+        "fig, ax = plt.subplots()\n"
+        "plot_response(branch, ax=ax)"
+    )
+    assigned_only = "figure = plot_response(branch)"  # no last expression: nothing shown
+    cells = _executed([on_pyplot_axes, assigned_only])
+    tutorial_cells, (pyplot_cell, assigned_cell) = cells[:-2], cells[-2:]
+    plotting = [cell for cell in tutorial_cells if "plot_response(branch)" in cell.source or "plot_multipliers(branch)" in cell.source]
+    assert len(plotting) == 2  # plot_response and plot_multipliers, each the last expression of its cell
+    assert [_images(cell) for cell in plotting] == [1, 1]
+    assert sum(_images(cell) for cell in tutorial_cells) == 2  # and no other cell shows an image
+    assert _images(pyplot_cell) == 1
+    assert _images(assigned_cell) == 0

@@ -104,6 +104,16 @@ def special_point_summary(point) -> str:
     return f"**{point.kind.value}**\n\n" + _table(rows)
 
 
+def stop_text(branch) -> str:
+    """Why a branch's runs stopped, in words, each reason once: "reached a parameter bound" for both
+    directions, "reached a parameter bound; the corrector failed" for two different ones (in run order)."""
+    reasons = [str(r.value if hasattr(r, "value") else r) for r in [branch.stop_reason, *branch.stop_reasons] if r is not None]
+    unique = list(dict.fromkeys(reasons))
+    if len(unique) == 1 and len(reasons) > 1:
+        return f"{unique[0]} (both directions)" if len(reasons) == 2 else f"{unique[0]} (every run)"
+    return "; ".join(unique)
+
+
 def branch_summary(branch) -> str:
     """A branch: its range, stability, how it ended, and its special points."""
     lam = branch.parameter
@@ -112,8 +122,7 @@ def branch_summary(branch) -> str:
         ("parameter", f"{branch.parameter_name} from {_number(lam[0], 8)} to {_number(lam[-1], 8)}" if len(branch) else "-"),
         ("points", f"{len(branch)} ({stable} stable)"),
         ("shooting", "backward time" if branch.backward else "forward time"),
-        ("stopped", ", ".join(str(r.value if hasattr(r, "value") else r) for r in [branch.stop_reason, *branch.stop_reasons]
-                              if r is not None) or "-"),
+        ("stopped", stop_text(branch) or "-"),
     ]
     text = f"**{branch.label or branch.kind.value} branch** of {branch.model}\n\n" + _table(rows)
     if branch.special_points:

@@ -1098,7 +1098,8 @@ def cmd_paper(args: argparse.Namespace) -> int:
         print("the block-on-belt model smoothed (saltation.model.regularize), its stable branch followed in forward time:")
         print(paper.smoothing_table(results.smoothing))
     print(f"{len(written)} files written to {args.out}: figures fig3, fig4, fig6, fig7, fig8 (PNG and PDF), branch "
-          "data (JSON, CSV), special_points.json and smoothing_table.json")
+          "data (JSON; CSV, each with its .meta.json), the phase plane's curves (NPZ), special_points.json and "
+          "smoothing_table.json")
     return 0
 
 

@@ -305,6 +305,11 @@ def compute(settings: PaperSettings = PaperSettings(), progress: Progress = None
     )
 
 
+def _branch_csv(branch, path: Path) -> list[Path]:
+    """A branch as CSV and the metadata file beside it: both paths."""
+    return [io.save_branch_csv(branch, path), io.csv_metadata_path(path)]
+
+
 def write(results: PaperResults, out: Path) -> list[Path]:
     """Write figures (PNG and PDF), branch data (JSON and CSV) and ``special_points.json``."""
     out = Path(out)
@@ -328,10 +333,10 @@ def write(results: PaperResults, out: Path) -> list[Path]:
     written += plotting.save_figure(plotting.plot_response(results.block_on_belt.branches), out / "fig7_block_on_belt_diagram", dpi=150)
 
     written.append(io.save_branch_json(tri, out / "trilinear_branch.json"))
-    written.append(io.save_branch_csv(tri, out / "trilinear_branch.csv"))
+    written += _branch_csv(tri, out / "trilinear_branch.csv")
     written.append(io.save_diagram_json(results.block_on_belt.branches, out / "block_on_belt_branches.json"))
     for k, br in enumerate(results.block_on_belt.branches):
-        written.append(io.save_branch_csv(br, out / f"block_on_belt_branch{k}.csv"))
+        written += _branch_csv(br, out / f"block_on_belt_branch{k}.csv")
     np.savez(out / "fig6_phase_plane.npz", **{k: np.asarray(v) for k, v in pp.items()})
     written.append(out / "fig6_phase_plane.npz")
     written.append(io.save_special_points_json(results.special_point_records(), out / "special_points.json"))

@@ -365,18 +365,25 @@ class SweepResult:
         """
         return cls.from_dict(_read_json(path, bare_constants=True), source=str(path))
 
+    def __repr__(self) -> str:
+        v = self.values
+        span = f"{v[0]:.6g} .. {v[-1]:.6g}" if v.size else "no values"
+        return (f"SweepResult({self.model!r}, {self.parameter_name} {span}, {v.size} values, {len(self.parameter_points)} "
+                f"points ({self.section}), {len(self.failures)} failed)")
+
     # -- figure ------------------------------------------------------------------------------
     def plot(self, ax: Axes | None = None, *, state: int | str = 0, **style) -> Figure:
         """Scatter the points over the parameter; draws on ``ax`` or on a new Figure (no pyplot state)."""
-        from matplotlib.figure import Figure
+        from saltation.output.plotting import figure_of, new_figure
 
         k = self._state_index(state)
         if ax is None:
-            fig = Figure(figsize=(6.4, 4.4), layout="constrained")
+            fig = new_figure((6.4, 4.4))
             ax = fig.add_subplot()
         else:
-            fig = ax.get_figure()
-        kw = {"s": 1.0, "color": "k", "marker": ".", "linewidths": 0, "rasterized": True} | style
+            fig = figure_of(ax)
+        # dots of 2 points square: seen on a page at any density (a point per sample, no edge)
+        kw = {"s": 2.0, "color": "k", "marker": ".", "linewidths": 0, "rasterized": True} | style
         ax.scatter(self.parameter_points, self.states[:, k], **kw)
         ax.set_xlabel(self.parameter_name)
         name = self.state_names[k]
@@ -698,16 +705,25 @@ class PeriodMap:
         """
         return cls.from_dict(_read_json(path, bare_constants=True), source=str(path))
 
+    def __repr__(self) -> str:
+        found = self.periods[self.periods > 0]
+        return (f"PeriodMap({self.model!r}, {self.parameter_name} x {self.parameter2_name}: {self.values.size} x "
+                f"{self.values2.size} cells, periods up to {self.max_period}: {found.size} periodic, "
+                f"{int(np.count_nonzero(self.periods == 0))} not, {len(self.failures)} failed)")
+
     def plot(self, ax: Axes | None = None) -> Figure:
-        """The map: one colour per period (1 ... max_period), grey for none found, white for failures."""
+        """The map: one colour per period (1 ... max_period); grey where no period up to max_period settled within
+        the transient (chaos, a longer period, or a slow transient: the colour bar says "not periodic"); white
+        for failures."""
         from matplotlib.colors import BoundaryNorm, ListedColormap
-        from matplotlib.figure import Figure
+
+        from saltation.output.plotting import figure_of, new_figure
 
         if ax is None:
-            fig = Figure(figsize=(6.4, 4.8), layout="constrained")
+            fig = new_figure((6.4, 4.8))
             ax = fig.add_subplot()
         else:
-            fig = ax.get_figure()
+            fig = figure_of(ax)
         import matplotlib
 
         base = matplotlib.colormaps["tab20"]
@@ -716,7 +732,9 @@ class PeriodMap:
         norm = BoundaryNorm(np.arange(-1.5, self.max_period + 1.5), cmap.N)
         mesh = ax.pcolormesh(_edges(self.values), _edges(self.values2), self.periods, cmap=cmap, norm=norm)
         bar = fig.colorbar(mesh, ax=ax, ticks=np.arange(-1, self.max_period + 1))
-        bar.ax.set_yticklabels(["failed", "none"] + [str(k) for k in range(1, self.max_period + 1)])
+        # "not periodic": no period up to max_period within the transient (chaos, a longer period, or not settled)
+        bar.ax.set_yticklabels(["failed", f"not periodic\n(<= {self.max_period})"]
+                               + [str(k) for k in range(1, self.max_period + 1)])
         bar.set_label("period of the attractor (forcing periods)")
         ax.set_xlabel(self.parameter_name)
         ax.set_ylabel(self.parameter2_name)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -207,6 +208,13 @@ class SpecialPoint:
 
         return special_point_summary(self)
 
+    def __repr__(self) -> str:
+        where = f"{self.parameter:.10g}"
+        if self.second_parameter is not None and math.isfinite(self.second_parameter):
+            where += f", {self.second_parameter:.10g}"
+        sides = f" {self.sides[0]} -> {self.sides[1]}" if self.sides else ""
+        return f"SpecialPoint({self.kind.value}{sides} at {where}, located to {self.accuracy:.1e}, {self.status.value})"
+
 
 @dataclass
 class Branch:
@@ -259,6 +267,25 @@ class Branch:
         from saltation.summary import branch_summary
 
         return branch_summary(self)
+
+    def __repr__(self) -> str:
+        from saltation.summary import stop_text
+
+        name = type(self).__name__
+        if not len(self):
+            return f"{name}({self.model!r}, {self.kind.value}, no points)"
+        lam = self.parameter
+        span = f"{self.parameter_name} {lam[0]:.6g} .. {lam[-1]:.6g}"
+        if self.second_parameter_name:
+            mu = self.second_parameter
+            span += f", {self.second_parameter_name} {mu[0]:.6g} .. {mu[-1]:.6g}"
+        kinds = ", ".join(sp.kind.value for sp in self.special_points[:4]) + (", ..." if len(self.special_points) > 4 else "")
+        special = f"{len(self.special_points)} special point{'s' if len(self.special_points) != 1 else ''}"
+        special += f" ({kinds})" if kinds else ""
+        stop = stop_text(self)
+        return (f"{name}({self.model!r}, {self.label or self.kind.value}, {span}, {len(self)} point"
+                f"{'s' if len(self) != 1 else ''} ({int(np.count_nonzero(self.stable))} stable), {special}"
+                + (f", stopped: {stop}" if stop else "") + ")")
 
     def __len__(self) -> int:
         return len(self.points)

@@ -134,6 +134,11 @@ class SwitchingEvent(NamedTuple):
         """What identifies the event in an orbit's event sequence."""
         return (int(self.kind), self.transition, self.surface)
 
+    def __repr__(self) -> str:
+        which = f"transition {self.transition}" if self.transition >= 0 else "end of sliding"
+        return (f"SwitchingEvent(t={self.t:.12g}, {self.kind.name.lower()}, {which}: {self.mode_from} -> {self.mode_to} "
+                f"on {self.surface})")
+
 
 @dataclass(frozen=True)
 class Trajectory:
@@ -188,6 +193,13 @@ class Trajectory:
     def events(self) -> list[SwitchingEvent]:
         """The switching events, in the order met."""
         return _switching_events(self.system, self.event_log)
+
+    def __repr__(self) -> str:
+        x1 = ", ".join(f"{v:.6g}" for v in np.asarray(self.x1)[:6]) + (", ..." if len(self.x1) > 6 else "")
+        modes = self.modes
+        path = " -> ".join(modes[:5]) + (f" -> ... ({len(modes)} modes)" if len(modes) > 5 else "")
+        return (f"Trajectory({self.system.name!r}, t {self.t0:.8g} .. {self.t1:.8g}, {len(self.events)} events, "
+                f"{path}, x1=[{x1}]" + (", with monodromy" if self.monodromy is not None else "") + ")")
 
     @property
     def event_sequence(self) -> tuple[tuple[int, int, str], ...]:
@@ -359,6 +371,10 @@ class Flow:
         self._identity = np.eye(system.n)  # read-only inputs of the kernel
         self._offsets = kc.result_offsets(system.n)
         self._zeros = np.zeros(system.n)
+
+    def __repr__(self) -> str:
+        t = self.tolerances
+        return f"Flow({self.system.name!r}, {self.system.n} states, rtol={t.rtol:g}, atol={t.atol:g})"
 
     def __reduce__(self):
         # a flow travels as its model and tolerances (to a worker process, a Dask task): the compiled

@@ -6,6 +6,7 @@ that each can build them, and the continuation engine reads them.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -77,6 +78,12 @@ class BranchPoint:
     trivial_error: float = float("nan")
     excursion: float = float("nan")
     second_parameter: float = float("nan")
+
+    def __repr__(self) -> str:
+        where = f"{self.parameter:.10g}" + ("" if not math.isfinite(self.second_parameter) else f", {self.second_parameter:.10g}")
+        mu = ", ".join(f"{abs(m):.4g}" for m in np.asarray(self.multipliers)[:4])
+        return (f"BranchPoint(at {where}, T={self.period:.8g}, amplitude={self.amplitude:.6g}, "
+                f"{'stable' if self.stable else 'unstable'}, |mu|=[{mu}], events={'/'.join(self.event_labels) or '-'})")
 
 
 #: The name of :class:`BranchPoint` where a problem describes a solved point (before a branch records it).

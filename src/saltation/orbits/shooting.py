@@ -185,6 +185,14 @@ class PeriodicOrbit:
 
         return orbit_summary(self)
 
+    def __repr__(self) -> str:
+        state = ", ".join(f"{v:.6g}" for v in np.asarray(self.state0)[:6]) + (", ..." if len(self.state0) > 6 else "")
+        mu = f"{np.max(np.abs(self.multipliers)):.6g}" if len(self.multipliers) else "-"
+        how = ("backward" if self.backward else "forward") + (", autonomous" if self.autonomous else ", forced")
+        return (f"PeriodicOrbit({self.system_name!r}, T={self.period:.10g}, x0=[{state}], max |mu|={mu}, "
+                f"{'stable' if self.stable else 'unstable'}, {len(self.events)} events, {how}"
+                + ("" if self.converged else ", NOT converged") + ")")
+
 
 def newton(
     fun, u0: np.ndarray, *, tol: float = 1e-10, max_iter: int = 30, what: str = "Newton", damped: bool = False
@@ -288,6 +296,12 @@ class ShootingProblem:
         self.t0 = 0.0 if self.autonomous else math.fmod(t0, self.system.forcing_period(self.p))
         self.x_ref: np.ndarray | None = None
         self.f_ref: np.ndarray | None = None
+
+    def __repr__(self) -> str:
+        how = ("backward" if self.backward else "forward") + (", autonomous" if self.autonomous else ", forced")
+        lam = f", continuation in {self.lam_name}" if self.lam_name else ""
+        periods = f", {self.periods} periods" if self.periods != 1 else ""
+        return f"ShootingProblem({self.system.name!r}, {how}{periods}{lam})"
 
     # -- the protocol used by continuation ----------------------------------------------
     @property
@@ -1000,6 +1014,9 @@ class MultipleShootingProblem:
         self.backward, self.autonomous, self.t0 = problem.backward, problem.autonomous, problem.t0
         self.sign, self.tolerances, self.periods = problem.sign, problem.tolerances, 1
         self._segs: tuple[np.ndarray, float | None, list[Trajectory]] | None = None
+
+    def __repr__(self) -> str:
+        return f"MultipleShootingProblem({self.problem!r}, {self.segments} segments)"
 
     @property
     def dimension(self) -> int:

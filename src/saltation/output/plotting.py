@@ -27,15 +27,23 @@ from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind
 
 __all__ = [
     "CurveStyle",
+    "NotebookFigure",
     "MEASURE_LABELS",
+    "PUBLICATION_RC",
     "PhaseCurve",
     "SPECIAL_POINT_MARKERS",
+    "figure_of",
+    "new_figure",
     "plot_loci",
     "plot_multipliers",
     "plot_phase_plane",
     "plot_response",
     "save_figure",
 ]
+
+#: matplotlib settings :func:`save_figure` writes with: TrueType (Type 42) fonts in PDF and PostScript
+#: (matplotlib's default, Type 3, is refused by several journals), also for mathtext.
+PUBLICATION_RC = {"pdf.fonttype": 42, "ps.fonttype": 42}
 
 STABLE_STYLE = "-"
 UNSTABLE_STYLE = "-."
@@ -69,10 +77,71 @@ MEASURE_LABELS: dict[str, str] = {
 Measure = str | Callable[[Branch], np.ndarray]
 
 
+class NotebookFigure(Figure):
+    """A :class:`matplotlib.figure.Figure` that Jupyter shows, once, as the last expression of a cell.
+
+    It is made without ``pyplot``, so no backend shows it on its own, and it renders itself as PNG for
+    IPython's display (``_repr_png_``), whatever the backend (with ``%matplotlib inline`` IPython's own
+    formatter for figures draws the same PNG).  Everything else is a plain figure: ``savefig``,
+    :func:`save_figure`, adding axes.
+    """
+
+    def _repr_png_(self) -> bytes:
+        from io import BytesIO
+
+        buffer = BytesIO()
+        self.savefig(buffer, format="png", dpi=100)
+        return buffer.getvalue()
+
+
+def new_figure(figsize: tuple[float, float] = (6.4, 4.8)) -> NotebookFigure:
+    """A new figure of this module's kind (constrained layout, shown by Jupyter once; see :class:`NotebookFigure`)."""
+    return NotebookFigure(figsize=figsize, layout="constrained")
+
+
+def figure_of(ax: Axes) -> Figure:
+    """The figure of a caller's ``Axes``, to be returned by a plotting function.
+
+    A figure of ``pyplot`` is shown by a notebook's inline backend when the cell ends; returned as the
+    cell's last expression, IPython's formatter would show it once more.  So, in IPython, this figure's
+    PNG is drawn once by whichever display comes first (the cell's result, or the backend's), which
+    then closes it in ``pyplot`` (as the inline backend does after every cell) so that the backend does
+    not draw it again.  Figures made without ``pyplot`` are left as they are.
+    """
+    fig = ax.figure
+    if getattr(getattr(fig, "canvas", None), "manager", None) is None:
+        return fig
+    try:
+        from IPython import get_ipython
+    except ImportError:
+        return fig
+    shell = get_ipython()
+    formatters = getattr(getattr(shell, "display_formatter", None), "formatters", {})
+    png = formatters.get("image/png")
+    if png is None:
+        return fig
+    import weakref
+
+    key = id(fig)
+
+    def once(figure):
+        png.singleton_printers.pop(key, None)
+        from IPython.core.pylabtools import print_figure
+        from matplotlib import pyplot
+
+        data = print_figure(figure, "png")
+        pyplot.close(figure)  # the backend's own display at the cell's end skips it now
+        return data
+
+    png.singleton_printers[key] = once
+    weakref.finalize(fig, png.singleton_printers.pop, key, None)
+    return fig
+
+
 def _new_axes(ax: Axes | None, figsize: tuple[float, float]) -> tuple[Figure, Axes]:
     if ax is not None:
-        return ax.figure, ax
-    fig = Figure(figsize=figsize, layout="constrained")
+        return figure_of(ax), ax
+    fig = new_figure(figsize)
     return fig, fig.add_subplot()
 
 
@@ -527,7 +596,8 @@ def plot_phase_plane(
 def save_figure(fig: Figure, stem: str | PathLike[str], *, dpi: int = 200) -> tuple[Path, Path]:
     """Write ``stem.png`` and ``stem.pdf``, atomically.
 
-    Both images are drawn in memory first, then written through
+    The PDF embeds its fonts as TrueType (Type 42), as journals ask, never as Type 3.  Both images are
+    drawn in memory first, then written through
     :func:`saltation.output.io.write_atomically`: each file is the whole new image or the old file, never a
     part of one (a failure while drawing leaves both old files untouched).
 
@@ -556,18 +626,21 @@ def save_figure(fig: Figure, stem: str | PathLike[str], *, dpi: int = 200) -> tu
     stem = Path(stem)
     png = stem.with_name(stem.name + ".png")
     pdf = stem.with_name(stem.name + ".pdf")
+    import matplotlib
+
     images = {}
-    for path, options in ((png, {"format": "png", "dpi": dpi}), (pdf, {"format": "pdf"})):
-        buffer = BytesIO()
-        fig.savefig(buffer, **options)
-        images[path] = buffer.getvalue()
+    with matplotlib.rc_context(PUBLICATION_RC):
+        for path, options in ((png, {"format": "png", "dpi": dpi}), (pdf, {"format": "pdf"})):
+            buffer = BytesIO()
+            fig.savefig(buffer, **options)
+            images[path] = buffer.getvalue()
     write_atomically(images)
     return png, pdf
 
 
 def plot_loci(loci, *, title: str = ""):
     """Two-parameter curves of special points (:class:`saltation.special_points.loci.Locus`), codimension-two points marked."""
-    fig = Figure(figsize=(6.4, 4.8), layout="constrained")
+    fig = new_figure((6.4, 4.8))
     ax = fig.add_subplot()
     for k, locus in enumerate(loci):
         if len(locus):

@@ -83,7 +83,7 @@ SLIDING_KINDS = frozenset(
 )
 
 
-@dataclass
+@dataclass(repr=False)  # (the repr of a Branch)
 class Locus(Branch):
     """A curve of special points in two parameters: a :class:`~saltation.branches.branch.Branch` whose
     points carry both parameters (``parameter`` the first, ``second_parameter`` the second), labelled with
