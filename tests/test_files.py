@@ -80,7 +80,7 @@ def make_branch(n_points: int = 28, label: str = "stable periodic") -> Branch:
     return Branch(model="block_on_belt", parameter_name="v_dr", kind=BranchKind.PERIODIC, backward=True,
                   points=points, special_points=specials, stop_reason=StopReason.MIN_STEP,
                   stop_reasons=[StopReason.PARAMETER_BOUND, None], fixed_parameters={"m": 1.0, "eta": 1e-4},
-                  label=label, autonomous=True)
+                  label=label, autonomous=True, state_names=("x", "v"))
 
 
 def make_sweep() -> SweepResult:
@@ -655,21 +655,20 @@ def _drop_column(column: str):
 
 CSV_EDITS = [
     (_cell(3, "stable", "yes"), "line 4 (point 2), column stable", "expected true or false, got 'yes'"),
-    (_cell(3, "parameter", "abc"), "line 4 (point 2), column parameter", "expected a number"),
-    (_cell(3, "parameter", "nan"), "line 4 (point 2), column parameter", "expected a finite number, got 'nan'"),
-    (_cell(5, "state_1", ""), "line 6 (point 4), column state_1", "expected a number"),
-    (_cell(5, "mu1_abs", "big"), "line 6 (point 4), column mu1_abs", "expected a number"),
+    (_cell(3, "v_dr", "abc"), "line 4 (point 2), column v_dr", "expected a number"),
+    (_cell(3, "v_dr", "nan"), "line 4 (point 2), column v_dr", "expected a finite number, got 'nan'"),
+    (_cell(5, "v", ""), "line 6 (point 4), column v", "expected a number"),
+    (_cell(5, "multiplier2_abs", "big"), "line 6 (point 4), column multiplier2_abs", "expected a number"),
     (_cell(2, "iterations", "1.5"), "line 3 (point 1), column iterations", "expected a non-negative integer"),
     (_cell(2, "iterations", "-2"), "line 3 (point 1), column iterations", "expected a non-negative integer"),
     (lambda rows: rows[4].pop(), "line 5 (point 3)", "has 15 fields; the header has 16"),
     (lambda rows: rows[4].append("1.0"), "line 5 (point 3)", "has 17 fields; the header has 16"),
     (_drop_column("step"), "line 1 (header)", "missing the column 'step'"),
-    (_drop_column("mu1_im"), "line 1 (header)", "missing the column 'mu1_im'"),
-    (lambda rows: rows[0].__setitem__(rows[0].index("state_1"), "state_2"), "line 1 (header)",
-     "unexpected column 'state_2'"),
+    (_drop_column("multiplier2_im"), "line 1 (header)", "missing the column 'multiplier2_im'"),
+    (lambda rows: rows[0].__setitem__(rows[0].index("v"), "w"), "line 1 (header)", "unexpected column 'w'"),
     (lambda rows: rows[0].__setitem__(rows[0].index("step"), "period"), "line 1 (header)",
      "the column 'period' appears twice"),
-    (lambda rows: [r.append("x") for r in rows], "line 1 (header)", "unexpected column 'x'"),
+    (lambda rows: [r.append("extra") for r in rows], "line 1 (header)", "unexpected column 'extra'"),
 ]
 
 

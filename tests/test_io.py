@@ -257,21 +257,66 @@ def test_load_rejects_other_formats(tmp_path):
 
 
 def test_csv_columns(tmp_path):
-    path = save_branch_csv(synthetic_branch(), tmp_path / "branch.csv")
+    """The columns are named after the parameter, the states and what each multiplier column holds."""
+    branch = synthetic_branch()
+    branch.state_names = ("x", "v")
+    path = save_branch_csv(branch, tmp_path / "branch.csv")
     with path.open(newline="") as fh:
         rows = list(csv.reader(fh))
     assert rows[0] == [
-        "parameter", "period", "amplitude", "half_peak_to_peak", "stable", "event_labels", "step", "iterations",
-        "state_0", "state_1", "mu0_re", "mu0_im", "mu0_abs", "mu1_re", "mu1_im", "mu1_abs",
+        "v_dr", "period", "amplitude", "half_peak_to_peak", "stable", "event_labels", "step", "iterations",
+        "x", "v", "multiplier1_re", "multiplier1_im", "multiplier1_abs", "multiplier2_re", "multiplier2_im",
+        "multiplier2_abs",
     ]
     assert len(rows) == 1 + len(synthetic_branch())
     first = dict(zip(rows[0], rows[1]))
     assert first["stable"] == "true"
     assert first["event_labels"] == "free -[h1+]-> contact;contact -[h1-]-> free"
-    assert float(first["parameter"]) == 1 / 3
+    assert float(first["v_dr"]) == 1 / 3
     last = dict(zip(rows[0], rows[-1]))
-    assert (last["mu0_re"], last["mu0_im"], last["mu0_abs"]) == ("inf", "0.0", "inf")
+    assert (last["multiplier1_re"], last["multiplier1_im"], last["multiplier1_abs"]) == ("inf", "0.0", "inf")
     assert last["event_labels"] == ""
+
+
+def test_csv_columns_of_equilibria_and_of_clashing_names(tmp_path):
+    """An equilibrium branch's values are the Jacobian's eigenvalues (no modulus column); a state named like a
+    fixed column, or a branch without state names (files before they were recorded), gets a prefixed name;
+    both read back the same."""
+    branch = synthetic_branch()
+    branch.kind, branch.state_names = BranchKind.EQUILIBRIUM, ("period", "v")
+    path = save_branch_csv(branch, tmp_path / "eq.csv", metadata=False)
+    header = next(csv.reader(path.open(newline="")))
+    assert header[8:] == ["state_period", "v", "eigenvalue1_re", "eigenvalue1_im", "eigenvalue2_re", "eigenvalue2_im"]
+    loaded = load_branch_csv(path, model="block_on_belt", parameter_name="v_dr")
+    for p, q in zip(branch.points, loaded.points):
+        np.testing.assert_array_equal(p.state, q.state)
+        np.testing.assert_array_equal(p.multipliers, q.multipliers)
+    branch = synthetic_branch()
+    path = save_branch_csv(branch, tmp_path / "unnamed.csv", metadata=False)
+    assert next(csv.reader(path.open(newline="")))[8:10] == ["state_0", "state_1"]
+
+
+def test_csv_of_the_first_format_still_loads(tmp_path):
+    """A CSV written before the columns were named (parameter, state_0, mu0_re, ...) loads as it did."""
+    branch = synthetic_branch()
+    rows = [["parameter", "period", "amplitude", "half_peak_to_peak", "stable", "event_labels", "step", "iterations",
+             "state_0", "state_1", "mu0_re", "mu0_im", "mu0_abs", "mu1_re", "mu1_im", "mu1_abs"]]
+    for p in branch.points:
+        row = [repr(float(p.parameter)), repr(float(p.period)), repr(float(p.amplitude)), repr(float(p.half_peak_to_peak)),
+               "true" if p.stable else "false", ";".join(p.event_labels), repr(float(p.step)), str(p.iterations)]
+        row += [repr(float(x)) for x in p.state]
+        for z in p.multipliers:
+            row += [repr(float(z.real)), repr(float(z.imag)), repr(float(abs(z)))]
+        rows.append(row)
+    path = tmp_path / "old.csv"
+    with path.open("w", newline="") as fh:
+        csv.writer(fh).writerows(rows)
+    loaded = load_branch_csv(path, model="block_on_belt", parameter_name="v_dr")
+    assert len(loaded) == len(branch)
+    for p, q in zip(branch.points, loaded.points):
+        assert (q.parameter, q.stable, q.event_labels) == (p.parameter, p.stable, p.event_labels)
+        np.testing.assert_array_equal(p.state, q.state)
+        np.testing.assert_array_equal(p.multipliers, q.multipliers)
 
 
 def test_csv_round_trip_of_points_is_lossless(tmp_path):

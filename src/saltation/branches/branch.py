@@ -246,6 +246,9 @@ class Branch:
         the second parameter, whose values are the column :attr:`second_parameter` (empty otherwise).
     curve_of : SpecialPointKind or None
         On such a curve: the kind of the special point it continues.
+    state_names : tuple of str
+        The model's states, in the order of each point's ``state`` (empty in files written before
+        2026-11-26); they name the CSV columns.
     """
 
     model: str
@@ -261,6 +264,7 @@ class Branch:
     autonomous: bool = False
     second_parameter_name: str = ""
     curve_of: SpecialPointKind | None = None
+    state_names: tuple[str, ...] = ()
 
     def _repr_markdown_(self) -> str:
         """A summary for Jupyter (:mod:`saltation.summary`)."""

@@ -136,6 +136,7 @@ class Continuation:
             backward=bool(getattr(problem, "backward", False)),
             fixed_parameters=dict(zip(problem.system.parameter_names, map(float, problem.p))),
             autonomous=bool(problem.system.is_autonomous),
+            state_names=tuple(problem.system.state_names),
         )
         self.solutions: list[Solution] = []
         self.last_failure: np.ndarray | None = None

@@ -52,6 +52,7 @@ import io as _io
 import json
 import math
 import os
+import re
 import secrets
 import stat
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -917,6 +918,29 @@ def _csv_float(x: float) -> str:
     return repr(float(x))
 
 
+_VALUE_COLUMN = re.compile(r"^(multiplier|eigenvalue)(\d+)_(re|im|abs)$")
+
+
+def csv_header(branch: Branch, n_state: int, n_mu: int) -> list[str]:
+    """The header of a branch's CSV: the continuation parameter's name, the fixed columns (period,
+    amplitude, ...), the states by name (their values at the start of the period; ``state_<name>`` for a
+    name that is also a column's), then per multiplier ``multiplier<i>_re``, ``_im`` and ``_abs``
+    (``i`` from 1), or for an equilibrium branch per eigenvalue of the Jacobian ``eigenvalue<i>_re``
+    and ``_im``."""
+    parameter = branch.parameter_name or "parameter"
+    names = tuple(branch.state_names) if len(branch.state_names) == n_state else tuple(f"state_{i}" for i in range(n_state))
+    taken = set(_CSV_COLUMNS[1:]) | {parameter}
+    states = [f"state_{name}" if name in taken or _VALUE_COLUMN.match(name) else name for name in names]
+    header = [parameter, *_CSV_COLUMNS[1:], *states]
+    if branch.kind is BranchKind.EQUILIBRIUM:
+        for i in range(1, n_mu + 1):
+            header += [f"eigenvalue{i}_re", f"eigenvalue{i}_im"]
+    else:
+        for i in range(1, n_mu + 1):
+            header += [f"multiplier{i}_re", f"multiplier{i}_im", f"multiplier{i}_abs"]
+    return header
+
+
 def _csv_text(branch: Branch) -> str:
     """The CSV of the branch's points (checked before anything is written)."""
     n_state = len(branch.points[0].state) if branch.points else 0
@@ -930,9 +954,8 @@ def _csv_text(branch: Branch) -> str:
         bad = [e for e in p.event_labels if EVENT_SEPARATOR in e]
         if bad:
             raise ValueError(f"point {k}: event label {bad[0]!r} contains the separator {EVENT_SEPARATOR!r}")
-    header = list(_CSV_COLUMNS) + [f"state_{i}" for i in range(n_state)]
-    for i in range(n_mu):
-        header += [f"mu{i}_re", f"mu{i}_im", f"mu{i}_abs"]
+    header = csv_header(branch, n_state, n_mu)
+    equilibria = branch.kind is BranchKind.EQUILIBRIUM
     buffer = _io.StringIO(newline="")
     writer = csv.writer(buffer)
     writer.writerow(header)
@@ -949,7 +972,7 @@ def _csv_text(branch: Branch) -> str:
         ]
         row += [_csv_float(x) for x in p.state]
         for z in np.asarray(p.multipliers, dtype=complex):
-            row += [_csv_float(z.real), _csv_float(z.imag), _csv_float(abs(z))]
+            row += [_csv_float(z.real), _csv_float(z.imag)] + ([] if equilibria else [_csv_float(abs(z))])
         writer.writerow(row)
     return buffer.getvalue()
 
@@ -1001,8 +1024,40 @@ def _parse_bool(s: str) -> bool:
     raise ValueError(f"not a boolean: {s!r}")
 
 
+def _named_csv_header(header: list[str], f: _Fields) -> list[str]:
+    """A header of :func:`csv_header` in the internal names of the first format (``parameter``,
+    ``state_<i>``, ``mu<i>_re``, ... from 0), which the rest of the reader uses."""
+    fixed = set(_CSV_COLUMNS[1:])
+    out = ["parameter"]
+    n_state = 0
+    for name in header[1:]:
+        m = _VALUE_COLUMN.match(name)
+        if m:
+            i = int(m.group(2)) - 1
+            if i < 0:
+                f.fail("line 1 (header)", f"the column {name!r}: multipliers and eigenvalues count from 1")
+            out.append(f"mu{i}_{m.group(3)}")
+        elif name in fixed or name == "events":
+            out.append(name)
+        else:
+            out.append(f"state_{n_state}")
+            n_state += 1
+    return out
+
+
 def _csv_header(header: list[str], f: _Fields) -> tuple[dict[str, int], int, int]:
-    """The columns of a branch CSV by name, the number of states and of multipliers."""
+    """The columns of a branch CSV by name, the number of states and of multipliers.  Files written
+    before 2026-11-26 name the columns ``parameter``, ``state_<i>``, ``mu<i>_re`` ...; newer ones after the
+    parameter and the states (:func:`csv_header`)."""
+    named = bool(header) and header[0] != "parameter"
+    if named:
+        values = "eigenvalue" if any(h.startswith("eigenvalue") for h in header) else "multiplier"
+        header = _named_csv_header(header, f)
+
+    def shown(name: str) -> str:  # a column as the file names it
+        m = re.match(r"^mu(\d+)_(re|im|abs)$", name)
+        return f"{values}{int(m.group(1)) + 1}_{m.group(2)}" if named and m else name
+
     col: dict[str, int] = {}
     for j, name in enumerate(header):
         if name in col:
@@ -1025,7 +1080,7 @@ def _csv_header(header: list[str], f: _Fields) -> tuple[dict[str, int], int, int
     for i in range(n_mu):
         for part in ("re", "im"):
             if f"mu{i}_{part}" not in col:
-                f.fail("line 1 (header)", f"missing the column 'mu{i}_{part}'")
+                f.fail("line 1 (header)", f"missing the column {shown(f'mu{i}_{part}')!r}")
     return col, n_state, n_mu
 
 
@@ -1040,7 +1095,7 @@ def _read_text(path: PathType, fields: _Fields, kind: str, empty: str) -> str:
     return text
 
 
-def _read_csv_points(path: PathType, f: _Fields) -> list[BranchPoint]:
+def _read_csv_points(path: PathType, f: _Fields, check_header: Callable[[list[str]], None] | None = None) -> list[BranchPoint]:
     text = _read_text(path, f, "CSV", "the file is empty (no header)")
     reader = csv.reader(_io.StringIO(text, newline=""), strict=True)
     try:
@@ -1051,11 +1106,15 @@ def _read_csv_points(path: PathType, f: _Fields) -> list[BranchPoint]:
         f.fail(f"line {rows[-1][0]}", "the file ends inside this row (no line end after it): truncated")
     (_, header), body = rows[0], [(line, row) for line, row in rows[1:] if row]
     col, n_state, n_mu = _csv_header(header, f)
-    return [_csv_point(row, f"line {line} (point {k})", col, n_state, n_mu, f) for k, (line, row) in enumerate(body)]
+    if check_header is not None:
+        check_header(header)
+    return [_csv_point(row, f"line {line} (point {k})", col, n_state, n_mu, f, header) for k, (line, row) in enumerate(body)]
 
 
-def _csv_point(row: list[str], here: str, col: Mapping[str, int], n_state: int, n_mu: int, f: _Fields) -> BranchPoint:
-    """The branch point of one CSV row (``here`` names it)."""
+
+def _csv_point(row: list[str], here: str, col: Mapping[str, int], n_state: int, n_mu: int, f: _Fields,
+               header: Sequence[str]) -> BranchPoint:
+    """The branch point of one CSV row (``here`` names it; messages name the columns as ``header`` does)."""
     if len(row) != len(col):
         f.fail(here, f"has {len(row)} fields; the header has {len(col)} (truncated or hand-edited?)")
 
@@ -1066,12 +1125,12 @@ def _csv_point(row: list[str], here: str, col: Mapping[str, int], n_state: int, 
                 raise ValueError
             return convert(s)
         except ValueError:
-            f.fail(f"{here}, column {name}", f"expected {what}, got {s!r}")
+            f.fail(f"{here}, column {header[col[name]]}", f"expected {what}, got {s!r}")
 
     def real(name: str, finite: bool = False) -> float:
         x = cell(name, float, "a number (or inf, -inf, nan)")
         if finite and not math.isfinite(x):
-            f.fail(f"{here}, column {name}", f"expected a finite number, got {row[col[name]]!r}")
+            f.fail(f"{here}, column {header[col[name]]}", f"expected a finite number, got {row[col[name]]!r}")
         return x
 
     def count(s: str) -> int:
@@ -1096,6 +1155,33 @@ def _csv_point(row: list[str], here: str, col: Mapping[str, int], n_state: int, 
         step=real("step"),
         iterations=cell("iterations", count, "a non-negative integer"),
     )
+
+
+def _check_named_header(header: list[str], d: Any, f: _Fields, meta: Path) -> None:
+    """A CSV whose side file records the states' names has exactly the header :func:`csv_header` gives."""
+    if not isinstance(d, dict) or not d.get("state_names") or not isinstance(d.get("parameter_name"), str):
+        return  # (a side file of an earlier version, or a damaged one: its own reader says what is wrong)
+    try:
+        kind = BranchKind(d.get("kind", "periodic"))
+    except ValueError:
+        return  # (the side file's reader names the problem)
+    if not header or header[0] == "parameter":
+        return
+    n_mu = sum(1 for h in header if (m := _VALUE_COLUMN.match(h)) and m.group(3) == "re")
+    names = tuple(str(s) for s in d["state_names"])
+    expected = csv_header(Branch(model="", parameter_name=d["parameter_name"], kind=kind, state_names=names),
+                          len(names), n_mu)
+    if header == expected:
+        return
+    odd = [h for h in header if h not in expected]
+    if odd:
+        f.fail("line 1 (header)", f"unexpected column {odd[0]!r}: the side file {meta.name} names the columns "
+               f"{', '.join(expected)}")
+    missing = [h for h in expected if h not in header]
+    if missing:
+        f.fail("line 1 (header)", f"missing the column {missing[0]!r} (the side file {meta.name} names the columns "
+               f"{', '.join(expected)})")
+    f.fail("line 1 (header)", f"the columns are not in the order the side file {meta.name} gives: {', '.join(expected)}")
 
 
 def load_branch_points_csv(path: PathType) -> list[BranchPoint]:
@@ -1155,11 +1241,11 @@ def load_branch_csv(
         If a file cannot be read.
     """
     f = _Fields(path)
-    points = _read_csv_points(path, f)
     meta = csv_metadata_path(path)
     if not meta.exists():
-        return Branch(model=model, parameter_name=parameter_name, kind=kind, points=points)
+        return Branch(model=model, parameter_name=parameter_name, kind=kind, points=_read_csv_points(path, f))
     d = _read_json(meta)
+    points = _read_csv_points(path, f, lambda header: _check_named_header(header, d, f, meta))
     mf = _Fields(meta)
     branch = _branch_from_dict(d, mf, "", points)
     n = mf.take(d, "", "n_points", lambda x, field: mf.integer(x, field, minimum=0), None)

@@ -389,7 +389,7 @@ def follow_locus(
         model=problem.system.name, parameter_name=problem.lam_name, kind=BranchKind.PERIODIC,
         points=joined(records), fixed_parameters=dict(zip(problem.system.parameter_names, map(float, p))),
         label=f"{point.kind.value} curve", autonomous=problem.autonomous, second_parameter_name=second,
-        curve_of=point.kind, stop_reason="; ".join(reasons),
+        curve_of=point.kind, stop_reason="; ".join(reasons), state_names=tuple(problem.system.state_names),
     )
     points = locus.values
 
