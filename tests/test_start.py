@@ -95,7 +95,17 @@ def test_a_given_state_is_kept_and_only_the_period_estimated(hopf_flow):
 
 def test_a_transient_that_settles_to_an_equilibrium_gives_no_period(hopf_flow):
     with pytest.raises(StartGuessError, match="no repeating events or oscillation"):
-        find_periodic_orbit(hopf_flow)  # from zeros: the equilibrium itself
+        find_periodic_orbit(hopf_flow, np.zeros(2))  # from zeros: the equilibrium itself
+
+
+def test_an_autonomous_model_without_a_guess_starts_where_it_moves(hopf_flow):
+    """The origin is the Hopf normal form's equilibrium: the transient that finds the cycle starts from a
+    unit state instead (the cycle: radius sqrt(mu), period 2 pi)."""
+    orbit = find_periodic_orbit(hopf_flow)
+    assert orbit.period == pytest.approx(2 * math.pi, rel=1e-9)
+    assert np.hypot(*orbit.state0) == pytest.approx(math.sqrt(0.25), rel=1e-9)
+    with pytest.raises(StartGuessError, match=r"from \[0.0, 0.0\].*from \[1.0, 0.0\]"):
+        find_periodic_orbit(hopf_flow, parameters={"mu": -0.25})  # every start settles to the stable origin
 
 
 def test_a_diverging_transient_is_reported(forced_flow):

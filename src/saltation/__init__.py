@@ -50,3 +50,19 @@ __all__ = [
     "Status", "StepSizeError", "SweepStart", "SwitchingEvent", "Tolerances", "Trajectory", "Transition", "continue_branch",
     "continue_orbit", "find_periodic_orbit", "period_map", "simulate", "sweep",
 ]
+
+
+def _no_terminal_reset_at_exit() -> None:
+    """numba formats its warnings (the first comes from the engine's contract, at import) through colorama,
+    whose first use registers a reset of the terminal's colours at exit: ``ESC[0m`` written to standard
+    output when Python stops, by a program that printed no colour.  Saltation unregisters it (colorama
+    registers it once per process, so it does not come back)."""
+    import atexit
+    import sys
+
+    initialise = sys.modules.get("colorama.initialise")
+    if initialise is not None and hasattr(initialise, "reset_all"):
+        atexit.unregister(initialise.reset_all)
+
+
+_no_terminal_reset_at_exit()

@@ -520,14 +520,22 @@ def multipliers_json(mu: Sequence[complex]) -> list:
 
 def transient(flow, name: str, p: np.ndarray, state: np.ndarray | None, *, t0: float, backward: bool):
     """A transient in the direction of integration (:func:`saltation.orbits.start.transient`) from the
-    shipped model's start state and with its length; returns (trajectory, start state)."""
+    shipped model's start state and with its length; returns (trajectory, start state).  An autonomous
+    model without a start state starts where its transient oscillates
+    (:func:`saltation.orbits.start.oscillating_transient`: the origin, then unit states)."""
     system = flow.system
     values = dict(zip(system.parameter_names, map(float, p)))
-    if state is None:
-        start = SHIPPED[name].start if name in SHIPPED else None
-        state = np.array(start(values, backward) if start else np.zeros(system.n), dtype=float)
     length_fn = SHIPPED[name].transient_length if name in SHIPPED else None
     length = length_fn(values) if (length_fn and system.is_autonomous) else None
+    start = SHIPPED[name].start if name in SHIPPED else None
+    if state is None and start is None and system.is_autonomous:
+        try:
+            traj, _ = start_guesses.oscillating_transient(flow, p, t0=t0, backward=backward, length=length)
+        except StartGuessError as exc:
+            raise CommandError(f"{exc}; give a starting guess with --x0 and --period") from None
+        return traj, traj.x0
+    if state is None:
+        state = np.array(start(values, backward) if start else np.zeros(system.n), dtype=float)
     try:
         traj = start_guesses.transient(flow, p, state, t0=t0, backward=backward, length=length)
     except StartGuessError as exc:
@@ -757,13 +765,30 @@ def _progress_bar(enabled: bool):
         return None, lambda: None
     from tqdm import tqdm
 
+    from saltation.engine.codegen import build_watcher
+
     bar = tqdm(total=None, unit=" points", file=sys.stderr, dynamic_ncols=True, leave=False, mininterval=0.25, disable=None)
+    if bar.disable:  # not a terminal: no bar, and a build says so in a line of its own
+        return (lambda stage, count: None), bar.close
+    stage_now = [""]
 
     def update(stage: str, _count: int) -> None:
-        bar.set_description(stage)
+        stage_now[0] = stage.rstrip(": ")
+        bar.set_description_str(stage_now[0])
         bar.update(1)
 
-    return update, bar.close
+    def watch(message: str | None, seconds: float) -> None:  # a one-time build, shown in the bar
+        bar.set_description_str(f"{message} ({seconds:.0f} s)" if message else stage_now[0])
+        bar.refresh()
+
+    watching = build_watcher(watch)
+    watching.__enter__()
+
+    def close() -> None:
+        watching.__exit__(None, None, None)
+        bar.close()
+
+    return update, close
 
 
 def _special_points_text(records: list[dict]) -> str:
@@ -899,7 +924,8 @@ def cmd_continue(args: argparse.Namespace) -> int:
     plotting.save_figure(plotting.plot_response(branches), out / f"{stem}_diagram")
     total = sum(len(b) for b in branches)
     reasons = "; ".join(b.stop_reason.value for b in branches if b.stop_reason is not None)
-    print(f"{total} points on {len(branches)} branch(es) of {system.name} over {args.param}; stopped: {reasons}")
+    print(f"{total} point{'s' if total != 1 else ''} on {len(branches)} branch{'es' if len(branches) != 1 else ''} of "
+          f"{system.name} over {args.param}; stopped: {reasons}")
     if note:
         print(note)
     print(_special_points_text(records))

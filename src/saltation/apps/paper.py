@@ -368,14 +368,17 @@ def special_point_table(records: list[dict]) -> str:
             return "-"
         return " ".join("inf" if m == "inf" else f"{abs(complex(*m)):.4f}" for m in mu)
 
-    rows = [f"{'model':<14} {'kind':<30} {'parameter':>10} {'value':>16} {'|mu| minus / at':>22} {'|mu| plus':>18}"]
-    for r in records:
-        minus = r.get("multipliers_minus", r.get("multipliers"))
-        plus = r.get("multipliers_plus")
-        rows.append(
-            f"{r['model']:<14} {r['kind']:<30} {r['parameter']:>10} {r['value']:>16.10f} {fmt(minus):>22} {fmt(plus):>18}"
-        )
-    return "\n".join(rows)
+    cells = [(str(r["model"]), str(r["kind"]), str(r["parameter"]), f"{r['value']:.10f}",
+              fmt(r.get("multipliers_minus", r.get("multipliers"))), fmt(r.get("multipliers_plus"))) for r in records]
+    head = ("model", "kind", "parameter", "value", "|mu| minus / at", "|mu| plus")
+    # each column as wide as its longest entry (at least as the paper's table has it): long names keep the columns
+    widths = [max([least, len(h)] + [len(c[k]) for c in cells]) for k, (least, h) in enumerate(zip((14, 30, 10, 16, 22, 18), head))]
+    left = (True, True, False, False, False, False)
+
+    def line(row) -> str:
+        return " ".join(f"{c:<{w}}" if lft else f"{c:>{w}}" for c, w, lft in zip(row, widths, left)).rstrip()
+
+    return "\n".join([line(head), *(line(c) for c in cells)])
 
 
 def _counter(progress: Progress, what: str):

@@ -865,10 +865,48 @@ def _load(stem: str, source: str, modname: str, what: str, after: Callable[[Modu
         return module
 
 
+_BUILD_WATCHERS: list[Callable[[str | None, float], None]] = []
+
+
+@contextlib.contextmanager
+def build_watcher(callback: Callable[[str | None, float], None]):
+    """While active, a build (:func:`building`) is shown by ``callback(message, seconds)``, every second
+    and once at the end with ``message`` None, instead of a line of its own on standard error: a progress
+    bar on the terminal shows it (the command line's does)."""
+    _BUILD_WATCHERS.append(callback)
+    try:
+        yield
+    finally:
+        _BUILD_WATCHERS.remove(callback)
+
+
 @contextlib.contextmanager
 def building(message: str, *, stream=None, interval: float = 1.0):
     """Say on standard error what is being built, and, on a terminal, keep the line moving with the
-    seconds elapsed until it is done (a compile of a minute should not look like a hang)."""
+    seconds elapsed until it is done (a compile of a minute should not look like a hang).  With a
+    :func:`build_watcher` active, the watcher shows it instead."""
+    watchers = list(_BUILD_WATCHERS)
+    if watchers:
+        done = threading.Event()
+        start = time.monotonic()
+
+        def tell() -> None:
+            for watch in watchers:
+                watch(message, time.monotonic() - start)
+            while not done.wait(interval):
+                for watch in watchers:
+                    watch(message, time.monotonic() - start)
+
+        ticker = threading.Thread(target=tell, name="saltation-build-watch", daemon=True)
+        ticker.start()
+        try:
+            yield
+        finally:
+            done.set()
+            ticker.join()
+            for watch in watchers:
+                watch(None, time.monotonic() - start)
+        return
     stream = sys.stderr if stream is None else stream
     live = bool(getattr(stream, "isatty", lambda: False)())
     stream.write(f"saltation: {message}" + ("" if live else "\n"))

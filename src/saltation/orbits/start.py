@@ -141,6 +141,34 @@ def estimate_period(traj: Trajectory) -> float:
     return float(T)
 
 
+def candidate_starts(n: int) -> list[np.ndarray]:
+    """Where an autonomous model's transient starts when no state is given, in the order tried: the origin,
+    then one unit along each state, then one along every state.  The origin alone often does not move (an
+    equilibrium, or the sticking set of a friction model)."""
+    return [np.zeros(n), *np.eye(n), np.ones(n)]
+
+
+def oscillating_transient(
+    flow: Flow, parameters: np.ndarray, *, t0: float = 0.0, backward: bool = False, length: float | None = None,
+) -> tuple[Trajectory, float]:
+    """The first transient of an autonomous model, from :func:`candidate_starts`, that ends in an oscillation,
+    and its period (:func:`estimate_period`).
+
+    Raises
+    ------
+    StartGuessError
+        If none does; the message names the starts tried and why each failed.
+    """
+    tried = []
+    for x in candidate_starts(flow.system.n):
+        try:
+            traj = transient(flow, parameters, x, t0=t0, backward=backward, length=length)
+            return traj, estimate_period(traj)
+        except StartGuessError as exc:
+            tried.append(f"from {x.tolist()}: {exc}")
+    raise StartGuessError(f"no transient of {flow.system.name!r} ends in an oscillation (" + "; ".join(tried) + ")")
+
+
 def starting_guess(
     flow: Flow,
     parameters: np.ndarray,
@@ -160,6 +188,9 @@ def starting_guess(
     autonomous = flow.system.is_autonomous
     if state is not None and (period is not None or not autonomous):
         return np.asarray(state, dtype=float), period
+    if state is None and autonomous:
+        traj, found = oscillating_transient(flow, parameters, t0=t0, backward=backward, length=length)
+        return traj.x1.copy(), found if period is None else period
     traj = transient(flow, parameters, state, t0=t0, backward=backward, length=length)
     x0 = traj.x1.copy() if state is None else np.asarray(state, dtype=float)
     if autonomous and period is None:
