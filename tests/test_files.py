@@ -80,7 +80,7 @@ def make_branch(n_points: int = 28, label: str = "stable periodic") -> Branch:
     return Branch(model="block_on_belt", parameter_name="v_dr", kind=BranchKind.PERIODIC, backward=True,
                   points=points, special_points=specials, stop_reason=StopReason.MIN_STEP,
                   stop_reasons=[StopReason.PARAMETER_BOUND, None], fixed_parameters={"m": 1.0, "eta": 1e-4},
-                  label=label, autonomous=True, state_names=("x", "v"))
+                  label=label, autonomous=True, state_names=("x", "v"), axis_labels={"v_dr": "$v_{dr}$ (m/s)"})
 
 
 def make_sweep() -> SweepResult:

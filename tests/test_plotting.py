@@ -73,6 +73,13 @@ def block_on_belt_like() -> Branch:
                   special_points=[fold], autonomous=True, label="stick-slip")
 
 
+def _special_y(branch, sp) -> float:
+    """The amplitude the plot marks a special point at (see saltation.output.plotting)."""
+    from saltation.output.plotting import _special_point_y
+
+    return _special_point_y(branch, sp, branch.amplitude, "amplitude")
+
+
 def _lines(fig: Figure, gid: str):
     return [ln for ln in fig.axes[0].get_lines() if ln.get_gid() == gid]
 
@@ -132,14 +139,14 @@ def test_response_runs_split_by_stability_change():
 
 @pytest.mark.parametrize(
     ("measure", "words"),
-    [("amplitude", "max |x|"), ("half_peak_to_peak", "half peak-to-peak")],
+    [("amplitude", r"\max_t\,|x|"), ("half_peak_to_peak", r"\max_t x - \min_t x")],
 )
 def test_response_y_label_names_the_measure(measure, words):
     branch = trilinear_like()
     fig = plot_response(branch, measure=measure)
     ax = fig.axes[0]
     assert words in ax.get_ylabel()
-    assert ax.get_xlabel() == "omega"
+    assert ax.get_xlabel() == r"$\omega$"  # mathtext: Greek letters by name
     expected = branch.amplitude if measure == "amplitude" else branch.half_peak_to_peak
     np.testing.assert_array_equal(_lines(fig, "stable")[0].get_ydata()[:5], expected[:5])
 
@@ -165,7 +172,7 @@ def test_multipliers_unit_line_and_dotted_jump(tmp_path):
     branch = trilinear_like()
     fig = plot_multipliers(branch)
     unit = _lines(fig, "unit")
-    assert len(unit) == 1 and unit[0].get_linestyle() == "--"
+    assert len(unit) == 1 and unit[0].get_linestyle() == "-" and unit[0].get_color() == "0.6"  # light, under
     assert list(unit[0].get_ydata()) == [1.0, 1.0]
     jumps = _lines(fig, "jump")
     assert len(jumps) == 2
@@ -216,7 +223,7 @@ def test_phase_plane(tmp_path):
     ]
     fig = plot_phase_plane(curves, equilibrium=(1.0, 0.0), stick_band=(2.0, 0.1))
     ax = fig.axes[0]
-    assert (ax.get_xlabel(), ax.get_ylabel()) == ("x", "x'")
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("$x$", r"$\dot x$")
     (stable,) = _lines(fig, "stable")
     (unstable,) = _lines(fig, "unstable")
     assert stable.get_linestyle() == "-" and unstable.get_linestyle() == "--"
@@ -253,23 +260,30 @@ def test_every_kind_of_special_point_has_a_marker():
     assert len({marker for marker, _ in SPECIAL_POINT_MARKERS.values()}) == len(SPECIAL_POINT_MARKERS)
 
 
-def test_nearby_special_points_are_moved_apart():
-    """Two special points at almost the same place (the paper's Fig. 7 at its fold): both markers are
-    drawn where neither hides the other, the second tied to its point by a leader line."""
+def test_nearby_special_points_are_each_drawn_at_their_point_and_named():
+    """Two special points at almost the same place (the paper's Fig. 7 at its fold): both markers are drawn at
+    their points, the second smaller and filled on top (neither hides the other), and named by an annotation
+    with a leader line whose text lies inside the axes."""
     from dataclasses import replace
 
     branch = trilinear_like()
     near = replace(branch.special_points[1], kind=SpecialPointKind.NONSMOOTH_NO_CROSSING, parameter=1.4501)
     branch.special_points.append(near)
     fig = plot_response(branch)
-    fig.canvas.draw()
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig).draw()  # (a figure made without pyplot has no drawing canvas of its own)
     (fold,) = _lines(fig, "fold")
     (other,) = _lines(fig, "nonsmooth_no_crossing")
-    a = fold.get_transform().transform(np.column_stack([fold.get_xdata(), fold.get_ydata()]))[0]
-    b = other.get_transform().transform(np.column_stack([other.get_xdata(), other.get_ydata()]))[0]
-    size = fold.get_markersize() * fig.dpi / 72  # marker size in pixels
-    assert np.hypot(*(a - b)) > size  # apart by more than a marker
-    assert any(t.arrow_patch is not None for t in fig.axes[0].texts)  # the leader line
+    assert (other.get_xdata()[0], other.get_ydata()[0]) == (1.4501, _special_y(branch, near))  # at its point
+    assert other.get_markersize() < fold.get_markersize() and other.get_zorder() > fold.get_zorder()
+    assert other.get_markerfacecolor() == "k"
+    ax = fig.axes[0]
+    (label,) = [t for t in ax.texts if t.get_gid() == "nonsmooth_no_crossing_label"]
+    assert label.arrow_patch is not None and label.get_text() == "non-smooth point, no crossing"
+    inside = ax.get_window_extent()
+    box = label.get_window_extent(fig.canvas.get_renderer())
+    assert inside.x0 <= box.x0 and box.x1 <= inside.x1 and inside.y0 <= box.y0 and box.y1 <= inside.y1
 
 
 def test_phase_plane_legend_below_hides_nothing():
@@ -280,3 +294,34 @@ def test_phase_plane_legend_below_hides_nothing():
     legend_box = ax.get_legend().get_window_extent()
     assert legend_box.y1 <= ax.get_window_extent().y0  # entirely below the axes
     assert [t.get_text() for t in ax.texts] == ["I"]
+
+
+def test_a_model_declares_its_labels_and_units():
+    """Axis labels are mathtext: a model may declare a state's or parameter's label and unit; plots of its
+    branches use them (recorded on the branch), and an unknown name is refused."""
+    from saltation import ContinuationSettings, Crossing, Flow, Mode, PiecewiseSystem, Transition, continue_orbit
+    from saltation.errors import ModelError
+    from saltation.orbits.shooting import find_periodic_orbit
+
+    def model(**kw):
+        return PiecewiseSystem(
+            "test_plotting_labels", states=["x", "v"], parameters={"omega": 0.8, "zeta": 0.1},
+            modes=[Mode("left", ["v", "-x - 2*zeta*v + cos(omega*t)"], domain=["x < 2"]),
+                   Mode("right", ["v", "-x - 2*zeta*v + cos(omega*t)"], domain=["x >= 2"])],
+            surfaces={"s": "x - 2"},
+            transitions=[Transition("left", "s", Crossing.RISING, "right"),
+                         Transition("right", "s", Crossing.FALLING, "left")],
+            period="2*pi/omega", **kw)
+
+    system = model(labels={"v": r"\dot x"}, units={"omega": "rad/s", "x": "m"})
+    assert system.axis_label("omega") == r"$\omega$ (rad/s)"
+    assert system.axis_label("v") == r"$\dot x$"
+    assert system.axis_label("zeta") == r"$\zeta$"
+    with pytest.raises(ModelError, match="'omgea' is not a state or parameter"):
+        model(units={"omgea": "rad/s"})
+    flow = Flow(system)
+    orbit = find_periodic_orbit(flow, [0.0, 0.0])
+    branch = continue_orbit(orbit, "omega", bounds=(0.8, 0.9), settings=ContinuationSettings(ds=0.05, ds_max=0.05))
+    ax = plot_response(branch).axes[0]
+    assert ax.get_xlabel() == r"$\omega$ (rad/s)"
+    assert ax.get_ylabel() == r"$A = \max_t\,|x|$ (m)"

@@ -24,6 +24,7 @@ from pathlib import Path
 
 
 import numpy as np
+from matplotlib.lines import Line2D
 
 from saltation.output import io
 
@@ -196,6 +197,7 @@ def phase_plane(v_dr: float = 1.0) -> dict[str, np.ndarray]:
     stable = stable_stick_slip_cycle(flow, v_dr)
     # the unstable cycle attracts in backward time: a backward transient from inside the stable cycle
     p = flow.parameters({"v_dr": v_dr})
+    d = system.defaults
     x_eq = np.array([system.defaults["F_slip"] / system.defaults["k"], 0.0])
     guess = x_eq + 0.9 * (stable.state0 - x_eq)
     back = flow.run(guess, 0.0, -3 * stable.period, p)
@@ -223,6 +225,8 @@ def phase_plane(v_dr: float = 1.0) -> dict[str, np.ndarray]:
         "unstable_backward_multipliers": multipliers_from_monodromy(unstable.monodromy),
         "v_dr": np.array(v_dr),
         "eta": np.array(system.defaults["eta"]),
+        # D: the band |x' - v_dr| < eta where the spring and damper force is below F_stick (eq. 17)
+        "stick_x": np.array([(-d["F_stick"] - d["c"] * v_dr) / d["k"], (d["F_stick"] - d["c"] * v_dr) / d["k"]]),
     }
 
 
@@ -326,7 +330,8 @@ def write(results: PaperResults, out: Path) -> list[Path]:
                               style=plotting.CurveStyle.TRAJECTORY) for k in ("I", "II", "III")),
     ]
     fig6 = plotting.plot_phase_plane(
-        curves, equilibrium=pp["equilibrium"], stick_band=(float(pp["v_dr"]), 0.05), band_label="stick band D (eta enlarged)",
+        curves, equilibrium=pp["equilibrium"], stick_band=(float(pp["v_dr"]), 0.05), band_label="stick phase D (eta enlarged)",
+        stick_region=(float(pp["stick_x"][0]), float(pp["stick_x"][1])), regions=("V", "W", "D"),
         legend_below=True, labels=[(k, pp[f"flow_{k}"][0]) for k in ("I", "II", "III")], figsize=(6.0, 5.2),
     )
     written += plotting.save_figure(fig6, out / "fig6_block_on_belt_phase_plane", dpi=150)
@@ -342,16 +347,22 @@ def write(results: PaperResults, out: Path) -> list[Path]:
     written.append(io.save_special_points_json(results.special_point_records(), out / "special_points.json"))
     if results.smoothing:
         stable, unstable = results.block_on_belt.branches[:2]
-        fig8 = plotting.plot_response([stable, unstable], special_points=False)
+        fig8 = plotting.plot_response([stable, unstable], special_points=False, legend=False)
         ax = fig8.axes[0]
-        ax.plot([], [], "k-", label="stable (discontinuous model)")
-        ax.plot([], [], "k-.", label="infinitely unstable (backward time)")
+        for line in ax.lines:  # the discontinuous model's branches on top, thick: the smoothed ones lie along them
+            line.set_linewidth(2.6)
+            line.set_zorder(4)
+        handles = [Line2D([], [], color="k", linestyle="-", linewidth=2.6, label="stable (discontinuous model)"),
+                   Line2D([], [], color="k", linestyle="-.", linewidth=2.6, label="infinitely unstable (backward time)")]
+        dashes = [(0, (4, 1.5)), (0, (1, 1)), (0, (6, 1.5, 1, 1.5))]
         for k, (row, br) in enumerate(zip(results.smoothing, results.smoothed_branches)):
-            ax.plot(br.parameter, br.amplitude, "-", color=f"C{k}", lw=1.0, label=f"smoothed, epsilon = {row.epsilon:g}")
-            ax.plot(br.parameter[-1], br.amplitude[-1], "x", color=f"C{k}")
+            style = {"color": "0.55" if k % 2 else "0.3", "linestyle": dashes[k % len(dashes)], "linewidth": 1.1}
+            ax.plot(br.parameter, br.amplitude, zorder=5, **style)
+            ax.plot(br.parameter[-1], br.amplitude[-1], "x", color=style["color"], zorder=6)
+            handles.append(Line2D([], [], label=rf"smoothed, $\varepsilon$ = {row.epsilon:g}", **style))
         ax.set_xlim(0.8, 1.12)
         ax.set_ylim(1.9, 2.45)
-        ax.legend(loc="lower left", fontsize=7)
+        ax.legend(handles=handles, loc="lower left", fontsize=7)
         ax.set_title("Smoothed models follow the stable branch and stop at its fold (x: last point);\n"
                      "the infinitely unstable branch is found by backward shooting of the discontinuous model",
                      fontsize=8)

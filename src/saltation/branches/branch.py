@@ -117,6 +117,7 @@ class SpecialPoint:
     Attributes
     ----------
     kind : SpecialPointKind
+        What the point is.
     parameter : float
         Located parameter value.
     bracket : (float, float)
@@ -150,6 +151,7 @@ class SpecialPoint:
     status : SpecialPointStatus
         Located by its defining system, bracketed between two solutions, or failed.
     note : str
+        A sentence on how it was found or classified.
     touch_surface, touch_mode : str
         Where the orbit meets a switching surface at a grazing or a sliding
         bifurcation: the surface, and the mode whose field is tangent to it
@@ -161,6 +163,11 @@ class SpecialPoint:
         first's; ``nan`` on a one-parameter branch).
     sides : (str, str)
         At a CODIMENSION_TWO point: the kinds of the special point on either side along the curve.
+
+    Raises
+    ------
+    ValueError
+        If ``limits`` or ``status`` is given as a name that is not one of theirs.
     """
 
     kind: SpecialPointKind
@@ -249,6 +256,9 @@ class Branch:
     state_names : tuple of str
         The model's states, in the order of each point's ``state`` (empty in files written before
         2026-11-26); they name the CSV columns.
+    axis_labels : dict of str to str
+        The axis label of each state and parameter as the model declares it (mathtext with its unit,
+        :meth:`saltation.model.system.PiecewiseSystem.axis_label`); plots use them.
     """
 
     model: str
@@ -265,6 +275,7 @@ class Branch:
     second_parameter_name: str = ""
     curve_of: SpecialPointKind | None = None
     state_names: tuple[str, ...] = ()
+    axis_labels: dict[str, str] = field(default_factory=dict)
 
     def _repr_markdown_(self) -> str:
         """A summary for Jupyter (:mod:`saltation.summary`)."""
@@ -330,13 +341,29 @@ class Branch:
         return np.array([p.multipliers for p in self.points])
 
     def check_stability_flags(self) -> bool:
-        """Whether every stored stability flag agrees with the stored multipliers."""
+        """Whether every stored stability flag agrees with the stored multipliers.
+
+        Returns
+        -------
+        bool
+            True when each point's ``stable`` is what its multipliers say (eigenvalues with negative
+            real parts, for equilibria).
+        """
         if self.kind is BranchKind.EQUILIBRIUM:
             return all(p.stable == bool(np.all(np.real(p.multipliers) < 0)) for p in self.points)
         return all(p.stable == is_stable(p.multipliers, autonomous=self.autonomous) for p in self.points)
 
     def extend(self, other: Branch) -> None:
-        """Prepend a run of the same branch in the other direction from the same start point."""
+        """Prepend a run of the same branch in the other direction from the same start point.
+
+        The other run's points (its start point dropped) are reversed and put first, and every special
+        point's ``index`` is moved to match.
+
+        Parameters
+        ----------
+        other : Branch
+            The run in the other direction, from the same start point.
+        """
         m = len(other.points)
         self.points = list(reversed(other.points[1:])) + self.points
         moved = [_reindex(sp, m - 2 - sp.index) for sp in other.special_points]

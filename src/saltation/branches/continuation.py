@@ -37,15 +37,50 @@ from saltation.errors import SaltationError
 from saltation.orbits.shooting import EquilibriumProblem, ShootingProblem
 
 
+
+def _axis_labels(system) -> dict[str, str]:
+    """Every state's and parameter's axis label as the model gives it (none for a model without labels)."""
+    label = getattr(system, "axis_label", None)
+    if label is None:
+        return {}
+    return {name: label(name) for name in (*system.state_names, *system.parameter_names)}
+
 class Detector(Protocol):
-    """What the engine asks of a special-point detector."""
+    """What the engine asks of a special-point detector.
+
+    A protocol: :class:`~saltation.special_points.detection.SpecialPointDetector` is the one the
+    special-point layer hands in.
+    """
 
     def check(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
-        """The special points between consecutive branch points ``a`` (point ``index``) and ``b``."""
+        """The special points between consecutive branch points ``a`` (point ``index``) and ``b``.
+
+        Parameters
+        ----------
+        a, b : Solution
+            Consecutive corrected points of the branch.
+        index : int
+            The index of ``a`` on the branch.
+
+        Returns
+        -------
+        list of SpecialPoint
+            The special points located between them (none, usually).
+        """
 
     def past_failure(self, prev: Solution) -> tuple[Solution, SpecialPoint] | None:
-        """Where the corrector failed beyond ``prev``: the first solution past the special point that
-        stopped it and that point, or None."""
+        """Where the corrector failed beyond ``prev``: the first solution past the special point that stopped it.
+
+        Parameters
+        ----------
+        prev : Solution
+            The last point the corrector reached.
+
+        Returns
+        -------
+        tuple of (Solution, SpecialPoint) or None
+            The first solution past the special point and that point, or None.
+        """
 
 
 #: ``detector(problem, corrector, branch) -> Detector``: how the engine makes its detector.
@@ -78,6 +113,11 @@ class ContinuationSettings:
         Distance in ``(u, lam)`` to which special points are located.
     max_correction : float
         A corrector step longer than this (relative to ``1 + |z|``) counts as divergence.
+
+    Raises
+    ------
+    ValueError
+        If not ``0 < ds_min <= ds <= ds_max``, or the bounds are not increasing.
     """
 
     ds: float = 0.02
@@ -106,11 +146,23 @@ class Continuation:
     Parameters
     ----------
     problem : ShootingProblem or EquilibriumProblem
-        The problem, with its continuation parameter set.
-    settings : ContinuationSettings
+        The problem, with its continuation parameter set (any problem of the protocol, e.g. a
+        :class:`~saltation.orbits.conditions.ConditionedProblem` for a two-parameter curve).
+    settings : ContinuationSettings, optional
+        The options (``ContinuationSettings()`` by default).
     detector : callable, optional
         ``detector(problem, corrector, branch)`` makes the :class:`Detector` used when
         ``settings.detect``; None (the default) finds no special points.
+
+    Raises
+    ------
+    SaltationError
+        If the problem has no continuation parameter.
+
+    References
+    ----------
+    Keller (1977), "Numerical solution of bifurcation and nonlinear eigenvalue problems", in
+    Rabinowitz (ed.), *Applications of Bifurcation Theory*, Academic Press.
 
     Examples
     --------
@@ -137,6 +189,7 @@ class Continuation:
             fixed_parameters=dict(zip(problem.system.parameter_names, map(float, problem.p))),
             autonomous=bool(problem.system.is_autonomous),
             state_names=tuple(problem.system.state_names),
+            axis_labels=_axis_labels(problem.system),
         )
         self.solutions: list[Solution] = []
         self.last_failure: np.ndarray | None = None
@@ -144,7 +197,33 @@ class Continuation:
 
     # ---------------------------------------------------------------------------------
     def run(self, u0: np.ndarray, lam0: float, *, direction: int = 1) -> Iterator[BranchPoint]:
-        """Yield branch points, starting with the corrected start point."""
+        """Yield branch points, starting with the corrected start point.
+
+        The branch grows in :attr:`branch` as the points are yielded; its ``stop_reason`` says why the
+        run ended (a parameter bound, the largest number of points, the smallest step, a closed loop, a
+        cycle collapse).
+
+        Parameters
+        ----------
+        u0 : ndarray
+            Guess of the unknowns at the start.
+        lam0 : float
+            Start value of the continuation parameter (corrected at fixed ``lam0``).
+        direction : int
+            +1 for increasing parameter at the start, -1 for decreasing.
+
+        Yields
+        ------
+        BranchPoint
+            Each accepted point, as recorded on the branch.
+
+        Raises
+        ------
+        SaltationError
+            If ``lam0`` lies outside ``settings.bounds``, or the start point cannot be corrected: a
+            :class:`ConvergenceError`, or the error of the problem's evaluation (an
+            :class:`IntegrationError`, a :class:`StationaryStateError` ...).
+        """
 
         s = self.settings
         lo, hi = s.bounds
@@ -351,17 +430,39 @@ def continue_branch(
     Parameters
     ----------
     problem : ShootingProblem or EquilibriumProblem
+        The problem, with its continuation parameter set (any problem of the protocol).
     u0 : ndarray
         Guess of the unknowns at the start (see ``problem.pack``).
     lam0 : float, optional
         Start value of the parameter (the problem's value by default).
+    settings : ContinuationSettings, optional
+        The options (``ContinuationSettings()`` by default).
     directions : tuple of int
         +1 (increasing parameter first), -1, or both.
+    label : str
+        A label for the branch (legends, files).
     progress : callable, optional
         Called with each new BranchPoint.
     detector : callable, optional
         Makes the special-point detector (see :class:`Continuation`); None finds none.
         :func:`saltation.continue_branch` hands in the special-point layer's.
+
+    Returns
+    -------
+    Branch
+        The points of every direction (the second direction's reversed and put before the first's),
+        with the special points found and each run's stop reason.
+
+    Raises
+    ------
+    SaltationError
+        If no direction is given, the problem has no continuation parameter, ``lam0`` lies outside
+        the bounds, or the start point cannot be corrected (see :meth:`Continuation.run`).
+
+    References
+    ----------
+    Keller (1977), "Numerical solution of bifurcation and nonlinear eigenvalue problems", in
+    Rabinowitz (ed.), *Applications of Bifurcation Theory*, Academic Press.
     """
     lam0 = problem.lam0() if lam0 is None else float(lam0)
     branch: Branch | None = None

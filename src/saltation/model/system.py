@@ -399,6 +399,22 @@ class NamedParts:
 
 
 
+def _name_texts(texts: Mapping[str, str] | None, what: str, names: Sequence[str]) -> dict[str, str]:
+    """A model's ``labels`` or ``units``: texts by state or parameter name (``t`` too), checked."""
+    if texts is None:
+        return {}
+    if not isinstance(texts, Mapping):
+        raise ModelError(f"{what} must be a mapping of state or parameter names to text, got {type(texts).__name__}")
+    out = {}
+    for key, text in texts.items():
+        if key not in names:
+            raise ModelError(f"{what}: {key!r} is not a state or parameter of the model (they are {list(names)})")
+        if not isinstance(text, str):
+            raise ModelError(f"{what}[{key!r}] must be a string, got {text!r}")
+        out[key] = text
+    return out
+
+
 class PiecewiseSystem(NamedParts):
     """A piecewise-smooth (discontinuous) dynamical system.
 
@@ -419,6 +435,12 @@ class PiecewiseSystem(NamedParts):
     period : expression, optional
         For forced (time-periodic) systems, the forcing period in terms of the
         parameters, e.g. ``"2*pi/omega"``.  ``None`` for autonomous systems.
+    labels : mapping of str to str, optional
+        How plots write states and parameters, as mathtext without ``$`` (``{"v": r"\dot x"}``);
+        by default the name, with Greek letters by name (``omega`` as ``\omega``) and the part after
+        an underscore as a subscript.
+    units : mapping of str to str, optional
+        Their units, written after the label (``{"omega": "rad/s"}``).
 
     Raises
     ------
@@ -438,6 +460,8 @@ class PiecewiseSystem(NamedParts):
         transitions: Sequence[Transition],
         *,
         period: Expr | None = None,
+        labels: Mapping[str, str] | None = None,
+        units: Mapping[str, str] | None = None,
     ):
         if not isinstance(name, str) or not name.replace("_", "").isalnum():
             raise ModelError(f"model name {name!r} must be a string of letters and digits (underscores allowed)")
@@ -464,6 +488,8 @@ class PiecewiseSystem(NamedParts):
             raise ModelError(f"names used twice among states, parameters and time 't': {sorted(dupes)}")
         if not self.state_names:
             raise ModelError("a model needs at least one state")
+        self.labels = _name_texts(labels, "labels", names)
+        self.units = _name_texts(units, "units", names)
         self.x = sp.Matrix([sp.Symbol(s, real=True) for s in self.state_names])
         self.p = sp.Matrix([sp.Symbol(s, real=True) for s in self.parameter_names])
         self.t = TIME
@@ -705,6 +731,31 @@ class PiecewiseSystem(NamedParts):
         state.pop("_period_functions", None)
         state.pop("_parameter_divisors", None)
         return state
+
+    def axis_label(self, name: str) -> str:
+        """How a plot's axis names a state or parameter: its label (declared, or the name as mathtext) and
+        its unit, e.g. ``$\\omega$ (rad/s)``.
+
+        Parameters
+        ----------
+        name : str
+            A state's or parameter's name, or ``t``.
+
+        Returns
+        -------
+        str
+
+        Raises
+        ------
+        ModelError
+            If the model has no state or parameter of that name.
+        """
+        if name not in (*self.state_names, *self.parameter_names, "t"):
+            raise ModelError(f"{name!r} is not a state or parameter of {self.name!r}")
+        from saltation.model.labels import tex_name
+
+        text = f"${self.labels[name]}$" if name in self.labels else f"${tex_name(name)}$"
+        return text + (f" ({self.units[name]})" if self.units.get(name) else "")
 
     def _repr_markdown_(self) -> str:
         """A summary for Jupyter (:mod:`saltation.summary`)."""

@@ -733,6 +733,10 @@ def _dec_fixed(f: _Fields, v: Any, field: str, done: dict[str, Any]) -> dict[str
     return {k: f.real(x, _sub(field, k)) for k, x in f.obj(v, field).items()}
 
 
+def _dec_texts(f: _Fields, v: Any, field: str, done: dict[str, Any]) -> dict[str, str]:
+    return {k: f.string(x, _sub(field, k)) for k, x in f.obj(v, field).items()}
+
+
 def _dec_list(dec: Decoder) -> Decoder:
     return lambda f, v, field, done: [dec(f, x, _item(field, k), done) for k, x in enumerate(f.list(v, field))]
 
@@ -747,6 +751,7 @@ _BRANCH_CODEC = _Codec(
         "stop_reason": _STOP,
         "stop_reasons": (lambda rs: [_enc_stop(r) for r in rs], _dec_list(_STOP[1])),
         "fixed_parameters": (lambda d: {str(k): _enc_float(v) for k, v in d.items()}, _dec_fixed),
+        "axis_labels": (lambda d: {str(k): str(v) for k, v in d.items()}, _dec_texts),
         "curve_of": (lambda k: None if k is None else k.value, _nullable(_choice(_KINDS))),
     },
     skip=frozenset({"points"}),  # written beside the metadata (JSON) or as the rows of a CSV
@@ -763,6 +768,7 @@ def branch_to_dict(branch: Branch) -> dict[str, Any]:
     Parameters
     ----------
     branch : Branch
+        The branch.
 
     Returns
     -------
@@ -824,12 +830,19 @@ def save_branch_json(branch: Branch, path: PathType) -> Path:
     Parameters
     ----------
     branch : Branch
+        The branch.
     path : str or path-like
+        The file to write.
 
     Returns
     -------
     Path
         The file written.
+
+    Raises
+    ------
+    OSError
+        If the file cannot be written (see :func:`write_atomically`).
     """
     return _write_json(branch_to_dict(branch), path)
 
@@ -862,12 +875,19 @@ def save_diagram_json(branches: Iterable[Branch], path: PathType) -> Path:
     Parameters
     ----------
     branches : iterable of Branch
+        The branches.
     path : str or path-like
+        The file to write.
 
     Returns
     -------
     Path
         The file written.
+
+    Raises
+    ------
+    OSError
+        If the file cannot be written (see :func:`write_atomically`).
     """
     obj = {
         **format_header(DIAGRAM_FORMAT),
@@ -909,7 +929,18 @@ _CSV_COLUMNS = ("parameter", "period", "amplitude", "half_peak_to_peak", "stable
 
 
 def csv_metadata_path(path: PathType) -> Path:
-    """The side file holding a CSV branch's metadata and special points: ``<stem>.meta.json``."""
+    """The side file holding a CSV branch's metadata and special points: ``<stem>.meta.json``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file.
+
+    Returns
+    -------
+    Path
+        The side file's path, in the same folder.
+    """
     path = Path(path)
     return path.with_name(path.stem + ".meta.json")
 
@@ -1266,6 +1297,7 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
     Parameters
     ----------
     sp : SpecialPoint
+        The special point.
     model : str
         Name of the model.
     parameter : str
@@ -1322,12 +1354,22 @@ def save_special_points_json(records: Iterable[dict[str, Any]], path: PathType) 
     Parameters
     ----------
     records : iterable of dict
+        The records.
     path : str or path-like
+        The file to write.
 
     Returns
     -------
     Path
         The file written.
+
+    Raises
+    ------
+    ValueError
+        If a record holds a bare non-finite number (those of :func:`special_point_record` are encoded
+        as strings); no file is touched.
+    OSError
+        If the file cannot be written (see :func:`write_atomically`).
     """
     return _write_json(list(records), path)
 

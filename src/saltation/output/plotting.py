@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 import enum
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from matplotlib.transforms import offset_copy
 from matplotlib.lines import Line2D
 
-from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind
+from saltation.branches.branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
+from saltation.model.labels import tex_name
 
 __all__ = [
     "CurveStyle",
@@ -32,6 +32,7 @@ __all__ = [
     "PUBLICATION_RC",
     "PhaseCurve",
     "SPECIAL_POINT_MARKERS",
+    "axis_label",
     "figure_of",
     "new_figure",
     "plot_loci",
@@ -68,11 +69,19 @@ SPECIAL_POINT_MARKERS: dict[SpecialPointKind, tuple[str, str]] = {
     SpecialPointKind.CODIMENSION_TWO: ("p", "codimension-two point of a curve"),
 }
 
-#: Axis label per amplitude measure; ``{x}`` is the name of the first state.
+#: Axis label per amplitude measure (mathtext); ``{x}`` is the first state as mathtext.
 MEASURE_LABELS: dict[str, str] = {
-    "amplitude": "A = max |{x}| over a period",
-    "half_peak_to_peak": "A = half peak-to-peak of {x}",
+    "amplitude": r"$A = \max_t\,|{x}|$",
+    "half_peak_to_peak": r"$A = \frac{{1}}{{2}}\,(\max_t {x} - \min_t {x})$",
 }
+
+def axis_label(name: str, labels: Mapping[str, str] | None = None) -> str:
+    """The axis label of a state or parameter: the model's own label when it declares one (see
+    :class:`saltation.model.system.PiecewiseSystem`, ``labels`` and ``units``; a branch records them in
+    :attr:`~saltation.branches.branch.Branch.axis_labels`), else the name as mathtext."""
+    if labels and name in labels:
+        return labels[name]
+    return f"${tex_name(name)}$" if name else ""
 
 Measure = str | Callable[[Branch], np.ndarray]
 
@@ -230,7 +239,7 @@ def plot_response(
     measure: Measure = "amplitude",
     ylabel: str | None = None,
     xlabel: str | None = None,
-    state_name: str = "x",
+    state_name: str | None = None,
     colors: Sequence[str] | None = None,
     special_points: bool = True,
     legend: bool = True,
@@ -252,9 +261,10 @@ def plot_response(
     ylabel : str, optional
         Defaults to a label naming the measure (required wording for a callable measure).
     xlabel : str, optional
-        Defaults to the first branch's parameter name.
-    state_name : str
-        Name of the first state in the default y label.
+        Defaults to the first branch's parameter, as its model labels it (mathtext and unit).
+    state_name : str, optional
+        The first state in the default y label; by default the branch's first state, as its model
+        labels it.
     colors : sequence of str, optional
         One colour per branch; defaults to black for all (the paper's style).
     special_points : bool
@@ -275,15 +285,18 @@ def plot_response(
     marks_at: list[tuple[SpecialPointKind, float, float]] = []
     all_x: list[float] = []
     all_y: list[float] = []
+    drawn: dict[tuple[bool, bool], None] = {}  # (equilibrium, stable) styles drawn, in order: the legend's
     for b, branch in enumerate(branches):
         color = colors[b % len(colors)] if colors else "k"
         y = _measure_values(branch, measure)
         sp_y = {sp.index: _special_point_y(branch, sp, y, measure) for sp in branch.special_points}
+        equilibria = branch.kind is BranchKind.EQUILIBRIUM
         for stable, xs, ys in stability_runs(branch, y, sp_y):
-            ax.plot(
-                xs, ys, color=color, linestyle=STABLE_STYLE if stable else UNSTABLE_STYLE,
-                linewidth=1.5, gid="stable" if stable else "unstable",
-            )
+            style = _run_style(equilibria, stable)
+            ax.plot(xs, ys, color=style.get("color", color) if not colors else color,
+                    **{k: v for k, v in style.items() if k != "color"},
+                    gid=("equilibrium_" if equilibria else "") + ("stable" if stable else "unstable"))
+            drawn[(equilibria, stable)] = None
         if branch.label and colors:
             handles.append(Line2D([], [], color=color, label=branch.label))
         if special_points:
@@ -294,51 +307,96 @@ def plot_response(
         all_x.extend(branch.parameter)
         all_y.extend(np.asarray(y, dtype=float)[np.isfinite(y)])
     _mark_special_points(fig, ax, marks_at, all_x, all_y)
-    runs_styles = [Line2D([], [], color="k", linestyle=STABLE_STYLE, label="stable"),
-                   Line2D([], [], color="k", linestyle=UNSTABLE_STYLE, label="unstable")]
+    runs_styles = [Line2D([], [], **_run_style(eq, stable), label=_RUN_NAMES[(eq, stable)]) for eq, stable in drawn]
     marks = [
         Line2D([], [], linestyle="none", marker=SPECIAL_POINT_MARKERS[k][0], markersize=9,
                markerfacecolor="white", markeredgecolor="k", label=SPECIAL_POINT_MARKERS[k][1])
         for k in kinds_seen
     ]
+    first = branches[0] if branches else None
     if ylabel is None:
-        ylabel = MEASURE_LABELS[measure].format(x=state_name) if isinstance(measure, str) else "A"
+        ylabel = _measure_label(measure, first, state_name)
     ax.set_ylabel(ylabel)
-    ax.set_xlabel(xlabel if xlabel is not None else (branches[0].parameter_name if branches else ""))
+    if xlabel is None:
+        xlabel = axis_label(first.parameter_name, first.axis_labels) if first is not None else ""
+    ax.set_xlabel(xlabel)
     if legend:
         ax.legend(handles=runs_styles + handles + marks, loc="best", fontsize="small")
     return fig
 
 
+_RUN_NAMES = {(False, True): "stable", (False, False): "unstable", (True, True): "equilibrium, stable",
+              (True, False): "equilibrium, unstable"}
+
+
+def _run_style(equilibria: bool, stable: bool) -> dict:
+    """Line style of a run of a branch: periodic orbits black, solid where stable and dash-dot where not
+    (the paper's Figs. 3 and 7); equilibria thinner, grey, solid or dotted (distinct in black and white)."""
+    if equilibria:
+        return {"color": "0.45", "linestyle": "-" if stable else ":", "linewidth": 1.2}
+    return {"color": "k", "linestyle": STABLE_STYLE if stable else UNSTABLE_STYLE, "linewidth": 1.5}
+
+
+def _measure_label(measure: Measure, branch: Branch | None, state_name: str | None) -> str:
+    """The y label of a measure: mathtext of the first state, with its unit if the model declares one."""
+    if not isinstance(measure, str):
+        return "A"
+    unit = ""
+    if state_name is None:
+        name = branch.state_names[0] if branch is not None and branch.state_names else "x"
+        label = branch.axis_labels.get(name, "") if branch is not None else ""
+        tex = label.split("$")[1] if label.count("$") >= 2 else tex_name(name)
+        unit = label.rsplit("$", 1)[-1] if label.count("$") >= 2 else ""
+    else:
+        tex = tex_name(state_name)
+    return MEASURE_LABELS[measure].format(x=tex) + unit
+
+
 def _mark_special_points(fig: Figure, ax: Axes, marks: list[tuple[SpecialPointKind, float, float]],
                          all_x: Sequence[float], all_y: Sequence[float], *, near: float = 0.03) -> None:
-    """Draw special-point markers; of markers closer than ``near`` (a fraction of the data's extent)
-    the first stays at its point and the others move aside along a diagonal, each tied to its point by
-    a thin leader line, so that every marker stays visible."""
+    """Draw special-point markers, each at its point.  Of markers closer than ``near`` (a fraction of the
+    data's extent) the first is drawn full size; each other one smaller and filled, on top, so that none
+    hides another, and named by an annotation whose text lies towards the middle of the data (inside
+    the axes) with a leader line to its point."""
     if not marks:
         return
     xs, ys = np.asarray(all_x, dtype=float), np.asarray(all_y, dtype=float)
     width = float(np.ptp(xs)) if xs.size and np.ptp(xs) > 0 else 1.0
     height = float(np.ptp(ys)) if ys.size and np.ptp(ys) > 0 else 1.0
+    mid_x = float(np.min(xs)) + 0.5 * width if xs.size else 0.0
+    mid_y = float(np.min(ys)) + 0.5 * height if ys.size else 0.0
     placed: list[tuple[float, float]] = []
     for kind, x, y in marks:
         crowd = sum(1 for (px, py) in placed if math.hypot((x - px) / width, (y - py) / height) < near)
         placed.append((x, y))
-        marker, _ = SPECIAL_POINT_MARKERS[kind]
+        marker, name = SPECIAL_POINT_MARKERS[kind]
         style = {"linestyle": "none", "marker": marker, "markersize": 9, "markerfacecolor": "white",
                  "markeredgecolor": "k", "zorder": 5, "gid": kind.value}
         if crowd == 0:
             ax.plot([x], [y], **style)
             continue
-        shift = 16.0 * crowd  # points, down and to the right of the crowded spot
-        ax.plot([x], [y], transform=offset_copy(ax.transData, fig=fig, x=shift, y=-shift, units="points"), **style)
-        ax.annotate("", xy=(x, y), xytext=(shift, -shift), textcoords="offset points",
-                    arrowprops={"arrowstyle": "-", "color": "0.4", "linewidth": 0.6, "shrinkA": 5, "shrinkB": 0})
+        style.update(markersize=max(4.0, 9.0 - 2.0 * crowd), markerfacecolor="k", zorder=5 + crowd)
+        ax.plot([x], [y], **style)
+        dx = -1.0 if x > mid_x else 1.0  # towards the middle: the text stays inside the axes
+        dy = -1.0 if y > mid_y else 1.0
+        ax.annotate(name, xy=(x, y), xytext=(dx * 24.0, dy * 18.0 * crowd), textcoords="offset points",
+                    ha="right" if dx < 0 else "left", va="center", fontsize="x-small", gid=f"{kind.value}_label",
+                    arrowprops={"arrowstyle": "-", "color": "0.4", "linewidth": 0.6, "shrinkA": 0, "shrinkB": 4})
 
 
 # ---------------------------------------------------------------------------
 # Floquet multipliers
 # ---------------------------------------------------------------------------
+
+
+_MULTIPLIER_DASHES = ["-", (0, (5, 2)), (0, (6, 2, 1, 2)), (0, (3, 1, 1, 1, 1, 1)), (0, (8, 3))]
+
+
+def _multiplier_style(i: int) -> dict:
+    """The line of ``|mu_(i+1)|``: the first black, solid and thickest, the next ones grey, thinner and broken,
+    drawn on top, so that each is seen in black and white, also where two coincide (a complex pair)."""
+    return {"color": "k" if i == 0 else ("0.55" if i % 2 else "0.35"),
+            "linestyle": _MULTIPLIER_DASHES[i % len(_MULTIPLIER_DASHES)], "linewidth": max(0.8, 2.4 - 0.8 * i)}
 
 
 def _assign_sides(
@@ -440,13 +498,14 @@ def plot_multipliers(
             ax.plot([sp.parameter], [top], linestyle="none", marker="^", color="k", clip_on=False, gid="infinite")
 
     n_mu = mags.shape[1] if mags.ndim == 2 else 0
-    colors = [f"C{i}" for i in range(n_mu)]
+    styles = [_multiplier_style(i) for i in range(n_mu)]
+    colors = [st["color"] for st in styles]
     for xs, ys in pieces:
         if not xs:
             continue
         ys_arr = np.array(ys)
-        for i in range(n_mu):
-            ax.plot(xs, ys_arr[:, i], color=colors[i], linestyle="-", linewidth=1.5, gid=f"mu{i}")
+        for i in range(n_mu):  # later ones thinner and broken, on top: a pair of equal |mu| shows both
+            ax.plot(xs, ys_arr[:, i], **styles[i], zorder=2 + i, gid=f"mu{i}")
     for i in range(n_mu):
         inf_idx = np.flatnonzero(~np.isfinite(mags[:, i]))
         if inf_idx.size:
@@ -454,13 +513,13 @@ def plot_multipliers(
             ax.plot(x[inf_idx[::every]], np.full(inf_idx[::every].size, top), linestyle="none", marker="^",
                     markersize=5, color=colors[i], clip_on=False, gid="infinite")
 
-    ax.axhline(1.0, color="0.4", linestyle="--", linewidth=1.0, gid="unit")
+    ax.axhline(1.0, color="0.6", linestyle="-", linewidth=0.8, zorder=1, gid="unit")
     ax.set_ylim(-0.03 * top, 1.05 * top)
-    ax.set_xlabel(xlabel if xlabel is not None else branch.parameter_name)
+    ax.set_xlabel(xlabel if xlabel is not None else axis_label(branch.parameter_name, branch.axis_labels))
     ax.set_ylabel(r"$|\mu_i|$")
     if legend:
-        handles = [Line2D([], [], color=colors[i], label=rf"$|\mu_{{{i + 1}}}|$") for i in range(n_mu)]
-        handles.append(Line2D([], [], color="0.4", linestyle="--", label=r"$|\mu| = 1$"))
+        handles = [Line2D([], [], **styles[i], label=rf"$|\mu_{{{i + 1}}}|$") for i in range(n_mu)]
+        handles.append(Line2D([], [], color="0.6", linestyle="-", linewidth=0.8, label=r"$|\mu| = 1$"))
         if nonsmooth:
             handles.append(Line2D([], [], color="k", linestyle=JUMP_STYLE, label="jump at non-smooth point"))
         if not np.all(np.isfinite(mags)) or any(
@@ -517,8 +576,10 @@ def plot_phase_plane(
     equilibrium_label: str = "equilibrium",
     stick_band: tuple[float, float] | None = None,
     band_label: str | None = None,
-    xlabel: str = "x",
-    ylabel: str = "x'",
+    stick_region: tuple[float, float] | None = None,
+    regions: Sequence[str] = (),
+    xlabel: str = "$x$",
+    ylabel: str = r"$\dot x$",
     legend: bool = True,
     legend_below: bool = False,
     labels: Sequence[tuple[str, Sequence[float]]] = (),
@@ -539,6 +600,13 @@ def plot_phase_plane(
         display; the real one is tiny, so pass an enlarged value to make the band visible.
     band_label : str, optional
         Legend text of the band; by default it names the inequality.
+    stick_region : (float, float), optional
+        ``(x_min, x_max)``: the part of the band where the state sticks (the paper's ``D``,
+        ``|k x + c x'| < F_stick`` as well); only that part is shaded, and the band's edges are drawn
+        as the boundaries of the subspaces.
+    regions : sequence of str
+        Names written in the subspaces: above the band, below it and in the shaded part, in that
+        order (the paper's ``("V", "W", "D")``).
     xlabel, ylabel : str
     legend : bool
     legend_below : bool
@@ -560,7 +628,8 @@ def plot_phase_plane(
     if stick_band is not None:
         v_dr, eta = stick_band
         label = band_label if band_label is not None else f"D: |x' - v_dr| < eta (v_dr = {v_dr:g}, eta enlarged)"
-        ax.axhspan(v_dr - eta, v_dr + eta, color="0.8", alpha=0.7, linewidth=0, label=label, gid="stick_band")
+        if stick_region is None:
+            ax.axhspan(v_dr - eta, v_dr + eta, color="0.8", alpha=0.7, linewidth=0, label=label, gid="stick_band")
         for edge in (v_dr - eta, v_dr + eta):
             ax.axhline(edge, color="0.3", linewidth=0.8)
     for k, curve in enumerate(curves):
@@ -578,6 +647,27 @@ def plot_phase_plane(
                 label=equilibrium_label, gid="equilibrium", zorder=5)
     for text, (x, y) in labels:
         ax.annotate(text, xy=(x, y), xytext=(4, 4), textcoords="offset points", fontsize="medium", gid="label")
+    if stick_band is not None and stick_region is not None:  # D within the data's range (the axes keep theirs)
+        v_dr, eta = stick_band
+        x_min, x_max = ax.get_xlim()
+        lo, hi = max(stick_region[0], x_min), min(stick_region[1], x_max)
+        ax.fill_between([lo, hi], v_dr - eta, v_dr + eta, color="0.8", alpha=0.7, linewidth=0, label=label,
+                        gid="stick_band", zorder=0.5)
+        for x_edge in {lo, hi} & set(stick_region):
+            ax.plot([x_edge, x_edge], [v_dr - eta, v_dr + eta], color="0.3", linewidth=0.8)
+        ax.set_xlim(x_min, x_max)
+    if regions and stick_band is not None:
+        v_dr, eta = stick_band
+        x_min, x_max = ax.get_xlim()
+        above, below, *inside = regions
+        for text, y, va in ((above, v_dr + eta, "bottom"), (below, v_dr - eta, "top")):
+            ax.annotate(text, xy=(x_max, y), xytext=(-8, 3 if va == "bottom" else -3), textcoords="offset points",
+                        ha="right", va=va, fontsize="large", fontstyle="italic", gid="region")
+        if inside and stick_region is not None:
+            x_d = max(stick_region[0], x_min) + 0.08 * (x_max - x_min)
+            ax.annotate(inside[0], xy=(x_d, v_dr), xytext=(0, -22), textcoords="offset points", ha="center",
+                        va="top", fontsize="large", fontstyle="italic", gid="region",
+                        arrowprops={"arrowstyle": "-", "color": "0.3", "linewidth": 0.6})
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     if legend and ax.get_legend_handles_labels()[0]:
