@@ -78,7 +78,22 @@ MEASURE_LABELS: dict[str, str] = {
 def axis_label(name: str, labels: Mapping[str, str] | None = None) -> str:
     """The axis label of a state or parameter: the model's own label when it declares one (see
     :class:`saltation.model.system.PiecewiseSystem`, ``labels`` and ``units``; a branch records them in
-    :attr:`~saltation.branches.branch.Branch.axis_labels`), else the name as mathtext."""
+    :attr:`~saltation.branches.branch.Branch.axis_labels`), else the name as mathtext.
+
+    Parameters
+    ----------
+    name : str
+    labels : mapping of str to str, optional
+        Axis labels by name, as a branch records them.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    Nothing: every name has a label.
+    """
     if labels and name in labels:
         return labels[name]
     return f"${tex_name(name)}$" if name else ""
@@ -104,7 +119,22 @@ class NotebookFigure(Figure):
 
 
 def new_figure(figsize: tuple[float, float] = (6.4, 4.8)) -> NotebookFigure:
-    """A new figure of this module's kind (constrained layout, shown by Jupyter once; see :class:`NotebookFigure`)."""
+    """A new figure of this module's kind (constrained layout, shown by Jupyter once; see :class:`NotebookFigure`).
+
+    Parameters
+    ----------
+    figsize : (float, float)
+        Width and height in inches.
+
+    Returns
+    -------
+    NotebookFigure
+
+    Raises
+    ------
+    ValueError
+        If the size is not positive (matplotlib's check).
+    """
     return NotebookFigure(figsize=figsize, layout="constrained")
 
 
@@ -116,6 +146,19 @@ def figure_of(ax: Axes) -> Figure:
     PNG is drawn once by whichever display comes first (the cell's result, or the backend's), which
     then closes it in ``pyplot`` (as the inline backend does after every cell) so that the backend does
     not draw it again.  Figures made without ``pyplot`` are left as they are.
+
+    Parameters
+    ----------
+    ax : Axes
+
+    Returns
+    -------
+    Figure
+        ``ax.figure``.
+
+    Raises
+    ------
+    Nothing of its own: outside IPython it only returns the figure.
     """
     fig = ax.figure
     if getattr(getattr(fig, "canvas", None), "manager", None) is None:
@@ -277,6 +320,11 @@ def plot_response(
     Returns
     -------
     Figure
+
+    Raises
+    ------
+    ValueError
+        For an unknown measure name.
     """
     branches = _as_list(branches)
     fig, ax = _new_axes(ax, figsize)
@@ -450,6 +498,10 @@ def plot_multipliers(
     Returns
     -------
     Figure
+
+    Raises
+    ------
+    Nothing of its own: infinite multipliers are clipped and marked, not refused.
     """
     fig, ax = _new_axes(ax, figsize)
     x = branch.parameter
@@ -728,8 +780,22 @@ def save_figure(fig: Figure, stem: str | PathLike[str], *, dpi: int = 200) -> tu
     return png, pdf
 
 
-def plot_loci(loci, *, title: str = ""):
-    """Two-parameter curves of special points (:class:`saltation.special_points.loci.Locus`), codimension-two points marked."""
+def plot_loci(loci, *, title: str = "") -> Figure:
+    """Two-parameter curves of special points (:class:`saltation.special_points.loci.Locus`), codimension-two points marked.
+
+    Parameters
+    ----------
+    loci : sequence of Locus
+    title : str
+
+    Returns
+    -------
+    Figure
+
+    Raises
+    ------
+    Nothing of its own: empty curves are skipped.
+    """
     fig = new_figure((6.4, 4.8))
     ax = fig.add_subplot()
     for k, locus in enumerate(loci):
