@@ -540,3 +540,15 @@ def test_the_newton_compiles_without_the_integrator(tmp_path):
     )
     out = subprocess.run([sys.executable, "-c", newton_only], env=env, capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["True", "False"], out.stderr
+
+
+def test_the_suite_compiles_into_its_own_cache():
+    """The suite (tests/conftest.py) sets the kernel cache to a folder of its own before anything compiles, so the
+    user's cache (~/.cache/saltation, or their SALTATION_CACHE_DIR) is untouched by a test run; command-line runs
+    the tests start inherit it."""
+    from conftest import TEST_CACHE
+
+    assert os.environ["SALTATION_CACHE_DIR"] == str(TEST_CACHE.resolve())
+    user_default = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "saltation"
+    assert TEST_CACHE.resolve() != user_default.resolve()
+    assert codegen.cache_directory() == TEST_CACHE.resolve()

@@ -419,7 +419,7 @@ def _mark_special_points(fig: Figure, ax: Axes, marks: list[tuple[SpecialPointKi
         placed.append((x, y))
         marker, name = SPECIAL_POINT_MARKERS[kind]
         style = {"linestyle": "none", "marker": marker, "markersize": 9, "markerfacecolor": "white",
-                 "markeredgecolor": "k", "zorder": 5, "gid": kind.value}
+                 "markeredgecolor": "k", "zorder": 5, "gid": kind.value, "clip_on": False}  # (whole at an edge)
         if crowd == 0:
             ax.plot([x], [y], **style)
             continue
