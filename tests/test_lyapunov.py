@@ -1,0 +1,109 @@
+"""Lyapunov exponents through the saltation matrices (saltation.orbits.lyapunov), against closed forms and
+against the Floquet multipliers of periodic orbits (a second method, through the same saltation matrices
+but by the eigenvalues of the monodromy matrix)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition
+from saltation.errors import ModelError
+from saltation.orbits.lyapunov import lyapunov_exponents
+from saltation.orbits.shooting import find_periodic_orbit
+
+
+def _within(value: float, expected: float, accuracy: float, slack: float = 1e-6) -> bool:
+    """The exponent agrees with the reference to three times its stated accuracy (plus a slack for the
+    integration's own error over the run)."""
+    return abs(value - expected) <= 3.0 * accuracy + slack
+
+
+def test_a_damped_linear_oscillator_has_its_eigenvalues_real_part_twice(trilinear_flow):
+    """The trilinear system below the contact is linear: x'' + c x' + k x = f: both exponents are
+    Re(lambda) = -c / (2 m) = -0.025 (a complex pair of eigenvalues)."""
+    result = lyapunov_exponents(trilinear_flow, [0.1, 0.0], parameters={"omega": 0.7}, time=600.0, transient=100.0)
+    assert result.exponents.shape == (2,)
+    for e, a in zip(result.exponents, result.accuracy):
+        assert 0 < a < 1e-3
+        assert _within(e, -0.025, a)
+
+
+def hopf(mu: float = 0.25) -> PiecewiseSystem:
+    """The Hopf normal form in two modes split by the line y = 0 (the same field): its cycle of radius sqrt(mu)
+    crosses the line twice a period (saltation matrices of identity); Lyapunov exponents 0 and -2 mu."""
+    field = ["mu*x - y - x*(x**2 + y**2)", "x + mu*y - y*(x**2 + y**2)"]
+    return PiecewiseSystem(
+        "test_lyapunov_hopf", states=["x", "y"], parameters={"mu": mu},
+        modes=[Mode("upper", field, domain=["y >= 0"]), Mode("lower", field, domain=["y < 0"])],
+        surfaces={"axis": "y"},
+        transitions=[Transition("upper", "axis", Crossing.FALLING, "lower"),
+                     Transition("lower", "axis", Crossing.RISING, "upper")],
+    )
+
+
+def test_an_autonomous_cycle_has_a_zero_exponent_and_its_radial_contraction():
+    result = lyapunov_exponents(Flow(hopf()), [0.5, 0.0], time=400.0, transient=40.0)
+    (zero, radial), (a0, a1) = result.exponents, result.accuracy
+    assert _within(zero, 0.0, a0, 1e-4)  # (the phase direction: its estimate decays like 1/time)
+    assert _within(radial, -0.5, a1, 1e-4)
+
+
+def sliding_relay() -> PiecewiseSystem:
+    """x' = -sgn(x), y' = -y: both fields push into x = 0, where a Filippov sliding motion starts in finite time
+    (its saltation matrix maps the x direction onto the surface): exponents -1 (y) and -inf (x)."""
+    return PiecewiseSystem(
+        "test_lyapunov_sliding_relay", states=["x", "y"], parameters={"a": 1.0},
+        modes=[Mode("right", ["-a", "-y"], domain=["x > 0"]), Mode("left", ["a", "-y"], domain=["x <= 0"])],
+        surfaces={"s": "x"},
+        transitions=[Transition("right", "s", Crossing.FALLING, "left"),
+                     Transition("left", "s", Crossing.RISING, "right")],
+    )
+
+
+def test_a_sliding_motion_collapses_a_direction_to_minus_infinity():
+    result = lyapunov_exponents(Flow(sliding_relay()), [0.5, 1.0], time=20.0)
+    assert result.exponents[0] == pytest.approx(-1.0, abs=3 * result.accuracy[0] + 1e-6)
+    assert result.exponents[1] == -math.inf and result.accuracy[1] == 0.0
+    assert "-inf" in repr(result)
+
+
+def test_an_impacting_orbit_has_the_exponents_of_its_floquet_multipliers():
+    """A periodic orbit with impacts (resets): the exponents are ln|mu_i| / T of the multipliers of its monodromy
+    matrix, both through the saltation matrices of the impacts."""
+    from saltation.models import impact_oscillator
+
+    flow = Flow(impact_oscillator())
+    values = {"s": 1.2, "omega": 0.8}
+    orbit = find_periodic_orbit(flow, parameters=values)
+    assert orbit.events and orbit.stable  # it impacts, once a period, and attracts
+    reference = np.sort(np.log(np.abs(orbit.multipliers)) / orbit.period)[::-1]
+    # the impact's restitution is in them: without it the free oscillator's would be -zeta = -0.05
+    assert np.all(reference < -0.06)
+    result = lyapunov_exponents(flow, orbit.state0, parameters=values, time=300 * orbit.period)
+    for e, a, ref in zip(result.exponents, result.accuracy, reference):
+        assert _within(e, ref, a, 1e-5)
+
+
+def test_bad_input_is_named(trilinear_flow):
+    with pytest.raises(ModelError, match="time must be positive"):
+        lyapunov_exponents(trilinear_flow, [0.0, 0.0], time=0.0)
+    with pytest.raises(ModelError, match="2 components"):
+        lyapunov_exponents(trilinear_flow, [0.0], time=1.0)
+    with pytest.raises(ModelError, match="blocks"):
+        lyapunov_exponents(trilinear_flow, [0.0, 0.0], time=1.0, blocks=1)
+
+
+def test_the_command_prints_the_exponents_as_json(capsys):
+    from saltation.apps import cli
+
+    assert cli.main(["lyapunov", "trilinear", "--set", "omega=0.7", "--time", "300", "--transient", "100",
+                     "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert {"model", "exponents", "accuracy", "time"} <= set(out)
+    assert out["model"] == "trilinear" and out["time"] == 300.0
+    for e, a in zip(out["exponents"], out["accuracy"]):
+        assert _within(e, -0.025, a)
