@@ -107,3 +107,30 @@ def test_the_command_prints_the_exponents_as_json(capsys):
     assert out["model"] == "trilinear" and out["time"] == 300.0
     for e, a in zip(out["exponents"], out["accuracy"]):
         assert _within(e, -0.025, a)
+
+
+def test_a_sweep_records_the_largest_exponent_and_reads_it_back(tmp_path):
+    """``sweep(..., lyapunov=True)``: without contact (omega = 1.4, 1.5) the response is the linear one, largest
+    exponent -c / (2 m); where the orbit touches the supports it is ln|mu_1| / T of the orbit found by shooting
+    (a second method). Files keep it; files without it read as None."""
+    from saltation.apps.sweeps import SweepResult, period_map, sweep
+    from saltation.models import trilinear
+
+    values = np.array([1.2, 1.4, 1.5])
+    result = sweep(trilinear(), "omega", values, periods=40, transient=300, workers=1, lyapunov=True)
+    lam = result.largest_exponents
+    flow = Flow(trilinear())
+    orbit = find_periodic_orbit(flow, result.at(0)[-1], parameters={"omega": 1.2})
+    assert orbit.stable
+    assert lam[0] == pytest.approx(np.log(np.max(np.abs(orbit.multipliers))) / orbit.period, abs=2e-3)
+    np.testing.assert_allclose(lam[1:], -0.025, atol=1e-3)  # (over 40 periods: the QR's oscillation, about 1/time)
+    back = SweepResult.load(result.save(tmp_path / "s.json"))
+    np.testing.assert_array_equal(back.largest_exponents, lam)
+    d = result.to_dict()
+    del d["largest_exponents"]
+    assert SweepResult.from_dict(d).largest_exponents is None
+    assert len(result.plot().axes) == 2  # the diagram over its exponent
+    grid = period_map(trilinear(), "omega", [1.4, 1.5], "f0", [0.1, 0.15], periods=20, transient=300, workers=1,
+                      lyapunov=True)
+    assert grid.largest_exponents.shape == (2, 2)
+    np.testing.assert_allclose(grid.largest_exponents, -0.025, atol=2e-3)

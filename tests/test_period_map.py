@@ -100,13 +100,16 @@ def test_sweeps_on_a_dask_cluster_match_local_runs():
     import distributed  # installed with the test extras (the [distributed] extra for users)
 
     values = np.linspace(0.32, 0.40, 6)
-    local = sweep(bouncing_ball(), "A", values, periods=20, transient=50, x0=start_state(), workers=2)
+    local = sweep(bouncing_ball(), "A", values, periods=20, transient=50, x0=start_state(), workers=2, lyapunov=True)
     map_args = (friction_oscillator(), "v_b", [1.0, 1.6, 2.2], "F", [0.4, 0.6])
     grid_local = period_map(*map_args, max_period=4, workers=2)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
-        remote = sweep(bouncing_ball(), "A", values, periods=20, transient=50, x0=start_state(), workers=2, client=client)
+        remote = sweep(bouncing_ball(), "A", values, periods=20, transient=50, x0=start_state(), workers=2, client=client,
+                       lyapunov=True)
         grid_remote = period_map(*map_args, max_period=4, workers=2, client=client)
     np.testing.assert_array_equal(remote.states, local.states)
     np.testing.assert_array_equal(remote.counts, local.counts)
+    np.testing.assert_array_equal(remote.largest_exponents, local.largest_exponents)  # (--lyapunov on Dask too)
+    assert np.all(np.isfinite(local.largest_exponents))
     np.testing.assert_array_equal(grid_remote.periods, grid_local.periods)

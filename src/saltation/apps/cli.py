@@ -1248,6 +1248,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         result = sweep(
             system, args.param, values, periods=200 if args.periods is None else args.periods,
             transient=args.transient, x0=x0, start=rule, parameters=overrides, workers=args.workers, client=client,
+            lyapunov=args.lyapunov,
         )
     finally:
         if client is not None:
@@ -1291,6 +1292,7 @@ def _period_map_command(args, system, values, values2, x0, rule, overrides, clie
     grid = period_map(
         system, args.param, values, args.param2, values2, max_period=max_period, periods=args.periods,
         transient=args.transient, x0=x0, start=rule, parameters=overrides, workers=args.workers, client=client,
+        lyapunov=args.lyapunov,
     )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -1344,6 +1346,10 @@ def _add_sweep_parser(sub) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="run the values as tasks on the Dask cluster at this scheduler address (pip install "
                         "'saltation[distributed]'); the results equal a local run with the same --workers")
+    p.add_argument("--lyapunov", action="store_true",
+                   help="also record the largest Lyapunov exponent at each value (or cell), over the sampled periods, "
+                        "and draw it (a panel below the diagram or the map): negative for a long period or a slow "
+                        "transient, positive for chaos")
     p.add_argument("--param2", metavar="NAME", default=None,
                    help="a second parameter: a two-parameter map of the attractor's period (forced models)")
     p.add_argument("--from2", dest="start2", metavar="V", type=_finite, default=None, help="first value of --param2")

@@ -199,6 +199,10 @@ class SweepResult:
     start : SweepStart
         Where each value started: from the previous value's final state, or its own start
         (:class:`SweepStart`).  Files written before it was recorded were all ``PREVIOUS``.
+    largest_exponents : ndarray, shape (m,), or None
+        With ``lyapunov=True``: the largest Lyapunov exponent at each value, over the sampled periods
+        (:func:`saltation.orbits.lyapunov.lyapunov_exponents`; ``nan`` where the value failed): it tells
+        a long period or a slow transient (negative) from chaos (positive).
     """
 
     model: str
@@ -212,6 +216,7 @@ class SweepResult:
     failures: tuple[tuple[float, str], ...] = ()
     settings: dict = field(default_factory=dict)
     start: SweepStart = SweepStart.PREVIOUS
+    largest_exponents: np.ndarray | None = None
 
     @property
     def x(self) -> np.ndarray:
@@ -219,11 +224,40 @@ class SweepResult:
         return self.states[:, 0]
 
     def points(self, state: int | str = 0) -> tuple[np.ndarray, np.ndarray]:
-        """``(parameter_points, states[:, state])``: the flat pair of arrays to plot."""
+        """``(parameter_points, states[:, state])``: the flat pair of arrays to plot.
+
+        Parameters
+        ----------
+        state : int or str
+            The state, by index or name.
+
+        Returns
+        -------
+        parameter_points : ndarray, shape (N,)
+            The parameter value of each point.
+        values : ndarray, shape (N,)
+            That state at each point.
+
+        Raises
+        ------
+        ModelError
+            For an unknown state name or an index out of range.
+        """
         return self.parameter_points, self.states[:, self._state_index(state)]
 
     def at(self, value_index: int) -> np.ndarray:
-        """States sampled at ``values[value_index]``, shape (counts[value_index], n)."""
+        """States sampled at ``values[value_index]``.
+
+        Parameters
+        ----------
+        value_index : int
+            Index into :attr:`values`.
+
+        Returns
+        -------
+        ndarray, shape (counts[value_index], n)
+            The states sampled at that value (none where its simulation failed).
+        """
         start = int(np.sum(self.counts[:value_index]))
         return self.states[start : start + int(self.counts[value_index])]
 
@@ -239,7 +273,13 @@ class SweepResult:
 
     # -- export ------------------------------------------------------------------------------
     def to_dict(self) -> dict:
-        """A JSON-ready dictionary (non-finite numbers as strings)."""
+        """A JSON-ready dictionary (non-finite numbers as strings).
+
+        Returns
+        -------
+        dict
+            The record :meth:`from_dict` reads, with the format header.
+        """
 
         def enc(v: float) -> float | str:
             return float(v) if math.isfinite(v) else str(float(v))
@@ -257,6 +297,7 @@ class SweepResult:
             "parameter_points": [enc(v) for v in self.parameter_points],
             "states": [[enc(v) for v in row] for row in self.states],
             "failures": [[enc(v), msg] for v, msg in self.failures],
+            **({} if self.largest_exponents is None else {"largest_exponents": [enc(v) for v in self.largest_exponents]}),
         }
 
     @classmethod
@@ -315,6 +356,7 @@ class SweepResult:
                            for k, (v, m) in enumerate(failures)),
             settings=dict(f.take(d, "", "settings", f.obj, {})),
             start=f.take(d, "", "start", lambda v, field: f.choice(v, field, {k.value: k for k in SweepStart}), SweepStart.PREVIOUS),
+            largest_exponents=f.take(d, "", "largest_exponents", lambda v, field: f.reals(v, field, len(values)), None),
         )
 
     def save(self, path: str | PathLike[str]) -> Path:
@@ -328,11 +370,17 @@ class SweepResult:
         Parameters
         ----------
         path : str or path-like
+            The file to write.
 
         Returns
         -------
         Path
             The file written.
+
+        Raises
+        ------
+        OSError
+            If the file cannot be written.
         """
         path = Path(path)
         if path.suffix.lower() == ".json":
@@ -373,11 +421,36 @@ class SweepResult:
 
     # -- figure ------------------------------------------------------------------------------
     def plot(self, ax: Axes | None = None, *, state: int | str = 0, **style) -> Figure:
-        """Scatter the points over the parameter; draws on ``ax`` or on a new Figure (no pyplot state)."""
+        """Scatter the points over the parameter; draws on ``ax`` or on a new Figure (no pyplot state).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on (a new figure by default).
+        state : int or str
+            The state plotted, by index or name.
+        **style
+            Keyword arguments of :meth:`matplotlib.axes.Axes.scatter`, over the defaults (black dots of 2
+            points square).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure drawn on.
+
+        Raises
+        ------
+        ModelError
+            For an unknown state name or an index out of range.
+        """
         from saltation.output.plotting import figure_of, new_figure
 
         k = self._state_index(state)
-        if ax is None:
+        exponent_ax = None
+        if ax is None and self.largest_exponents is not None:  # the diagram over the largest exponent
+            fig = new_figure((6.4, 6.0))
+            ax, exponent_ax = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
+        elif ax is None:
             fig = new_figure((6.4, 4.4))
             ax = fig.add_subplot()
         else:
@@ -392,6 +465,12 @@ class SweepResult:
         else:
             ax.set_ylabel(f"{name} at maxima of {self.state_names[0]}")
         ax.set_title(f"{self.model}: brute-force diagram")
+        if exponent_ax is not None:
+            exponent_ax.axhline(0.0, color="0.6", linewidth=0.8)
+            exponent_ax.plot(self.values, self.largest_exponents, color="k", linewidth=1.0, marker=".", markersize=2.5,
+                             gid="largest_exponent")
+            exponent_ax.set_ylabel(r"largest Lyapunov exponent $\lambda_1$")
+            exponent_ax.set_xlabel(self.parameter_name)
         return fig
 
 
@@ -411,6 +490,7 @@ class _Job:
     period: float | None
     t0: float
     tolerances: Tolerances | None
+    lyapunov: bool = False
 
 
 _WORKER_FLOW: Flow | None = None
@@ -449,6 +529,7 @@ def sweep(
     period: float | None = None,
     t0: float = 0.0,
     client=None,
+    lyapunov: bool = False,
 ) -> SweepResult:
     """Brute-force diagram: simulate at each parameter value and sample the attractor.
 
@@ -507,7 +588,16 @@ def sweep(
     ValueError
         For no values, values or ``t0`` not finite, ``periods`` not a
         positive integer, ``transient`` not a non-negative one, ``period``
-        not positive and finite, or an unknown ``start``.
+        not positive and finite, ``workers`` below 1, or an unknown ``start``.
+    KernelCacheError
+        If the model cannot be compiled into the kernel cache.
+
+    References
+    ----------
+    Hairer, Norsett and Wanner (1993), *Solving Ordinary Differential Equations I: Nonstiff Problems*,
+    2nd ed., Springer (DOP853's dense output, on which the samples are read).  Kiefer (1953),
+    "Sequential minimax search for a maximum", Proc. Amer. Math. Soc. 4 (golden-section search of the
+    maxima).
     """
     p_index = system.parameter_index(parameter)
     rule = _start_rule(start)
@@ -538,16 +628,17 @@ def sweep(
     pieces = np.array_split(np.arange(values.size), n_workers)
     jobs = [
         _Job(values[k], starts[k], rule is SweepStart.OWN, p_index, base, int(periods), int(transient), use_poincare,
-             period, float(t0), tolerances)
+             period, float(t0), tolerances, bool(lyapunov))
         for k in pieces
     ]
     results = _run_jobs(system, jobs, client)
 
-    counts, samples, failures = [], [], []
-    for chunk_counts, chunk_samples, chunk_failures in results:
+    counts, samples, failures, exponents = [], [], [], []
+    for chunk_counts, chunk_samples, chunk_failures, chunk_exponents in results:
         counts += chunk_counts
         samples += chunk_samples
         failures += chunk_failures
+        exponents += chunk_exponents
     counts_arr = np.array(counts, dtype=int)
     states = np.concatenate(samples) if samples else np.zeros((0, system.n))
     settings = {"periods": int(periods), "transient": int(transient), "t0": float(t0), "x0": _describe_x0(x0)}
@@ -565,6 +656,7 @@ def sweep(
         failures=tuple(failures),
         settings=settings,
         start=rule,
+        largest_exponents=np.array(exponents, dtype=float) if lyapunov else None,
     )
 
 
@@ -592,6 +684,9 @@ class PeriodMap:
     start : SweepStart
         Where each cell started (:class:`SweepStart`); ``PREVIOUS`` for files written before it was
         recorded.
+    largest_exponents : ndarray, shape (len(values2), len(values)), or None
+        With ``lyapunov=True``: each cell's largest Lyapunov exponent over the sampled periods
+        (``nan`` where the cell failed).
     """
 
     model: str
@@ -604,9 +699,16 @@ class PeriodMap:
     failures: tuple[tuple[float, float, str], ...] = ()
     settings: dict = field(default_factory=dict)
     start: SweepStart = SweepStart.PREVIOUS
+    largest_exponents: np.ndarray | None = None
 
     def to_dict(self) -> dict:
-        """A JSON-ready dictionary."""
+        """A JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            The record :meth:`from_dict` reads, with the format header.
+        """
         return {
             **format_header(PERIOD_MAP_FORMAT),
             "model": self.model,
@@ -619,6 +721,8 @@ class PeriodMap:
             "max_period": int(self.max_period),
             "failures": [[float(a), float(b), m] for a, b, m in self.failures],
             "settings": dict(self.settings),
+            **({} if self.largest_exponents is None else {"largest_exponents": [
+                [float(v) if math.isfinite(v) else str(float(v)) for v in row] for row in self.largest_exponents]}),
         }
 
     @classmethod
@@ -668,6 +772,8 @@ class PeriodMap:
                             f.string(m, f"failures[{k}][2]")) for k, (a, b, m) in enumerate(failures)),
             settings=dict(f.take(d, "", "settings", f.obj)),
             start=f.take(d, "", "start", lambda v, field: f.choice(v, field, {k.value: k for k in SweepStart}), SweepStart.PREVIOUS),
+            largest_exponents=f.take(d, "", "largest_exponents", lambda v, field: np.array(
+                [f.reals(row, f"{field}[{k}]", len(values)) for k, row in enumerate(f.list(v, field, len(values2)))]), None),
         )
 
     def save(self, path: str | PathLike[str]) -> Path:
@@ -676,11 +782,17 @@ class PeriodMap:
         Parameters
         ----------
         path : str or path-like
+            The file to write.
 
         Returns
         -------
         Path
             The file written.
+
+        Raises
+        ------
+        OSError
+            If the file cannot be written.
         """
         return write_json(self.to_dict(), path)
 
@@ -712,14 +824,31 @@ class PeriodMap:
                 f"{int(np.count_nonzero(self.periods == 0))} not, {len(self.failures)} failed)")
 
     def plot(self, ax: Axes | None = None) -> Figure:
-        """The map: one colour per period (1 ... max_period); grey where no period up to max_period settled within
-        the transient (chaos, a longer period, or a slow transient: the colour bar says "not periodic"); white
-        for failures."""
+        """The map: one colour per period (1 ... max_period).
+
+        Grey where no period up to ``max_period`` settled within the transient (chaos, a longer period,
+        or a slow transient: the colour bar says "not periodic"); white for failures.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on (a new figure by default).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure drawn on, with its colour bar.
+        """
         from matplotlib.colors import BoundaryNorm, ListedColormap
 
         from saltation.output.plotting import figure_of, new_figure
 
-        if ax is None:
+        own = ax is None
+        exponent_ax = None
+        if own and self.largest_exponents is not None:  # the periods above, the largest exponent below
+            fig = new_figure((6.4, 8.4))
+            ax, exponent_ax = fig.subplots(2, 1, sharex=True)
+        elif own:
             fig = new_figure((6.4, 4.8))
             ax = fig.add_subplot()
         else:
@@ -733,12 +862,19 @@ class PeriodMap:
         mesh = ax.pcolormesh(_edges(self.values), _edges(self.values2), self.periods, cmap=cmap, norm=norm)
         bar = fig.colorbar(mesh, ax=ax, ticks=np.arange(-1, self.max_period + 1))
         # "not periodic": no period up to max_period within the transient (chaos, a longer period, or not settled)
-        bar.ax.set_yticklabels(["failed", f"not periodic\n(<= {self.max_period})"]
+        bar.ax.set_yticklabels(["failed", f"no period <= {self.max_period}"]
                                + [str(k) for k in range(1, self.max_period + 1)])
         bar.set_label("period of the attractor (forcing periods)")
         ax.set_xlabel(self.parameter_name)
         ax.set_ylabel(self.parameter2_name)
         ax.set_title(f"{self.model}: period of the attractor")
+        if exponent_ax is not None:
+            limit = float(np.nanmax(np.abs(self.largest_exponents))) if np.isfinite(self.largest_exponents).any() else 1.0
+            mesh2 = exponent_ax.pcolormesh(_edges(self.values), _edges(self.values2), self.largest_exponents,
+                                           cmap="RdBu_r", vmin=-limit, vmax=limit)
+            fig.colorbar(mesh2, ax=exponent_ax).set_label(r"largest Lyapunov exponent $\lambda_1$ (red: chaos)")
+            exponent_ax.set_xlabel(self.parameter_name)
+            exponent_ax.set_ylabel(self.parameter2_name)
         return fig
 
 
@@ -751,8 +887,25 @@ def _edges(v: np.ndarray) -> np.ndarray:
 
 
 def attractor_period(samples: np.ndarray, max_period: int, tolerance: float = 1e-6) -> int:
-    """The smallest ``k <= max_period`` with ``x_{j+k} = x_j`` for every stroboscopic sample (to
-    ``tolerance`` relative to the samples' size), or 0 when there is none."""
+    """The smallest period of a sequence of stroboscopic samples, or 0 when there is none.
+
+    The smallest ``k <= max_period`` with ``x_{j+k} = x_j`` for every sample (to ``tolerance``
+    relative to the samples' size).
+
+    Parameters
+    ----------
+    samples : ndarray, shape (m, n)
+        States at consecutive forcing periods.
+    max_period : int
+        Longest period looked for.
+    tolerance : float
+        Relative tolerance of the comparison.
+
+    Returns
+    -------
+    int
+        The period in forcing periods, or 0 (chaos, a longer period, or not settled).
+    """
     samples = np.asarray(samples, dtype=float)
     scale = tolerance * (1.0 + float(np.abs(samples).max(initial=0.0)))
     for k in range(1, max_period + 1):
@@ -779,6 +932,7 @@ def period_map(
     client=None,
     tolerances: Tolerances | None = None,
     t0: float = 0.0,
+    lyapunov: bool = False,
 ) -> PeriodMap:
     """Two-parameter brute-force map of a forced system: the attractor's period in each grid cell.
 
@@ -837,7 +991,10 @@ def period_map(
         components or not finite.
     ValueError
         For no values or values not finite, ``max_period`` not a positive integer, ``periods`` not
-        above it, ``transient`` not a non-negative integer, ``t0`` not finite, or an unknown ``start``.
+        above it, ``transient`` not a non-negative integer, ``t0`` not finite, ``workers`` below 1,
+        or an unknown ``start``.
+    KernelCacheError
+        If the model cannot be compiled into the kernel cache.
     """
     if system.is_autonomous:
         raise ModelError(f"a period map counts forcing periods; {system.name!r} is autonomous")
@@ -869,7 +1026,7 @@ def period_map(
             system, x0, cells, lambda p: f"{parameter}={p[p1]:.10g}, {parameter2}={p[p2]:.10g}"
         )
         jobs.append(_Job(values, starts, rule is SweepStart.OWN, p1, row, periods, int(transient), True, None,
-                         float(t0), tolerances))
+                         float(t0), tolerances, bool(lyapunov)))
     n_workers = min(_workers(workers, client), len(jobs))
     grouped = [_RowsJob(jobs[k::n_workers]) for k in range(n_workers)]  # rows dealt round-robin to the workers
     results: list = [None] * len(jobs)
@@ -877,8 +1034,10 @@ def period_map(
         for r, res in enumerate(out):
             results[k + r * n_workers] = res
     grid = np.zeros((values2.size, values.size), dtype=int)
+    exponent_grid = np.full((values2.size, values.size), math.nan)
     failures = []
-    for i, (counts, samples, fails) in enumerate(results):
+    for i, (counts, samples, fails, row_exponents) in enumerate(results):
+        exponent_grid[i] = row_exponents
         failed = {v for v, _ in fails}
         it = iter(samples)
         for j, (value, c) in enumerate(zip(values, counts)):
@@ -893,6 +1052,7 @@ def period_map(
         settings={"periods": periods, "transient": int(transient), "tolerance": float(tolerance), "t0": float(t0),
                   "x0": _describe_x0(x0)},
         start=rule,
+        largest_exponents=exponent_grid if lyapunov else None,
     )
 
 
@@ -950,8 +1110,12 @@ def _context():
     return multiprocessing.get_context("fork" if "fork" in methods else None)
 
 
-def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list[tuple[float, str]]]:
-    """Simulate one chunk of values, each from its own start or from the previous final state."""
+def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list[tuple[float, str]], list[float]]:
+    """Simulate one chunk of values, each from its own start or from the previous final state: the sample
+    counts, the samples, the failures, and per value the largest Lyapunov exponent over the sampled
+    periods (``nan`` unless the job asks for them, or where the value failed)."""
+    from saltation.orbits.lyapunov import lyapunov_exponents
+
     system = flow.system
     p = job.base.copy()
     x: np.ndarray | None = None  # a fresh start: the job's start state of the value
@@ -959,6 +1123,7 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
     counts: list[int] = []
     samples: list[np.ndarray] = []
     failures: list[tuple[float, str]] = []
+    largest: list[float] = []
     for i, value in enumerate(job.values):
         p[job.parameter_index] = value
         if job.own or x is None:
@@ -970,6 +1135,10 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
             if job.transient:
                 traj = flow.run(x, job.t0, t_sample, p, mode0=mode, tolerances=job.tolerances)
                 x, mode = traj.x1, traj.mode1
+            exponent = math.nan
+            if job.lyapunov:  # over the sampled periods, from the same state (a variational run beside the samples)
+                exponent = lyapunov_exponents(flow, x, parameters=p, time=job.periods * T, t0=t_sample, interval=T,
+                                              blocks=max(2, min(10, job.periods)), tolerances=job.tolerances).largest
             traj = flow.run(x, t_sample, t_end, p, mode0=mode, dense=True, tolerances=job.tolerances)
             if job.poincare:
                 times = t_sample + T * np.arange(1, job.periods + 1)
@@ -983,11 +1152,13 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
         except (SaltationError, ValueError, ArithmeticError) as exc:
             failures.append((float(value), f"{type(exc).__name__}: {exc}"))
             counts.append(0)
+            largest.append(math.nan)
             x, mode = None, None  # the next value starts afresh
             continue
         counts.append(len(pts))
         samples.append(np.asarray(pts, dtype=float))
-    return counts, samples, failures
+        largest.append(float(exponent))
+    return counts, samples, failures, largest
 
 
 # -- reading the dense output --------------------------------------------------------------------
