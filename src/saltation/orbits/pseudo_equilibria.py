@@ -1,0 +1,198 @@
+"""Pseudo-equilibria of Filippov systems: rest points of a sliding motion on a switching surface.
+
+On a surface ``h(x) = 0`` whose two fields both push into it, the state slides with Filippov's convex
+combination ``f_s = (1 - a) f_minus + a f_plus``, the weight ``a = h_x f_minus / (h_x f_minus - h_x f_plus)``
+chosen so that ``f_s`` is tangent to the surface.  A pseudo-equilibrium is a point of the surface where
+``f_s = 0``: both fields there are anti-parallel.  It is a point of the sliding region when ``0 < a < 1``
+(both fields push into the surface); its stability in the sliding motion is that of ``f_s`` restricted
+to the surface.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from saltation.engine.flow import Flow
+from saltation.errors import ConvergenceError, ModelError
+from saltation.model.system import PiecewiseSystem
+
+
+@dataclass(frozen=True)
+class PseudoEquilibrium:
+    """A rest point of a sliding motion.
+
+    Attributes
+    ----------
+    state : ndarray, shape (n,)
+        The point, on the surface.
+    surface : str
+    modes : (str, str)
+        The modes on the surface's negative (``h < 0``) and positive side.
+    weights : (float, float)
+        ``(1 - a, a)``: the weights of the two modes' fields in the sliding field, which vanishes there.
+    eigenvalues : ndarray, shape (n - 1,), complex
+        Of the sliding field restricted to the surface (its Jacobian on the tangent space): the point's
+        stability in the sliding motion (stable when every real part is negative).
+    admissible : bool
+        Whether it lies in the sliding region (``0 < a < 1``: both fields push into the surface); a
+        point with ``a`` outside is virtual.
+    residual : float
+        ``|f_s|`` there.
+    """
+
+    state: np.ndarray
+    surface: str
+    modes: tuple[str, str]
+    weights: tuple[float, float]
+    eigenvalues: np.ndarray
+    admissible: bool
+    residual: float
+
+    @property
+    def stable(self) -> bool:
+        """Admissible and attracting in the sliding motion."""
+        return bool(self.admissible and np.all(self.eigenvalues.real < 0))
+
+    def __repr__(self) -> str:
+        x = ", ".join(f"{v:.8g}" for v in self.state)
+        return (f"PseudoEquilibrium(on {self.surface}, x=[{x}], weights={self.weights[0]:.6g}/{self.weights[1]:.6g}, "
+                f"{'stable' if self.stable else 'unstable' if self.admissible else 'virtual'})")
+
+
+def find_pseudo_equilibrium(
+    system: PiecewiseSystem | Flow,
+    surface: str,
+    state0: Sequence[float],
+    *,
+    parameters: Mapping[str, float] | np.ndarray | None = None,
+    tol: float = 1e-12,
+    max_iter: int = 30,
+) -> PseudoEquilibrium:
+    """A pseudo-equilibrium on ``surface`` near ``state0``, by Newton on ``(1 - a) f_minus + a f_plus = 0``,
+    ``h = 0`` in the unknowns ``(x, a)``.
+
+    The two modes are those on either side of the surface at ``state0`` (the model's initial-mode rule
+    a little off the surface along ``h_x``); their fields' Jacobians are the model's exact ones.
+
+    Parameters
+    ----------
+    system : PiecewiseSystem or Flow
+        An autonomous model.
+    surface : str
+        The switching surface.
+    state0 : array_like, shape (n,)
+        A guess.
+    parameters : mapping or ndarray, optional
+        Parameter values (the model's defaults otherwise).
+    tol : float
+        Newton stops when ``|r| <= tol (1 + |x|)``.
+    max_iter : int
+
+    Returns
+    -------
+    PseudoEquilibrium
+
+    Raises
+    ------
+    ModelError
+        If the model is forced, the surface unknown, the guess of the wrong size, or the same mode lies
+        on both sides of the surface at the guess.
+    ConvergenceError
+        If Newton does not converge (with the residual history), or its Jacobian is singular.
+
+    References
+    ----------
+    A. F. Filippov (1988), *Differential Equations with Discontinuous Righthand Sides*, Kluwer.
+    Yu. A. Kuznetsov, S. Rinaldi and A. Gragnani (2003), "One-parameter bifurcations in planar Filippov
+    systems", International Journal of Bifurcation and Chaos 13.
+    """
+    flow = system if isinstance(system, Flow) else Flow(system)
+    model = flow.system
+    if not model.is_autonomous:
+        raise ModelError(f"model {model.name!r} is forced: it has no pseudo-equilibria (its fields depend on time)")
+    if surface not in model.surface_names:
+        raise ModelError(f"surface {surface!r} does not exist; surfaces are {list(model.surface_names)}")
+    x = np.asarray(state0, dtype=float).reshape(-1)
+    if x.shape != (model.n,):
+        raise ModelError(f"the guess must have {model.n} components, got {x.shape[0]}")
+    p = flow.parameters(parameters)
+    minus, plus = _sides(flow, surface, x, p)
+    fm, fp = flow.vector_field(minus, 0.0, x, p), flow.vector_field(plus, 0.0, x, p)
+    hx = flow.indicator_gradient(surface, 0.0, x, p)[0]
+    gm, gp = float(hx @ fm), float(hx @ fp)
+    a = gm / (gm - gp) if gm != gp else 0.5
+    history: list[float] = []
+    for _ in range(max_iter + 1):
+        fm, fp = flow.vector_field(minus, 0.0, x, p), flow.vector_field(plus, 0.0, x, p)
+        h = flow.indicator(surface, 0.0, x, p)
+        r = np.append((1.0 - a) * fm + a * fp, h)
+        norm = float(np.linalg.norm(r))
+        history.append(norm)
+        if norm <= tol * (1.0 + float(np.linalg.norm(x))):
+            break
+        jm, jp = flow.vector_field_jacobian(minus, 0.0, x, p), flow.vector_field_jacobian(plus, 0.0, x, p)
+        hx = flow.indicator_gradient(surface, 0.0, x, p)[0]
+        J = np.zeros((model.n + 1, model.n + 1))
+        J[: model.n, : model.n] = (1.0 - a) * jm + a * jp
+        J[: model.n, model.n] = fp - fm
+        J[model.n, : model.n] = hx
+        try:
+            step = np.linalg.solve(J, r)
+        except np.linalg.LinAlgError:
+            raise ConvergenceError(f"pseudo-equilibrium on {surface!r}: singular Jacobian at x = {x.tolist()}", history) from None
+        x, a = x - step[: model.n], a - float(step[model.n])
+    else:
+        raise ConvergenceError(f"pseudo-equilibrium on {surface!r}: Newton did not converge from {list(map(float, state0))}",
+                               history)
+    eigenvalues = _sliding_eigenvalues(flow, surface, minus, plus, x, p)
+    return PseudoEquilibrium(state=x, surface=surface, modes=(model.mode_names[minus], model.mode_names[plus]),
+                             weights=(1.0 - a, a), eigenvalues=eigenvalues, admissible=bool(0.0 < a < 1.0),
+                             residual=history[-1])
+
+
+def _sides(flow: Flow, surface: str, x: np.ndarray, p: np.ndarray) -> tuple[int, int]:
+    """The modes on the negative and positive side of the surface at ``x``."""
+    hx = flow.indicator_gradient(surface, 0.0, x, p)[0]
+    size = float(np.linalg.norm(hx))
+    if size == 0.0:
+        raise ModelError(f"surface {surface!r} has no gradient at {x.tolist()}: no sides to tell apart")
+    h = flow.indicator(surface, 0.0, x, p)
+    d = hx / size
+    offset = 1e-7 * (1.0 + float(np.linalg.norm(x)))
+    base = x - (h / size) * d  # onto the surface (to first order)
+    minus = flow.initial_mode(base - offset * d, p)
+    plus = flow.initial_mode(base + offset * d, p)
+    if minus == plus:
+        name = flow.system.mode_names[minus]
+        raise ModelError(f"mode {name!r} lies on both sides of surface {surface!r} at {x.tolist()}: no sliding there")
+    return minus, plus
+
+
+def _sliding_eigenvalues(flow: Flow, surface: str, minus: int, plus: int, x: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Eigenvalues of the sliding field's Jacobian on the surface's tangent space at ``x`` (central
+    differences of the sliding field along an orthonormal basis of the tangent space, steps 1e-6)."""
+    n = flow.system.n
+    hx = flow.indicator_gradient(surface, 0.0, x, p)[0]
+    _, _, vt = np.linalg.svd(hx[None, :])
+    tangent = vt[1:].T  # (n, n - 1): the null space of h_x
+
+    def sliding(y: np.ndarray) -> np.ndarray:
+        fm, fp = flow.vector_field(minus, 0.0, y, p), flow.vector_field(plus, 0.0, y, p)
+        g = flow.indicator_gradient(surface, 0.0, y, p)[0]
+        gm, gp = float(g @ fm), float(g @ fp)
+        a = gm / (gm - gp)
+        return (1.0 - a) * fm + a * fp
+
+    if n == 1:
+        return np.zeros(0, dtype=complex)
+    step = 1e-6 * (1.0 + float(np.linalg.norm(x)))
+    columns = [(sliding(x + step * t) - sliding(x - step * t)) / (2 * step) for t in tangent.T]
+    restricted = tangent.T @ np.column_stack(columns)
+    return np.sort_complex(np.linalg.eigvals(restricted).astype(complex))
+
+
+__all__ = ["PseudoEquilibrium", "find_pseudo_equilibrium"]

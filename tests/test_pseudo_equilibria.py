@@ -1,0 +1,74 @@
+"""Pseudo-equilibria of Filippov systems (saltation.orbits.pseudo_equilibria) against closed forms."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition
+from saltation.errors import ModelError
+from saltation.orbits.pseudo_equilibria import find_pseudo_equilibrium
+
+A, B, C, D = 1.0, 2.0, 0.5, 0.3
+
+
+def relay(sign: str = "-") -> PiecewiseSystem:
+    """``x' = a`` (x < 0) or ``-b`` (x > 0): both push into x = 0, where the state slides with the weight
+    ``a / (a + b)`` of the right field; ``y' = {sign}y + c`` or ``{sign}y - d``.  The pseudo-equilibrium is
+    ``y = {-sign}(b c - a d) / (a + b)``, with the sliding eigenvalue ``{sign}1``."""
+    return PiecewiseSystem(
+        f"test_pseudo_relay_{'stable' if sign == '-' else 'unstable'}", states=["x", "y"],
+        parameters={"a": A, "b": B, "c": C, "d": D},
+        modes=[Mode("left", ["a", f"{sign}y + c"], domain=["x < 0"]), Mode("right", ["-b", f"{sign}y - d"], domain=["x >= 0"])],
+        surfaces={"s": "x"},
+        transitions=[Transition("left", "s", Crossing.RISING, "right"), Transition("right", "s", Crossing.FALLING, "left")],
+    )
+
+
+def test_a_stable_pseudo_equilibrium_against_its_closed_form():
+    point = find_pseudo_equilibrium(relay("-"), "s", [0.1, 1.0])
+    weight = A / (A + B)
+    np.testing.assert_allclose(point.state, [0.0, (B * C - A * D) / (A + B)], rtol=0, atol=1e-12)
+    assert point.weights == pytest.approx((1 - weight, weight), abs=1e-12)
+    assert point.modes == ("left", "right") and point.admissible and point.stable
+    # central differences of the sliding field (steps 1e-6) on an affine field: exact to rounding, 1e-9
+    np.testing.assert_allclose(point.eigenvalues, [-1.0], atol=1e-8)
+
+
+def test_an_unstable_pseudo_equilibrium_is_found_and_said_unstable():
+    point = find_pseudo_equilibrium(Flow(relay("+")), "s", [0.0, 0.0])
+    np.testing.assert_allclose(point.state, [0.0, -(B * C - A * D) / (A + B)], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(point.eigenvalues, [1.0], atol=1e-8)
+    assert point.admissible and not point.stable
+    assert "unstable" in repr(point)
+
+
+def test_the_sliding_field_is_restricted_to_the_surface():
+    """Three states: on x = 0 the sliding motion of (y, z) is y' = -y + z, z' = -z - y + const, eigenvalues
+    -1 +- i; the pseudo-equilibrium is where both vanish."""
+    system = PiecewiseSystem(
+        "test_pseudo_three", states=["x", "y", "z"], parameters={"a": A, "b": B, "c": C, "d": D},
+        modes=[Mode("left", ["a", "-y + z", "-z - y + c"], domain=["x < 0"]),
+               Mode("right", ["-b", "-y + z", "-z - y - d"], domain=["x >= 0"])],
+        surfaces={"s": "x"},
+        transitions=[Transition("left", "s", Crossing.RISING, "right"), Transition("right", "s", Crossing.FALLING, "left")],
+    )
+    point = find_pseudo_equilibrium(system, "s", [0.2, 0.0, 0.0])
+    forcing = (B * C - A * D) / (A + B)  # (1 - a) c - a d with a = A / (A + B)
+    np.testing.assert_allclose(point.state, [0.0, forcing / 2, forcing / 2], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(point.eigenvalues, [-1 - 1j, -1 + 1j], atol=1e-8)
+
+
+def test_a_point_outside_the_sliding_region_is_virtual():
+    """With both fields pointing right (b < 0), nothing slides: the rest point of the combination has a weight
+    outside (0, 1) and is called virtual."""
+    point = find_pseudo_equilibrium(relay("-"), "s", [0.0, 0.0], parameters={"b": -2.0})
+    assert not point.admissible and not point.stable
+    assert point.weights[1] == pytest.approx(A / (A - 2.0), abs=1e-12)
+
+
+def test_bad_input_is_named(trilinear_flow):
+    with pytest.raises(ModelError, match="forced"):
+        find_pseudo_equilibrium(trilinear_flow, "h1a", [0.0, 0.0])
+    with pytest.raises(ModelError, match="surface 'nope' does not exist"):
+        find_pseudo_equilibrium(relay(), "nope", [0.0, 0.0])
