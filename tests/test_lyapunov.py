@@ -134,3 +134,37 @@ def test_a_sweep_records_the_largest_exponent_and_reads_it_back(tmp_path):
                       lyapunov=True)
     assert grid.largest_exponents.shape == (2, 2)
     np.testing.assert_allclose(grid.largest_exponents, -0.025, atol=2e-3)
+
+
+def test_a_filippov_orbit_has_the_exponents_of_its_floquet_multipliers():
+    """The friction oscillator's stick-slip orbit slides once a period: one multiplier is 0 (the sliding start's
+    saltation matrix is singular), the other ln|mu| / T; the exponents are -inf and that one."""
+    from saltation.models import friction_oscillator
+
+    flow = Flow(friction_oscillator())
+    orbit = find_periodic_orbit(flow)
+    assert any(e.kind.name == "SLIDING_START" for e in orbit.events)
+    mu = np.sort(np.abs(orbit.multipliers))[::-1]
+    assert mu[1] == 0.0
+    result = lyapunov_exponents(flow, orbit.state0, time=100 * orbit.period)
+    assert _within(result.exponents[0], math.log(mu[0]) / orbit.period, result.accuracy[0])
+    assert result.exponents[1] == -math.inf
+
+
+def test_the_exponents_add_up_to_the_divergence_and_the_saltation_determinants():
+    """Liouville's formula through the events: the exponents sum to the time average of div f plus
+    sum ln|det S| per unit time.  The impact oscillator's field has div f = -2 zeta; its impact (h = x - s, v -> -r v)
+    has S = [[-r, 0], [(f+_v + r f-_v) / v, -r]] by eq. (9), det S = r^2; its stable orbit at s = 1.2, omega = 0.8
+    impacts once a forcing period: -2 zeta + 2 ln(r) omega / (2 pi).  The sum
+    is kept exactly by the QR steps (ln|det| of each interval), so only rounding over the run separates them."""
+    from saltation.models import impact_oscillator
+
+    system = impact_oscillator()
+    flow = Flow(system)
+    values = {"s": 1.2, "omega": 0.8}
+    orbit = find_periodic_orbit(flow, parameters=values)
+    assert len(orbit.events) == 1
+    result = lyapunov_exponents(flow, orbit.state0, parameters=values, time=200 * orbit.period)
+    zeta, r = system.defaults["zeta"], system.defaults["r"]
+    expected = -2 * zeta + 2 * math.log(r) * values["omega"] / (2 * math.pi)
+    assert result.exponents.sum() == pytest.approx(expected, abs=1e-9)
