@@ -83,6 +83,7 @@ TARGETS = {
     "corner_curve_s_per_200_points": 0.5,
     "fold_curve_s_per_200_points": 0.3,
     "sliding_curve_s_per_200_points": 1.0,
+    "lyapunov_1000_periods_ms": 50.0,
 }
 
 
@@ -552,6 +553,33 @@ def bench_nonlinear(quick: bool) -> dict:
     }
 
 
+def bench_lyapunov(quick: bool) -> dict:
+    """Lyapunov exponents of the trilinear system over 1,000 forcing periods at w = 1.2 (contact every period),
+    reorthonormalised every period; and the time of the same periods without the variational equation."""
+    from saltation.orbits.lyapunov import lyapunov_exponents
+
+    flow = Flow(trilinear())
+    w = 1.2
+    T = 2 * math.pi / w
+    p = flow.parameters({"omega": w})
+    start = flow.run([0.1, 0.0], 0.0, 100 * T, p).x1
+    lyapunov_exponents(flow, start, parameters=p, time=10 * T)
+
+    def once():
+        return lyapunov_exponents(flow, start, parameters=p, time=1000 * T)
+
+    t_s, result = timed_runs(once, quick)
+    plain = min(_time_of(lambda: flow.run(start, 0.0, 1000 * T, p)) for _ in range(3))
+    return {"lyapunov_1000_periods_ms": 1e3 * t_s, "lyapunov_plain_run_ms": 1e3 * plain,
+            "lyapunov_exponents": [float(e) for e in result.exponents]}
+
+
+def _time_of(fn) -> float:
+    t = time.perf_counter()
+    fn()
+    return time.perf_counter() - t
+
+
 BENCHMARKS = {
     "nonlinear": bench_nonlinear,
     "loci": bench_loci,
@@ -563,6 +591,7 @@ BENCHMARKS = {
     "events": bench_events,
     "chain": bench_chain,
     "sweep": bench_sweep,
+    "lyapunov": bench_lyapunov,
 }
 
 
@@ -643,6 +672,8 @@ def table(results: dict) -> str:
         ("corner curve, 200 points (s)", "corner_curve_s_per_200_points", None, None),
         ("fold curve, 200 points (s)", "fold_curve_s_per_200_points", None, None),
         ("sliding curve, 200 points (s)", "sliding_curve_s_per_200_points", None, None),
+        ("Lyapunov exponents, 1000 periods (ms)", "lyapunov_1000_periods_ms", None, None),
+        ("  the same periods, no variational equation (ms)", "lyapunov_plain_run_ms", None, None),
     ]
     lines = [f"{'benchmark':42s} {'saltation':>11s} {'scipy':>11s} {'ratio':>8s}  target"]
     for label, k, kb, kr in rows:

@@ -574,6 +574,10 @@ def sweep(
         Run the chunks as tasks on this Dask cluster instead of local
         processes (``workers`` chunks; default: one per thread of the
         cluster).  The same chunks give the same results as a local run.
+    lyapunov : bool
+        Also compute, at each value, the largest Lyapunov exponent over the sampled periods
+        (:func:`saltation.orbits.lyapunov.lyapunov_exponents`), as
+        :attr:`SweepResult.largest_exponents` (``nan`` where the value failed).
 
     Returns
     -------
@@ -977,6 +981,9 @@ def period_map(
         Integration tolerances.
     t0 : float
         Initial time, the phase of the section.
+    lyapunov : bool
+        Also compute each cell's largest Lyapunov exponent over the sampled periods, as
+        :attr:`PeriodMap.largest_exponents` (``nan`` where the cell failed).
 
     Returns
     -------

@@ -27,7 +27,25 @@ class NewtonSettings(Protocol):
 
 @dataclass
 class Solution:
-    """A corrected point ``z = (u, lam)`` with its evaluation and summary."""
+    """A corrected point ``z = (u, lam)`` with its evaluation and summary.
+
+    Attributes
+    ----------
+    z : ndarray
+        The point, ``(u, lam)``.
+    evaluation : Evaluation
+        The problem's evaluation there.
+    summary : BranchPoint
+        The problem's description of it.
+    tangent : ndarray or None
+        The unit tangent of the branch there, once computed.
+    iterations : int
+        Newton iterations of the corrector.
+    step : float
+        The arclength step that led to it.
+    tests : dict of str to float
+        Test-function values, by the detector.
+    """
 
     z: np.ndarray
     evaluation: Evaluation
@@ -47,8 +65,19 @@ class Solution:
 
 
 def canonical_events(events: tuple) -> tuple:
-    """An event sequence (labels or :func:`saltation.orbits.shooting.event_ids`) up to cyclic rotation (where an
-    orbit starts is not a change)."""
+    """An event sequence up to cyclic rotation (where an orbit starts is not a change).
+
+    Parameters
+    ----------
+    events : tuple
+        Event labels, or event identities (:func:`saltation.orbits.records.event_ids`).
+
+    Returns
+    -------
+    tuple
+        The least rotation of the sequence: equal for two sequences that differ only by where they
+        start.
+    """
     if not events:
         return events
     rotations = [events[k:] + events[:k] for k in range(len(events))]
@@ -67,7 +96,16 @@ def bordered(jac_u: np.ndarray, jac_lam: np.ndarray, row: np.ndarray) -> np.ndar
 
 @dataclass
 class Corrector:
-    """Newton solvers on the branch of one problem (shared by continuation and location)."""
+    """Newton solvers on the branch of one problem (shared by continuation and location).
+
+    Attributes
+    ----------
+    problem : object
+        A problem of the continuation protocol (``evaluate``, ``describe``, and optionally
+        ``correct``, the compiled iteration).
+    settings : NewtonSettings
+        Its ``tol``, ``max_newton`` and ``max_correction`` (:class:`ContinuationSettings` has them).
+    """
 
     problem: object
     settings: NewtonSettings
@@ -75,10 +113,30 @@ class Corrector:
     def solve_bordered(self, z_pred: np.ndarray, normal: np.ndarray) -> Solution:
         """Solve ``r(z) = 0``, ``normal . (z - z_pred) = 0`` by Newton from ``z_pred``.
 
+        The problem's compiled iteration (``correct``) is used where it has one and it runs; otherwise the
+        iteration is in Python.  An iteration stops early when a correction exceeds ``max_correction (1
+        + |z|)`` or the bordered matrix is singular.
+
+        Parameters
+        ----------
+        z_pred : ndarray
+            The predicted point ``(u, lam)``.
+        normal : ndarray
+            The bordering row: the tangent at the last point (pseudo-arclength), or ``e_lam`` (a fixed
+            parameter).
+
+        Returns
+        -------
+        Solution
+            The corrected point, its evaluation, summary and iteration count.
+
         Raises
         ------
         ConvergenceError
             If Newton does not converge in ``max_newton`` iterations.
+        SaltationError
+            Whatever the problem's evaluation or description raises (an :class:`IntegrationError`, a
+            :class:`StationaryStateError` ...).
         """
         prob = self.problem
         s = self.settings
@@ -113,13 +171,47 @@ class Corrector:
         raise ConvergenceError("corrector did not converge", history)
 
     def solve_fixed(self, u0: np.ndarray, lam: float) -> Solution:
-        """Solve ``r(u, lam) = 0`` at fixed ``lam`` (natural parameter)."""
+        """Solve ``r(u, lam) = 0`` at fixed ``lam`` (natural parameter).
+
+        Parameters
+        ----------
+        u0 : ndarray
+            Guess of the unknowns.
+        lam : float
+            The parameter's value.
+
+        Returns
+        -------
+        Solution
+            The corrected point.
+
+        Raises
+        ------
+        ConvergenceError, SaltationError
+            As :meth:`solve_bordered`.
+        """
         e = np.zeros(len(u0) + 1)
         e[-1] = 1.0
         return self.solve_bordered(np.append(u0, lam), e)
 
     def tangent(self, sol: Solution, previous: np.ndarray) -> np.ndarray:
-        """Unit tangent at ``sol`` oriented along ``previous``."""
+        """Unit tangent at ``sol`` oriented along ``previous``.
+
+        Solves ``[[J_u, J_lam], [previous]] t = e_last``; where that matrix is singular, ``previous``
+        itself is returned (normalised).
+
+        Parameters
+        ----------
+        sol : Solution
+            A corrected point with ``jac_lam`` in its evaluation.
+        previous : ndarray
+            The previous tangent (or ``e_lam`` at the start).
+
+        Returns
+        -------
+        ndarray
+            The unit tangent, with ``t . previous >= 0``.
+        """
         ev = sol.evaluation
         J = bordered(ev.jac_u, ev.jac_lam, previous)
         rhs = np.zeros(J.shape[0])

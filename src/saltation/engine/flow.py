@@ -146,6 +146,8 @@ class Trajectory:
 
     Attributes
     ----------
+    system : PiecewiseSystem
+        The model.
     t0, t1 : float
         Start and end time (``t1 < t0`` in backward time).
     x0, x1 : ndarray, shape (n,)
@@ -231,9 +233,24 @@ class Trajectory:
         return tuple(np.asarray(a) for a in self._steps)
 
     def at(self, times: Sequence[float] | np.ndarray) -> np.ndarray:
-        """States at the given times (inside the time span) from the dense output, shape (m, n).
+        """States at the given times (inside the time span) from the dense output.
 
         At an event time the state before the event is returned.
+
+        Parameters
+        ----------
+        times : array_like, shape (m,)
+            Times inside the span from :attr:`t0` to :attr:`t1`.
+
+        Returns
+        -------
+        ndarray, shape (m, n)
+            The state at each time, from DOP853's continuous extension of the step that covers it.
+
+        Raises
+        ------
+        ValueError
+            If the trajectory was computed without ``dense=True``.
         """
         _, _, _, y0, F = self.dense_steps
         times = np.asarray(times, dtype=float).reshape(-1)
@@ -243,7 +260,25 @@ class Trajectory:
         return dense_evaluate(F[k], y0[k], s)
 
     def locate(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For each time, the index of the recorded step that covers it and the fraction within it."""
+        """For each time, the index of the recorded step that covers it and the fraction within it.
+
+        Parameters
+        ----------
+        times : ndarray, shape (m,)
+            Times inside the span of the trajectory.
+
+        Returns
+        -------
+        k : ndarray of int, shape (m,)
+            Index of the recorded step (:attr:`dense_steps`) that covers each time.
+        s : ndarray, shape (m,)
+            Fraction of that step, in ``[0, s_end[k]]``.
+
+        Raises
+        ------
+        ValueError
+            If the trajectory was computed without ``dense=True``.
+        """
         t_old, h, s_end, _, _ = self.dense_steps
         times = np.asarray(times, dtype=float)
         forward = h[0] > 0 if h.size else True
@@ -255,10 +290,18 @@ class Trajectory:
     def sample(self, num_per_step: int = 8) -> tuple[np.ndarray, np.ndarray]:
         """Dense states along the trajectory.
 
+        Parameters
+        ----------
+        num_per_step : int
+            Number of intervals each recorded step is cut into (``num_per_step + 1`` points per step, the
+            step's ends included).
+
         Returns
         -------
         t : ndarray, shape (m,)
+            Times, in the direction of integration.
         x : ndarray, shape (m, n)
+            States at those times (the initial state alone for a trajectory without steps).
 
         Raises
         ------
@@ -285,7 +328,27 @@ def _dense_eval(F: np.ndarray, y0: np.ndarray, s: np.ndarray) -> np.ndarray:
 
 
 def dense_evaluate(F: np.ndarray, y0: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """DOP853's continuous extension of steps ``(F[k], y0[k])`` at fractions ``s[k]``, shape (m, n)."""
+    """DOP853's continuous extension of steps ``(F[k], y0[k])`` at fractions ``s[k]``.
+
+    Parameters
+    ----------
+    F : ndarray, shape (m, 7, n)
+        Dense-output coefficients of each step (the last item of :attr:`Trajectory.dense_steps`).
+    y0 : ndarray, shape (m, n)
+        State at the start of each step.
+    s : ndarray, shape (m,)
+        Fraction of each step at which to evaluate (0 at its start, 1 at its full length).
+
+    Returns
+    -------
+    ndarray, shape (m, n)
+        The interpolated states.
+
+    References
+    ----------
+    Hairer, Norsett and Wanner (1993), *Solving Ordinary Differential Equations I: Nonstiff Problems*,
+    2nd ed., Springer, section II.6 (dense output of DOP853).
+    """
     out = np.zeros(y0.shape)
     for j in range(7):
         out += F[:, 6 - j, :]
@@ -317,6 +380,12 @@ class Tolerances:
         forcing term (:mod:`saltation.engine.affine`), step with the exact flow
         (its Taylor series summed to rounding error) instead of DOP853; the
         tolerances then only govern the dense output between steps.
+
+    Raises
+    ------
+    ValueError
+        If ``rtol`` is not in ``(0, 1)``, ``atol`` is not positive and finite, or ``max_step`` is not
+        positive.
     """
 
     rtol: float = 1e-10
@@ -347,12 +416,21 @@ class Tolerances:
 class Flow:
     """The compiled flow of one model: integrate, with events and saltation matrices.
 
+    The first flow of a model compiles its functions (and, on a cold cache, the engine for its
+    number of states) into the kernel cache; later flows load them from there.
+
     Parameters
     ----------
     system : PiecewiseSystem
         The model.
     tolerances : Tolerances, optional
-        Default integration tolerances.
+        Default integration tolerances (``Tolerances()`` by default).
+
+    Raises
+    ------
+    KernelCacheError
+        If the kernel cache cannot be written, or a compiled module cannot be rebuilt in it
+        (:mod:`saltation.engine.codegen`).
     """
 
     def __init__(self, system: PiecewiseSystem, tolerances: Tolerances | None = None):
@@ -382,7 +460,25 @@ class Flow:
         return (Flow, (self.system, self.tolerances))
 
     def parameters(self, overrides: Mapping[str, float] | np.ndarray | None = None) -> np.ndarray:
-        """Parameter vector from a mapping of overrides (or an array passed through)."""
+        """Parameter vector from a mapping of overrides (or an array passed through).
+
+        Parameters
+        ----------
+        overrides : mapping or ndarray, optional
+            Values by parameter name, the others at the model's defaults; or a full parameter vector,
+            shape ``(n_params,)``, which is checked and copied.
+
+        Returns
+        -------
+        ndarray, shape (n_params,)
+            The parameter values, in the model's order.
+
+        Raises
+        ------
+        ModelError
+            An unknown parameter name, a value that is not a finite number, an array of the wrong shape,
+            or parameters at which one of the model's expressions divides by zero.
+        """
         if isinstance(overrides, np.ndarray):
             if overrides.shape != (self.system.n_params,):
                 raise ModelError(f"parameter array must have shape ({self.system.n_params},), got {overrides.shape}")
@@ -396,6 +492,20 @@ class Flow:
     def initial_mode(self, x0: np.ndarray, p: np.ndarray, t0: float = 0.0) -> int:
         """The model's initial-mode rule, compiled: the first mode whose domain holds.
 
+        Parameters
+        ----------
+        x0 : ndarray, shape (n,)
+            State.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+        t0 : float
+            Time.
+
+        Returns
+        -------
+        int
+            Index of the mode.
+
         Raises
         ------
         InitialModeError
@@ -407,7 +517,29 @@ class Flow:
         return m
 
     def indicator(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> float:
-        """The indicator ``h(t, x, p)`` of a switching surface (by index or name)."""
+        """The indicator ``h(t, x, p)`` of a switching surface (by index or name).
+
+        Parameters
+        ----------
+        surface : int or str
+            Index or name of the surface.
+        t : float
+            Time.
+        x : array_like, shape (n,)
+            State.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+
+        Returns
+        -------
+        float
+            The value of the indicator (zero on the surface).
+
+        Raises
+        ------
+        ModelError
+            If ``surface`` names no surface of the model.
+        """
         s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
         return float(self._model[kc.INDICATOR](int(s), float(t), _c_array(x), _c_array(p)))
 
@@ -418,6 +550,18 @@ class Flow:
         (affine modes, ``exact_affine``) and it never slides; otherwise ``rtol``
         times the state's size times the number of events plus one (the error of
         DOP853 per stretch between events, at the requested tolerance).
+
+        Parameters
+        ----------
+        traj : Trajectory
+            A trajectory of this flow.
+        tolerances : Tolerances, optional
+            The tolerances it was computed with (the flow's by default).
+
+        Returns
+        -------
+        float
+            The estimate, in the units of the state.
         """
         tol = tolerances or self.tolerances
         affine = self._model[kc.AFFINE_MODES]
@@ -428,25 +572,117 @@ class Flow:
         return tol.rtol * (1.0 + float(np.abs(traj.x1).max())) * (1 + len(traj.events))
 
     def vector_field(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
-        """The vector field ``f(t, x, p)`` of a mode."""
+        """The vector field ``f(t, x, p)`` of a mode.
+
+        Parameters
+        ----------
+        mode : int or str
+            Index or name of the mode.
+        t : float
+            Time.
+        x : array_like, shape (n,)
+            State.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The mode's field at ``(t, x)``.
+
+        Raises
+        ------
+        ModelError
+            If ``mode`` names no mode of the model.
+        """
         f = np.zeros(self.system.n)
         self._model[kc.VECTOR_FIELD](self.system.mode_index(mode), float(t), _c_array(x), _c_array(p), f)
         return f
 
     def vector_field_jacobian(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
-        """``f_x`` of a mode."""
+        """The Jacobian ``f_x`` of a mode's vector field.
+
+        Parameters
+        ----------
+        mode : int or str
+            Index or name of the mode.
+        t : float
+            Time.
+        x : array_like, shape (n,)
+            State.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            ``f_x`` at ``(t, x)``.
+
+        Raises
+        ------
+        ModelError
+            If ``mode`` names no mode of the model.
+        """
         J = np.zeros((self.system.n, self.system.n))
         self._model[kc.VECTOR_FIELD_JAC](self.system.mode_index(mode), float(t), _c_array(x), _c_array(p), J)
         return J
 
     def vector_field_parameters(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
-        """``f_p`` of a mode, shape ``(n, n_params)``."""
+        """The parameter derivative ``f_p`` of a mode's vector field.
+
+        Parameters
+        ----------
+        mode : int or str
+            Index or name of the mode.
+        t : float
+            Time.
+        x : array_like, shape (n,)
+            State.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+
+        Returns
+        -------
+        ndarray, shape (n, n_params)
+            ``f_p`` at ``(t, x)``.
+
+        Raises
+        ------
+        ModelError
+            If ``mode`` names no mode of the model.
+        """
         fp = np.zeros((self.system.n, max(self.system.n_params, 1)))
         self._model[kc.VECTOR_FIELD_DP](self.system.mode_index(mode), float(t), _c_array(x), _c_array(p), fp)
         return fp[:, : self.system.n_params]
 
     def indicator_gradient(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
-        """``(h_x, h_t, h_p)`` of a switching surface at ``(t, x)``."""
+        """The derivatives ``(h_x, h_t, h_p)`` of a switching surface's indicator at ``(t, x)``.
+
+        Parameters
+        ----------
+        surface : int or str
+            Index or name of the surface.
+        t : float
+            Time.
+        x : array_like, shape (n,)
+            State.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+
+        Returns
+        -------
+        h_x : ndarray, shape (n,)
+            Gradient in the state.
+        h_t : float
+            Derivative in time (non-zero for a moving surface).
+        h_p : ndarray, shape (n_params,)
+            Gradient in the parameters.
+
+        Raises
+        ------
+        ModelError
+            If ``surface`` names no surface of the model.
+        """
         s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
         hx = np.zeros(self.system.n)
         hp = np.zeros(max(self.system.n_params, 1))
@@ -456,7 +692,40 @@ class Flow:
     def lie_derivative(
         self, mode: int | str, surface: int | str, t: float, x: Sequence[float], p: np.ndarray
     ) -> tuple[float, np.ndarray, np.ndarray, float]:
-        """``L = h_x f + h_t`` of a surface along a mode's field, with ``L_x``, ``L_p`` and ``L_t``."""
+        """The Lie derivative ``L = h_x f + h_t`` of a surface along a mode's field, with ``L_x``, ``L_p`` and ``L_t``.
+
+        ``L`` is the speed at which the mode's flow crosses the surface: the denominator of the saltation
+        matrix, eq. (9) of *Fold bifurcations in discontinuous systems*, zero at a tangency.
+
+        Parameters
+        ----------
+        mode : int or str
+            Index or name of the mode.
+        surface : int or str
+            Index or name of the surface.
+        t : float
+            Time.
+        x : array_like, shape (n,)
+            State.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+
+        Returns
+        -------
+        L : float
+            The Lie derivative at ``(t, x)``.
+        L_x : ndarray, shape (n,)
+            Its gradient in the state.
+        L_p : ndarray, shape (n_params,)
+            Its gradient in the parameters.
+        L_t : float
+            Its derivative in time.
+
+        Raises
+        ------
+        ModelError
+            If ``mode`` or ``surface`` names no mode or surface of the model.
+        """
         m = self.system.mode_index(mode)
         k = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
         gx = np.zeros(self.system.n)
@@ -467,7 +736,24 @@ class Flow:
         return value, gx, gp[: self.system.n_params], rate_t
 
     def guard_holds(self, transition: int, t: float, x: Sequence[float], p: np.ndarray) -> bool:
-        """Whether every condition of a transition's guard holds at ``(t, x)``."""
+        """Whether every condition of a transition's guard holds at ``(t, x)``.
+
+        Parameters
+        ----------
+        transition : int
+            Index of the transition.
+        t : float
+            Time.
+        x : array_like, shape (n,)
+            State.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+
+        Returns
+        -------
+        bool
+            True when the guard holds (always, for a transition without a guard).
+        """
         return bool(self._model[kc.GUARD](int(transition), float(t), _c_array(x), _c_array(p)))
 
     def transition_jump(
@@ -475,19 +761,45 @@ class Flow:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Fire a transition at a state on its surface: ``(x+, S, dx+/dp)``.
 
-        The saltation matrix by the general formula (eq. 9 with a reset ``g``),
+        The saltation matrix by the general formula (eq. (9) of *Fold bifurcations in discontinuous
+        systems*, with a reset ``g``),
         ``S = g_x + (f+ - g_x f- - g_t) h_x / (h_x f- + h_t)``, with ``f-`` the
         field of the transition's source mode and ``f+`` that of its target at
         ``x+ = g(t, x, p)``; the same formula as the engine's at every event,
         and the same in backward time (reversing time flips the numerator and
         the denominator alike).
-        The third item is the jump's own parameter derivative
-        ``g_p + (f+ - g_x f- - g_t) h_p / (h_x f- + h_t)``, shape ``(n, n_params)``.
+
+        Parameters
+        ----------
+        transition : int
+            Index of the transition.
+        t : float
+            Time of the event.
+        x : array_like, shape (n,)
+            State on the transition's surface, before the event.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+
+        Returns
+        -------
+        x_plus : ndarray, shape (n,)
+            The state after the event (``x`` itself without a reset).
+        S : ndarray, shape (n, n)
+            The saltation matrix.
+        dx_plus_dp : ndarray, shape (n, n_params)
+            The jump's own parameter derivative
+            ``g_p + (f+ - g_x f- - g_t) h_p / (h_x f- + h_t)``.
 
         Raises
         ------
         IntegrationError
             If the flow is tangent to the surface there (the saltation matrix is undefined).
+
+        References
+        ----------
+        Aizerman and Gantmakher (1958), "On the stability of periodic motions", *Journal of Applied
+        Mathematics and Mechanics* 22.  Leine and Van Campen, "Fold bifurcations in discontinuous
+        systems", eq. (9).
         """
         sys_ = self.system
         n, k = sys_.n, int(transition)
@@ -529,6 +841,10 @@ class Flow:
     ) -> Trajectory:
         """Integrate from ``t0`` to ``t1`` (``t1 < t0`` integrates backward in time).
 
+        Between events the compiled engine steps with DOP853 (or with the exact flow of an affine mode);
+        it locates every event, applies its reset and saltation matrix, and slides along a surface with
+        Filippov's convex combination where both fields push into it.
+
         Parameters
         ----------
         x0 : array_like, shape (n,)
@@ -546,6 +862,8 @@ class Flow:
             (-1: none); with ``variational``, :attr:`Trajectory.parameter_sensitivity`.
         dense : bool
             Keep the dense output for :meth:`Trajectory.sample`.
+        tolerances : Tolerances, optional
+            Integration tolerances (the flow's by default).
         phi0, psi0 : ndarray, optional
             The fundamental solution matrix, shape (n, n), and the parameter
             sensitivity, shape (n,), at ``t0`` (identity and zero by default):
@@ -555,10 +873,34 @@ class Flow:
             passes their surfaces as if they were not there): the virtual
             orbits that define a grazing (:mod:`saltation.special_points.grazing`).
 
+        Returns
+        -------
+        Trajectory
+            The end state and mode, the events with their saltation matrices, and the monodromy
+            (with ``variational``) and dense output (with ``dense``).
+
         Raises
         ------
-        InitialModeError, ModelError, IntegrationError
-            With a message that names the mode and surface involved.
+        ModelError
+            An initial state, parameter vector, ``phi0`` or ``psi0`` of the wrong size or not finite, an
+            unknown mode or parameter, or a state that leaves a mode's domain where no transition holds.
+        ValueError
+            If ``t0`` or ``t1`` is not finite.
+        InitialModeError
+            If ``mode0`` is not given and ``x0`` lies in no mode's domain.
+        IntegrationError
+            If the integration fails: :class:`ChatteringError` (too many events, or events closer than
+            the time axis resolves), :class:`StepSizeError`, :class:`NonFiniteError`,
+            :class:`SlidingError` (a sliding motion the model does not define), or an
+            :class:`IntegrationError` itself (a tangential event, too many steps, a degenerate case).
+            The message names the mode and surface involved.
+
+        References
+        ----------
+        Hairer, Norsett and Wanner (1993), *Solving Ordinary Differential Equations I: Nonstiff Problems*,
+        2nd ed., Springer (DOP853).  Filippov (1988), *Differential Equations with Discontinuous
+        Righthand Sides*, Kluwer (sliding).  Leine and Van Campen, "Fold bifurcations in discontinuous
+        systems", eq. (9) (saltation matrices).
         """
         sys_ = self.system
         tol = tolerances or self.tolerances
@@ -614,8 +956,44 @@ class Flow:
         map at a fixed span (``normal`` None, ``damped``), or the bordered
         pseudo-arclength system of ``z = (x0[, T], lam)`` (``span`` 0: the
         forcing period follows ``lam``; ``phase = (x_ref, f_ref)`` for
-        autonomous orbits).  Returns None when the kernel cannot run the
-        problem (a forcing period given as a Python callable).
+        autonomous orbits).
+
+        Parameters
+        ----------
+        z0 : ndarray
+            Initial iterate: ``x0`` (and ``T`` for an autonomous orbit), then ``lam`` for the bordered
+            system.
+        normal : ndarray or None
+            The pseudo-arclength row of the bordered system (None: the period map at a fixed ``lam``).
+        p : ndarray, shape (n_params,)
+            Parameter values (the continuation parameter's entry is taken from ``z``).
+        t0 : float
+            Initial time of every shot.
+        sign : float
+            +1 to shoot forward in time, -1 backward.
+        lam_index : int
+            Index of the continuation parameter.
+        span : float
+            The length of a shot of a forced orbit at fixed parameters (0: the forcing period at ``lam``).
+        phase : tuple of ndarray or None
+            ``(x_ref, f_ref)``, the phase condition of an autonomous orbit.
+        tol : float
+            Newton tolerance: converged when ``|r| <= tol (1 + |u|)``.
+        max_iter : int
+            Largest number of iterations.
+        max_correction : float
+            The bordered loop stops when a correction exceeds ``max_correction (1 + |z|)``.
+        damped : bool
+            Newton on the period map at a fixed ``lam`` (``normal`` unused), each step halved (up to 8
+            times) until the residual decreases; False: the bordered pseudo-arclength system.
+        tolerances : Tolerances, optional
+            Integration tolerances (the flow's by default).
+
+        Returns
+        -------
+        CompiledNewton or None
+            The loop's outcome (its ``code`` says whether it converged, and why not), or None when the
+            kernel cannot run the problem (a forcing period given as a Python callable).
         """
         if span == 0.0 and phase is None and not isinstance(self.system, PiecewiseSystem):
             return None  # the forcing period is a Python callable
@@ -634,7 +1012,34 @@ class Flow:
                               shot=out)
 
     def shot_trajectory(self, result: CompiledNewton, x0: np.ndarray, t0: float, p: np.ndarray, sensitivity: int) -> Trajectory:
-        """The trajectory of the last shot of :meth:`compiled_newton` (raises that shot's error if it failed)."""
+        """The trajectory of the last shot of :meth:`compiled_newton`.
+
+        Parameters
+        ----------
+        result : CompiledNewton
+            The outcome of :meth:`compiled_newton`.
+        x0 : ndarray, shape (n,)
+            The initial state of that shot.
+        t0 : float
+            Its initial time.
+        p : ndarray, shape (n_params,)
+            Its parameter values.
+        sensitivity : int
+            Index of the parameter whose sensitivity the shot carried (-1: none).
+
+        Returns
+        -------
+        Trajectory
+            The shot, with its monodromy (no dense output).
+
+        Raises
+        ------
+        IntegrationError
+            The error of the shot, if it failed (as :meth:`run` raises it: a subclass such as
+            :class:`ChatteringError`, or :class:`ModelError` for a state outside every domain).
+        InitialModeError
+            If the shot failed and ``x0`` lies in no mode's domain.
+        """
         ok = int(result.shot[0][kc.INFO_STATUS]) == _STATUS_OK
         # the shot's initial mode; after a failure the rule itself, which raises for a state in no mode
         m0 = int(result.shot[0][kc.INFO_INITIAL_MODE]) if ok else self.initial_mode(x0, p, t0)
@@ -815,6 +1220,51 @@ def simulate(
 
     A convenience around :class:`Flow` (which keeps the compiled kernels for
     repeated use).
+
+    Parameters
+    ----------
+    system : PiecewiseSystem
+        The model.
+    x0 : array_like, shape (n,)
+        Initial state.
+    t_span : tuple of float
+        ``(t0, t1)``, start and end time.
+    parameters : mapping, optional
+        Parameter values by name (the model's defaults for the others).
+    mode0 : int or str, optional
+        Initial mode; by default the model's initial-mode rule.
+    variational : bool
+        Carry the fundamental solution matrix (the monodromy over the span).
+    dense : bool
+        Keep the dense output (:meth:`Trajectory.sample`, :meth:`Trajectory.at`).
+    tolerances : Tolerances, optional
+        Integration tolerances (``Tolerances()`` by default).
+
+    Returns
+    -------
+    Trajectory
+        The solution over the span, with its events.
+
+    Raises
+    ------
+    ModelError
+        A state or parameter of the wrong size or not finite, an unknown mode or parameter name, or a
+        state that leaves a mode's domain where no transition holds.
+    ValueError
+        If a time of ``t_span`` is not finite.
+    InitialModeError
+        If ``mode0`` is not given and ``x0`` lies in no mode's domain.
+    IntegrationError
+        If the integration fails (:class:`ChatteringError`, :class:`StepSizeError`,
+        :class:`NonFiniteError`, :class:`SlidingError`, or :class:`IntegrationError` itself).
+    KernelCacheError
+        If the model cannot be compiled into the kernel cache.
+
+    References
+    ----------
+    Hairer, Norsett and Wanner (1993), *Solving Ordinary Differential Equations I: Nonstiff Problems*,
+    2nd ed., Springer (DOP853).  Filippov (1988), *Differential Equations with Discontinuous
+    Righthand Sides*, Kluwer (sliding).
     """
     flow = Flow(system, tolerances)
     return flow.run(x0, t_span[0], t_span[1], flow.parameters(parameters), mode0=mode0, variational=variational, dense=dense)

@@ -37,16 +37,31 @@ def regularize(system: PiecewiseSystem, epsilon: float, *, name: str | None = No
     Parameters
     ----------
     system : PiecewiseSystem
+        The discontinuous model, without resets.
     epsilon : float
         Default width of the sigmoids (a parameter of the result, named ``parameter``).
     name : str, optional
         Name of the result (default ``<name>_smooth``).
+    parameter : str
+        Name of the width parameter in the result.
+
+    Returns
+    -------
+    PiecewiseSystem
+        One mode, ``smooth``, with the field ``sum_m W_m f_m``, no surfaces and no transitions; the
+        parameters of ``system`` plus ``parameter``, and its forcing period.
 
     Raises
     ------
     ModelError
         If a transition has a reset, ``epsilon`` is not positive, or ``parameter``
         is already a name of the model.
+
+    References
+    ----------
+    Sotomayor and Teixeira (1996), "Regularization of discontinuous vector fields", Proceedings of
+    the International Conference on Differential Equations (Lisboa 1995), World Scientific.
+    Leine and Van Campen, "Fold bifurcations in discontinuous systems" (on what smoothing loses).
     """
     if not epsilon > 0:
         raise ModelError(f"regularize: epsilon must be positive, got {epsilon!r}")

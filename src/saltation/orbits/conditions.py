@@ -22,8 +22,8 @@ The conditions:
 * :class:`CubicTangency`: adding-sliding.  At an unknown instant ``tau`` of a sliding motion, the exit
   side's field is tangent with zero rate: ``L_A = 0`` and ``L_A,x f_A + L_A,t = 0``;
 * :class:`MultiplierCondition`: a fold (``mu = +1``) or a period doubling (``mu = -1``), minimally
-  augmented: the bordered test function of Govaerts (*Numerical Bifurcation Analysis of Dynamical
-  Systems*, SIAM 2000) vanishes where ``M - mu I`` is singular.
+  augmented: the bordered test function of Govaerts (*Numerical Methods for Bifurcations of Dynamical
+  Equilibria*, SIAM 2000) vanishes where ``M - mu I`` is singular.
 
 :class:`ConditionedProblem` is the augmented problem.  It has the continuation protocol (so a
 two-parameter curve is :class:`~saltation.branches.continuation.Continuation` on it) and one Newton
@@ -55,7 +55,25 @@ _ARRIVALS = (EventKind.TRANSITION, EventKind.SLIDING_START)
 
 @dataclass
 class Piece:
-    """The shot at an interior instant: time, state, mode, ``Phi(t, t0)`` and the sensitivities ``d x / d p_j``."""
+    """The shot at an interior instant: time, state, mode, ``Phi(t, t0)`` and the sensitivities ``d x / d p_j``.
+
+    Attributes
+    ----------
+    t : float
+        The instant.
+    x : ndarray, shape (n,)
+        The state there.
+    mode : str
+        The mode there.
+    fundamental : ndarray, shape (n, n)
+        The fundamental solution matrix ``Phi(t, t0)`` (saltation matrices included).
+    sensitivities : dict of int to ndarray, shape (n,)
+        ``d x(t) / d p_j``, by parameter index.
+    sliding : bool
+        Whether the shot is on a sliding motion there.
+    velocity : ndarray, shape (n,), or None
+        The vector field there (the sliding field on a sliding motion).
+    """
 
     t: float
     x: np.ndarray
@@ -73,8 +91,11 @@ class Shot:
     Attributes
     ----------
     x0 : ndarray, shape (n,)
+        The initial state.
     period : float
+        The period.
     parameters : ndarray
+        Parameter values.
     trajectory : Trajectory
         The whole period, with its monodromy.
     sensitivities : dict of int to ndarray
@@ -103,7 +124,25 @@ class Shot:
     mode0: str | None = None
 
     def run_to(self, t: float, params: Sequence[int]) -> Piece:
-        """A partial run from ``t0`` to ``t`` with the sensitivities of ``params`` (one integration each)."""
+        """A partial run from ``t0`` to ``t`` with the sensitivities of ``params`` (one integration each).
+
+        Parameters
+        ----------
+        t : float
+            The instant to run to.
+        params : sequence of int
+            Indices of the parameters whose sensitivities to carry.
+
+        Returns
+        -------
+        Piece
+            The shot at ``t``.
+
+        Raises
+        ------
+        IntegrationError, ModelError, InitialModeError
+            If a run fails (see :meth:`Flow.run`).
+        """
         mode0 = self.mode0 if self.mode0 is not None else self.trajectory.mode0
         runs = [self.flow.run(self.x0, self.t0, t, self.parameters, mode0=mode0, variational=True,
                               sensitivity=j, disabled=self.disabled, tolerances=self.tolerances)
@@ -116,8 +155,21 @@ class Shot:
 
 @dataclass
 class Rows:
-    """A condition's values and derivatives: by ``x0`` (m, n), the period (m,), the parameters (m, k) in
-    the problem's order, and the condition's own extra unknowns (m, e)."""
+    """A condition's values and derivatives.
+
+    Attributes
+    ----------
+    value : ndarray, shape (m,)
+        The ``m`` equations' values.
+    d_x0 : ndarray, shape (m, n)
+        Derivatives by the initial state (or the node of the segment that holds the condition).
+    d_period : ndarray, shape (m,)
+        Derivatives by the period.
+    d_parameters : ndarray, shape (m, k)
+        Derivatives by the parameters of the derivative columns, in the problem's order.
+    d_extra : ndarray, shape (m, e)
+        Derivatives by the condition's own extra unknowns.
+    """
 
     value: np.ndarray
     d_x0: np.ndarray
@@ -129,6 +181,8 @@ class Rows:
 class Condition(abc.ABC):
     """One or more equations attached to a periodic orbit (see the module docstring).
 
+    A subclass sets the class attributes and writes :meth:`rows`.
+
     Attributes
     ----------
     size : int
@@ -137,6 +191,12 @@ class Condition(abc.ABC):
         Number of unknowns of its own (an instant).
     disabled : tuple of int
         Transitions the orbit passes as if they were not there (a grazing's virtual orbit).
+    name : str
+        What it locates, for messages.
+    start_mode : str or None
+        The mode the shot starts in (None: the model's initial-mode rule at ``x0``).
+    anchors_phase : bool
+        It fixes the phase of an autonomous orbit, whose phase condition it then replaces.
     """
 
     size: int = 1
@@ -149,25 +209,78 @@ class Condition(abc.ABC):
     anchors_phase: bool = False
 
     def start(self) -> np.ndarray:
-        """The initial values of its extra unknowns."""
+        """The initial values of its extra unknowns.
+
+        Returns
+        -------
+        ndarray, shape (extras,)
+            Their guesses (none by default).
+        """
         return np.zeros(0)
 
     def split(self, extra: np.ndarray) -> float | None:
-        """The instant to split the shot at (its fundamental matrix there is then free), or None."""
+        """The instant to split the shot at (its fundamental matrix there is then free), or None.
+
+        Parameters
+        ----------
+        extra : ndarray, shape (extras,)
+            The condition's own unknowns.
+
+        Returns
+        -------
+        float or None
+            The instant, or None for a shot that is not split.
+        """
         return None
 
     def instant(self, extra: np.ndarray) -> float | None:
-        """The instant at which it reads the orbit (multiple shooting reads it from the segment that holds
-        it), or None (the start, or the whole period)."""
+        """The instant at which it reads the orbit, or None (the start, or the whole period).
+
+        Multiple shooting reads it from the segment that holds that instant.
+
+        Parameters
+        ----------
+        extra : ndarray, shape (extras,)
+            The condition's own unknowns.
+
+        Returns
+        -------
+        float or None
+            The instant (by default the split instant).
+        """
         return self.split(extra)
 
     @abc.abstractmethod
     def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
-        """Its values and derivatives at the shot (``extra``: its own unknowns; ``params``: the parameter
-        indices of the derivative columns, in order)."""
+        """Its values and derivatives at the shot.
+
+        Parameters
+        ----------
+        shot : Shot
+            The shot of the period (split where :meth:`split` asked).
+        extra : ndarray, shape (extras,)
+            The condition's own unknowns.
+        params : sequence of int
+            The parameter indices of the derivative columns, in order.
+        problem : ConditionedProblem
+            The problem, for conditions that shoot again (finite differences).
+
+        Returns
+        -------
+        Rows
+            ``size`` equations and their derivatives.
+        """
 
     def accept(self, shot: Shot, extra: np.ndarray) -> None:
-        """Called at every accepted point: move the guesses along."""
+        """Called at every accepted point: move the guesses along.
+
+        Parameters
+        ----------
+        shot : Shot
+            The accepted point's shot.
+        extra : ndarray, shape (extras,)
+            The condition's own unknowns there.
+        """
 
 
 def _rows(size: int, n: int, k: int, e: int) -> Rows:
@@ -175,12 +288,35 @@ def _rows(size: int, n: int, k: int, e: int) -> Rows:
 
 
 class Tangency(Condition):
-    """A grazing: the virtual orbit (``transition`` and ``also_disabled`` passed) is tangent to the
-    transition's surface at the unknown instant ``t_g``: ``h = 0`` and ``L = h_x f + h_t = 0`` there.
+    """A grazing: the virtual orbit is tangent to the transition's surface at the unknown instant ``t_g``.
+
+    The virtual orbit passes ``transition`` and ``also_disabled`` without firing them; the equations
+    are ``h = 0`` and ``L = h_x f + h_t = 0`` at ``t_g``.
 
     Derivatives: ``d h / d x0 = h_x Phi(t_g)``, ``d h / d p = h_x psi(t_g) + h_p``, ``d h / d t_g = L``;
-    the same for ``L`` with ``L_x``, ``L_p`` and ``d L / d t_g = L_x f + L_t`` (eq. 9's ingredients,
+    the same for ``L`` with ``L_x``, ``L_p`` and ``d L / d t_g = L_x f + L_t`` (eq. (9)'s ingredients,
     from the model's exact derivatives).
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    transition : int
+        Index of the grazed transition (its surface is the one touched).
+    t_guess : float
+        Guess of the instant of tangency.
+    also_disabled : sequence of int
+        Further transitions the virtual orbit passes.
+
+    Raises
+    ------
+    IndexError
+        If ``transition`` is not an index of the model's transitions.
+
+    References
+    ----------
+    di Bernardo, Budd, Champneys and Kowalczyk (2008), *Piecewise-smooth Dynamical Systems: Theory
+    and Applications*, Springer (grazing bifurcations).
     """
 
     size = 2
@@ -202,6 +338,29 @@ class Tangency(Condition):
         return float(extra[0])
 
     def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
+        """``(h, L)`` at the instant of tangency and their derivatives (see the class docstring).
+
+        Parameters
+        ----------
+        shot : Shot
+            The shot, split at ``t_g``.
+        extra : ndarray, shape (1,)
+            ``t_g``.
+        params : sequence of int
+            The parameter indices of the derivative columns.
+        problem : ConditionedProblem
+            Unused.
+
+        Returns
+        -------
+        Rows
+            Two equations, one extra unknown.
+
+        Raises
+        ------
+        SaltationError
+            If the instant ``t_g`` left the period (the shot has no piece there).
+        """
         flow, p, piece = self.flow, shot.parameters, shot.piece
         n = len(shot.x0)
         out = _rows(2, n, len(params), 1)
@@ -269,8 +428,19 @@ class ReturnTangency(Condition):
 
 @dataclass(frozen=True)
 class EventIdentity:
-    """An orbit's event named by what it is, not by when: its kind class, surface, the mode it comes
-    from, and its place among the period's events of that description."""
+    """An orbit's event named by what it is, not by when.
+
+    Attributes
+    ----------
+    surface : str
+        The surface of the event.
+    mode_from : str
+        The mode it comes from.
+    ordinal : int
+        Its place among the period's events of that description.
+    kinds : tuple of EventKind
+        The kinds of events that match (arrivals: transitions and starts of sliding, by default).
+    """
 
     surface: str
     mode_from: str
@@ -278,6 +448,18 @@ class EventIdentity:
     kinds: tuple[EventKind, ...] = _ARRIVALS
 
     def matches(self, e: SwitchingEvent) -> bool:
+        """Whether an event has this description (kind, surface and mode it comes from).
+
+        Parameters
+        ----------
+        e : SwitchingEvent
+            An event.
+
+        Returns
+        -------
+        bool
+            True if it matches (whatever its place).
+        """
         return e.kind in self.kinds and e.surface == self.surface and e.mode_from == self.mode_from
 
     def find(self, events: Sequence[SwitchingEvent], t_last: float | None = None, period: float = math.inf
@@ -288,10 +470,24 @@ class EventIdentity:
         lies more than a quarter period from ``t_last`` (an arrival that moved across the section
         ``t = t0``), the one of them nearest ``t_last`` modulo the period.
 
+        Parameters
+        ----------
+        events : sequence of SwitchingEvent
+            The events of one period.
+        t_last : float, optional
+            The time of the event last found (None: by its place only).
+        period : float
+            The period, to measure times modulo it.
+
+        Returns
+        -------
+        SwitchingEvent
+            The event.
+
         Raises
         ------
         SaltationError
-            If the orbit no longer has such an event.
+            If the orbit no longer has such an event (or, without ``t_last``, fewer than ``ordinal + 1``).
         """
         found = [e for e in events if self.matches(e)]
         if not found:
@@ -312,13 +508,29 @@ class EventIdentity:
 
 
 class ArrivalTangency(Condition):
-    """Crossing- or switching-sliding: where the orbit arrives at a surface (the event ``identity``), the
-    field of ``far_mode`` is tangent to it: ``L_B(t_e, x_e) = h_x f_B + h_t = 0``.
+    """Crossing- or switching-sliding: where the orbit arrives at a surface, the far side's field is tangent to it.
 
-    The event's time and state move with the unknowns as the implicit function theorem says
-    (``d t_e = -h_x d x^- / L_A``, ``d x_e = d x^- + f_A d t_e``, with ``L_A`` the arriving field's
+    At the event ``identity``, ``L_B(t_e, x_e) = h_x f_B + h_t = 0`` with ``f_B`` the field of
+    ``far_mode``.  The event's time and state move with the unknowns as the implicit function theorem
+    says (``d t_e = -h_x d x^- / L_A``, ``d x_e = d x^- + f_A d t_e``, with ``L_A`` the arriving field's
     rate); ``d x^-`` is the shot's fundamental matrix just before the event, from the shot split a
     moment ``delta`` before it and carried to the event to second order.
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    identity : EventIdentity
+        The arrival.
+    far_mode : str
+        The mode on the far side of the surface, whose field turns tangent.
+    t_guess : float
+        Guess of the arrival's time.
+
+    References
+    ----------
+    di Bernardo, Kowalczyk and Nordmark (2002), "Bifurcations of dynamical systems with sliding:
+    derivation of normal-form mappings", Physica D 170 (crossing- and switching-sliding).
     """
 
     name = "arrival tangency"
@@ -340,9 +552,50 @@ class ArrivalTangency(Condition):
         return self._t_last_eval
 
     def arrival(self, shot: Shot) -> SwitchingEvent:
+        """The arrival of this identity in a shot, nearest the last one found.
+
+        Parameters
+        ----------
+        shot : Shot
+            A shot of the period.
+
+        Returns
+        -------
+        SwitchingEvent
+            The arrival event.
+
+        Raises
+        ------
+        SaltationError
+            If the orbit no longer arrives there (see :meth:`EventIdentity.find`).
+        """
         return self.identity.find(shot.trajectory.events, self._t_last_eval, shot.period)
 
     def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
+        """``L_B`` at the arrival and its derivatives through the event (see the class docstring).
+
+        Parameters
+        ----------
+        shot : Shot
+            The shot, split just before the arrival.
+        extra : ndarray, shape (0,)
+            No unknowns of its own.
+        params : sequence of int
+            The parameter indices of the derivative columns.
+        problem : ConditionedProblem
+            Unused.
+
+        Returns
+        -------
+        Rows
+            One equation.
+
+        Raises
+        ------
+        SaltationError
+            If the orbit no longer arrives there, or arrives tangentially (the arrival's time is then not a
+            smooth function of the unknowns).
+        """
         flow, p = self.flow, shot.parameters
         n = len(shot.x0)
         out = _rows(1, n, len(params), 0)
@@ -389,11 +642,37 @@ class ArrivalTangency(Condition):
 
 
 class CubicTangency(Condition):
-    """Adding-sliding: at an unknown instant ``tau`` of a sliding motion, the field of ``exit_mode`` has a
-    cubic tangency with the surface: ``G1 = L_A = 0`` and ``G2 = L_A,x f_A + L_A,t = 0`` at ``(tau,
-    x(tau))``.  ``x(tau)`` comes from a partial run (a split inside a sliding motion would restart it);
-    ``d x(tau) / d tau`` is the sliding velocity there.  The derivatives of ``G2`` (second derivatives
-    of the model) are central differences of closed-form functions, no integration."""
+    """Adding-sliding: at an unknown instant ``tau`` of a sliding motion, the exit side's field has a cubic tangency.
+
+    The equations are ``G1 = L_A = 0`` and ``G2 = L_A,x f_A + L_A,t = 0`` at ``(tau, x(tau))``, with
+    ``f_A`` the field of ``exit_mode``.  ``x(tau)`` comes from a partial run (a split inside a sliding
+    motion would restart it); ``d x(tau) / d tau`` is the sliding velocity there.  The derivatives of
+    ``G2`` (second derivatives of the model) are central differences of closed-form functions, no
+    integration.
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    exit_mode : str
+        The mode the sliding motion would leave into.
+    surface : str
+        The sliding surface.
+    t_guess : float
+        Guess of ``tau``.
+    h : float
+        Relative step of the central differences.
+
+    Raises
+    ------
+    ModelError
+        If ``surface`` names no surface of the model.
+
+    References
+    ----------
+    di Bernardo, Kowalczyk and Nordmark (2002), "Bifurcations of dynamical systems with sliding:
+    derivation of normal-form mappings", Physica D 170 (adding-sliding).
+    """
 
     size = 2
     extras = 1
@@ -418,6 +697,29 @@ class CubicTangency(Condition):
         return np.array([L, float(Lx @ self.flow.vector_field(self.exit_mode, t, x, p)) + Lt])
 
     def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
+        """``(G1, G2)`` at ``tau`` and their derivatives (see the class docstring).
+
+        Parameters
+        ----------
+        shot : Shot
+            The shot of the period (a partial run to ``tau`` is made from it).
+        extra : ndarray, shape (1,)
+            ``tau``.
+        params : sequence of int
+            The parameter indices of the derivative columns.
+        problem : ConditionedProblem
+            Unused.
+
+        Returns
+        -------
+        Rows
+            Two equations, one extra unknown.
+
+        Raises
+        ------
+        IntegrationError, ModelError
+            If the partial run fails.
+        """
         p = shot.parameters
         n = len(shot.x0)
         out = _rows(2, n, len(params), 1)
@@ -464,6 +766,20 @@ class MultiplierCondition(Condition):
     so a step mostly takes them once; near a corner, where ``g`` bends sharply, the check fails and they
     are taken again.  The residual, ``g`` itself, is always exact: only the Newton's rate depends on
     them.  ``reuse=0`` takes them at every evaluation.
+
+    Parameters
+    ----------
+    mu : float
+        The multiplier: ``+1`` (fold) or ``-1`` (period doubling).
+    h : float
+        Relative step of the central differences.
+    reuse : float
+        Relative distance within which the kept derivatives are tried again (0: never).
+
+    References
+    ----------
+    Govaerts (2000), *Numerical Methods for Bifurcations of Dynamical Equilibria*, SIAM (minimally
+    augmented systems, the bordered test function).
     """
 
     name = "multiplier"
@@ -476,9 +792,27 @@ class MultiplierCondition(Condition):
         self._kept: tuple[np.ndarray, tuple, Rows] | None = None
 
     def kept_derivatives(self, point: np.ndarray, params: Sequence[int], value: float, n_x: int) -> Rows | None:
-        """The derivatives taken last, if ``point`` (``(x0 or nodes, T, parameters)``, the first ``n_x`` the
-        state or nodes) is within ``reuse`` of where they were taken, with the same free parameters, and
-        they predict ``g`` there (``value``) to a tenth of its change; otherwise None."""
+        """The derivatives taken last, if they still serve at ``point``; otherwise None.
+
+        They serve when ``point`` is within ``reuse`` of where they were taken, with the same free
+        parameters, and they predict ``g`` there (``value``) to a tenth of its change.
+
+        Parameters
+        ----------
+        point : ndarray
+            ``(x0 or nodes, T, parameters)``.
+        params : sequence of int
+            The parameter indices of the derivative columns.
+        value : float
+            ``g`` at ``point``.
+        n_x : int
+            The number of leading entries of ``point`` that are the state or the nodes.
+
+        Returns
+        -------
+        Rows or None
+            The kept rows, or None.
+        """
         kept = self._kept
         if kept is None or self.reuse <= 0 or kept[0].shape != point.shape or kept[1] != tuple(params):
             return None
@@ -493,10 +827,42 @@ class MultiplierCondition(Condition):
         return rows
 
     def keep_derivatives(self, point: np.ndarray, params: Sequence[int], rows: Rows) -> None:
+        """Keep derivatives for :meth:`kept_derivatives` (copies).
+
+        Parameters
+        ----------
+        point : ndarray
+            ``(x0 or nodes, T, parameters)`` where they were taken.
+        params : sequence of int
+            The parameter indices of the derivative columns.
+        rows : Rows
+            The derivatives.
+        """
         self._kept = (point.copy(), tuple(params), Rows(rows.value.copy(), rows.d_x0.copy(), rows.d_period.copy(),
                                                         rows.d_parameters.copy(), rows.d_extra.copy()))
 
     def g(self, M: np.ndarray) -> float:
+        """The bordered test function ``g`` of a monodromy.
+
+        The bordering vectors are the singular vectors of ``M - mu I`` at the first call, kept after.
+
+        Parameters
+        ----------
+        M : ndarray, shape (n, n)
+            A monodromy.
+
+        Returns
+        -------
+        float
+            ``g``, zero exactly where ``M - mu I`` is singular.
+
+        Raises
+        ------
+        SaltationError
+            If the bordered matrix is singular.
+        numpy.linalg.LinAlgError
+            If the singular value decomposition at the first call does not converge.
+        """
         n = M.shape[0]
         A = M - self.mu * np.eye(n)
         if self._border is None:
@@ -515,6 +881,30 @@ class MultiplierCondition(Condition):
             raise SaltationError(f"the bordered matrix of the multiplier {self.mu:+g} test is singular") from None
 
     def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
+        """``g`` of the shot's monodromy and its derivatives (central differences, or the kept ones).
+
+        Parameters
+        ----------
+        shot : Shot
+            The shot of the period.
+        extra : ndarray, shape (0,)
+            No unknowns of its own.
+        params : sequence of int
+            The parameter indices of the derivative columns.
+        problem : ConditionedProblem
+            The problem, whose :meth:`ConditionedProblem.monodromy` the differences shoot.
+
+        Returns
+        -------
+        Rows
+            One equation.
+
+        Raises
+        ------
+        SaltationError
+            If a bordered matrix is singular, or a shot of the differences fails (an
+            :class:`IntegrationError`).
+        """
         n = len(shot.x0)
         out = _rows(1, n, len(params), 0)
         out.value[0] = self.g(shot.trajectory.monodromy)
@@ -562,14 +952,18 @@ class Located:
     unknowns : ndarray
         ``(x0[, T], free parameters..., extras...)``.
     state0 : ndarray
+        The orbit's initial state.
     period : float
+        Its period.
     parameters : ndarray
         Every parameter's value there.
     shot : Shot
+        The shot at the solution.
     accuracy : ndarray
         Per free parameter: the Newton correction that would follow, plus the integration error carried
         to it through the inverse Jacobian (an estimate of its error).
     residuals : list of float
+        Newton's residual history.
     """
 
     unknowns: np.ndarray
@@ -591,9 +985,11 @@ class ConditionedProblem:
 
     Parameters
     ----------
-    problem : ShootingProblem
-        The orbit's problem (single shooting, forced or autonomous, forward or backward time).
+    problem : ShootingProblem or MultipleShootingProblem
+        The orbit's problem (single or multiple shooting, forced or autonomous, forward or backward
+        time; one forcing period).
     conditions : sequence of Condition
+        The equations attached.
     free : sequence of str
         The parameters that become unknowns.
     continuation : str, optional
@@ -604,7 +1000,14 @@ class ConditionedProblem:
     Raises
     ------
     ModelError
-        If the equations and unknowns do not balance, or a name is not a parameter.
+        If the equations and unknowns do not balance, a name is not a parameter, the problem closes
+        after several forcing periods, a condition that fixes the phase is put on a forced orbit, or
+        the conditions ask the orbit to start in different modes.
+
+    References
+    ----------
+    Dankowicz and Schilder (2013), *Recipes for Continuation*, SIAM (an orbit problem extended by zero
+    functions, as COCO's ``hspo`` toolbox does).
     """
 
     def __init__(self, problem, conditions: Sequence[Condition], free: Sequence[str], *,
@@ -662,8 +1065,28 @@ class ConditionedProblem:
     def pack(self, state0: np.ndarray, *, period: float | None = None, extras: np.ndarray | None = None) -> np.ndarray:
         """Unknowns from a state (the period of an autonomous orbit) and the freed parameters' values.
 
-        With multiple shooting ``state0`` is every node, shape ``(m, n)`` or flat, or one state (the nodes
-        are then its trajectory's states at the segments' starts)."""
+        Parameters
+        ----------
+        state0 : ndarray
+            The initial state; with multiple shooting every node, shape ``(m, n)`` or flat, or one state
+            (the nodes are then its trajectory's states at the segments' starts).
+        period : float, optional
+            The period of an autonomous orbit.
+        extras : ndarray, optional
+            The conditions' own unknowns (their :meth:`Condition.start` by default).
+
+        Returns
+        -------
+        ndarray
+            ``u``, of size :attr:`dimension`.
+
+        Raises
+        ------
+        ModelError
+            If the state or nodes have the wrong size.
+        IntegrationError
+            If the trajectory to the nodes cannot be integrated.
+        """
         state0 = np.asarray(state0, dtype=float).ravel()
         if self.segments > 1 and state0.size == self.system.n:  # the nodes along the (virtual) orbit from it
             T = float(period) if self.autonomous else self.system.forcing_period(self.p)
@@ -685,6 +1108,20 @@ class ConditionedProblem:
         return np.concatenate(head)
 
     def parameters_at(self, u: np.ndarray, lam: float | None = None) -> np.ndarray:
+        """Every parameter's value at the unknowns ``u`` (and ``lam``).
+
+        Parameters
+        ----------
+        u : ndarray
+            The unknowns (the freed parameters are read from them).
+        lam : float, optional
+            Value of the curve's parameter.
+
+        Returns
+        -------
+        ndarray, shape (n_params,)
+            A copy of the parameters.
+        """
         p = self.p.copy()
         p[self.free] = u[self.n_base : self.n_base + len(self.free)]
         if lam is not None and self.lam_index >= 0:
@@ -692,9 +1129,35 @@ class ConditionedProblem:
         return p
 
     def lam0(self) -> float:
+        """The curve's parameter's value in the problem's parameters.
+
+        Returns
+        -------
+        float
+            The starting value of ``lam``.
+        """
         return float(self.p[self.lam_index])
 
     def period_at(self, shot_or_u, p: np.ndarray) -> float:
+        """The period of a shot or of the unknowns, under the parameters ``p``.
+
+        Parameters
+        ----------
+        shot_or_u : Shot or ndarray
+            A shot, or the unknowns.
+        p : ndarray
+            Parameter values (a forced orbit's period is the forcing period there).
+
+        Returns
+        -------
+        float
+            The period.
+
+        Raises
+        ------
+        ModelError
+            If the forcing period is not positive and finite at ``p``.
+        """
         if self.autonomous:
             return shot_or_u.period if isinstance(shot_or_u, Shot) else float(shot_or_u[self.n_nodes])
         return self.system.forcing_period(p)
@@ -718,7 +1181,33 @@ class ConditionedProblem:
         return None
 
     def shoot(self, x0: np.ndarray, T: float, p: np.ndarray, params: Sequence[int], split: float | None) -> Shot:
-        """The period from ``x0``, one run per parameter of ``params``, split at ``split`` if given."""
+        """The period from ``x0``, one run per parameter of ``params``, split at ``split`` if given.
+
+        Parameters
+        ----------
+        x0 : ndarray, shape (n,)
+            The initial state.
+        T : float
+            The period.
+        p : ndarray
+            Parameter values.
+        params : sequence of int
+            Indices of the parameters whose sensitivities to carry (one run each).
+        split : float or None
+            The instant to split the shot at (ignored outside the period).
+
+        Returns
+        -------
+        Shot
+            The shot, with :meth:`ShootingProblem.close_period` applied and its piece at the split.
+
+        Raises
+        ------
+        IntegrationError, ModelError, InitialModeError
+            If a run fails (see :meth:`Flow.run`).
+        InconsistentResultError
+            A reset exactly at the seam (see :meth:`ShootingProblem.close_period`).
+        """
         flow, t0, tol = self.flow, self.t0, self.tolerances
         t1 = t0 + self.sign * T
         if split is not None and not (min(t0, t1) < split < max(t0, t1)):
@@ -759,7 +1248,27 @@ class ConditionedProblem:
                     t0=t0, sign=self.sign, tolerances=tol, disabled=self.disabled)
 
     def monodromy(self, x0: np.ndarray, T: float, p: np.ndarray) -> np.ndarray:
-        """The monodromy of the period from ``x0`` (finite differences of multiplier conditions)."""
+        """The monodromy of the period from ``x0`` (finite differences of multiplier conditions).
+
+        Parameters
+        ----------
+        x0 : ndarray, shape (n,)
+            The initial state.
+        T : float
+            The period.
+        p : ndarray
+            Parameter values.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            The monodromy, the seam closed.
+
+        Raises
+        ------
+        IntegrationError, ModelError, InitialModeError
+            If the run fails.
+        """
         traj = self.flow.run(x0, self.t0, self.t0 + self.sign * T, p, mode0=self.mode0, variational=True,
                              disabled=self.disabled, tolerances=self.tolerances)
         return self.single.close_period(traj, p, disabled=self.disabled).monodromy
@@ -778,7 +1287,37 @@ class ConditionedProblem:
 
     def equations(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, Shot]:
-        """Residual, ``d/du``, ``d/dlam`` and the shot at ``(u, lam)``."""
+        """Residual, ``d/du``, ``d/dlam`` and the shot at ``(u, lam)``.
+
+        Parameters
+        ----------
+        u : ndarray
+            The unknowns.
+        lam : float, optional
+            Value of the curve's parameter.
+        need_lam : bool
+            Compute ``d/dlam`` too.
+
+        Returns
+        -------
+        r : ndarray, shape (dimension,)
+            The residual: the orbit's equations, then each condition's.
+        J : ndarray, shape (dimension, dimension)
+            Its Jacobian by ``u``.
+        jl : ndarray or None
+            Its derivative by ``lam`` (None without ``lam`` or ``need_lam``).
+        shot : Shot
+            The shot of the period.
+
+        Raises
+        ------
+        ConvergenceError
+            If the period is not positive and finite, or the shot cannot be split before a condition's
+            event.
+        SaltationError
+            If a condition cannot be evaluated (its instant left the period, its event is gone, a
+            bordered matrix is singular) or a run fails (an :class:`IntegrationError`).
+        """
         if self.segments > 1:
             return self._segmented_equations(u, lam, need_lam=need_lam)
         n, nb, k = self.system.n, self.n_base, len(self.free)
@@ -998,12 +1537,56 @@ class ConditionedProblem:
 
     # -- the continuation protocol --------------------------------------------------------
     def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
+        """The equations at ``(u, lam)`` in the continuation protocol.
+
+        Parameters
+        ----------
+        u : ndarray
+            The unknowns.
+        lam : float, optional
+            Value of the curve's parameter (its starting value when the problem has one and ``lam`` is
+            None).
+        need_lam : bool
+            Compute ``jac_lam`` too.
+
+        Returns
+        -------
+        Evaluation
+            ``residual``, ``jac_u``, ``jac_lam`` and the shot's trajectory.
+
+        Raises
+        ------
+        ConvergenceError, SaltationError
+            As :meth:`equations`.
+        """
         r, J, jl, shot = self.equations(u, self.lam0() if (lam is None and self.lam_index >= 0) else lam,
                                         need_lam=need_lam)
         return Evaluation(residual=r, jac_u=J, jac_lam=jl, trajectory=shot.trajectory)
 
     def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> BranchPoint:
-        """A curve point's summary: its orbit's multipliers (forward time), amplitude and events."""
+        """A curve point's summary: its orbit's multipliers (forward time), amplitude and events.
+
+        Parameters
+        ----------
+        u : ndarray
+            The solved unknowns.
+        lam : float or None
+            Value of the curve's parameter.
+        ev : Evaluation
+            Its evaluation.
+
+        Returns
+        -------
+        BranchPoint
+            The record a curve keeps.
+
+        Raises
+        ------
+        numpy.linalg.LinAlgError
+            If the monodromy is not finite.
+        StationaryStateError
+            Multiple shooting: a node of an autonomous orbit is an equilibrium.
+        """
         traj = ev.trajectory
         n = self.system.n
         if self.segments > 1:  # the multipliers from the segments' matrices (periodic Schur)
@@ -1020,6 +1603,20 @@ class ConditionedProblem:
         )
 
     def accept(self, u: np.ndarray, lam: float | None) -> None:
+        """Called at every accepted point: move the conditions' guesses along and re-anchor the phase.
+
+        Parameters
+        ----------
+        u : ndarray
+            The accepted unknowns.
+        lam : float or None
+            Value of the curve's parameter.
+
+        Raises
+        ------
+        StationaryStateError
+            If the phase condition would be anchored at an equilibrium.
+        """
         if self._last is not None:
             shot, extras = self._last
             shots = self._shots if self.segments > 1 else [shot] * len(self.conditions)
@@ -1038,11 +1635,31 @@ class ConditionedProblem:
         correction that would follow plus the integration error carried to it through the inverse
         Jacobian, plus its rounding.
 
+        Parameters
+        ----------
+        u0 : ndarray
+            Guess of the unknowns (:meth:`pack`).
+        tol : float
+            Newton tolerance.
+        max_iter : int
+            Largest number of iterations.
+        what : str
+            What is located, for the error messages.
+        history : list of float, optional
+            A list to append the residual norms to (a new one by default).
+
+        Returns
+        -------
+        Located
+            The solution, its shot and the accuracy of each freed parameter.
+
         Raises
         ------
         ConvergenceError
             With the residual history, if Newton does not converge, the Jacobian is singular or a shot
             fails on the way.
+        StationaryStateError
+            If the phase condition would be anchored at an equilibrium.
         """
         u = np.asarray(u0, dtype=float).copy()
         history = [] if history is None else history
@@ -1083,8 +1700,27 @@ class ConditionedProblem:
 
 
 def join(segs: Sequence[Trajectory]) -> Trajectory:
-    """One trajectory from consecutive segments: their events in order, the product of their transfer
-    matrices as its monodromy (assembled: its eigenvalues are not the multipliers' best values)."""
+    """One trajectory from consecutive segments.
+
+    Their events in order, the product of their transfer matrices as its monodromy (assembled: its
+    eigenvalues are not the multipliers' best values).
+
+    Parameters
+    ----------
+    segs : sequence of Trajectory
+        Consecutive segments, with their transfer matrices.
+
+    Returns
+    -------
+    Trajectory
+        From the first segment's start to the last one's end, without parameter sensitivity or dense
+        output.
+
+    Raises
+    ------
+    IndexError
+        If ``segs`` is empty.
+    """
     first, last = segs[0], segs[-1]
     logs = [seg.event_log for seg in segs]
     event_log = tuple(np.concatenate([log[k] for log in logs]) for k in range(len(first.event_log)))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import cmath
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +23,16 @@ def multipliers_from_monodromy(monodromy: np.ndarray, *, backward: bool = False)
         multipliers are then the reciprocals of its eigenvalues, and a zero
         backward multiplier becomes an infinite forward one (an infinitely
         unstable orbit).
+
+    Returns
+    -------
+    ndarray, complex, shape (n,)
+        The multipliers, sorted as :func:`sort_multipliers`.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the monodromy is not finite, or its eigenvalues do not converge.
     """
     mu = eigenvalues(monodromy)
     if backward:
@@ -73,10 +84,17 @@ def autonomous_multipliers(monodromy: np.ndarray, velocity: np.ndarray, *, backw
         multiplier not above ``max(1e-13, trivial_error)`` in magnitude, zero to the
         monodromy's accuracy, becomes an infinite forward one.
 
+    Returns
+    -------
+    AutonomousMultipliers
+        The forward-time multipliers (sorted as :func:`sort_multipliers`) and ``|M n - n|``.
+
     Raises
     ------
     ValueError
-        If the velocity is zero (a stationary state has no flow direction).
+        If the velocity is zero or not finite (a stationary state has no flow direction).
+    numpy.linalg.LinAlgError
+        If the monodromy is not finite, or the eigenvalues do not converge.
     """
     M = np.asarray(monodromy, dtype=float)
     f = np.asarray(velocity, dtype=float)
@@ -105,6 +123,16 @@ def eigenvalues(matrix: np.ndarray) -> np.ndarray:
     :mod:`scipy.linalg.lapack`, without numpy's per-call dispatch, which costs
     several times the work for the small matrices of a monodromy.
 
+    Parameters
+    ----------
+    matrix : array_like, shape (n, n)
+        A real matrix.
+
+    Returns
+    -------
+    ndarray, complex, shape (n,)
+        Its eigenvalues, in LAPACK's order (complex pairs adjacent).
+
     Raises
     ------
     numpy.linalg.LinAlgError
@@ -123,7 +151,20 @@ def eigenvalues(matrix: np.ndarray) -> np.ndarray:
 
 
 def reciprocal(mu: np.ndarray, *, zero: float = 1e-13) -> np.ndarray:
-    """``1 / mu`` with multipliers below ``zero`` in magnitude mapped to infinity."""
+    """``1 / mu`` with multipliers below ``zero`` in magnitude mapped to infinity.
+
+    Parameters
+    ----------
+    mu : ndarray, complex
+        Multipliers (backward-time ones, for example).
+    zero : float
+        Magnitude at or below which a multiplier counts as zero.
+
+    Returns
+    -------
+    ndarray, complex
+        The reciprocals, in the same order; ``inf`` for a zero multiplier.
+    """
     out = np.empty_like(mu, dtype=complex)
     for i, m in enumerate(mu):
         out[i] = complex(np.inf, 0.0) if abs(m) <= zero else 1.0 / m
@@ -131,19 +172,57 @@ def reciprocal(mu: np.ndarray, *, zero: float = 1e-13) -> np.ndarray:
 
 
 def sort_multipliers(mu: np.ndarray) -> np.ndarray:
-    """Sort by decreasing magnitude, then by argument (deterministic order)."""
+    """Sort by decreasing magnitude, then by argument (deterministic order).
+
+    Parameters
+    ----------
+    mu : array_like, complex
+        Multipliers.
+
+    Returns
+    -------
+    ndarray, complex
+        The same values, sorted.
+    """
     values = np.asarray(mu, dtype=complex).tolist()  # a plain sort: numpy's lexsort costs more for a few values
     return np.array(sorted(values, key=lambda z: (-abs(z), -cmath.phase(z))), dtype=complex)
 
 
 def trivial_multiplier_error(mu: np.ndarray) -> float:
-    """Distance from 1 of the multiplier closest to 1 (the trivial one of an autonomous orbit)."""
+    """Distance from 1 of the multiplier closest to 1 (the trivial one of an autonomous orbit).
+
+    Parameters
+    ----------
+    mu : ndarray, complex
+        Multipliers (infinite ones are ignored).
+
+    Returns
+    -------
+    float
+        ``min |mu - 1|`` over the finite multipliers; ``inf`` if there is none.
+    """
     finite = mu[np.isfinite(mu)]
     return float(np.min(np.abs(finite - 1.0))) if finite.size else np.inf
 
 
 def is_stable(mu: np.ndarray, *, autonomous: bool, tol: float = 1e-6) -> bool:
-    """All multipliers inside the unit circle (the trivial one excepted for autonomous orbits)."""
+    """All multipliers inside the unit circle (the trivial one excepted for autonomous orbits).
+
+    Parameters
+    ----------
+    mu : array_like, complex
+        Forward-time multipliers.
+    autonomous : bool
+        Whether the orbit is autonomous: the multiplier closest to 1 (the trivial one) is then not
+        counted.
+    tol : float
+        A multiplier counts as inside when ``|mu| < 1 + tol``.
+
+    Returns
+    -------
+    bool
+        True for a stable orbit.
+    """
     mu = np.asarray(mu, dtype=complex)
     keep = np.abs(mu) < 1.0 + tol
     if autonomous and mu.size:
@@ -173,6 +252,32 @@ def set_valued_multipliers(
 
     For backward-time monodromies the convex combination is formed in
     backward time and the paths are mapped to forward-time multipliers.
+
+    Parameters
+    ----------
+    m_minus, m_plus : ndarray, shape (n, n)
+        The monodromies on either side of the non-smooth point, in the direction of integration.
+    num : int
+        Number of values of ``q``, evenly spaced in ``[0, 1]``.
+    backward : bool
+        Whether the monodromies were computed in backward time (the paths are then the reciprocals
+        of the eigenvalues, see :func:`reciprocal`).
+
+    Returns
+    -------
+    SetValuedMultipliers
+        ``q`` and the eigenvalue paths of ``(1 - q) M- + q M+``, each path matched by proximity
+        from one ``q`` to the next.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If a monodromy is not finite, or the eigenvalues do not converge.
+
+    References
+    ----------
+    Leine and Van Campen, "Fold bifurcations in discontinuous systems" (set-valued Floquet
+    multipliers, the eigenvalues of the convex combination of the monodromies).
     """
     q = np.linspace(0.0, 1.0, num)
     n = m_minus.shape[0]
@@ -229,6 +334,10 @@ def _match_list(prev: list[complex], new: list[complex]) -> list[complex]:
 def product_eigenvalues(factors: Sequence[np.ndarray]) -> np.ndarray:
     """Eigenvalues of ``factors[-1] @ ... @ factors[0]``, from the factors (periodic Schur decomposition).
 
+    The product is never formed: SLICOT's MB03VD reduces the factors to periodic Hessenberg form and
+    MB03WD computes the periodic real Schur form, so that small eigenvalues of a product with large
+    ones keep their accuracy.
+
     Parameters
     ----------
     factors : sequence of ndarray, shape (n, n)
@@ -237,6 +346,18 @@ def product_eigenvalues(factors: Sequence[np.ndarray]) -> np.ndarray:
     Returns
     -------
     ndarray, complex, shape (n,)
+        The eigenvalues of the product, in the order of the Schur form's diagonal.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If a single factor is given (its eigenvalues are then computed directly) and it is not
+        finite, or its eigenvalues do not converge.
+
+    References
+    ----------
+    Bojanczyk, Golub and Van Dooren (1992), "The periodic Schur decomposition: algorithms and
+    applications", Proc. SPIE 1770.
     """
     mats = [np.asarray(a, dtype=float) for a in factors]
     n = mats[0].shape[0]

@@ -93,12 +93,18 @@ class PeriodicOrbit:
 
     Attributes
     ----------
+    system_name : str
+        Name of the model.
     state0 : ndarray, shape (n,)
         State at ``t0`` on the orbit.
     period : float
+        The period (a forced orbit's is its forcing period).
     t0 : float
+        Initial time (a forced orbit's phase of the forcing).
     backward : bool
         Whether the orbit was computed in backward time.
+    autonomous : bool
+        Whether the model is autonomous.
     parameters : ndarray
         Parameter values.
     monodromy : ndarray, shape (n, n)
@@ -108,8 +114,11 @@ class PeriodicOrbit:
     trajectory : Trajectory
         One period, with its events.
     converged : bool
+        Whether Newton converged.
     iterations : int
+        Newton iterations.
     residual_norm : float
+        Norm of the last residual.
     residuals : list of float
         Newton residual history.
     trivial_error : float
@@ -117,6 +126,9 @@ class PeriodicOrbit:
         :func:`saltation.orbits.floquet.autonomous_multipliers`), at most
         :data:`TRIVIAL_MULTIPLIER_ACCURACY`; ``nan`` for forced orbits.  By multiple shooting, the
         largest ``|Phi_i f(x_i) - f(x_(i+1))| / |f(x_(i+1))|`` over the segments.
+    problem : ShootingProblem or None
+        The shooting problem that found it (its flow, tolerances and section): what
+        :func:`saltation.special_points.continuation.continue_orbit` follows.
     segments : int
         The number of shooting segments (1: single shooting).
     nodes : ndarray, shape (segments, n), or None
@@ -200,13 +212,41 @@ def newton(
     """Newton's method on ``fun(u) -> (r, J, extra)``.
 
     Converged when ``|r| <= tol * (1 + |u|)``.  With ``damped``, a step is
-    halved (up to 8 times) until the residual decreases.
+    halved (up to 8 times) until the residual decreases.  A trial step at which
+    ``fun`` raises a :class:`SaltationError` counts as one that does not reduce it.
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(u)`` returns the residual ``r``, its Jacobian ``J`` (square) and anything else
+        (``extra``) to hand back with the solution.
+    u0 : ndarray
+        Initial iterate.
+    tol : float
+        Tolerance.
+    max_iter : int
+        Largest number of iterations.
+    what : str
+        What is solved, for the error messages.
+    damped : bool
+        Halve steps that do not reduce the residual.
+
+    Returns
+    -------
+    u : ndarray
+        The solution.
+    history : list of float
+        Residual norms, first to last.
+    extra : object
+        The third item of ``fun`` at the solution.
 
     Raises
     ------
     ConvergenceError
-        With the residual history, after ``max_iter`` iterations or when the
-        Jacobian is singular.
+        With the residual history: after ``max_iter`` iterations, when the
+        Jacobian is singular, the residual is not finite, or no step reduces it.
+    SaltationError
+        Whatever ``fun`` raises at ``u0`` (the first evaluation is not a trial step).
     """
     u = np.array(u0, dtype=float)
     history: list[float] = []
@@ -244,6 +284,11 @@ def newton(
 class ShootingProblem:
     """Periodic orbits of a model by single shooting.
 
+    The residual is the period map minus the identity, ``r = phi(t0 + s T; t0, x0) - x0``, and its
+    Jacobian the monodromy matrix minus the identity, the monodromy carrying the saltation matrix of
+    every event (eq. (9) of *Fold bifurcations in discontinuous systems*): Newton converges
+    quadratically through the events.
+
     Parameters
     ----------
     flow : Flow
@@ -257,10 +302,23 @@ class ShootingProblem:
     t0 : float
         Initial time (forced systems: the phase of the forcing).
     tolerances : Tolerances, optional
+        Integration tolerances (the flow's by default).
     periods : int
         Forced systems: the number of forcing periods the orbit takes to
         close (2 for the branch born at a period doubling).  Such problems
         iterate Newton in Python rather than in the compiled kernel.
+
+    Raises
+    ------
+    ModelError
+        If ``periods`` is not a positive integer (or not 1 for an autonomous model), ``t0`` is not
+        finite, a parameter name or value is invalid, or the forcing period is not positive and finite.
+
+    References
+    ----------
+    Stoer and Bulirsch, *Introduction to Numerical Analysis*, Springer, section 7.3 (shooting
+    methods).  Leine and Van Campen, "Fold bifurcations in discontinuous systems", eq. (9) (the
+    saltation matrix in the monodromy).
     """
 
     def __init__(
@@ -310,6 +368,23 @@ class ShootingProblem:
         return self.system.n + (1 if self.autonomous else 0)
 
     def parameters_at(self, lam: float | None) -> np.ndarray:
+        """The parameter vector with the continuation parameter set to ``lam``.
+
+        Parameters
+        ----------
+        lam : float or None
+            Value of the continuation parameter (None: the problem's parameters as they are).
+
+        Returns
+        -------
+        ndarray, shape (n_params,)
+            A copy of the parameters.
+
+        Raises
+        ------
+        ModelError
+            If ``lam`` is given and the problem has no continuation parameter.
+        """
         p = self.p.copy()
         if lam is not None:
             if self.lam_index < 0:
@@ -318,12 +393,42 @@ class ShootingProblem:
         return p
 
     def lam0(self) -> float:
+        """The continuation parameter's value in the problem's parameters.
+
+        Returns
+        -------
+        float
+            The starting value of ``lam``.
+
+        Raises
+        ------
+        ModelError
+            If the problem has no continuation parameter.
+        """
         if self.lam_index < 0:
             raise ModelError("this problem has no continuation parameter")
         return float(self.p[self.lam_index])
 
     def pack(self, state0: Sequence[float], period: float | None = None) -> np.ndarray:
-        """Unknowns ``u`` from an initial state (and period, autonomous systems)."""
+        """Unknowns ``u`` from an initial state (and period, autonomous systems).
+
+        Parameters
+        ----------
+        state0 : sequence of float
+            The initial state, ``n`` values.
+        period : float, optional
+            The period guess of an autonomous model (ignored for a forced one).
+
+        Returns
+        -------
+        ndarray
+            ``x0`` (forced) or ``(x0, T)`` (autonomous).
+
+        Raises
+        ------
+        ModelError
+            If the state has the wrong size, or an autonomous model is given no positive period.
+        """
         x0 = np.asarray(state0, dtype=float)
         if x0.shape != (self.system.n,):
             raise ModelError(f"initial state must have {self.system.n} components {list(self.system.state_names)}")
@@ -334,11 +439,41 @@ class ShootingProblem:
         return np.append(x0, float(period))
 
     def set_phase_reference(self, u: np.ndarray, lam: float | None = None) -> None:
-        """Anchor the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` at ``u``."""
+        """Anchor the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` at ``u``.
+
+        Parameters
+        ----------
+        u : ndarray
+            Unknowns ``(x0, T)``; ``x_ref`` is their state.
+        lam : float, optional
+            Value of the continuation parameter.
+
+        Raises
+        ------
+        StationaryStateError
+            If the vector field vanishes at the state (an equilibrium).
+        InitialModeError
+            If the state lies in no mode's domain.
+        """
         self.anchor_phase(np.asarray(u[: self.system.n], dtype=float), self.parameters_at(lam))
 
     def anchor_phase(self, x: np.ndarray, p: np.ndarray) -> None:
-        """Anchor the phase condition at the state ``x`` under the parameters ``p``."""
+        """Anchor the phase condition at the state ``x`` under the parameters ``p``.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n,)
+            The reference state ``x_ref``.
+        p : ndarray, shape (n_params,)
+            Parameter values; ``f_ref`` is the unit vector field of ``x``'s mode there.
+
+        Raises
+        ------
+        StationaryStateError
+            If the vector field vanishes at ``x`` (an equilibrium).
+        InitialModeError
+            If ``x`` lies in no mode's domain.
+        """
         mode = self.flow.initial_mode(x, p, self.t0)
         f = self.flow.vector_field(mode, self.t0, x, p)
         norm = np.linalg.norm(f)
@@ -358,6 +493,23 @@ class ShootingProblem:
         motion.  The phase condition anchored there is transverse to the flow and away from the
         surfaces, so Newton does not put the shooting state on a surface.  Otherwise, or when the
         guess cannot be integrated (Newton then reports why), ``u`` is returned as it is.
+
+        Parameters
+        ----------
+        u : ndarray
+            The guess ``(x0, T)`` (a forced model's ``x0`` is returned as it is).
+        lam : float, optional
+            Value of the continuation parameter.
+
+        Returns
+        -------
+        ndarray
+            The guess, its state moved or not.
+
+        Raises
+        ------
+        InitialModeError
+            If the guess's state lies in no mode's domain (when its distance to the surfaces is measured).
         """
         if not self.autonomous:
             return u
@@ -401,10 +553,58 @@ class ShootingProblem:
         return least
 
     def period_of(self, u: np.ndarray, lam: float | None = None) -> float:
+        """The period of the unknowns ``u`` at ``lam``.
+
+        Parameters
+        ----------
+        u : ndarray
+            Unknowns ``x0`` or ``(x0, T)``.
+        lam : float, optional
+            Value of the continuation parameter.
+
+        Returns
+        -------
+        float
+            ``T`` of an autonomous orbit; ``periods`` times the forcing period of a forced one.
+
+        Raises
+        ------
+        ModelError
+            If the forcing period is not positive and finite at these parameters.
+        """
         return float(u[-1]) if self.autonomous else self.periods * self.system.forcing_period(self.parameters_at(lam))
 
     def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
-        """Residual ``r(u, lam)`` and its exact Jacobians."""
+        """Residual ``r(u, lam)`` and its exact Jacobians.
+
+        One shot over the period with the fundamental solution matrix (:meth:`close_period` applied),
+        then :meth:`periodicity`.
+
+        Parameters
+        ----------
+        u : ndarray
+            Unknowns ``x0`` or ``(x0, T)``.
+        lam : float, optional
+            Value of the continuation parameter.
+        need_lam : bool
+            Compute ``jac_lam`` too (the shot then carries the parameter sensitivity).
+
+        Returns
+        -------
+        Evaluation
+            ``residual``, ``jac_u``, ``jac_lam`` (None without ``lam`` or ``need_lam``) and the shot.
+
+        Raises
+        ------
+        IntegrationError
+            If the period is not positive, or the shot fails (see :meth:`Flow.run`).
+        InitialModeError, ModelError
+            A state in no mode's domain, an invalid parameter.
+        InconsistentResultError
+            A reset exactly at the seam (see :meth:`close_period`).
+        StationaryStateError
+            An autonomous orbit whose phase condition is anchored at an equilibrium.
+        """
         n = self.system.n
         p = self.parameters_at(lam)
         x0 = np.ascontiguousarray(u[:n])
@@ -432,20 +632,28 @@ class ShootingProblem:
         Parameters
         ----------
         x0 : ndarray, shape (n,)
+            The shot's initial state.
         traj : Trajectory
             The shot over the period, with its monodromy (and :meth:`close_period` applied).
         p : ndarray
+            Parameter values of the shot.
         sensitivities : mapping of int to ndarray, shape (n,)
             ``d x(end) / d p_j`` as the shot carried them, by parameter index.
 
         Returns
         -------
         residual : ndarray, shape (n[+1],)
+            ``x(t0 + s T) - x0`` (and the phase condition).
         jac_u : ndarray, shape (n[+1], n[+1])
             By ``u = (x0[, T])``.
         jac_p : ndarray, shape (n[+1], k)
             By the parameters of ``sensitivities``, in their order: for a forced orbit the period
             ``T(p)`` moves the end point along the flow, ``psi_j + s dT/dp_j f(end)``.
+
+        Raises
+        ------
+        StationaryStateError
+            If the phase condition is not anchored yet and ``x0`` is an equilibrium.
         """
         n = self.system.n
         M = traj.monodromy
@@ -474,8 +682,32 @@ class ShootingProblem:
         self, conditions: Sequence[Condition], free: Sequence[str], *, continuation: str | None = None,
         parameters: np.ndarray | None = None,
     ) -> ConditionedProblem:
-        """This problem with conditions attached and parameters freed: the defining system of a special
-        point (``continuation`` None) or a two-parameter curve of one (see :mod:`saltation.orbits.conditions`).
+        """This problem with conditions attached and parameters freed.
+
+        The defining system of a special point (``continuation`` None) or a two-parameter curve of one
+        (see :mod:`saltation.orbits.conditions`).
+
+        Parameters
+        ----------
+        conditions : sequence of Condition
+            The conditions that define the point.
+        free : sequence of str
+            The parameters that become unknowns.
+        continuation : str, optional
+            The curve's parameter (a two-parameter curve).
+        parameters : ndarray, optional
+            The parameter values to start from (the problem's own by default).
+
+        Returns
+        -------
+        ConditionedProblem
+            The extended problem.
+
+        Raises
+        ------
+        ModelError
+            If the equations and unknowns do not balance, or a name is not a parameter (see
+            :class:`ConditionedProblem`).
 
         Examples
         --------
@@ -500,15 +732,33 @@ class ShootingProblem:
           then as below;
         * at neither (the shot starts in mode ``a`` with no event and ends, within rounding, on the
           surface of a transition from its final mode ``b`` back to ``a``): that transition is
-          applied at the end (reset, saltation matrix of eq. 9, parameter sensitivity) and logged.
+          applied at the end (reset, saltation matrix of eq. (9), parameter sensitivity) and logged.
 
         Any other shot is returned as it is; the transitions in ``disabled`` (passed by a virtual orbit)
         are never applied at the seam.
+
+        Parameters
+        ----------
+        traj : Trajectory
+            A shot over one period (a shot without monodromy is returned as it is).
+        p : ndarray
+            Its parameter values.
+        sensitivity : int
+            Index of the parameter whose sensitivity the shot carries (-1: none).
+        disabled : sequence of int
+            Transitions the shot passes without firing (see :meth:`Flow.run`).
+
+        Returns
+        -------
+        Trajectory
+            The shot, the seam's event logged once.
 
         Raises
         ------
         InconsistentResultError
             For a reset (an impact) exactly at the seam, logged at both ends.
+        IntegrationError
+            If the shot run again fails, or the transition applied at the end is tangent to its surface.
         """
         sys_ = self.system
         if traj.monodromy is None:
@@ -607,14 +857,38 @@ class ShootingProblem:
 
         Solves ``r(u, lam) = 0``, ``normal . (z - z_pred) = 0`` for
         ``z = (u, lam)`` by the Newton iteration of
-        :meth:`saltation.branches.continuation.Corrector.solve_bordered`.  Returns the
-        solution, its evaluation and the number of iterations, or None when
-        the kernel cannot run it (then iterate in Python).
+        :meth:`saltation.branches.continuation.Corrector.solve_bordered`.
+
+        Parameters
+        ----------
+        z_pred : ndarray
+            The predicted point ``(u, lam)``.
+        normal : ndarray
+            The pseudo-arclength row (the tangent at the last point).
+        tol : float
+            Newton tolerance.
+        max_newton : int
+            Largest number of iterations.
+        max_correction : float
+            The iteration stops when a correction exceeds ``max_correction (1 + |z|)``.
+
+        Returns
+        -------
+        tuple of (ndarray, Evaluation, int) or None
+            The solution ``z``, its evaluation and the number of iterations; or None when the kernel
+            cannot run it (no continuation parameter, several forcing periods, a forcing period given as a
+            callable, a singular matrix, or an event at the end of the period): then iterate in Python.
 
         Raises
         ------
         ConvergenceError
             If Newton does not converge.
+        IntegrationError, ModelError, InitialModeError
+            If the last shot failed (as :meth:`Flow.run` raises it).
+        StationaryStateError
+            If the phase condition would be anchored at an equilibrium.
+        InconsistentResultError
+            A reset exactly at the seam (see :meth:`close_period`).
         """
         if self.lam_index < 0 or self.periods != 1:
             return None  # the kernel's corrector closes orbits after one forcing period
@@ -643,8 +917,25 @@ class ShootingProblem:
         return z, ev, found.iterations
 
     def verify(self, u: np.ndarray, lam: float | None, traj: Trajectory) -> tuple[np.ndarray, float]:
-        """The forward-time multipliers of a solved point and its trivial multiplier's error, once the
-        point is known to be a periodic orbit.
+        """The forward-time multipliers of a solved point and its trivial multiplier's error.
+
+        Called once the point is known to satisfy the periodicity equations.
+
+        Parameters
+        ----------
+        u : ndarray
+            The solved unknowns.
+        lam : float or None
+            Value of the continuation parameter.
+        traj : Trajectory
+            The shot over the period, with its monodromy.
+
+        Returns
+        -------
+        multipliers : ndarray, complex
+            Forward-time Floquet multipliers.
+        trivial_error : float
+            ``|M n - n|`` of an autonomous orbit (``nan`` for a forced one).
 
         Raises
         ------
@@ -677,6 +968,20 @@ class ShootingProblem:
         :data:`STATIONARY_FACTOR` times the integration tolerance at the state's scale.  Below it, the
         point is an equilibrium of a mode, a pseudo-equilibrium (a point of a sliding or sticking set
         where the sliding motion stops), or a period shrunk to zero.
+
+        Parameters
+        ----------
+        u : ndarray
+            The solved unknowns.
+        lam : float or None
+            Value of the continuation parameter.
+        traj : Trajectory
+            The shot over the period.
+
+        Returns
+        -------
+        str or None
+            The explanation (which of the three, and where), or None for a state that moves.
         """
         tol = self.tolerances or self.flow.tolerances
         n = self.system.n
@@ -709,6 +1014,20 @@ class ShootingProblem:
     def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> BranchPoint:
         """Summary of a solved point for a branch (multipliers, amplitude, events).
 
+        Parameters
+        ----------
+        u : ndarray
+            The solved unknowns.
+        lam : float or None
+            Value of the continuation parameter.
+        ev : Evaluation
+            Its evaluation (with the shot).
+
+        Returns
+        -------
+        BranchPoint
+            The record a branch keeps.
+
         Raises
         ------
         StationaryStateError, InconsistentResultError
@@ -730,7 +1049,20 @@ class ShootingProblem:
         )
 
     def accept(self, u: np.ndarray, lam: float | None) -> None:
-        """Called by continuation at every accepted point: re-anchor the phase condition."""
+        """Called by continuation at every accepted point: re-anchor the phase condition.
+
+        Parameters
+        ----------
+        u : ndarray
+            The accepted unknowns.
+        lam : float or None
+            Value of the continuation parameter.
+
+        Raises
+        ------
+        StationaryStateError
+            If the accepted state of an autonomous orbit is an equilibrium.
+        """
         if self.autonomous:
             self.set_phase_reference(u, lam)
 
@@ -738,15 +1070,37 @@ class ShootingProblem:
     def solve(self, u0: np.ndarray, lam: float | None = None, *, tol: float = 1e-10, max_iter: int = 30) -> PeriodicOrbit:
         """Newton on the period map from the guess ``u0``.
 
+        A forced orbit is iterated in the compiled kernel; an autonomous one (or a forced one the kernel
+        cannot close) in Python, with damped steps.
+
+        Parameters
+        ----------
+        u0 : ndarray
+            Guess of the unknowns (:meth:`pack`).
+        lam : float, optional
+            Value of the continuation parameter.
+        tol : float
+            Newton tolerance: converged when ``|r| <= tol (1 + |u|)``.
+        max_iter : int
+            Largest number of Newton iterations.
+
+        Returns
+        -------
+        PeriodicOrbit
+            The orbit, with its forward-time multipliers.
+
         Raises
         ------
         ConvergenceError
-            With the residual history when Newton fails.
+            With the residual history when Newton fails; a :class:`NoOrbitNearGuessError` when, in
+            addition, the flow from an autonomous guess comes to rest.
         StationaryStateError
             When it converges to a state that does not move (an equilibrium, a pseudo-equilibrium, a
             period shrunk to zero).
         InconsistentResultError
             When an autonomous orbit's trivial multiplier is not 1 within :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
+        IntegrationError, InitialModeError
+            When the shot from the guess itself fails.
         """
         u0 = np.asarray(u0, dtype=float)
         if self.autonomous:
@@ -794,6 +1148,21 @@ class ShootingProblem:
         A guess near no periodic orbit often lies in the basin of a stationary state: a sticking
         set (a sliding motion that stops, a pseudo-equilibrium) or an equilibrium.  That is the
         explanation a failed shooting gives.
+
+        Parameters
+        ----------
+        u : ndarray
+            The guess ``(x0, T)``.
+        lam : float, optional
+            Value of the continuation parameter.
+        periods : int
+            How many guessed periods to integrate.
+
+        Returns
+        -------
+        tuple of (ndarray, str) or None
+            The state where the flow stops and the explanation; None for a forced model, a guess that
+            cannot be integrated, or a flow that keeps moving.
         """
         if not self.autonomous:
             return None
@@ -822,7 +1191,28 @@ class ShootingProblem:
     ) -> PeriodicOrbit:
         """Package a solved point ``u`` and its trajectory over one period as a :class:`PeriodicOrbit`.
 
-        ``period`` and ``parameters`` (at ``lam``) when the caller has them already.
+        Parameters
+        ----------
+        u : ndarray
+            The solved unknowns.
+        lam : float or None
+            Value of the continuation parameter.
+        trajectory : Trajectory
+            The shot over the period, with its monodromy.
+        history : sequence of float
+            Newton's residual history.
+        period, parameters : optional
+            The period and the parameters at ``lam``, when the caller has them already.
+
+        Returns
+        -------
+        PeriodicOrbit
+            The orbit, with its multipliers (:meth:`verify`).
+
+        Raises
+        ------
+        StationaryStateError, InconsistentResultError
+            As :meth:`verify`.
         """
         M = trajectory.monodromy
         mu, trivial_error = self.verify(u, lam, trajectory)
@@ -916,9 +1306,11 @@ def find_periodic_orbit(
     Raises
     ------
     ModelError
-        A ``period`` that contradicts the forcing period, a state of the wrong size.
+        A ``period`` that contradicts the forcing period, a state of the wrong size, a guess of every
+        node without a period, an invalid parameter or number of segments.
     ConvergenceError
-        Newton did not converge (with its residual history).
+        Newton did not converge (with its residual history); a :class:`NoOrbitNearGuessError` when,
+        in addition, the flow from an autonomous guess comes to rest.
     StationaryStateError
         Shooting converged to a state that does not move: an equilibrium, a
         pseudo-equilibrium, or a period shrunk to zero.
@@ -927,6 +1319,16 @@ def find_periodic_orbit(
         :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
     StartGuessError
         Without a guess: the transient failed, diverged or shows no oscillation.
+    IntegrationError, InitialModeError
+        The shot from the guess itself fails (Newton's later trial steps that fail are shortened).
+    KernelCacheError
+        A model given as such cannot be compiled into the kernel cache.
+
+    References
+    ----------
+    Stoer and Bulirsch, *Introduction to Numerical Analysis*, Springer, section 7.3 (single and
+    multiple shooting).  Leine and Van Campen, "Fold bifurcations in discontinuous systems", eq. (9)
+    (the saltation matrices in the monodromy).
     """
     if not isinstance(flow, Flow):  # a model
         flow = Flow(flow, tolerances=tolerances)
@@ -984,20 +1386,26 @@ class MultipleShootingProblem:
     f(x_{i+1})``, this leaves the nontrivial multipliers, and the trivial one is the product of the
     factors' gains along the flow.
 
-    References
-    ----------
-    Bojanczyk, Golub and Van Dooren (1992), "The periodic Schur decomposition: algorithms and
-    applications", Proc. SPIE 1770.  Stoer and Bulirsch, *Introduction to Numerical Analysis*,
-    section 7.3.5 (multiple shooting).
-
     The unknowns are ``U = (x_1, ..., x_m[, T])``; the problem's time direction, ``t0``, tolerances
     and parameters are kept.
 
     Parameters
     ----------
     problem : ShootingProblem
+        The single-shooting problem of the orbit (one forcing period).
     segments : int
         The number of segments ``m`` (at least 1; 1 is single shooting written as this problem).
+
+    Raises
+    ------
+    ModelError
+        If ``segments`` is not a positive integer, or ``problem`` closes after several forcing periods.
+
+    References
+    ----------
+    Stoer and Bulirsch, *Introduction to Numerical Analysis*, Springer, section 7.3.5 (multiple
+    shooting).  Bojanczyk, Golub and Van Dooren (1992), "The periodic Schur decomposition: algorithms
+    and applications", Proc. SPIE 1770.
     """
 
     def __init__(self, problem: ShootingProblem, segments: int):
@@ -1023,6 +1431,25 @@ class MultipleShootingProblem:
         return self.segments * self.n + (1 if self.problem.autonomous else 0)
 
     def period_of(self, U: np.ndarray, lam: float | None = None) -> float:
+        """The period of the unknowns ``U`` at ``lam``.
+
+        Parameters
+        ----------
+        U : ndarray
+            The nodes (and the period of an autonomous orbit).
+        lam : float, optional
+            Value of the continuation parameter.
+
+        Returns
+        -------
+        float
+            ``T`` of an autonomous orbit; the forcing period of a forced one.
+
+        Raises
+        ------
+        ModelError
+            If the forcing period is not positive and finite at these parameters.
+        """
         return float(U[-1]) if self.problem.autonomous else self.problem.period_of(U[: self.n], lam)
 
     def _times(self, T: float) -> np.ndarray:
@@ -1030,7 +1457,25 @@ class MultipleShootingProblem:
         return prob.t0 + prob.sign * T * np.arange(self.segments + 1) / self.segments
 
     def pack(self, u: np.ndarray, lam: float | None = None) -> np.ndarray:
-        """Nodes from a single-shooting guess ``u = (x0[, T])``: the guess's own trajectory at ``t_i``."""
+        """Nodes from a single-shooting guess ``u = (x0[, T])``: the guess's own trajectory at ``t_i``.
+
+        Parameters
+        ----------
+        u : ndarray
+            The single-shooting guess (:meth:`ShootingProblem.pack`).
+        lam : float, optional
+            Value of the continuation parameter.
+
+        Returns
+        -------
+        ndarray
+            ``U = (x_1, ..., x_m[, T])``.
+
+        Raises
+        ------
+        IntegrationError, InitialModeError
+            If the guess's trajectory cannot be integrated.
+        """
         prob = self.problem
         T = prob.period_of(u, lam)
         p = prob.parameters_at(lam)
@@ -1045,9 +1490,31 @@ class MultipleShootingProblem:
         return np.append(U, T) if prob.autonomous else U
 
     def shoot(self, U: np.ndarray, lam: float | None = None, sensitivity: int = -1) -> list[Trajectory]:
-        """The segments from the nodes of ``U``, each with its transfer matrix (and the sensitivity to
-        parameter ``sensitivity``); each starts in the mode its predecessor ends in (the first in the
-        mode of its state)."""
+        """The segments from the nodes of ``U``, each with its transfer matrix.
+
+        Each segment starts in the mode its predecessor ends in (the first in the mode of its state).
+
+        Parameters
+        ----------
+        U : ndarray
+            The nodes (and the period of an autonomous orbit).
+        lam : float, optional
+            Value of the continuation parameter.
+        sensitivity : int
+            Index of the parameter whose sensitivity each segment carries (-1: none).
+
+        Returns
+        -------
+        list of Trajectory
+            The ``m`` segments, with their transfer matrices.
+
+        Raises
+        ------
+        ConvergenceError
+            If the period is not positive and finite (a Newton step threw it away).
+        IntegrationError, InitialModeError
+            If a segment cannot be integrated.
+        """
         prob, n = self.problem, self.n
         T = self.period_of(U, lam)
         if not (T > 0 and math.isfinite(T)):
@@ -1066,7 +1533,33 @@ class MultipleShootingProblem:
 
     def residual(self, U: np.ndarray, lam: float | None = None, *, sensitivity: int = -1
                  ) -> tuple[np.ndarray, np.ndarray, list[Trajectory]]:
-        """``(r, J, segments)``: the matching equations (and phase condition) and their exact Jacobian."""
+        """``(r, J, segments)``: the matching equations (and phase condition) and their exact Jacobian.
+
+        Parameters
+        ----------
+        U : ndarray
+            The nodes (and the period of an autonomous orbit).
+        lam : float, optional
+            Value of the continuation parameter.
+        sensitivity : int
+            Index of the parameter whose sensitivity each segment carries (-1: none).
+
+        Returns
+        -------
+        r : ndarray, shape (dimension,)
+            The residual.
+        J : ndarray, shape (dimension, dimension)
+            Its Jacobian by ``U``.
+        segments : list of Trajectory
+            The segments (:meth:`shoot`).
+
+        Raises
+        ------
+        ConvergenceError, IntegrationError, InitialModeError
+            As :meth:`shoot`.
+        StationaryStateError
+            If the phase condition would be anchored at an equilibrium.
+        """
         prob, n = self.problem, self.n
         segs = self.shoot(U, lam, sensitivity)
         dim = self.dimension
@@ -1086,9 +1579,32 @@ class MultipleShootingProblem:
         self, conditions: Sequence[Condition], free: Sequence[str], *, continuation: str | None = None,
         parameters: np.ndarray | None = None,
     ) -> ConditionedProblem:
-        """The defining system of a special point (or a two-parameter curve of one) by multiple shooting:
-        the unknowns are ``(x_1..x_m[, T], freed parameters, the conditions' own)``, each condition is read
-        from the segment that holds its instant (see :meth:`ShootingProblem.with_conditions`)."""
+        """The defining system of a special point (or a two-parameter curve of one) by multiple shooting.
+
+        The unknowns are ``(x_1..x_m[, T], freed parameters, the conditions' own)``; each condition is
+        read from the segment that holds its instant (see :meth:`ShootingProblem.with_conditions`).
+
+        Parameters
+        ----------
+        conditions : sequence of Condition
+            The conditions that define the point.
+        free : sequence of str
+            The parameters that become unknowns.
+        continuation : str, optional
+            The curve's parameter (a two-parameter curve).
+        parameters : ndarray, optional
+            The parameter values to start from (the problem's own by default).
+
+        Returns
+        -------
+        ConditionedProblem
+            The extended problem.
+
+        Raises
+        ------
+        ModelError
+            If the equations and unknowns do not balance, or a name is not a parameter.
+        """
         return ConditionedProblem(self, conditions, free, continuation=continuation, parameters=parameters)
 
     def matching(self, U: np.ndarray, p: np.ndarray, segs: Sequence[Trajectory],
@@ -1109,6 +1625,7 @@ class MultipleShootingProblem:
         Returns
         -------
         r : ndarray, shape (m n,)
+            The mismatch at each node.
         J : ndarray, shape (m n, m n [+ 1])
             By the nodes (and the period: segment ``i`` ends at ``t0 + s (i + 1) T / m``).
         jp : ndarray, shape (m n, len(columns))
@@ -1138,9 +1655,38 @@ class MultipleShootingProblem:
 
     # -- the continuation protocol ----------------------------------------------------------
     def parameters_at(self, lam: float | None) -> np.ndarray:
+        """The parameter vector with the continuation parameter set to ``lam``.
+
+        Parameters
+        ----------
+        lam : float or None
+            Value of the continuation parameter (None: the problem's parameters as they are).
+
+        Returns
+        -------
+        ndarray, shape (n_params,)
+            A copy of the parameters.
+
+        Raises
+        ------
+        ModelError
+            If ``lam`` is given and the problem has no continuation parameter.
+        """
         return self.problem.parameters_at(lam)
 
     def lam0(self) -> float:
+        """The continuation parameter's value in the problem's parameters.
+
+        Returns
+        -------
+        float
+            The starting value of ``lam``.
+
+        Raises
+        ------
+        ModelError
+            If the problem has no continuation parameter.
+        """
         return self.problem.lam0()
 
     def evaluate(self, U: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
@@ -1149,6 +1695,27 @@ class MultipleShootingProblem:
         Segment ``i`` runs from ``t_i = t0 + s i T / m``: where the forcing period ``T`` moves with
         ``lam``, its start and end move too, ``d/dlam = psi_i + s dT/dlam ((i + 1) f(end_i) - i Phi_i
         f(t_i, x_i)) / m``.
+
+        Parameters
+        ----------
+        U : ndarray
+            The nodes (and the period of an autonomous orbit).
+        lam : float, optional
+            Value of the continuation parameter.
+        need_lam : bool
+            Compute ``jac_lam`` too.
+
+        Returns
+        -------
+        Evaluation
+            ``residual``, ``jac_u``, ``jac_lam`` and the segments joined into one trajectory.
+
+        Raises
+        ------
+        ConvergenceError, IntegrationError, InitialModeError
+            As :meth:`shoot`.
+        StationaryStateError
+            If the phase condition would be anchored at an equilibrium.
         """
         pidx = self.lam_index if (need_lam and lam is not None) else -1
         r, J, segs = self.residual(U, lam, sensitivity=pidx)
@@ -1163,6 +1730,20 @@ class MultipleShootingProblem:
 
     def describe(self, U: np.ndarray, lam: float | None, ev: Evaluation) -> BranchPoint:
         """A branch point's summary, its multipliers from the segments' matrices (periodic Schur).
+
+        Parameters
+        ----------
+        U : ndarray
+            The solved nodes.
+        lam : float or None
+            Value of the continuation parameter.
+        ev : Evaluation
+            Its evaluation (the segments of the last :meth:`evaluate` at ``U`` are reused).
+
+        Returns
+        -------
+        BranchPoint
+            The record a branch keeps.
 
         Raises
         ------
@@ -1180,12 +1761,51 @@ class MultipleShootingProblem:
         )
 
     def accept(self, U: np.ndarray, lam: float | None) -> None:
-        """Called by continuation at every accepted point: re-anchor the phase condition."""
+        """Called by continuation at every accepted point: re-anchor the phase condition.
+
+        Parameters
+        ----------
+        U : ndarray
+            The accepted nodes.
+        lam : float or None
+            Value of the continuation parameter.
+
+        Raises
+        ------
+        StationaryStateError
+            If the accepted first node of an autonomous orbit is an equilibrium.
+        """
         if self.autonomous:
             self.problem.set_phase_reference(U, lam)
 
     def solve(self, U0: np.ndarray, lam: float | None = None, *, tol: float = 1e-10, max_iter: int = 30) -> PeriodicOrbit:
-        """Newton on the matching equations from the nodes ``U0`` (see :meth:`pack`)."""
+        """Newton on the matching equations from the nodes ``U0`` (see :meth:`pack`).
+
+        Parameters
+        ----------
+        U0 : ndarray
+            Guess of the nodes (and the period of an autonomous orbit).
+        lam : float, optional
+            Value of the continuation parameter.
+        tol : float
+            Newton tolerance: converged when ``|r| <= tol (1 + |U|)``.
+        max_iter : int
+            Largest number of Newton iterations.
+
+        Returns
+        -------
+        PeriodicOrbit
+            The orbit, its multipliers from the periodic Schur decomposition.
+
+        Raises
+        ------
+        ConvergenceError
+            With the residual history when Newton fails.
+        StationaryStateError, InconsistentResultError
+            As :meth:`orbit`.
+        IntegrationError, InitialModeError
+            When the segments from the guess cannot be integrated.
+        """
         prob = self.problem
         U0 = np.asarray(U0, dtype=float)
         if prob.autonomous:
@@ -1203,8 +1823,30 @@ class MultipleShootingProblem:
         return self.orbit(U, lam, segs, history)
 
     def multipliers(self, U: np.ndarray, lam: float | None, segs: list[Trajectory]) -> tuple[np.ndarray, float]:
-        """Forward-time multipliers from the segments' transfer matrices, and (autonomous orbits) the
-        largest relative error of ``Phi_i f(x_i) = f(x_{i+1})``, the trivial direction's consistency."""
+        """Forward-time multipliers from the segments' transfer matrices.
+
+        Parameters
+        ----------
+        U : ndarray
+            The solved nodes.
+        lam : float or None
+            Value of the continuation parameter.
+        segs : list of Trajectory
+            The segments, with their transfer matrices.
+
+        Returns
+        -------
+        multipliers : ndarray, complex
+            Forward-time multipliers, by the periodic Schur decomposition of the factors.
+        trivial_error : float
+            Autonomous orbits: the largest relative error of ``Phi_i f(x_i) = f(x_{i+1})``, the trivial
+            direction's consistency (``nan`` for a forced orbit).
+
+        Raises
+        ------
+        StationaryStateError
+            If a node of an autonomous orbit is an equilibrium.
+        """
         prob, n = self.problem, self.n
         factors = [seg.monodromy for seg in segs]
         if not prob.autonomous:
@@ -1233,7 +1875,32 @@ class MultipleShootingProblem:
         return sort_multipliers(reciprocal(mu) if prob.backward else mu), error
 
     def orbit(self, U: np.ndarray, lam: float | None, segs: list[Trajectory], history: Sequence[float]) -> PeriodicOrbit:
-        """The solved nodes as a :class:`PeriodicOrbit`, its trajectory the segments joined."""
+        """The solved nodes as a :class:`PeriodicOrbit`, its trajectory the segments joined.
+
+        Parameters
+        ----------
+        U : ndarray
+            The solved nodes.
+        lam : float or None
+            Value of the continuation parameter.
+        segs : list of Trajectory
+            The segments.
+        history : sequence of float
+            Newton's residual history.
+
+        Returns
+        -------
+        PeriodicOrbit
+            With its multipliers, segments and nodes.
+
+        Raises
+        ------
+        StationaryStateError
+            If the state does not move over the period, or a node is an equilibrium.
+        InconsistentResultError
+            If an autonomous orbit's segments do not map the flow direction from node to node within
+            :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
+        """
         prob, n = self.problem, self.n
         trajectory = join(segs)
         T = self.period_of(U, lam)
@@ -1258,7 +1925,21 @@ class MultipleShootingProblem:
 
 @dataclass(frozen=True)
 class Equilibrium:
-    """An equilibrium of one mode, with the eigenvalues of ``f_x`` there."""
+    """An equilibrium of one mode, with the eigenvalues of ``f_x`` there.
+
+    Attributes
+    ----------
+    mode : str
+        The mode.
+    state : ndarray, shape (n,)
+        The equilibrium.
+    parameters : ndarray
+        Parameter values.
+    eigenvalues : ndarray, complex
+        Eigenvalues of the mode's ``f_x`` at the state.
+    residuals : list of float
+        Newton's residual history.
+    """
 
     mode: str
     state: np.ndarray
@@ -1272,7 +1953,24 @@ class Equilibrium:
 
 
 class EquilibriumProblem:
-    """Equilibria ``f(x, p) = 0`` of one mode (autonomous systems), in the continuation protocol."""
+    """Equilibria ``f(x, p) = 0`` of one mode (autonomous systems), in the continuation protocol.
+
+    Parameters
+    ----------
+    flow : Flow
+        The compiled flow of an autonomous model.
+    mode : str or int
+        The mode whose field vanishes.
+    parameters : mapping or ndarray, optional
+        Parameter values (defaults of the model otherwise).
+    continuation_parameter : str, optional
+        Name of the parameter ``lam`` (continuation).
+
+    Raises
+    ------
+    ModelError
+        If the model is forced, or a mode, parameter name or value is invalid.
+    """
 
     def __init__(
         self,
@@ -1299,15 +1997,50 @@ class EquilibriumProblem:
         return self.system.n
 
     def parameters_at(self, lam: float | None) -> np.ndarray:
+        """The parameter vector with the continuation parameter set to ``lam``.
+
+        Parameters
+        ----------
+        lam : float or None
+            Value of the continuation parameter (None: the problem's parameters as they are).
+
+        Returns
+        -------
+        ndarray, shape (n_params,)
+            A copy of the parameters.
+        """
         p = self.p.copy()
         if lam is not None:
             p[self.lam_index] = lam
         return p
 
     def lam0(self) -> float:
+        """The continuation parameter's value in the problem's parameters.
+
+        Returns
+        -------
+        float
+            The starting value of ``lam``.
+        """
         return float(self.p[self.lam_index])
 
     def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
+        """The field ``f(x, p)`` of the mode and its Jacobians.
+
+        Parameters
+        ----------
+        u : ndarray, shape (n,)
+            The state.
+        lam : float, optional
+            Value of the continuation parameter.
+        need_lam : bool
+            Compute ``jac_lam`` (``f_p`` of the continuation parameter) too.
+
+        Returns
+        -------
+        Evaluation
+            ``residual = f``, ``jac_u = f_x``, ``jac_lam`` (None without ``lam`` or ``need_lam``).
+        """
         p = self.parameters_at(lam)
         x = np.asarray(u, dtype=float)
         f = self.flow.vector_field(self.mode, 0.0, x, p)
@@ -1318,6 +2051,28 @@ class EquilibriumProblem:
         return Evaluation(residual=f, jac_u=J, jac_lam=jl)
 
     def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> BranchPoint:
+        """Summary of a solved equilibrium for a branch: the eigenvalues of ``f_x`` as its multipliers.
+
+        Parameters
+        ----------
+        u : ndarray, shape (n,)
+            The equilibrium.
+        lam : float or None
+            Value of the continuation parameter.
+        ev : Evaluation
+            Its evaluation.
+
+        Returns
+        -------
+        BranchPoint
+            With the eigenvalues sorted by decreasing real part, stable when all have negative real
+            parts, and no period.
+
+        Raises
+        ------
+        numpy.linalg.LinAlgError
+            If the Jacobian is not finite.
+        """
         eig = np.linalg.eigvals(ev.jac_u).astype(complex)
         eig = eig[np.lexsort((-eig.imag, -eig.real))]
         return BranchPoint(
@@ -1332,9 +2087,40 @@ class EquilibriumProblem:
         )
 
     def accept(self, u: np.ndarray, lam: float | None) -> None:
-        """Nothing to re-anchor for equilibria."""
+        """Nothing to re-anchor for equilibria.
+
+        Parameters
+        ----------
+        u : ndarray
+            The accepted state.
+        lam : float or None
+            Value of the continuation parameter.
+        """
 
     def solve(self, x0: Sequence[float], lam: float | None = None, *, tol: float = 1e-12, max_iter: int = 30) -> Equilibrium:
+        """Newton on ``f(x, p) = 0`` from the guess ``x0``.
+
+        Parameters
+        ----------
+        x0 : sequence of float
+            Guess of the equilibrium.
+        lam : float, optional
+            Value of the continuation parameter.
+        tol : float
+            Newton tolerance: converged when ``|f| <= tol (1 + |x|)``.
+        max_iter : int
+            Largest number of Newton iterations.
+
+        Returns
+        -------
+        Equilibrium
+            The equilibrium and its eigenvalues.
+
+        Raises
+        ------
+        ConvergenceError
+            With the residual history when Newton fails.
+        """
         def fun(u):
             ev = self.evaluate(u, lam, need_lam=False)
             return ev.residual, ev.jac_u, ev

@@ -41,6 +41,7 @@ def transient(
     Parameters
     ----------
     flow : Flow
+        The flow of the model.
     parameters : ndarray
         Parameter vector (:meth:`Flow.parameters`).
     state : array_like, optional
@@ -63,7 +64,10 @@ def transient(
     Raises
     ------
     StartGuessError
-        If the run fails or diverges; the message says where it started and ended.
+        If the run fails (any :class:`SaltationError` of the integration, chained) or diverges, or
+        ``length`` is not positive; the message says where it started and ended.
+    ModelError
+        If the forcing period of a forced model is not positive and finite at these parameters.
     """
     system = flow.system
     p = np.asarray(parameters, dtype=float)
@@ -93,7 +97,19 @@ def transient(
 
 
 def period_from_events(traj: Trajectory) -> float | None:
-    """The period of the event sequence at the end of a trajectory (its shortest repeating lag), or None."""
+    """The period of the event sequence at the end of a trajectory (its shortest repeating lag), or None.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A transient.
+
+    Returns
+    -------
+    float or None
+        The time between the last event and the one a lag earlier, for the shortest lag over which
+        the sequence of event signatures repeats (checked back from the end); None if none repeats.
+    """
     events = traj.events
     sig = [e.signature for e in events]
     n = len(sig)
@@ -104,8 +120,26 @@ def period_from_events(traj: Trajectory) -> float | None:
 
 
 def period_from_section(traj: Trajectory) -> float | None:
-    """The period from the last two upward crossings of the Poincaré section ``x_1 =`` mid-range, over the
-    trajectory's second half (dense output needed), or None if it oscillates too little."""
+    """The period from the last two upward crossings of a Poincaré section.
+
+    The section is ``x_1 =`` mid-range of ``x_1`` over the trajectory's second half.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A transient with dense output.
+
+    Returns
+    -------
+    float or None
+        The time between the last two upward crossings, or None if the trajectory oscillates too
+        little (fewer than three crossings, or a range of ``x_1`` within rounding).
+
+    Raises
+    ------
+    ValueError
+        If the trajectory was computed without dense output.
+    """
     t, x = traj.sample(16)
     if t.size < 4:
         return None
@@ -125,10 +159,25 @@ def period_from_section(traj: Trajectory) -> float | None:
 def estimate_period(traj: Trajectory) -> float:
     """The period of the oscillation a transient of an autonomous model ends on.
 
+    From the repeating events (:func:`period_from_events`), else from a Poincaré section
+    (:func:`period_from_section`).
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A transient (with dense output, for the section).
+
+    Returns
+    -------
+    float
+        The period, positive.
+
     Raises
     ------
     StartGuessError
         If the transient shows no repeating events and no oscillation (it settles to an equilibrium).
+    ValueError
+        If the events do not repeat and the trajectory has no dense output.
     """
     T = period_from_events(traj)
     if T is None or not T > 0:
@@ -142,17 +191,51 @@ def estimate_period(traj: Trajectory) -> float:
 
 
 def candidate_starts(n: int) -> list[np.ndarray]:
-    """Where an autonomous model's transient starts when no state is given, in the order tried: the origin,
-    then one unit along each state, then one along every state.  The origin alone often does not move (an
-    equilibrium, or the sticking set of a friction model)."""
+    """Where an autonomous model's transient starts when no state is given, in the order tried.
+
+    The origin, then one unit along each state, then one along every state.  The origin alone often
+    does not move (an equilibrium, or the sticking set of a friction model).
+
+    Parameters
+    ----------
+    n : int
+        Number of states.
+
+    Returns
+    -------
+    list of ndarray, shape (n,)
+        The ``n + 2`` starting states.
+    """
     return [np.zeros(n), *np.eye(n), np.ones(n)]
 
 
 def oscillating_transient(
     flow: Flow, parameters: np.ndarray, *, t0: float = 0.0, backward: bool = False, length: float | None = None,
 ) -> tuple[Trajectory, float]:
-    """The first transient of an autonomous model, from :func:`candidate_starts`, that ends in an oscillation,
-    and its period (:func:`estimate_period`).
+    """The first transient of an autonomous model that ends in an oscillation, and its period.
+
+    The transients start from :func:`candidate_starts`, in order; the period is read by
+    :func:`estimate_period`.
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of an autonomous model.
+    parameters : ndarray
+        Parameter vector.
+    t0 : float
+        Start time.
+    backward : bool
+        Run backward in time.
+    length : float, optional
+        Length of each transient (:data:`TRANSIENT_TIME` by default).
+
+    Returns
+    -------
+    traj : Trajectory
+        The transient that oscillates.
+    period : float
+        Its period.
 
     Raises
     ------
@@ -184,6 +267,37 @@ def starting_guess(
     A given state is kept, and a given period; the transient (:func:`transient`, from ``state``) runs
     only when the state is None or, for an autonomous model, the period is.  A forced model's period is
     its forcing period (returned as None).
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    parameters : ndarray
+        Parameter vector.
+    state : array_like, optional
+        Guess of the state (the end of a transient by default).
+    period : float, optional
+        Guess of the period of an autonomous model (read from a transient by default).
+    t0 : float
+        Start time of the transient.
+    backward : bool
+        Run the transient backward in time.
+    length : float, optional
+        Length of an autonomous model's transient (:data:`TRANSIENT_TIME` by default).
+
+    Returns
+    -------
+    state : ndarray, shape (n,)
+        The state guess.
+    period : float or None
+        The period guess (None for a forced model whose period was not given).
+
+    Raises
+    ------
+    StartGuessError
+        If the transient fails, diverges, or shows no oscillation to read a period from.
+    ModelError
+        If the forcing period of a forced model is not positive and finite at these parameters.
     """
     autonomous = flow.system.is_autonomous
     if state is not None and (period is not None or not autonomous):

@@ -22,7 +22,27 @@ from saltation.orbits.shooting import ShootingProblem
 
 
 def period_doubling_direction(problem: ShootingProblem, point: SpecialPoint) -> np.ndarray:
-    """The unit eigenvector of the monodromy at a period doubling for its multiplier nearest -1."""
+    """The unit eigenvector of the monodromy at a period doubling for its multiplier nearest -1.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        The problem of the period-1 branch.
+    point : SpecialPoint
+        The period doubling (its state and parameter).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The real part of that eigenvector, normalised.
+
+    Raises
+    ------
+    SaltationError
+        If the orbit at the point cannot be evaluated (an :class:`IntegrationError`, say).
+    numpy.linalg.LinAlgError
+        If the monodromy is not finite.
+    """
     ev = problem.evaluate(np.asarray(point.state, dtype=float), point.parameter, need_lam=False)
     mu, vectors = np.linalg.eig(ev.trajectory.monodromy)
     k = int(np.argmin(np.abs(mu + 1.0)))
@@ -31,7 +51,24 @@ def period_doubling_direction(problem: ShootingProblem, point: SpecialPoint) -> 
 
 
 def period_doubled_problem(problem: ShootingProblem) -> ShootingProblem:
-    """The same shooting problem over twice as many forcing periods."""
+    """The same shooting problem over twice as many forcing periods.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        A forced problem.
+
+    Returns
+    -------
+    ShootingProblem
+        With ``periods`` doubled, and the same flow, parameters, continuation parameter, time
+        direction, ``t0`` and tolerances.
+
+    Raises
+    ------
+    ModelError
+        If the problem is autonomous (its period is an unknown, not a number of periods).
+    """
     return ShootingProblem(
         problem.flow, problem.p, continuation_parameter=problem.lam_name, backward=problem.backward, t0=problem.t0,
         tolerances=problem.tolerances, periods=2 * problem.periods,
@@ -59,6 +96,13 @@ def follow_period_doubled_branch(
     epsilon : float
         Distance along the critical eigenvector of the first period-2 orbit
         (tried smaller and larger if Newton fails there).
+    label : str
+        The label of the new branch.
+
+    Returns
+    -------
+    Branch
+        The period-2 branch, followed from its first orbit away from the period doubling.
 
     Raises
     ------
@@ -66,6 +110,15 @@ def follow_period_doubled_branch(
         If the point is not a period doubling, or the problem is autonomous.
     ConvergenceError
         If no period-2 orbit is found near the period doubling.
+    SaltationError
+        If the period-1 orbit at the point cannot be evaluated.
+
+    References
+    ----------
+    Kuznetsov (2004), *Elements of Applied Bifurcation Theory*, 3rd ed., Springer (the period
+    doubling as a pitchfork of the second iterate).  Keller (1977), "Numerical solution of bifurcation
+    and nonlinear eigenvalue problems", in Rabinowitz (ed.), *Applications of Bifurcation Theory*,
+    Academic Press (bordered systems and branch switching).
     """
     if point.kind is not SpecialPointKind.PERIOD_DOUBLING:
         raise ModelError(f"branch switching needs a period_doubling point, got {point.kind.value}")

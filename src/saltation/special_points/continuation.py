@@ -22,8 +22,25 @@ from saltation.special_points.detection import SpecialPointDetector
 
 
 class Continuation(engine.Continuation):
-    """:class:`saltation.branches.continuation.Continuation` with the special-point detector
-    (:class:`~saltation.special_points.detection.SpecialPointDetector`) unless another is given."""
+    """:class:`saltation.branches.continuation.Continuation` with the special-point detector.
+
+    The detector is :class:`~saltation.special_points.detection.SpecialPointDetector` unless another is
+    given.
+
+    Parameters
+    ----------
+    problem : ShootingProblem or EquilibriumProblem
+        The problem, with its continuation parameter set.
+    settings : ContinuationSettings, optional
+        The options (``ContinuationSettings()`` by default).
+    detector : callable, optional
+        ``detector(problem, corrector, branch)`` makes the detector; None finds no special points.
+
+    Raises
+    ------
+    SaltationError
+        If the problem has no continuation parameter.
+    """
 
     def __init__(self, problem, settings: ContinuationSettings | None = None, *,
                  detector: engine.DetectorFactory | None = SpecialPointDetector):
@@ -49,14 +66,41 @@ def continue_branch(
     Parameters
     ----------
     problem : ShootingProblem or EquilibriumProblem
+        The problem, with its continuation parameter set (any problem of the protocol).
     u0 : ndarray
         Guess of the unknowns at the start (see ``problem.pack``).
     lam0 : float, optional
         Start value of the parameter (the problem's value by default).
+    settings : ContinuationSettings, optional
+        Step sizes, bounds and tolerances (``ContinuationSettings()`` by default).
     directions : tuple of int
         +1 (increasing parameter first), -1, or both.
+    label : str
+        A label for the branch (legends, files).
     progress : callable, optional
         Called with each new BranchPoint.
+    detector : callable, optional
+        Makes the special-point detector (:class:`SpecialPointDetector` by default; None finds none).
+
+    Returns
+    -------
+    Branch
+        The points of every direction, the special points located on the way and each run's stop
+        reason.
+
+    Raises
+    ------
+    SaltationError
+        If no direction is given, the problem has no continuation parameter, ``lam0`` lies outside
+        the bounds, or the start point cannot be corrected (a :class:`ConvergenceError`, or the error
+        of the problem's evaluation).
+
+    References
+    ----------
+    Keller (1977), "Numerical solution of bifurcation and nonlinear eigenvalue problems", in
+    Rabinowitz (ed.), *Applications of Bifurcation Theory*, Academic Press (pseudo-arclength
+    continuation).  Leine and Van Campen, "Fold bifurcations in discontinuous systems"
+    (set-valued multipliers at the corners).
     """
     return engine.continue_branch(problem, u0, lam0, settings=settings, directions=directions, label=label,
                                   progress=progress, detector=detector)
@@ -96,10 +140,29 @@ def continue_orbit(
         grazing that stalls the corrector and the cycle-collapse test are those of single shooting
         and are not run; special points are located by their single-shooting defining systems.
 
+    Returns
+    -------
+    Branch
+        The orbit's branch, with its special points (folds, period doublings, Neimark-Sacker points,
+        corners, grazings, sliding bifurcations, cycle collapses) and stop reasons.
+
     Raises
     ------
     ModelError
-        For an unknown parameter, or an orbit that does not know its problem.
+        For an unknown parameter, an orbit that does not know its problem, or an invalid number of
+        segments.
+    ValueError
+        If ``bounds`` is not increasing.
+    SaltationError
+        If the orbit's parameter value lies outside ``bounds``, or its point cannot be corrected again
+        (see :meth:`Continuation.run`).
+
+    References
+    ----------
+    Keller (1977), "Numerical solution of bifurcation and nonlinear eigenvalue problems", in
+    Rabinowitz (ed.), *Applications of Bifurcation Theory*, Academic Press (pseudo-arclength
+    continuation).  Leine and Van Campen, "Fold bifurcations in discontinuous systems"
+    (set-valued multipliers at the corners).
     """
     base = orbit.problem
     if base is None:

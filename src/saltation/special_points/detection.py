@@ -37,7 +37,18 @@ from saltation.special_points.sliding import locate_adding_sliding, locate_tange
 
 @dataclass(frozen=True)
 class SetValuedCrossing:
-    """How the set-valued multipliers of a non-smooth point meet the unit circle."""
+    """How the set-valued multipliers of a non-smooth point meet the unit circle.
+
+    Attributes
+    ----------
+    kind : SpecialPointKind
+        ``discontinuous_fold`` (through +1), ``discontinuous_flip`` (through -1),
+        ``discontinuous_neimark_sacker`` (a complex pair) or ``nonsmooth_no_crossing``.
+    q : float or None
+        Where the crossing happens on the convex combination ``(1 - q) M- + q M+`` (None without one).
+    point : complex or None
+        The forward-time multiplier on the unit circle there (None without a crossing).
+    """
 
     kind: SpecialPointKind
     q: float | None
@@ -64,6 +75,39 @@ def classify_nonsmooth(
     unstable (a forward multiplier is infinite; ``M`` is then not available
     in forward time), the jump runs along the real axis from the finite
     multiplier to infinity and crosses at ``q = 0``.
+
+    Parameters
+    ----------
+    m_minus, m_plus : ndarray, shape (n, n), or None
+        The one-sided monodromies, in the direction of integration (None for an infinitely unstable
+        side).
+    backward : bool
+        Whether they were computed in backward time.
+    autonomous : bool
+        Whether the orbit is autonomous (its trivial path, at 1 throughout, is skipped).
+    mu_minus, mu_plus : ndarray, complex, optional
+        The one-sided forward multipliers, needed where a monodromy is None.
+    num : int
+        Number of values of ``q`` on which the paths are followed (each crossing is then refined by
+        bisection).
+
+    Returns
+    -------
+    SetValuedCrossing
+        The kind, and where the set crosses the unit circle.
+
+    Raises
+    ------
+    SaltationError
+        If a monodromy is missing and the multipliers do not make up for it (both sides' multipliers
+        are needed, and one side must be infinitely unstable).
+    numpy.linalg.LinAlgError
+        If a monodromy is not finite.
+
+    References
+    ----------
+    Leine and Van Campen, "Fold bifurcations in discontinuous systems" (set-valued Floquet
+    multipliers and discontinuous bifurcations).
     """
     if m_minus is None or m_plus is None:
         fin = mu_minus if m_minus is not None else mu_plus
@@ -144,7 +188,20 @@ def _refine_crossing(m_minus, m_plus, guide: complex, q0: float, qa: float, qb: 
 
 
 class SpecialPointDetector:
-    """Looks for special points between consecutive branch points and locates them."""
+    """Looks for special points between consecutive branch points and locates them.
+
+    Made by the continuation engine as ``SpecialPointDetector(problem, corrector, branch)`` (a
+    :data:`~saltation.branches.continuation.DetectorFactory`).
+
+    Parameters
+    ----------
+    problem : ShootingProblem or EquilibriumProblem
+        The branch's problem.
+    corrector : Corrector
+        The branch's corrector (its settings give the location tolerance ``locate_tol``).
+    branch : Branch
+        The branch being followed (its kind, time direction and whether it is autonomous).
+    """
 
     def __init__(self, problem, corrector: Corrector, branch: Branch):
         self.problem = problem
@@ -165,6 +222,17 @@ class SpecialPointDetector:
         its defining system (:mod:`saltation.special_points.grazing`), and the branch is
         restarted just beyond it, at growing distances, from the grazing
         orbit's state.
+
+        Parameters
+        ----------
+        prev : Solution
+            The last point the corrector reached.
+
+        Returns
+        -------
+        tuple of (Solution, SpecialPoint) or None
+            The first solution across the grazing and the grazing's record; None for a problem other
+            than a single-shooting one over one period, or when no grazing explains the failure.
         """
         prob = self.problem
         if not isinstance(prob, ShootingProblem) or prob.periods != 1:
@@ -220,6 +288,23 @@ class SpecialPointDetector:
         functions are then evaluated on each smooth piece of the step (from ``a`` to the located
         point's near side, from its far side to ``b``), so that a fold or a multiplier crossing in the
         same step as the change is found too.
+
+        Parameters
+        ----------
+        a, b : Solution
+            Consecutive corrected points.
+        index : int
+            The index of ``a`` on the branch.
+
+        Returns
+        -------
+        list of SpecialPoint
+            The located points (folds and multiplier crossings that fail their check are left out).
+
+        Raises
+        ------
+        SaltationError
+            If the one-sided monodromies needed to classify a non-smooth point are missing.
         """
         if canonical_events(a.summary.event_ids) != canonical_events(b.summary.event_ids):
             lo, hi = self._bisect_event_change(a, b)
@@ -257,6 +342,25 @@ class SpecialPointDetector:
 
     # -- location along the secant ----------------------------------------------------------
     def on_secant(self, a: Solution, b: Solution, sigma: float) -> Solution:
+        """The branch point on the secant from ``a`` to ``b`` at the fraction ``sigma``.
+
+        Parameters
+        ----------
+        a, b : Solution
+            Two corrected points.
+        sigma : float
+            Fraction of the secant (0 at ``a``, 1 at ``b``).
+
+        Returns
+        -------
+        Solution
+            The point corrected on the hyperplane normal to the secant through ``a + sigma (b - a)``.
+
+        Raises
+        ------
+        ConvergenceError, SaltationError
+            As :meth:`Corrector.solve_bordered`.
+        """
         d = b.z - a.z
         return self.corrector.solve_bordered(a.z + sigma * d, _unit(d))
 
@@ -271,6 +375,28 @@ class SpecialPointDetector:
         the error of the monodromy matrices.  A turning point without it is no fold (a corner
         of the branch that the event sequence does not show, or an orbit the integration cannot
         resolve), and None is returned.
+
+        Parameters
+        ----------
+        a, b : Solution
+            Corrected points on either side of the sign change.
+        index : int
+            The index of ``a`` on the branch.
+        kind : SpecialPointKind
+            The kind looked for.
+        test : callable
+            The test function of a :class:`Solution`.
+
+        Returns
+        -------
+        SpecialPoint or None
+            The located point, or None (see above).
+
+        References
+        ----------
+        Dowell and Jarratt (1971), "A modified regula falsi method for computing the root of an
+        equation", BIT 11 (the Illinois method).  Govaerts (2000), *Numerical Methods for Bifurcations
+        of Dynamical Equilibria*, SIAM (test functions).
         """
         sa, sb = 0.0, 1.0
         ga, gb = test(a), test(b)
@@ -337,7 +463,25 @@ class SpecialPointDetector:
         return relative * (1.0 + float(np.linalg.norm(traj.monodromy)))
 
     def locate_nonsmooth(self, a: Solution, b: Solution, index: int) -> SpecialPoint:
-        """Bisection along the secant on the event sequence, then set-valued multipliers."""
+        """Bisection along the secant on the event sequence, then set-valued multipliers.
+
+        Parameters
+        ----------
+        a, b : Solution
+            Corrected points with different event sequences.
+        index : int
+            The index of ``a`` on the branch.
+
+        Returns
+        -------
+        SpecialPoint
+            The non-smooth point (see :meth:`nonsmooth_point`).
+
+        Raises
+        ------
+        SaltationError
+            If the one-sided monodromies needed to classify it are missing.
+        """
         lo, hi = self._bisect_event_change(a, b)
         return self.nonsmooth_point(lo, hi, index, far=(a, b))
 
@@ -369,9 +513,36 @@ class SpecialPointDetector:
         Where the two sides differ by segments of zero length (a corner
         collision), ``M-`` and ``M+`` are the exact limits at the boundary
         orbit (:mod:`saltation.orbits.boundary`), and the point is placed at the
-        boundary orbit used.  Otherwise they are the monodromies of ``lo`` and
-        ``hi``.  ``far`` are the branch points beyond ``lo`` and ``hi`` (on the
-        same sides), used to estimate how well the multipliers are known.
+        boundary orbit used.  Otherwise a grazing or sliding bifurcation is located by its defining
+        system, and failing that ``M-`` and ``M+`` are the monodromies of ``lo`` and ``hi``.  ``far``
+        are the branch points beyond ``lo`` and ``hi`` (on the same sides), used to estimate how well
+        the multipliers are known.
+
+        Parameters
+        ----------
+        lo, hi : Solution
+            The bracketing solutions (``lo`` on the side of point ``index``).
+        index : int
+            The index of the branch point before the non-smooth point.
+        note : str
+            A note for the record.
+        far : tuple of Solution, optional
+            The branch points beyond ``lo`` and ``hi``.
+
+        Returns
+        -------
+        SpecialPoint
+            The classified point, with its one-sided multipliers and their accuracy.
+
+        Raises
+        ------
+        SaltationError
+            If the one-sided monodromies needed to classify it are missing.
+
+        References
+        ----------
+        Leine and Van Campen, "Fold bifurcations in discontinuous systems" (set-valued Floquet
+        multipliers at corners).
         """
         bracket = (min(lo.lam, hi.lam), max(lo.lam, hi.lam))
         accuracy = float(np.linalg.norm(hi.z - lo.z))
@@ -453,7 +624,30 @@ def special_point_between(
     monodromy_plus: np.ndarray | None,
     note: str = "",
 ) -> SpecialPoint:
-    """The record of a non-smooth point from the solutions on its two sides (``lo`` on the side of point ``index``)."""
+    """The record of a non-smooth point from the solutions on its two sides (``lo`` on the side of point ``index``).
+
+    Parameters
+    ----------
+    lo, hi : Solution
+        The bracketing solutions.
+    crossing : SetValuedCrossing
+        The classification.
+    index : int
+        The index of the branch point before the point.
+    bracket : tuple of float
+        The parameter interval that holds it.
+    accuracy : float
+        The distance between ``lo`` and ``hi``.
+    monodromy_plus : ndarray or None
+        The monodromy on ``hi``'s side.
+    note : str
+        A note for the record.
+
+    Returns
+    -------
+    SpecialPoint
+        At the middle of the bracket, with ``lo``'s state and both sides' multipliers.
+    """
     return SpecialPoint(
         kind=crossing.kind,
         parameter=0.5 * (lo.lam + hi.lam),
@@ -476,12 +670,31 @@ def special_point_between(
 
 
 def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoint | None:
-    """The record of a crossing-, switching- or adding-sliding between two branch points, located by
-    its defining system (:mod:`saltation.special_points.sliding`).
+    """The record of a crossing-, switching- or adding-sliding between two branch points.
 
-    Its one-sided multipliers are those of the two bracketing orbits (the
-    extra segment shrinks linearly or like a square root), and their
-    difference is the stated accuracy bound.
+    Located by its defining system (:mod:`saltation.special_points.sliding`).  Its one-sided
+    multipliers are those of the two bracketing orbits (the extra segment shrinks linearly or like a
+    square root), and their difference is the stated accuracy bound.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        The branch's problem (forward time, one forcing period).
+    lo, hi : Solution
+        The bracketing solutions (``lo`` on the side of point ``index``).
+    index : int
+        The index of the branch point before the point.
+
+    Returns
+    -------
+    SpecialPoint or None
+        The located point; None when the change is not a sliding bifurcation, the problem is not a
+        forward-time one over one period, or the location fails or lands outside the bracket.
+
+    References
+    ----------
+    di Bernardo, Kowalczyk and Nordmark (2002), "Bifurcations of dynamical systems with sliding:
+    derivation of normal-form mappings", Physica D 170.
     """
     flow = getattr(problem, "flow", None)
     sides = _sides(lo, hi)
@@ -564,8 +777,33 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     the instant of tangency when they stay bounded (a continuous field), and
     unbounded otherwise (an impact: ``S = O(1/v)``): the largest multiplier
     there is reported as ``inf``, the others are those of the nearest orbit.
-    Returns None when the change is not a grazing (or the problem is not a
-    forward-time shooting problem).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        The branch's problem (one forcing period).
+    lo, hi : Solution
+        The bracketing solutions.
+    index : int
+        The index of the branch point before the grazing.
+
+    Returns
+    -------
+    SpecialPoint or None
+        The ``grazing`` (or ``grazing_sliding``) record; None when the change is not a grazing, the
+        problem closes after several forcing periods, or the location fails or lands outside the
+        bracket.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the fundamental matrix at the instant of tangency is singular.
+
+    References
+    ----------
+    di Bernardo, Budd, Champneys and Kowalczyk (2008), *Piecewise-smooth Dynamical Systems: Theory
+    and Applications*, Springer.  Nordmark (1991), "Non-periodic motion caused by grazing incidence in
+    an impact oscillator", J. Sound Vib. 145 (the square-root singularity of impacts).
     """
     flow = getattr(problem, "flow", None)
     sides = _sides(lo, hi)

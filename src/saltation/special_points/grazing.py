@@ -38,9 +38,24 @@ from saltation.orbits.shooting import ShootingProblem
 
 
 def location_tolerances(flow: Flow, tolerances=None):
-    """The integration tolerances of a special point's defining system: those given, at most
-    ``rtol = 1e-12``, ``atol = 1e-14`` (a location costs a few tens of period maps; tight tolerances keep
-    the integration error below the location's target where DOP853 steps)."""
+    """The integration tolerances of a special point's defining system.
+
+    Those given, at most ``rtol = 1e-12``, ``atol = 1e-14``: a location costs a few tens of period
+    maps, and tight tolerances keep the integration error below the location's target where DOP853
+    steps.
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow (its tolerances by default).
+    tolerances : Tolerances, optional
+        The tolerances to tighten.
+
+    Returns
+    -------
+    Tolerances
+        A copy with ``rtol`` and ``atol`` capped.
+    """
     tol = tolerances or flow.tolerances
     return replace(tol, rtol=min(tol.rtol, 1e-12), atol=min(tol.atol, 1e-14))
 
@@ -56,6 +71,7 @@ class GrazingOrbit:
     state0 : ndarray, shape (n,)
         The orbit's state at ``t0``.
     period : float
+        Its period.
     t_graze : float
         The instant of tangency.
     x_graze : ndarray, shape (n,)
@@ -90,7 +106,24 @@ class GrazingOrbit:
 
 
 def indicator_rate(flow: Flow, surface: int, traj: Trajectory, p: np.ndarray) -> float:
-    """``dh/dt = h_x f + h_t`` of a surface at the end of a trajectory (in forward time)."""
+    """``dh/dt = h_x f + h_t`` of a surface at the end of a trajectory (in forward time).
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    surface : int
+        Index of the surface.
+    traj : Trajectory
+        A trajectory (its end state and velocity are used).
+    p : ndarray
+        Parameter values.
+
+    Returns
+    -------
+    float
+        The rate; zero where the flow is tangent to the surface.
+    """
     hx, ht, _ = flow.indicator_gradient(surface, traj.t1, traj.x1, p)
     return float(hx @ traj.velocity_end + ht)
 
@@ -102,8 +135,43 @@ def tangency_time(
     """The extremum of ``h`` along the orbit from ``(t0, x0)`` nearest ``t_guess``: a root of ``dh/dt``.
 
     Searches ``t_guess +- delta`` for a sign change of the rate, ``delta``
-    growing to ``span / 4``, within ``t0 .. t0 + sign span`` (``sign`` -1: backward time); None when
-    there is none.
+    growing to ``span / 4``, within ``t0 .. t0 + sign span`` (``sign`` -1: backward time), and
+    refines it by Brent's method.
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    x0 : ndarray, shape (n,)
+        The initial state.
+    t0 : float
+        The initial time.
+    p : ndarray
+        Parameter values.
+    surface : int
+        Index of the surface.
+    t_guess : float
+        Guess of the instant.
+    span : float
+        The length of the interval searched (the period).
+    mode0 : int or str, optional
+        The initial mode (the model's rule by default).
+    disabled : sequence of int
+        Transitions the orbit passes without firing (the grazed one).
+    tolerances : Tolerances, optional
+        Integration tolerances.
+    sign : float
+        +1 forward in time, -1 backward.
+
+    Returns
+    -------
+    float or None
+        The instant, or None when the rate does not change sign near ``t_guess``.
+
+    Raises
+    ------
+    IntegrationError, InitialModeError
+        If a run to a trial instant fails.
     """
     def rate(t: float) -> float:
         traj = flow.run(x0, t0, t, p, mode0=mode0, disabled=disabled, tolerances=tolerances)
@@ -142,12 +210,16 @@ def locate_grazing(
     backward: bool = False,
     also_disabled: Sequence[int] = (),
 ) -> GrazingOrbit:
-    """Locate a grazing periodic orbit: the orbit's problem with a :class:`~saltation.orbits.conditions.Tangency`
-    attached and the parameter freed, solved by the one Newton of :class:`~saltation.orbits.conditions.ConditionedProblem`.
+    """Locate a grazing periodic orbit.
+
+    The orbit's problem with a :class:`~saltation.orbits.conditions.Tangency` attached and the
+    parameter freed, solved by the one Newton of
+    :class:`~saltation.orbits.conditions.ConditionedProblem`.
 
     Parameters
     ----------
     flow : Flow
+        The flow of the model.
     x0 : array_like, shape (n,)
         Guess of the orbit's state at ``t0`` (a nearby orbit that misses the surface).
     lam : float
@@ -158,6 +230,16 @@ def locate_grazing(
         The transition whose surface the orbit grazes (disabled along the way).
     t_guess : float
         Guess of the instant of tangency.
+    parameters : mapping or ndarray, optional
+        The other parameters' values (the model's defaults by default).
+    t0 : float
+        Initial time (forced models: the phase of the forcing).
+    tol : float
+        Newton tolerance.
+    max_iter : int
+        Largest number of Newton iterations.
+    tolerances : Tolerances, optional
+        Integration tolerances (tightened by :func:`location_tolerances`).
     period : float, optional
         Autonomous models: the guess of the period, then an unknown too, with
         the phase condition ``f(x_ref) . (x0 - x_ref) = 0`` anchored at the guess.
@@ -166,12 +248,27 @@ def locate_grazing(
     also_disabled : sequence of int
         Further transitions the virtual orbit passes (touched at the same time, by symmetry).
 
+    Returns
+    -------
+    GrazingOrbit
+        The grazing orbit, its instant and state of tangency, monodromy and accuracy.
+
     Raises
     ------
     ConvergenceError
-        If Newton's method does not converge (with the residual history).
+        If no tangency lies near ``t_guess``, or Newton's method does not converge (with the residual
+        history).
     ModelError
-        For an autonomous model without a period guess.
+        For an autonomous model without a period guess, or an unknown parameter.
+    IntegrationError, InitialModeError
+        If the guess's orbit cannot be integrated while the instant of tangency is sought.
+    StationaryStateError
+        If the phase condition of an autonomous orbit would be anchored at an equilibrium.
+
+    References
+    ----------
+    di Bernardo, Budd, Champneys and Kowalczyk (2008), *Piecewise-smooth Dynamical Systems: Theory
+    and Applications*, Springer (grazing bifurcations).
     """
     system = flow.system
     tolerances = location_tolerances(flow, tolerances)
@@ -213,6 +310,7 @@ class TangentialReturn:
     Attributes
     ----------
     parameter : float
+        The parameter's value.
     state : ndarray, shape (n,)
         The touching point (on the surface).
     period : float
@@ -222,6 +320,7 @@ class TangentialReturn:
     accuracy : float
         Estimate of the error of ``parameter`` (the Newton correction that would follow).
     residuals : list of float
+        Newton's residual history.
     """
 
     parameter: float
@@ -258,19 +357,43 @@ def locate_tangential_return(
 
     Parameters
     ----------
+    flow : Flow
+        The flow of an autonomous model.
     x_touch : array_like
-        Guess of the touching point (the state where the orbit enters the transition).
-    lam, lam_name :
-        Guess of the parameter, and its name.
+        Guess of the touching point (the state where the orbit enters the transition); it is first
+        projected onto the surface.
+    lam : float
+        Guess of the parameter.
+    lam_name : str
+        The parameter that moves.
     transition : int
         The transition entered at the touch.
     period : float
         Guess of the period.
+    parameters : mapping or ndarray, optional
+        The other parameters' values (the model's defaults by default).
+    tol : float
+        Newton tolerance.
+    max_iter : int
+        Largest number of Newton iterations.
+    tolerances : Tolerances, optional
+        Integration tolerances (tightened by :func:`location_tolerances`).
+
+    Returns
+    -------
+    TangentialReturn
+        The touching point, parameter, period and accuracy.
 
     Raises
     ------
     ConvergenceError
         If Newton's method does not converge (with the residual history).
+    ModelError
+        For a forced model (the condition fixes the phase), or an unknown parameter.
+
+    References
+    ----------
+    Leine and Van Campen, "Fold bifurcations in discontinuous systems" (the stick-slip fold).
     """
     system = flow.system
     tolerances = location_tolerances(flow, tolerances)
@@ -305,8 +428,28 @@ def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_
     zero (relative to its range over the period) at a local extremum, from
     the side it would cross from, is a candidate for grazing.  Of a stretch of
     consecutive samples that all qualify (an indicator that stays flat near
-    zero, as in a stick phase), the one nearest zero is the candidate.  The
-    candidates come nearest first.
+    zero, as in a stick phase), the one nearest zero is the candidate.
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    traj : Trajectory
+        One period, with dense output.
+    p : ndarray
+        Parameter values.
+    relative_gap : float
+        How near zero, relative to the indicator's range, a candidate comes.
+
+    Returns
+    -------
+    list of tuple of (int, float)
+        The candidates, nearest first.
+
+    Raises
+    ------
+    ValueError
+        If the trajectory was computed without dense output.
     """
     system = flow.system
     t, x = traj.sample(16)
@@ -353,7 +496,25 @@ def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_
 
 
 def growth_exponent(distances: np.ndarray, magnitudes: np.ndarray) -> float:
-    """The exponent ``a`` of ``y ~ d^a``, fitted in log-log (-1/2 for the period map near a grazing)."""
+    """The exponent ``a`` of ``y ~ d^a``, fitted in log-log (-1/2 for the period map near a grazing).
+
+    Parameters
+    ----------
+    distances : array_like
+        Distances ``d`` to the grazing, positive.
+    magnitudes : array_like
+        The magnitudes ``y`` at those distances, positive.
+
+    Returns
+    -------
+    float
+        The least-squares slope of ``log y`` against ``log d``.
+
+    References
+    ----------
+    Nordmark (1991), "Non-periodic motion caused by grazing incidence in an impact oscillator",
+    J. Sound Vib. 145 (the square-root singularity).
+    """
     slope, _ = np.polyfit(np.log(np.asarray(distances, float)), np.log(np.asarray(magnitudes, float)), 1)
     return float(slope)
 

@@ -20,7 +20,7 @@ Every curve is the orbit's problem with a condition attached
 * smooth folds and period doublings (:class:`MultiplierCurve`): periodicity
   plus a bordered test function ``g`` that vanishes where ``M - mu I`` is
   singular (``mu = +1`` or ``-1``), the minimally augmented system of Govaerts
-  (*Numerical Bifurcation Analysis of Dynamical Systems*, SIAM 2000);
+  (*Numerical Methods for Bifurcations of Dynamical Equilibria*, SIAM 2000);
   derivatives of ``g`` by central differences
   (:class:`~saltation.orbits.conditions.MultiplierCondition`).
 
@@ -85,16 +85,18 @@ SLIDING_KINDS = frozenset(
 
 @dataclass(repr=False)  # (the repr of a Branch)
 class Locus(Branch):
-    """A curve of special points in two parameters: a :class:`~saltation.branches.branch.Branch` whose
-    points carry both parameters (``parameter`` the first, ``second_parameter`` the second), labelled with
+    """A curve of special points in two parameters.
+
+    A :class:`~saltation.branches.branch.Branch` whose points carry both parameters (``parameter`` the
+    first, ``second_parameter`` the second), labelled with
     :class:`~saltation.branches.branch.SpecialPoint` records of kind CODIMENSION_TWO where two defining
     conditions meet.
 
-    Attributes (beyond a branch's)
-    ------------------------------
+    Attributes
+    ----------
     stop_reason : str
-        Why each direction stopped, one clause each (``"increasing f0: reached a parameter bound;
-        decreasing f0: failed after 12 points: ..."``).
+        Beyond a branch's attributes: why each direction stopped, one clause each (``"increasing f0:
+        reached a parameter bound; decreasing f0: failed after 12 points: ..."``).
     kinds : list of str
         The kind of the special point at each curve point (grazing and corner curves, whose kind is
         classified along the curve; empty otherwise).
@@ -109,7 +111,14 @@ class Locus(Branch):
         return np.column_stack([self.parameter, self.second_parameter]).reshape(-1, 2)
 
     def record(self) -> dict:
-        """The curve as the command line writes it (``saltation locus --json``)."""
+        """The curve as the command line writes it (``saltation locus --json``).
+
+        Returns
+        -------
+        dict
+            ``points`` (pairs of the two parameters), ``stop_reason`` and ``special_points`` (the
+            codimension-two points, as :func:`codimension_two_record` writes them).
+        """
         return {
             "points": [[float(a), float(b)] for a, b in self.values],
             "stop_reason": self.stop_reason,
@@ -151,10 +160,23 @@ class _Curve(ConditionedProblem):
         self.first = first
 
     def snapshot(self) -> dict:
-        """The state that :meth:`accept` moves along a run (restored before a run in the other direction)."""
+        """The state that :meth:`accept` moves along a run (restored before a run in the other direction).
+
+        Returns
+        -------
+        dict
+            The last evaluation (none), the event sequences (none) and the conditions' starting guesses.
+        """
         return {"_last": None, "event_ids": [], "_guesses": [c.start() for c in self.conditions]}
 
     def restore(self, state: dict) -> None:
+        """Restore a :meth:`snapshot` before a run in the other direction.
+
+        Parameters
+        ----------
+        state : dict
+            What :meth:`snapshot` returned.
+        """
         for key, value in state.items():
             if key == "_guesses":
                 for c, g in zip(self.conditions, value):
@@ -170,6 +192,7 @@ class GrazingCurve(_Curve):
     Parameters
     ----------
     problem : ShootingProblem
+        The problem of the branch (forced, forward time).
     parameters : ndarray
         Parameter values at the start.
     first, second : str
@@ -180,6 +203,18 @@ class GrazingCurve(_Curve):
         Instant of tangency at the start.
     others : sequence of (int, float)
         Transitions touched at the same time (by symmetry), passed too.
+
+    Raises
+    ------
+    ModelError
+        For an autonomous or backward-time problem, or an unknown parameter.
+    IndexError
+        If ``transition`` is not an index of the model's transitions.
+
+    References
+    ----------
+    di Bernardo, Budd, Champneys and Kowalczyk (2008), *Piecewise-smooth Dynamical Systems: Theory
+    and Applications*, Springer (grazing bifurcations).
     """
 
     def __init__(self, problem: ShootingProblem, parameters: np.ndarray, first: str, second: str, transition: int,
@@ -193,10 +228,31 @@ class GrazingCurve(_Curve):
         self.period_start = self.system.forcing_period(self.p)
 
     def accept(self, u: np.ndarray, lam: float) -> None:
+        """Called at every accepted curve point: move the guesses along, and classify the corner there.
+
+        Parameters
+        ----------
+        u : ndarray
+            The accepted unknowns ``(x0, lam1, t_g)``.
+        lam : float
+            The second parameter's value.
+
+        Raises
+        ------
+        SaltationError
+            If the kind of the corner cannot be classified (see :meth:`corner_kind`).
+        """
         super().accept(u, lam)
         self.kinds.append(self.corner_kind(u, lam))
 
     def snapshot(self) -> dict:
+        """The state that :meth:`accept` moves along a run, with the corner kinds found (none).
+
+        Returns
+        -------
+        dict
+            As :meth:`_Curve.snapshot`, with ``kinds``.
+        """
         return super().snapshot() | {"kinds": []}
 
     def corner_kind(self, u: np.ndarray, lam: float) -> str:
@@ -205,6 +261,31 @@ class GrazingCurve(_Curve):
         The set-valued multipliers between the grazing orbit's monodromy and the
         same with the excursion's saltation matrices inserted, classified as on a
         branch; ``grazing`` when those saltation matrices are unbounded there.
+
+        Parameters
+        ----------
+        u : ndarray
+            The curve point's unknowns.
+        lam : float
+            The second parameter's value.
+
+        Returns
+        -------
+        str
+            The value of a :class:`~saltation.branches.branch.SpecialPointKind` (``grazing``,
+            ``discontinuous_fold``, ``nonsmooth_no_crossing``...).
+
+        Raises
+        ------
+        SaltationError
+            If a simultaneous touch is lost along the curve, or a run fails.
+        numpy.linalg.LinAlgError
+            If a fundamental matrix to a touch is singular.
+
+        References
+        ----------
+        Leine and Van Campen, "Fold bifurcations in discontinuous systems", eq. (9) simplified on the
+        switching surface (the saltation matrices at the corner).
         """
         n = self.system.n
         p = self.parameters_at(u, lam)
@@ -254,10 +335,31 @@ def grazed_transitions(
     ``1e-6`` of the state's scale (simultaneous touches, such as both supports
     of a symmetric orbit).
 
+    Parameters
+    ----------
+    flow : Flow
+        The flow of a forced model.
+    state : ndarray
+        The orbit's state at ``t0``.
+    p : ndarray
+        Parameter values.
+    t0 : float
+        Initial time.
+    tolerances : Tolerances, optional
+        Integration tolerances.
+
+    Returns
+    -------
+    list of tuple of (int, float)
+        The touched transitions and the instants of the touches.
+
     Raises
     ------
     SaltationError
-        If the orbit touches no surface of a transition of its modes.
+        If the orbit touches no surface of a transition of its modes, or a run fails (an
+        :class:`IntegrationError`).
+    ModelError
+        For an autonomous model (it has no forcing period).
     """
     system = flow.system
     T = system.forcing_period(p)
@@ -302,6 +404,11 @@ def follow_locus(
         The second parameter.
     bounds : (float, float)
         The range of the second parameter.
+    settings : ContinuationSettings, optional
+        Step sizes and tolerances (``bounds`` overrides theirs; special points of the curve itself are
+        not detected).
+    progress : callable, optional
+        Called with each new curve point.
 
     Returns
     -------
@@ -311,9 +418,21 @@ def follow_locus(
     Raises
     ------
     ModelError
-        For an autonomous or backward-time problem, or a kind without a defining system here.
+        For an autonomous or backward-time problem, one over several forcing periods, or a kind
+        without a defining system here.
     SaltationError
         If the curve cannot start: the special point's defining system has no solution at its start.
+    ValueError
+        If ``bounds`` is not increasing.
+
+    References
+    ----------
+    Keller (1977), "Numerical solution of bifurcation and nonlinear eigenvalue problems", in
+    Rabinowitz (ed.), *Applications of Bifurcation Theory*, Academic Press (pseudo-arclength
+    continuation).  Govaerts (2000), *Numerical Methods for Bifurcations of Dynamical Equilibria*,
+    SIAM (minimally augmented systems of folds and period doublings).  di Bernardo, Kowalczyk and
+    Nordmark (2002), "Bifurcations of dynamical systems with sliding: derivation of normal-form
+    mappings", Physica D 170 (the sliding bifurcations).
     """
     if problem.autonomous or problem.backward or problem.periods != 1:
         raise ModelError("two-parameter curves are implemented for forced models in forward time, over one forcing period")
@@ -521,13 +640,40 @@ def _touch_kind(problem: ShootingProblem, curve: _Curve, z: np.ndarray) -> str:
 
 def arrival_identity(flow: Flow, state: np.ndarray, p: np.ndarray, surface: str, t_touch: float, *,
                      t0: float = 0.0, tolerances=None) -> tuple[EventIdentity, float]:
-    """The arrival at ``surface`` of the orbit from ``state`` nearest ``t_touch``, named by identity (the
-    mode it arrives from and its place among such arrivals), and its time.
+    """The arrival at ``surface`` of the orbit from ``state`` nearest ``t_touch``, named by identity.
+
+    The identity is the mode it arrives from and its place among such arrivals.
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of a forced model.
+    state : ndarray
+        The orbit's state at ``t0``.
+    p : ndarray
+        Parameter values.
+    surface : str
+        The surface arrived at.
+    t_touch : float
+        The instant of the arrival, roughly.
+    t0 : float
+        Initial time.
+    tolerances : Tolerances, optional
+        Integration tolerances.
+
+    Returns
+    -------
+    identity : EventIdentity
+        The arrival's identity.
+    t : float
+        Its time.
 
     Raises
     ------
     SaltationError
-        If the orbit does not arrive at the surface.
+        If the orbit does not arrive at the surface, or its run fails (an :class:`IntegrationError`).
+    ModelError
+        For an autonomous model (it has no forcing period).
     """
     T = flow.system.forcing_period(p)
     traj = flow.run(state, t0, t0 + T, p, tolerances=tolerances)
@@ -553,6 +699,31 @@ class SlidingCurve(_Curve):
     a short excursion into the far side that re-arrives moments later comes from the other mode and
     is never taken for it.  Or the exit field's cubic tangency at an instant ``tau`` of a sliding motion
     (adding-sliding; unknowns ``(x0, lam1, tau)``).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        The problem of the branch (forced, forward time).
+    parameters : ndarray
+        Parameter values at the start.
+    second : str
+        The parameter the curve is followed in.
+    point : SpecialPoint
+        The located sliding bifurcation (with its ``touch_surface``, ``touch_mode`` and
+        ``touch_time``).
+
+    Raises
+    ------
+    ModelError
+        If the point does not say where the orbit touches the surface, or the problem is autonomous
+        or in backward time.
+    SaltationError
+        If the orbit does not arrive at the surface (crossing- and switching-sliding), or its run fails.
+
+    References
+    ----------
+    di Bernardo, Kowalczyk and Nordmark (2002), "Bifurcations of dynamical systems with sliding:
+    derivation of normal-form mappings", Physica D 170.
     """
 
     def __init__(self, problem: ShootingProblem, parameters: np.ndarray, second: str, point: SpecialPoint):
@@ -570,12 +741,26 @@ class SlidingCurve(_Curve):
         super().__init__(problem, [condition], parameters, problem.lam_name, second)
 
     def snapshot(self) -> dict:
+        """The state that :meth:`accept` moves along a run, with the arrival's time.
+
+        Returns
+        -------
+        dict
+            As :meth:`_Curve.snapshot`, with the arrival's last time (crossing- and switching-sliding).
+        """
         state = super().snapshot()
         if not self.adding:
             state["_arrival"] = self.condition.t_event
         return state
 
     def restore(self, state: dict) -> None:
+        """Restore a :meth:`snapshot` before a run in the other direction (the arrival's time too).
+
+        Parameters
+        ----------
+        state : dict
+            What :meth:`snapshot` returned.
+        """
         state = dict(state)
         t = state.pop("_arrival", None)
         if t is not None:
@@ -584,8 +769,33 @@ class SlidingCurve(_Curve):
 
 
 class MultiplierCurve(_Curve):
-    """Folds (``mu = 1``) or period doublings (``mu = -1``) of a forced orbit in two parameters
-    (:class:`~saltation.orbits.conditions.MultiplierCondition`)."""
+    """Folds (``mu = 1``) or period doublings (``mu = -1``) of a forced orbit in two parameters.
+
+    The condition is :class:`~saltation.orbits.conditions.MultiplierCondition`.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        The problem of the branch (forced, forward time).
+    parameters : ndarray
+        Parameter values at the start.
+    second : str
+        The parameter the curve is followed in.
+    mu : float
+        ``+1`` (fold) or ``-1`` (period doubling).
+    h : float
+        Relative step of the central differences of the test function.
+
+    Raises
+    ------
+    ModelError
+        For an autonomous or backward-time problem, or an unknown parameter.
+
+    References
+    ----------
+    Govaerts (2000), *Numerical Methods for Bifurcations of Dynamical Equilibria*, SIAM (minimally
+    augmented systems).
+    """
 
     def __init__(self, problem: ShootingProblem, parameters: np.ndarray, second: str, *, mu: float, h: float = 1e-6):
         self.mu = float(mu)

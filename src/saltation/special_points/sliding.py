@@ -69,6 +69,7 @@ class SlidingChange:
     mode : str
         The mode whose field is tangent to the surface at the bifurcation.
     surface : str
+        The sliding surface.
     t_guess : float
         Where the side with the extra events has them (the touch lies between).
     side : float
@@ -153,9 +154,29 @@ def sliding_change(flow: Flow, without: Trajectory, with_: Trajectory, p_with: n
     ``with_`` has the extra events: one more (crossing- and switching-sliding)
     or two more (adding-sliding), or twice that where the change happens at
     two points of the orbit at once (the two switchings of a symmetric orbit).
-    ``p_with`` and ``p_without`` are their parameter values.  The event
-    sequences are compared as cycles (events may pass the section ``t = t0``
-    between the two orbits).  Returns None for any other change.
+    The event sequences are compared as cycles (events may pass the section
+    ``t = t0`` between the two orbits).
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    without : Trajectory
+        One period of the orbit without the extra events.
+    with_ : Trajectory
+        One period of the orbit with them.
+    p_with, p_without : ndarray
+        Their parameter values.
+
+    Returns
+    -------
+    SlidingChange or None
+        The change, or None for any other change of the event sequence.
+
+    References
+    ----------
+    di Bernardo, Kowalczyk and Nordmark (2002), "Bifurcations of dynamical systems with sliding:
+    derivation of normal-form mappings", Physica D 170.
     """
     w, wo = _cyclic(with_), _cyclic(without)
     if not wo:
@@ -213,12 +234,15 @@ class SlidingBifurcationOrbit:
     Attributes
     ----------
     kind : SpecialPointKind
+        ``crossing_sliding``, ``switching_sliding`` or ``adding_sliding``.
     parameter : float
+        The parameter's value at the bifurcation.
     state0 : ndarray
         The orbit's state at ``t0``.
     t_touch : float
         Where the orbit meets the boundary of the sliding region.
     x_touch : ndarray
+        The state there.
     mode : str
         The mode whose field is tangent to the surface there.
     curvature : float
@@ -230,6 +254,7 @@ class SlidingBifurcationOrbit:
         The Newton correction of the parameter that would follow, plus the
         integration error carried to the parameter (an error estimate).
     residuals : list of float
+        Newton's residual history.
     trajectory : Trajectory
         The period from ``state0``, with its monodromy.
     """
@@ -247,16 +272,71 @@ class SlidingBifurcationOrbit:
 
 
 def exit_rate(flow: Flow, mode: str, surface: str, t: float, x: np.ndarray, p: np.ndarray) -> float:
-    """``h_x f + h_t``: the rate of the indicator along a mode's field (zero where the field is tangent)."""
+    """``h_x f + h_t``: the rate of the indicator along a mode's field (zero where the field is tangent).
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    mode : str
+        The mode.
+    surface : str
+        The surface.
+    t : float
+        Time.
+    x : ndarray
+        State.
+    p : ndarray
+        Parameter values.
+
+    Returns
+    -------
+    float
+        The Lie derivative of the indicator along the mode's field.
+
+    Raises
+    ------
+    ModelError
+        If ``mode`` or ``surface`` names no mode or surface of the model.
+    """
     hx, ht, _ = flow.indicator_gradient(surface, t, x, p)
     return float(hx @ flow.vector_field(mode, t, x, p) + ht)
 
 
 def rate_along(flow: Flow, mode: str, fn: Callable[[float, np.ndarray], float], t: float, x: np.ndarray,
                p: np.ndarray, delta: float = 1e-3) -> float:
-    """The derivative of ``fn(t, x)`` along the field of ``mode``: a fourth-order central difference
-    along the straight line ``(t + s, x + s f(t, x))`` (exact to ``O(delta^4)``, rounding
-    ``O(eps / delta)``)."""
+    """The derivative of ``fn(t, x)`` along the field of ``mode``.
+
+    A fourth-order central difference along the straight line ``(t + s, x + s f(t, x))`` (exact to
+    ``O(delta^4)``, rounding ``O(eps / delta)``).
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    mode : str
+        The mode whose field is followed.
+    fn : callable
+        ``fn(t, x) -> float``.
+    t : float
+        Time.
+    x : ndarray
+        State.
+    p : ndarray
+        Parameter values.
+    delta : float
+        Relative step (scaled by the time and the field's size).
+
+    Returns
+    -------
+    float
+        The derivative.
+
+    Raises
+    ------
+    ModelError
+        If ``mode`` names no mode of the model.
+    """
     f = flow.vector_field(mode, t, x, p)
     d = delta * max(1.0, abs(t)) / max(1.0, float(np.linalg.norm(f)))
     v = [fn(t + k * d, x + k * d * f) for k in (-2, -1, 1, 2)]
@@ -274,23 +354,66 @@ def locate_tangent_arrival(
     t0: float = 0.0, tol: float = 1e-12, max_iter: int = 20, fd_step: float = 1e-7, tolerances=None,
     period: float | None = None,
 ) -> SlidingBifurcationOrbit:
-    """Locate a crossing- or switching-sliding: periodicity plus ``h_x f_B + h_t = 0`` where the orbit
-    arrives at the surface.
+    """Locate a crossing- or switching-sliding: periodicity plus ``h_x f_B + h_t = 0`` at the arrival.
 
+    Where the orbit arrives at the surface, the far side's field is tangent to it.
     ``index`` is the position of that arrival among the orbit's events: a
     crossing into ``B`` or a sliding start, the same point on either side of
-    the bifurcation (continuous across it), so the condition's derivatives by
-    central differences are well defined there.  ``side`` is the sign of
-    ``h`` on ``B``'s side.  The kind follows from the tangency's curvature:
+    the bifurcation (continuous across it), so the condition is well defined
+    there.  The kind follows from the tangency's curvature:
     visible from ``B`` (its orbit leaves the surface) is a crossing-sliding,
     invisible a switching-sliding.
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    x0 : ndarray
+        Guess of the orbit's state at ``t0``.
+    lam : float
+        Guess of the parameter.
+    lam_name : str
+        The parameter that moves.
+    index : int
+        Position of the arrival among the guess's events.
+    far_mode : str
+        The mode ``B`` on the far side, whose field turns tangent.
+    side : float
+        The sign of ``h`` on ``B``'s side.
+    parameters : mapping or ndarray, optional
+        The other parameters' values (the model's defaults by default).
+    t0 : float
+        Initial time (forced models: the phase of the forcing).
+    tol : float
+        Newton tolerance.
+    max_iter : int
+        Largest number of Newton iterations.
+    fd_step : float
+        Unused (kept for the callers' signature; the condition's derivatives are exact).
+    tolerances : Tolerances, optional
+        Integration tolerances (tightened by
+        :func:`~saltation.special_points.grazing.location_tolerances`).
+    period : float, optional
+        Guess of the period (autonomous models).
+
+    Returns
+    -------
+    SlidingBifurcationOrbit
+        The located orbit, its kind from the curvature at the touch.
 
     Raises
     ------
     ConvergenceError
-        If Newton does not converge, or the orbit's events change along the way.
+        If Newton does not converge, or the guess's event ``index`` is not an arrival.
     ModelError
-        For an autonomous model without a ``period`` guess.
+        For an autonomous model without a ``period`` guess, or an unknown parameter.
+    IntegrationError, InitialModeError
+        If the guess's orbit cannot be integrated.
+
+    References
+    ----------
+    di Bernardo, Kowalczyk and Nordmark (2002), "Bifurcations of dynamical systems with sliding:
+    derivation of normal-form mappings", Physica D 170.
     """
     system = flow.system
     tolerances = location_tolerances(flow, tolerances)
@@ -328,22 +451,63 @@ def locate_adding_sliding(
     parameters=None, t0: float = 0.0, tol: float = 1e-12, max_iter: int = 20, fd_step: float = 1e-6,
     tolerances=None,
 ) -> SlidingBifurcationOrbit:
-    """Locate an adding-sliding: periodicity plus, at an unknown instant ``tau`` of a sliding motion,
-    ``g = h_x f_A + h_t = 0`` and ``dg/dt = 0`` along ``f_A`` (the exit side's cubic tangency).
+    """Locate an adding-sliding: periodicity plus the exit side's cubic tangency at an instant of a sliding motion.
 
-    The unknowns are ``(x0, lam, tau)``; ``t_guess`` starts ``tau`` (for
-    example between the extra exit and re-entry of the orbit that has them);
-    ``side`` is the sign of ``h`` on ``A``'s side.
+    At an unknown instant ``tau`` of a sliding motion, ``g = h_x f_A + h_t = 0`` and ``dg/dt = 0``
+    along ``f_A``.  The unknowns are ``(x0, lam, tau)``; ``t_guess`` starts ``tau`` (for
+    example between the extra exit and re-entry of the orbit that has them).
     ``g`` and its rate are taken at the state reached at ``tau`` (on the
     surface while the orbit slides; on the side that leaves, a state a little
     off it, where both are continuous).
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of a forced model.
+    x0 : ndarray
+        Guess of the orbit's state at ``t0``.
+    lam : float
+        Guess of the parameter.
+    lam_name : str
+        The parameter that moves.
+    t_guess : float
+        Guess of ``tau``.
+    exit_mode : str
+        The mode ``A`` the sliding motion would leave into.
+    surface : str
+        The sliding surface.
+    side : float
+        The sign of ``h`` on ``A``'s side.
+    parameters : mapping or ndarray, optional
+        The other parameters' values (the model's defaults by default).
+    t0 : float
+        Initial time (the phase of the forcing).
+    tol : float
+        Newton tolerance.
+    max_iter : int
+        Largest number of Newton iterations.
+    fd_step : float
+        Relative step of the central differences of the second derivatives.
+    tolerances : Tolerances, optional
+        Integration tolerances (tightened by
+        :func:`~saltation.special_points.grazing.location_tolerances`).
+
+    Returns
+    -------
+    SlidingBifurcationOrbit
+        The located orbit (``adding_sliding``).
 
     Raises
     ------
     ConvergenceError
         If Newton does not converge, or the touch does not lie on a sliding motion.
     ModelError
-        For an autonomous model.
+        For an autonomous model, an unknown parameter or surface.
+
+    References
+    ----------
+    di Bernardo, Kowalczyk and Nordmark (2002), "Bifurcations of dynamical systems with sliding:
+    derivation of normal-form mappings", Physica D 170.
     """
     system = flow.system
     tolerances = location_tolerances(flow, tolerances)
