@@ -436,8 +436,8 @@ class PiecewiseSystem(NamedParts):
         For forced (time-periodic) systems, the forcing period in terms of the
         parameters, e.g. ``"2*pi/omega"``.  ``None`` for autonomous systems.
     labels : mapping of str to str, optional
-        How plots write states and parameters, as mathtext without ``$`` (``{"v": r"\dot x"}``);
-        by default the name, with Greek letters by name (``omega`` as ``\omega``) and the part after
+        How plots write states and parameters, as mathtext without ``$`` (``{"v": r"\\dot x"}``);
+        by default the name, with Greek letters by name (``omega`` as ``\\omega``) and the part after
         an underscore as a subscript.
     units : mapping of str to str, optional
         Their units, written after the label (``{"omega": "rad/s"}``).
