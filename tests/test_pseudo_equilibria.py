@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -72,3 +74,46 @@ def test_bad_input_is_named(trilinear_flow):
         find_pseudo_equilibrium(trilinear_flow, "h1a", [0.0, 0.0])
     with pytest.raises(ModelError, match="surface 'nope' does not exist"):
         find_pseudo_equilibrium(relay(), "nope", [0.0, 0.0])
+
+
+def test_a_branch_of_pseudo_equilibria_against_its_closed_form():
+    """Continued in c, the relay's pseudo-equilibrium is y = (b c - a d) / (a + b) at every point, stable, with the
+    sliding eigenvalue -1."""
+    from saltation import ContinuationSettings
+    from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem
+    from saltation.special_points.continuation import continue_branch
+
+    flow = Flow(relay("-"))
+    first = find_pseudo_equilibrium(flow, "s", [0.0, 0.0])
+    problem = PseudoEquilibriumProblem(flow, "s", first.modes, {"c": C}, continuation_parameter="c")
+    branch = continue_branch(problem, PseudoEquilibriumProblem.unknowns(first), C,
+                             settings=ContinuationSettings(ds=0.05, ds_max=0.1, bounds=(-1.0, 2.0)))
+    c = branch.parameter
+    assert c.min() == pytest.approx(-1.0) and c.max() == pytest.approx(2.0) and len(branch) > 20
+    np.testing.assert_allclose(branch.states[:, 1], (B * c - A * D) / (A + B), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(branch.states[:, 0], 0.0, atol=1e-12)
+    assert np.all(branch.stable)
+    np.testing.assert_allclose(np.asarray(branch.multipliers)[:, 0], -1.0, atol=1e-8)
+
+
+def test_the_command_continues_pseudo_equilibria(tmp_path, capsys):
+    """``saltation continue FILE:relay --equilibrium sliding:s``: the branch's CSV holds the closed form."""
+    import csv
+
+    from saltation.apps import cli
+
+    model = tmp_path / "relay_model.py"  # a user's model file, importing the model from this test module
+    model.write_text(f"import sys\nsys.path.insert(0, {str(Path(__file__).parent)!r})\n"
+                     "from test_pseudo_equilibria import relay\n")
+    status = cli.main(["continue", f"{model}:relay", "--param", "c", "--from", "0.5", "--to", "1.5",
+                       "--equilibrium", "sliding:s", "--out", str(tmp_path / "out"), "--no-progress"])
+    assert status == 0
+    (table,) = (tmp_path / "out").glob("*_branch.csv")
+    rows = list(csv.DictReader(table.open(newline="")))
+    assert len(rows) > 5 and "eigenvalue1_re" in rows[0]
+    for row in rows:
+        assert float(row["y"]) == pytest.approx((B * float(row["c"]) - A * D) / (A + B), abs=1e-12)
+        assert float(row["eigenvalue1_re"]) == pytest.approx(-1.0, abs=1e-8)
+    assert cli.main(["continue", f"{model}:relay", "--param", "c", "--from", "0.5", "--to", "1.5",
+                     "--equilibrium", "sliding:nope", "--out", str(tmp_path / "out2"), "--no-progress"]) == 2
+    assert "unknown surface 'nope'" in capsys.readouterr().err

@@ -875,11 +875,16 @@ def cmd_continue(args: argparse.Namespace) -> int:
                 f"--equilibrium {args.equilibrium}: model {system.name!r} is forced (forcing period "
                 f"{system.period_expr}): it has no equilibria; continue its periodic orbits (drop --equilibrium)"
             )
+        sliding_on = args.equilibrium.partition("sliding:")[2] if args.equilibrium.startswith("sliding:") else None
+        if sliding_on is not None and sliding_on not in system.surface_names:
+            raise UsageError(f"unknown surface {sliding_on!r} in --equilibrium sliding:SURFACE for model {system.name!r}; "
+                             f"surfaces are {', '.join(system.surface_names)}")
         try:
-            system.mode_index(args.equilibrium)
+            if sliding_on is None:
+                system.mode_index(args.equilibrium)
         except SaltationError:
             raise UsageError(f"unknown mode {args.equilibrium!r} in --equilibrium for model {system.name!r}; modes "
-                             f"are {', '.join(system.mode_names)}") from None
+                             f"are {', '.join(system.mode_names)} (or sliding:SURFACE for pseudo-equilibria)") from None
         for flag, given in (("--period", args.period is not None), ("--backward", args.backward),
                             ("--segments", args.segments != 1)):
             if given:
@@ -904,7 +909,15 @@ def cmd_continue(args: argparse.Namespace) -> int:
     counter = (lambda point: update(f"{args.model}: {args.param}", 0)) if update else None
     branches = []
     try:
-        if args.equilibrium is not None:
+        if args.equilibrium is not None and args.equilibrium.startswith("sliding:"):
+            from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
+
+            surface = args.equilibrium.partition(":")[2]
+            guess = x0 if x0 is not None else np.zeros(system.n)
+            first = find_pseudo_equilibrium(flow, surface, guess, parameters=p)
+            problem = PseudoEquilibriumProblem(flow, surface, first.modes, overrides, continuation_parameter=args.param)
+            u0 = PseudoEquilibriumProblem.unknowns(first)
+        elif args.equilibrium is not None:
             problem = EquilibriumProblem(flow, args.equilibrium, overrides, continuation_parameter=args.param)
             guess = x0 if x0 is not None else np.zeros(system.n)
             u0 = problem.solve(guess, start).state
@@ -972,7 +985,9 @@ def _add_continue_parser(sub) -> None:
     p.add_argument("--x0", metavar="V1,V2,...", help="guess of the start state (default: the end of a transient)")
     p.add_argument("--period", metavar="T", type=_positive("--period"), help=PERIOD_HELP)
     p.add_argument("--backward", action="store_true", help="shoot in backward time (infinitely unstable branches)")
-    p.add_argument("--equilibrium", metavar="MODE", help="continue an equilibrium of this mode instead of periodic orbits (autonomous models)")
+    p.add_argument("--equilibrium", metavar="MODE", help="continue an equilibrium of this mode instead of periodic orbits "
+                   "(autonomous models); sliding:SURFACE continues the pseudo-equilibria of the sliding motion on "
+                   "that surface")
     p.add_argument("--out", metavar="DIR", default=".", help="output directory (default: the current one)")
     p.add_argument("--ds", metavar="S", type=_positive("--ds", MIN_STEP, " (the smallest step of a continuation)"),
                    default=None, help="initial arclength step, at most --ds-max (default 0.01, or --ds-max if smaller)")

@@ -19,6 +19,8 @@ import numpy as np
 from saltation.engine.flow import Flow
 from saltation.errors import ConvergenceError, ModelError
 from saltation.model.system import PiecewiseSystem
+from saltation.orbits.records import BranchPoint, Evaluation
+from saltation.orbits.shooting import EquilibriumProblem
 
 
 @dataclass(frozen=True)
@@ -195,4 +197,130 @@ def _sliding_eigenvalues(flow: Flow, surface: str, minus: int, plus: int, x: np.
     return np.sort_complex(np.linalg.eigvals(restricted).astype(complex))
 
 
-__all__ = ["PseudoEquilibrium", "find_pseudo_equilibrium"]
+
+
+class PseudoEquilibriumProblem(EquilibriumProblem):
+    """Pseudo-equilibria on a surface, in the continuation protocol: the unknowns are ``u = (x, a)``, the
+    equations ``(1 - a) f_minus + a f_plus = 0`` and ``h = 0`` (exact Jacobians from the model).
+
+    A branch of them is an equilibrium branch: each point's ``multipliers`` are the sliding field's
+    eigenvalues on the surface, and it is stable when it lies in the sliding region (``0 < a < 1``) and
+    they all have negative real parts.
+
+    Parameters
+    ----------
+    flow : Flow
+        The compiled flow of an autonomous model.
+    surface : str
+        The switching surface.
+    modes : (str, str)
+        The modes on its negative and positive side (see :func:`find_pseudo_equilibrium`).
+    parameters : mapping or ndarray, optional
+        Parameter values (the model's defaults otherwise).
+    continuation_parameter : str, optional
+        Name of the parameter ``lam``.
+
+    Raises
+    ------
+    ModelError
+        If the model is forced, or a surface, mode or parameter name is unknown.
+    """
+
+    def __init__(self, flow: Flow, surface: str, modes: tuple[str, str],
+                 parameters: Mapping[str, float] | np.ndarray | None = None, *, continuation_parameter: str | None = None):
+        super().__init__(flow, modes[0], parameters, continuation_parameter=continuation_parameter)
+        if surface not in self.system.surface_names:
+            raise ModelError(f"surface {surface!r} does not exist; surfaces are {list(self.system.surface_names)}")
+        self.surface = surface
+        self.minus, self.plus = (self.system.mode_index(m) for m in modes)
+
+    @property
+    def dimension(self) -> int:
+        return self.system.n + 1
+
+    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
+        """The sliding combination and the indicator at ``u = (x, a)``, with their Jacobians.
+
+        Parameters
+        ----------
+        u : ndarray, shape (n + 1,)
+        lam : float, optional
+            Value of the continuation parameter.
+        need_lam : bool
+            Compute ``jac_lam`` too.
+
+        Returns
+        -------
+        Evaluation
+        """
+        p = self.parameters_at(lam)
+        n = self.system.n
+        x, a = np.asarray(u[:n], dtype=float), float(u[n])
+        flow = self.flow
+        fm, fp = flow.vector_field(self.minus, 0.0, x, p), flow.vector_field(self.plus, 0.0, x, p)
+        hx, _, hp = flow.indicator_gradient(self.surface, 0.0, x, p)
+        residual = np.append((1.0 - a) * fm + a * fp, flow.indicator(self.surface, 0.0, x, p))
+        J = np.zeros((n + 1, n + 1))
+        J[:n, :n] = (1.0 - a) * flow.vector_field_jacobian(self.minus, 0.0, x, p) + a * flow.vector_field_jacobian(
+            self.plus, 0.0, x, p)
+        J[:n, n] = fp - fm
+        J[n, :n] = hx
+        jl = None
+        if need_lam and lam is not None:
+            k = self.lam_index
+            jl = np.append((1.0 - a) * flow.vector_field_parameters(self.minus, 0.0, x, p)[:, k]
+                           + a * flow.vector_field_parameters(self.plus, 0.0, x, p)[:, k], hp[k])
+        return Evaluation(residual=residual, jac_u=J, jac_lam=jl)
+
+    def describe(self, u: np.ndarray, lam: float | None, ev: Evaluation) -> BranchPoint:
+        """A solved pseudo-equilibrium for a branch: its state, and the sliding eigenvalues as multipliers.
+
+        Parameters
+        ----------
+        u : ndarray, shape (n + 1,)
+        lam : float or None
+        ev : Evaluation
+
+        Returns
+        -------
+        BranchPoint
+            Stable when admissible (``0 < a < 1``) and every eigenvalue has a negative real part.
+        """
+        n = self.system.n
+        x, a = np.array(u[:n], dtype=float), float(u[n])
+        eig = _sliding_eigenvalues(self.flow, self.surface, self.minus, self.plus, x, self.parameters_at(lam))
+        eig = eig[np.lexsort((-eig.imag, -eig.real))]
+        return BranchPoint(parameter=math.nan if lam is None else float(lam), state=x, period=float("nan"),
+                           amplitude=float(abs(x[0])), half_peak_to_peak=0.0, multipliers=eig,
+                           stable=bool(0.0 < a < 1.0 and np.all(eig.real < 0)), event_labels=())
+
+    def solve(self, x0: Sequence[float], lam: float | None = None, *, tol: float = 1e-12, max_iter: int = 30):
+        """The pseudo-equilibrium near ``x0`` at ``lam`` (:func:`find_pseudo_equilibrium`).
+
+        Parameters
+        ----------
+        x0 : sequence of float
+        lam : float, optional
+        tol : float
+        max_iter : int
+
+        Returns
+        -------
+        PseudoEquilibrium
+            Its ``state`` and ``weights`` make the continuation's first unknowns (:meth:`unknowns`).
+
+        Raises
+        ------
+        ConvergenceError
+            If Newton does not converge.
+        """
+        return find_pseudo_equilibrium(self.flow, self.surface, x0, parameters=self.parameters_at(lam), tol=tol,
+                                       max_iter=max_iter)
+
+    @staticmethod
+    def unknowns(point: PseudoEquilibrium) -> np.ndarray:
+        """The continuation's unknowns ``(x, a)`` of a pseudo-equilibrium."""
+        return np.append(point.state, point.weights[1])
+
+
+__all__ = ["PseudoEquilibrium", "PseudoEquilibriumProblem", "find_pseudo_equilibrium"]
