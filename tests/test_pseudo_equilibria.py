@@ -117,3 +117,62 @@ def test_the_command_continues_pseudo_equilibria(tmp_path, capsys):
     assert cli.main(["continue", f"{model}:relay", "--param", "c", "--from", "0.5", "--to", "1.5",
                      "--equilibrium", "sliding:nope", "--out", str(tmp_path / "out2"), "--no-progress"]) == 2
     assert "unknown surface 'nope'" in capsys.readouterr().err
+
+
+def boundary_model(stable: bool) -> PiecewiseSystem:
+    """x < 0: ``x' = (x + mu)`` or ``-(x + mu)`` (``stable``), ``y' = -y``; x >= 0: ``x' = -1``, ``y' = -y``.  The left
+    mode's equilibrium (-mu, 0) is admissible for mu > 0.  On x = 0 the left field's normal component is mu (or
+    -mu), the right one's -1: both push into the surface, and the pseudo-equilibrium (0, 0) is admissible, for
+    mu > 0 (or mu < 0), its weight a = mu / (mu + 1) (or -mu / (1 - mu)).  At mu = 0 the equilibrium reaches the
+    surface: with the unstable field both exist for mu > 0 (a non-smooth fold), with the stable one each on its
+    own side (persistence)."""
+    sign = "-" if stable else ""
+    return PiecewiseSystem(
+        f"test_boundary_equilibrium_{'persistence' if stable else 'fold'}", states=["x", "y"], parameters={"mu": 0.5},
+        modes=[Mode("left", [f"{sign}(x + mu)", "-y"], domain=["x < 0"]), Mode("right", ["-1", "-y"], domain=["x >= 0"])],
+        surfaces={"s": "x"},
+        transitions=[Transition("left", "s", Crossing.RISING, "right"), Transition("right", "s", Crossing.FALLING, "left")],
+    )
+
+
+@pytest.mark.parametrize(("stable", "start", "classification"), [(False, 0.5, "nonsmooth_fold"),
+                                                                 (True, -0.5, "persistence")])
+def test_boundary_equilibria_are_located_and_classified_against_the_closed_form(stable, start, classification):
+    from saltation import ContinuationSettings
+    from saltation.branches.branch import SpecialPointKind
+    from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem
+    from saltation.special_points.boundary_equilibria import boundary_equilibria
+    from saltation.special_points.continuation import continue_branch
+
+    flow = Flow(boundary_model(stable))
+    first = find_pseudo_equilibrium(flow, "s", [0.0, 0.3], parameters={"mu": start})
+    assert first.admissible
+    problem = PseudoEquilibriumProblem(flow, "s", first.modes, {"mu": start}, continuation_parameter="mu")
+    branch = continue_branch(problem, PseudoEquilibriumProblem.unknowns(first), start,
+                             settings=ContinuationSettings(ds=0.05, ds_max=0.1, bounds=(-0.5, 0.5)))
+    (point,) = boundary_equilibria(problem, branch)
+    assert point.kind is SpecialPointKind.BOUNDARY_EQUILIBRIUM and point.classification == classification
+    assert point.parameter == pytest.approx(0.0, abs=1e-12) and point.accuracy <= 1e-9
+    np.testing.assert_allclose(point.state, [0.0, 0.0], atol=1e-12)
+    assert point.touch_mode == "left"
+    # the left mode's equilibrium's eigenvalues there: +-1 in x (unstable or stable field), -1 in y
+    np.testing.assert_allclose(np.sort(point.multipliers.real), np.sort([-1.0 if stable else 1.0, -1.0]), atol=1e-12)
+
+
+def test_the_command_records_the_boundary_equilibrium(tmp_path, capsys):
+    """``continue ... --equilibrium sliding:s`` on the persistence example, from mu = -0.5 to 0.5: the special points
+    file names the boundary equilibrium at mu = 0 with its classification."""
+    from saltation.apps import cli
+    from saltation.output.io import load_special_points_json
+
+    model = tmp_path / "boundary_model.py"
+    model.write_text(f"import sys\nsys.path.insert(0, {str(Path(__file__).parent)!r})\n"
+                     "from test_pseudo_equilibria import boundary_model\nmodel = boundary_model(True)\n")
+    status = cli.main(["continue", f"{model}:model", "--param", "mu", "--from", "-0.5", "--to", "0.5",
+                       "--equilibrium", "sliding:s", "--x0", "0,0.3", "--out", str(tmp_path / "out"), "--no-progress"])
+    assert status == 0
+    (records,) = (tmp_path / "out").glob("*_special_points.json")
+    (record,) = load_special_points_json(records)  # (its reader checks the classification's value too)
+    assert record["kind"] == "boundary_equilibrium" and record["classification"] == "persistence"
+    assert abs(record["value"]) < 1e-12
+    assert "boundary_equilibrium" in capsys.readouterr().out

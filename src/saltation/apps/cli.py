@@ -927,6 +927,11 @@ def cmd_continue(args: argparse.Namespace) -> int:
         for point in cont.run(u0, start, direction=direction):
             if counter:
                 counter(point)
+        if args.equilibrium is not None and args.equilibrium.startswith("sliding:"):
+            from saltation.special_points.boundary_equilibria import boundary_equilibria
+
+            cont.branch.special_points = sorted([*cont.branch.special_points, *boundary_equilibria(problem, cont.branch)],
+                                                key=lambda sp: sp.index)
         branches.append(cont.branch)
         note = ""
         if cont.branch.stop_reason is not None and cont.branch.stop_reason.name == "MIN_STEP" and not args.backward \

@@ -33,6 +33,9 @@ class SpecialPointKind(enum.Enum):
     #: on a two-parameter curve of special points: where two defining conditions meet (the kind of the
     #: special point changes along the curve; :attr:`SpecialPoint.sides` names the two)
     CODIMENSION_TWO = "codimension_two"
+    #: an equilibrium of a mode reaches a switching surface, where a pseudo-equilibrium meets it
+    #: (:attr:`SpecialPoint.classification`: ``persistence`` or ``nonsmooth_fold``)
+    BOUNDARY_EQUILIBRIUM = "boundary_equilibrium"
 
     @property
     def is_nonsmooth(self) -> bool:
@@ -163,6 +166,10 @@ class SpecialPoint:
         first's; ``nan`` on a one-parameter branch).
     sides : (str, str)
         At a CODIMENSION_TWO point: the kinds of the special point on either side along the curve.
+    classification : str
+        At a BOUNDARY_EQUILIBRIUM: ``persistence`` (the equilibrium of the mode and the pseudo-equilibrium
+        exist on opposite sides of the point: one goes on as the other) or ``nonsmooth_fold`` (on the same
+        side: they meet and disappear together).
 
     Raises
     ------
@@ -197,6 +204,7 @@ class SpecialPoint:
     status: SpecialPointStatus = SpecialPointStatus.BRACKETED
     second_parameter: float = float("nan")
     sides: tuple[str, ...] = ()
+    classification: str = ""
 
     def __post_init__(self):
         # names as files and older callers give them

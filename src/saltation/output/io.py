@@ -1345,6 +1345,8 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
         rec["touch_surface"] = sp.touch_surface
         rec["touch_mode"] = sp.touch_mode
         rec["touch_time"] = _enc_float(sp.touch_time)
+    if sp.classification:
+        rec["classification"] = sp.classification
     return rec
 
 
@@ -1388,6 +1390,7 @@ def _check_record(v: Any, f: _Fields, where: str) -> dict[str, Any]:
         "note": f.string, "multipliers_accuracy": f.real, "limits": f.string, "touch_surface": f.string,
         "touch_mode": f.string, "touch_time": f.real, "status": lambda x, field: f.choice(x, field, _STATUSES),
         "growth_exponents": f.reals,
+        "classification": lambda x, field: f.choice(x, field, {"persistence": "persistence", "nonsmooth_fold": "nonsmooth_fold"}),
     }
     for key, decode in optional.items():
         f.take(d, where, key, decode, None)

@@ -67,6 +67,7 @@ SPECIAL_POINT_MARKERS: dict[SpecialPointKind, tuple[str, str]] = {
     SpecialPointKind.ADDING_SLIDING: ("d", "adding-sliding"),
     SpecialPointKind.CYCLE_COLLAPSE: ("8", "cycle collapses onto an equilibrium"),
     SpecialPointKind.CODIMENSION_TWO: ("p", "codimension-two point of a curve"),
+    SpecialPointKind.BOUNDARY_EQUILIBRIUM: ("+", "boundary equilibrium"),
 }
 
 #: Axis label per amplitude measure (mathtext); ``{x}`` is the first state as mathtext.

@@ -1,0 +1,148 @@
+"""Boundary-equilibrium bifurcations: where an equilibrium of a mode reaches a switching surface.
+
+On a branch of pseudo-equilibria (:class:`~saltation.orbits.pseudo_equilibria.PseudoEquilibriumProblem`)
+the weight ``a`` of the sliding combination leaves ``(0, 1)`` where one of the two fields vanishes on the
+surface: there the pseudo-equilibrium is an equilibrium of that mode, on its boundary.  The point is
+located by its defining system, the mode's equilibrium plus ``h = 0`` (unknowns ``(x, lam)``, exact
+Jacobians), and classified by where the two equilibria are admissible: on opposite sides of the point the
+one persists as the other (``persistence``); on the same side they meet and vanish together
+(``nonsmooth_fold``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind, SpecialPointStatus
+from saltation.errors import ConvergenceError
+from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem
+
+
+def sliding_weight(problem: PseudoEquilibriumProblem, state: np.ndarray, lam: float) -> float:
+    """The weight ``a`` of the positive side's field in the sliding combination at ``state``.
+
+    Parameters
+    ----------
+    problem : PseudoEquilibriumProblem
+    state : ndarray, shape (n,)
+    lam : float
+        Value of the continuation parameter.
+
+    Returns
+    -------
+    float
+        ``h_x f_minus / (h_x f_minus - h_x f_plus)`` (``nan`` where the two are equal).
+    """
+    p = problem.parameters_at(lam)
+    flow = problem.flow
+    hx = flow.indicator_gradient(problem.surface, 0.0, state, p)[0]
+    gm = float(hx @ flow.vector_field(problem.minus, 0.0, state, p))
+    gp = float(hx @ flow.vector_field(problem.plus, 0.0, state, p))
+    return gm / (gm - gp) if gm != gp else math.nan
+
+
+def boundary_equilibria(problem: PseudoEquilibriumProblem, branch: Branch, *, tol: float = 1e-12) -> list[SpecialPoint]:
+    """The boundary equilibria between consecutive points of a branch of pseudo-equilibria.
+
+    Parameters
+    ----------
+    problem : PseudoEquilibriumProblem
+        The branch's problem.
+    branch : Branch
+    tol : float
+        Newton tolerance of the defining system.
+
+    Returns
+    -------
+    list of SpecialPoint
+        Of kind BOUNDARY_EQUILIBRIUM, located (``accuracy`` the last Newton correction in the parameter),
+        with the mode's equilibrium's eigenvalues as ``multipliers``, the mode in ``touch_mode``, the
+        surface in ``touch_surface`` and the ``classification``.
+
+    Raises
+    ------
+    ConvergenceError
+        If a bracketed point cannot be located.
+
+    References
+    ----------
+    M. di Bernardo, C. J. Budd, A. R. Champneys and P. Kowalczyk (2008), *Piecewise-smooth Dynamical
+    Systems: Theory and Applications*, Springer, section 5.2 (boundary-equilibrium bifurcations).
+    Yu. A. Kuznetsov, S. Rinaldi and A. Gragnani (2003), "One-parameter bifurcations in planar Filippov
+    systems", International Journal of Bifurcation and Chaos 13.
+    """
+    points = branch.points
+    weights = [sliding_weight(problem, pt.state, pt.parameter) for pt in points]
+    found = []
+    for i in range(len(points) - 1):
+        for edge, mode in ((0.0, problem.minus), (1.0, problem.plus)):
+            w0, w1 = weights[i] - edge, weights[i + 1] - edge
+            if not (math.isfinite(w0) and math.isfinite(w1)) or w0 * w1 >= 0.0:
+                continue
+            s = w0 / (w0 - w1)
+            x = (1 - s) * points[i].state + s * points[i + 1].state
+            lam = (1 - s) * points[i].parameter + s * points[i + 1].parameter
+            x, lam, step = _locate(problem, mode, x, lam, tol)
+            inside = points[i + 1] if 0.0 < weights[i + 1] < 1.0 else points[i]  # the admissible pseudo side
+            pseudo_side = math.copysign(1.0, inside.parameter - lam)
+            regular_side = _regular_side(problem, mode, x, lam, abs(points[i + 1].parameter - points[i].parameter))
+            eig = np.linalg.eigvals(problem.flow.vector_field_jacobian(mode, 0.0, x, problem.parameters_at(lam)))
+            found.append(SpecialPoint(
+                kind=SpecialPointKind.BOUNDARY_EQUILIBRIUM, parameter=lam,
+                bracket=(float(points[i].parameter), float(points[i + 1].parameter)), accuracy=step, index=i,
+                state=x, period=math.nan, amplitude=float(abs(x[0])), multipliers=eig.astype(complex),
+                note=f"the equilibrium of {problem.system.mode_names[mode]!r} on surface {problem.surface!r}",
+                touch_surface=problem.surface, touch_mode=problem.system.mode_names[mode],
+                status=SpecialPointStatus.LOCATED,
+                classification="nonsmooth_fold" if regular_side == pseudo_side else "persistence",
+            ))
+    return found
+
+
+def _locate(problem: PseudoEquilibriumProblem, mode: int, x: np.ndarray, lam: float, tol: float):
+    """Newton on ``f_mode(x, lam) = 0``, ``h(x, lam) = 0``: the point, the parameter and the last correction."""
+    flow, n, k = problem.flow, problem.system.n, problem.lam_index
+    history = []
+    step = math.inf
+    for _ in range(30):
+        p = problem.parameters_at(lam)
+        f = flow.vector_field(mode, 0.0, x, p)
+        hx, _, hp = flow.indicator_gradient(problem.surface, 0.0, x, p)
+        r = np.append(f, flow.indicator(problem.surface, 0.0, x, p))
+        history.append(float(np.linalg.norm(r)))
+        J = np.zeros((n + 1, n + 1))
+        J[:n, :n] = flow.vector_field_jacobian(mode, 0.0, x, p)
+        J[:n, n] = flow.vector_field_parameters(mode, 0.0, x, p)[:, k]
+        J[n, :n], J[n, n] = hx, hp[k]
+        try:
+            d = np.linalg.solve(J, r)
+        except np.linalg.LinAlgError:
+            raise ConvergenceError("boundary equilibrium: singular defining system", history) from None
+        x, lam = x - d[:n], lam - float(d[n])
+        step = abs(float(d[n]))
+        if history[-1] <= tol * (1.0 + float(np.linalg.norm(x))) and step <= 1e3 * tol * (1.0 + abs(lam)):
+            return x, lam, max(step, np.finfo(float).eps * (1.0 + abs(lam)))
+    raise ConvergenceError("boundary equilibrium: Newton did not converge", history)
+
+
+def _regular_side(problem: PseudoEquilibriumProblem, mode: int, x: np.ndarray, lam: float, span: float) -> float:
+    """On which side of ``lam`` (+1 or -1) the mode's equilibrium lies in the mode's own side of the surface."""
+    flow = problem.flow
+    delta = 1e-3 * max(span, 1e-6)
+    sign_of_mode = -1.0 if mode == problem.minus else 1.0  # the negative side's mode lives where h < 0
+    for side in (1.0, -1.0):
+        p = problem.parameters_at(lam + side * delta)
+        y = x.copy()
+        for _ in range(30):  # Newton on the mode's field alone
+            dy = np.linalg.solve(flow.vector_field_jacobian(mode, 0.0, y, p), flow.vector_field(mode, 0.0, y, p))
+            y = y - dy
+            if np.linalg.norm(dy) <= 1e-14 * (1.0 + np.linalg.norm(y)):
+                break
+        if sign_of_mode * flow.indicator(problem.surface, 0.0, y, p) > 0.0:
+            return side
+    return 0.0
+
+
+__all__ = ["boundary_equilibria", "sliding_weight"]
