@@ -123,10 +123,8 @@ def find_pseudo_equilibrium(
         raise ModelError(f"the guess must have {model.n} components, got {x.shape[0]}")
     p = flow.parameters(parameters)
     minus, plus = _sides(flow, surface, x, p)
-    fm, fp = flow.vector_field(minus, 0.0, x, p), flow.vector_field(plus, 0.0, x, p)
-    hx = flow.indicator_gradient(surface, 0.0, x, p)[0]
-    gm, gp = float(hx @ fm), float(hx @ fp)
-    a = gm / (gm - gp) if gm != gp else 0.5
+    a = sliding_weight(flow, surface, minus, plus, x, p)
+    a = 0.5 if not math.isfinite(a) else a
     history: list[float] = []
     for _ in range(max_iter + 1):
         fm, fp = flow.vector_field(minus, 0.0, x, p), flow.vector_field(plus, 0.0, x, p)
@@ -156,6 +154,31 @@ def find_pseudo_equilibrium(
                              residual=history[-1])
 
 
+def sliding_weight(flow: Flow, surface: str, minus: int, plus: int, x: np.ndarray, p: np.ndarray) -> float:
+    """The weight ``a`` of the positive side's field in Filippov's sliding combination at ``x``.
+
+    Parameters
+    ----------
+    flow : Flow
+    surface : str
+    minus, plus : int
+        The modes on the surface's negative and positive side.
+    x : ndarray, shape (n,)
+    p : ndarray
+        Parameter values.
+
+    Returns
+    -------
+    float
+        ``h_x f_minus / (h_x f_minus - h_x f_plus)``, which makes the combination tangent to the surface
+        (``nan`` where both normal components are equal).
+    """
+    hx = flow.indicator_gradient(surface, 0.0, x, p)[0]
+    gm = float(hx @ flow.vector_field(minus, 0.0, x, p))
+    gp = float(hx @ flow.vector_field(plus, 0.0, x, p))
+    return gm / (gm - gp) if gm != gp else math.nan
+
+
 def _sides(flow: Flow, surface: str, x: np.ndarray, p: np.ndarray) -> tuple[int, int]:
     """The modes on the negative and positive side of the surface at ``x``."""
     hx = flow.indicator_gradient(surface, 0.0, x, p)[0]
@@ -183,11 +206,8 @@ def _sliding_eigenvalues(flow: Flow, surface: str, minus: int, plus: int, x: np.
     tangent = vt[1:].T  # (n, n - 1): the null space of h_x
 
     def sliding(y: np.ndarray) -> np.ndarray:
-        fm, fp = flow.vector_field(minus, 0.0, y, p), flow.vector_field(plus, 0.0, y, p)
-        g = flow.indicator_gradient(surface, 0.0, y, p)[0]
-        gm, gp = float(g @ fm), float(g @ fp)
-        a = gm / (gm - gp)
-        return (1.0 - a) * fm + a * fp
+        a = sliding_weight(flow, surface, minus, plus, y, p)
+        return (1.0 - a) * flow.vector_field(minus, 0.0, y, p) + a * flow.vector_field(plus, 0.0, y, p)
 
     if n == 1:
         return np.zeros(0, dtype=complex)
@@ -323,4 +343,4 @@ class PseudoEquilibriumProblem(EquilibriumProblem):
         return np.append(point.state, point.weights[1])
 
 
-__all__ = ["PseudoEquilibrium", "PseudoEquilibriumProblem", "find_pseudo_equilibrium"]
+__all__ = ["PseudoEquilibrium", "PseudoEquilibriumProblem", "find_pseudo_equilibrium", "sliding_weight"]

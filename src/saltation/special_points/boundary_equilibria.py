@@ -18,6 +18,7 @@ import numpy as np
 from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind, SpecialPointStatus
 from saltation.errors import ConvergenceError
 from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem
+from saltation.orbits.pseudo_equilibria import sliding_weight as pseudo_weight
 
 
 def sliding_weight(problem: PseudoEquilibriumProblem, state: np.ndarray, lam: float) -> float:
@@ -35,12 +36,8 @@ def sliding_weight(problem: PseudoEquilibriumProblem, state: np.ndarray, lam: fl
     float
         ``h_x f_minus / (h_x f_minus - h_x f_plus)`` (``nan`` where the two are equal).
     """
-    p = problem.parameters_at(lam)
-    flow = problem.flow
-    hx = flow.indicator_gradient(problem.surface, 0.0, state, p)[0]
-    gm = float(hx @ flow.vector_field(problem.minus, 0.0, state, p))
-    gp = float(hx @ flow.vector_field(problem.plus, 0.0, state, p))
-    return gm / (gm - gp) if gm != gp else math.nan
+    return pseudo_weight(problem.flow, problem.surface, problem.minus, problem.plus, np.asarray(state, dtype=float),
+                         problem.parameters_at(lam))
 
 
 def boundary_equilibria(problem: PseudoEquilibriumProblem, branch: Branch, *, tol: float = 1e-12) -> list[SpecialPoint]:
