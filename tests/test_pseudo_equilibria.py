@@ -176,3 +176,49 @@ def test_the_command_records_the_boundary_equilibrium(tmp_path, capsys):
     assert record["kind"] == "boundary_equilibrium" and record["classification"] == "persistence"
     assert abs(record["value"]) < 1e-12
     assert "boundary_equilibrium" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(("stable", "classification"), [(False, "nonsmooth_fold"), (True, "persistence")])
+def test_a_modes_equilibrium_branch_finds_the_same_boundary_equilibrium(stable, classification):
+    """The left mode's equilibrium (-mu, 0), continued in mu through 0, crosses the surface x = 0 there: the same
+    point and the same classification as from the branch of pseudo-equilibria (its partner, the pseudo-equilibrium,
+    admissible for mu > 0 with the unstable field, for mu < 0 with the stable one)."""
+    from saltation import ContinuationSettings
+    from saltation.orbits.shooting import EquilibriumProblem
+    from saltation.special_points.boundary_equilibria import boundary_equilibria_of_mode
+    from saltation.special_points.continuation import continue_branch
+
+    flow = Flow(boundary_model(stable))
+    problem = EquilibriumProblem(flow, "left", {"mu": 0.5}, continuation_parameter="mu")
+    branch = continue_branch(problem, problem.solve([-0.5, 0.0], 0.5).state, 0.5,
+                             settings=ContinuationSettings(ds=0.05, ds_max=0.1, bounds=(-0.5, 0.5)))
+    np.testing.assert_allclose(branch.states[:, 0], -branch.parameter, atol=1e-12)  # the closed form
+    (point,) = boundary_equilibria_of_mode(problem, branch)
+    assert point.classification == classification
+    assert point.parameter == pytest.approx(0.0, abs=1e-12) and point.touch_surface == "s"
+    np.testing.assert_allclose(point.state, [0.0, 0.0], atol=1e-12)
+
+
+@pytest.mark.parametrize(("right_field", "classification"), [("-(x + mu)", "persistence"), ("x - mu", "nonsmooth_fold")])
+def test_a_boundary_equilibrium_without_sliding_is_classified_by_the_other_modes_equilibrium(right_field, classification):
+    """x < 0: x' = -(x + mu); x >= 0: x' = -(x + mu) (the same field: the equilibrium -mu passes the surface, persistence)
+    or x' = x - mu (equilibrium +mu, admissible for mu > 0 like the left one -mu: they meet at 0, a non-smooth fold).
+    At x = 0 both fields have the normal component -mu: the surface is crossed, never slid on."""
+    from saltation import ContinuationSettings
+    from saltation.orbits.shooting import EquilibriumProblem
+    from saltation.special_points.boundary_equilibria import boundary_equilibria_of_mode
+    from saltation.special_points.continuation import continue_branch
+
+    system = PiecewiseSystem(
+        f"test_boundary_crossing_{classification}", states=["x", "y"], parameters={"mu": 0.5},
+        modes=[Mode("left", ["-(x + mu)", "-y"], domain=["x < 0"]), Mode("right", [right_field, "-y"], domain=["x >= 0"])],
+        surfaces={"s": "x"},
+        transitions=[Transition("left", "s", Crossing.RISING, "right"), Transition("right", "s", Crossing.FALLING, "left")],
+    )
+    flow = Flow(system)
+    problem = EquilibriumProblem(flow, "left", {"mu": 0.5}, continuation_parameter="mu")
+    branch = continue_branch(problem, problem.solve([-0.5, 0.0], 0.5).state, 0.5,
+                             settings=ContinuationSettings(ds=0.05, ds_max=0.1, bounds=(-0.5, 0.5)))
+    (point,) = boundary_equilibria_of_mode(problem, branch)
+    assert point.classification == classification
+    assert point.parameter == pytest.approx(0.0, abs=1e-12)

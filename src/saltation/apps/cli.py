@@ -927,11 +927,12 @@ def cmd_continue(args: argparse.Namespace) -> int:
         for point in cont.run(u0, start, direction=direction):
             if counter:
                 counter(point)
-        if args.equilibrium is not None and args.equilibrium.startswith("sliding:"):
-            from saltation.special_points.boundary_equilibria import boundary_equilibria
+        if args.equilibrium is not None:  # where an equilibrium reaches a switching surface
+            from saltation.special_points.boundary_equilibria import boundary_equilibria, boundary_equilibria_of_mode
 
-            cont.branch.special_points = sorted([*cont.branch.special_points, *boundary_equilibria(problem, cont.branch)],
-                                                key=lambda sp: sp.index)
+            found = (boundary_equilibria if args.equilibrium.startswith("sliding:") else boundary_equilibria_of_mode)(
+                problem, cont.branch)
+            cont.branch.special_points = sorted([*cont.branch.special_points, *found], key=lambda sp: sp.index)
         branches.append(cont.branch)
         note = ""
         if cont.branch.stop_reason is not None and cont.branch.stop_reason.name == "MIN_STEP" and not args.backward \

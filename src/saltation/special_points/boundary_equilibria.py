@@ -16,9 +16,10 @@ import math
 import numpy as np
 
 from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind, SpecialPointStatus
-from saltation.errors import ConvergenceError
-from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem
+from saltation.errors import ConvergenceError, SaltationError
+from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
 from saltation.orbits.pseudo_equilibria import sliding_weight as pseudo_weight
+from saltation.orbits.shooting import EquilibriumProblem
 
 
 def sliding_weight(problem: PseudoEquilibriumProblem, state: np.ndarray, lam: float) -> float:
@@ -81,24 +82,99 @@ def boundary_equilibria(problem: PseudoEquilibriumProblem, branch: Branch, *, to
             s = w0 / (w0 - w1)
             x = (1 - s) * points[i].state + s * points[i + 1].state
             lam = (1 - s) * points[i].parameter + s * points[i + 1].parameter
-            x, lam, step = _locate(problem, mode, x, lam, tol)
+            x, lam, step = _locate(problem, problem.surface, mode, x, lam, tol)
             inside = points[i + 1] if 0.0 < weights[i + 1] < 1.0 else points[i]  # the admissible pseudo side
             pseudo_side = math.copysign(1.0, inside.parameter - lam)
-            regular_side = _regular_side(problem, mode, x, lam, abs(points[i + 1].parameter - points[i].parameter))
-            eig = np.linalg.eigvals(problem.flow.vector_field_jacobian(mode, 0.0, x, problem.parameters_at(lam)))
-            found.append(SpecialPoint(
-                kind=SpecialPointKind.BOUNDARY_EQUILIBRIUM, parameter=lam,
-                bracket=(float(points[i].parameter), float(points[i + 1].parameter)), accuracy=step, index=i,
-                state=x, period=math.nan, amplitude=float(abs(x[0])), multipliers=eig.astype(complex),
-                note=f"the equilibrium of {problem.system.mode_names[mode]!r} on surface {problem.surface!r}",
-                touch_surface=problem.surface, touch_mode=problem.system.mode_names[mode],
-                status=SpecialPointStatus.LOCATED,
-                classification="nonsmooth_fold" if regular_side == pseudo_side else "persistence",
-            ))
+            sign = -1.0 if mode == problem.minus else 1.0  # the negative side's mode lives where h < 0
+            span = abs(points[i + 1].parameter - points[i].parameter)
+            regular_side = _admissible_side(problem, problem.surface, mode, sign, x, lam, span)
+            found.append(_record(problem, problem.surface, mode, x, lam, step, i, points,
+                                 "nonsmooth_fold" if regular_side == pseudo_side else "persistence"))
     return found
 
 
-def _locate(problem: PseudoEquilibriumProblem, mode: int, x: np.ndarray, lam: float, tol: float):
+def boundary_equilibria_of_mode(problem: EquilibriumProblem, branch: Branch, *, tol: float = 1e-12) -> list[SpecialPoint]:
+    """The boundary equilibria of a branch of one mode's equilibria: where the equilibrium crosses a surface that
+    one of the mode's transitions watches.
+
+    The partner that meets it there is the pseudo-equilibrium of the sliding motion when the surface slides
+    at the point, otherwise the equilibrium of the mode across the surface; the classification compares the
+    sides of the point where each is admissible (in its own region, or in the sliding region).
+
+    Parameters
+    ----------
+    problem : EquilibriumProblem
+        The branch's problem.
+    branch : Branch
+    tol : float
+        Newton tolerance of the defining system.
+
+    Returns
+    -------
+    list of SpecialPoint
+        As :func:`boundary_equilibria`.
+
+    Raises
+    ------
+    ConvergenceError
+        If a bracketed point cannot be located.
+
+    References
+    ----------
+    M. di Bernardo, C. J. Budd, A. R. Champneys and P. Kowalczyk (2008), *Piecewise-smooth Dynamical
+    Systems: Theory and Applications*, Springer, section 5.2.
+    """
+    system, flow, mode = problem.system, problem.flow, problem.mode
+    points = branch.points
+    found = []
+    for transition in system.transitions:
+        if system.mode_index(transition.source) != mode:
+            continue
+        surface, sign = transition.surface, -float(int(transition.direction))  # the mode lives where h has this sign
+        values = [flow.indicator(surface, 0.0, pt.state, problem.parameters_at(pt.parameter)) for pt in points]
+        for i in range(len(points) - 1):
+            if not values[i] * values[i + 1] < 0.0:
+                continue
+            s = values[i] / (values[i] - values[i + 1])
+            x = (1 - s) * points[i].state + s * points[i + 1].state
+            lam = (1 - s) * points[i].parameter + s * points[i + 1].parameter
+            x, lam, step = _locate(problem, surface, mode, x, lam, tol)
+            span = abs(points[i + 1].parameter - points[i].parameter)
+            regular_side = _admissible_side(problem, surface, mode, sign, x, lam, span)
+            partner_side = _partner_side(problem, surface, system.mode_index(transition.target), -sign, x, lam, span)
+            found.append(_record(problem, surface, mode, x, lam, step, i, points,
+                                 "nonsmooth_fold" if regular_side == partner_side else "persistence"))
+    return found
+
+
+def _record(problem, surface: str, mode: int, x: np.ndarray, lam: float, step: float, i: int, points,
+            classification: str) -> SpecialPoint:
+    eig = np.linalg.eigvals(problem.flow.vector_field_jacobian(mode, 0.0, x, problem.parameters_at(lam)))
+    name = problem.system.mode_names[mode]
+    return SpecialPoint(
+        kind=SpecialPointKind.BOUNDARY_EQUILIBRIUM, parameter=lam,
+        bracket=(float(points[i].parameter), float(points[i + 1].parameter)), accuracy=step, index=i,
+        state=x, period=math.nan, amplitude=float(abs(x[0])), multipliers=eig.astype(complex),
+        note=f"the equilibrium of {name!r} on surface {surface!r}", touch_surface=surface, touch_mode=name,
+        status=SpecialPointStatus.LOCATED, classification=classification,
+    )
+
+
+def _partner_side(problem, surface: str, other: int, other_sign: float, x: np.ndarray, lam: float, span: float) -> float:
+    """Where the equilibrium's partner is admissible: the pseudo-equilibrium if the surface slides there, else
+    the equilibrium of the mode across the surface (0 where neither is)."""
+    delta = 1e-3 * max(span, 1e-6)
+    for side in (1.0, -1.0):
+        try:
+            point = find_pseudo_equilibrium(problem.flow, surface, x, parameters=problem.parameters_at(lam + side * delta))
+        except SaltationError:
+            continue
+        if point.admissible:
+            return side
+    return _admissible_side(problem, surface, other, other_sign, x, lam, span)
+
+
+def _locate(problem, surface: str, mode: int, x: np.ndarray, lam: float, tol: float):
     """Newton on ``f_mode(x, lam) = 0``, ``h(x, lam) = 0``: the point, the parameter and the last correction."""
     flow, n, k = problem.flow, problem.system.n, problem.lam_index
     history = []
@@ -106,8 +182,8 @@ def _locate(problem: PseudoEquilibriumProblem, mode: int, x: np.ndarray, lam: fl
     for _ in range(30):
         p = problem.parameters_at(lam)
         f = flow.vector_field(mode, 0.0, x, p)
-        hx, _, hp = flow.indicator_gradient(problem.surface, 0.0, x, p)
-        r = np.append(f, flow.indicator(problem.surface, 0.0, x, p))
+        hx, _, hp = flow.indicator_gradient(surface, 0.0, x, p)
+        r = np.append(f, flow.indicator(surface, 0.0, x, p))
         history.append(float(np.linalg.norm(r)))
         J = np.zeros((n + 1, n + 1))
         J[:n, :n] = flow.vector_field_jacobian(mode, 0.0, x, p)
@@ -124,22 +200,27 @@ def _locate(problem: PseudoEquilibriumProblem, mode: int, x: np.ndarray, lam: fl
     raise ConvergenceError("boundary equilibrium: Newton did not converge", history)
 
 
-def _regular_side(problem: PseudoEquilibriumProblem, mode: int, x: np.ndarray, lam: float, span: float) -> float:
-    """On which side of ``lam`` (+1 or -1) the mode's equilibrium lies in the mode's own side of the surface."""
+def _admissible_side(problem, surface: str, mode: int, sign: float, x: np.ndarray, lam: float, span: float) -> float:
+    """On which side of ``lam`` (+1 or -1) the mode's equilibrium near ``x`` lies where ``sign * h > 0`` (the
+    mode's side of the surface); 0 where it does on neither (or has no equilibrium there)."""
     flow = problem.flow
     delta = 1e-3 * max(span, 1e-6)
-    sign_of_mode = -1.0 if mode == problem.minus else 1.0  # the negative side's mode lives where h < 0
     for side in (1.0, -1.0):
         p = problem.parameters_at(lam + side * delta)
         y = x.copy()
-        for _ in range(30):  # Newton on the mode's field alone
-            dy = np.linalg.solve(flow.vector_field_jacobian(mode, 0.0, y, p), flow.vector_field(mode, 0.0, y, p))
-            y = y - dy
-            if np.linalg.norm(dy) <= 1e-14 * (1.0 + np.linalg.norm(y)):
-                break
-        if sign_of_mode * flow.indicator(problem.surface, 0.0, y, p) > 0.0:
+        try:
+            for _ in range(30):  # Newton on the mode's field alone
+                dy = np.linalg.solve(flow.vector_field_jacobian(mode, 0.0, y, p), flow.vector_field(mode, 0.0, y, p))
+                y = y - dy
+                if np.linalg.norm(dy) <= 1e-14 * (1.0 + np.linalg.norm(y)):
+                    break
+            else:
+                continue
+        except np.linalg.LinAlgError:
+            continue
+        if sign * flow.indicator(surface, 0.0, y, p) > 0.0:
             return side
     return 0.0
 
 
-__all__ = ["boundary_equilibria", "sliding_weight"]
+__all__ = ["boundary_equilibria", "boundary_equilibria_of_mode", "sliding_weight"]
