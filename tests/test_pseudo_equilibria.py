@@ -176,6 +176,15 @@ def test_the_command_records_the_boundary_equilibrium(tmp_path, capsys):
     assert record["kind"] == "boundary_equilibrium" and record["classification"] == "persistence"
     assert abs(record["value"]) < 1e-12
     assert "boundary_equilibrium" in capsys.readouterr().out
+    # and the branch through it: the left mode's equilibria (-mu, 0), followed from the boundary equilibrium
+    from saltation.output.io import load_branch_json
+
+    others = sorted(p for p in (tmp_path / "out").glob("*_branch_*.json") if not p.name.endswith(".meta.json"))
+    assert others
+    through = [load_branch_json(path) for path in others]
+    assert any(b.label == "equilibrium of left" for b in through)
+    for b in through:
+        np.testing.assert_allclose(b.states[:, 0], -b.parameter, atol=1e-12)
 
 
 @pytest.mark.parametrize(("stable", "classification"), [(False, "nonsmooth_fold"), (True, "persistence")])

@@ -934,6 +934,9 @@ def cmd_continue(args: argparse.Namespace) -> int:
                 problem, cont.branch)
             cont.branch.special_points = sorted([*cont.branch.special_points, *found], key=lambda sp: sp.index)
         branches.append(cont.branch)
+        if args.equilibrium is not None:
+            branches += _through_boundary_equilibria(flow, overrides, args.param, settings, cont.branch,
+                                                     sliding=args.equilibrium.startswith("sliding:"))
         note = ""
         if cont.branch.stop_reason is not None and cont.branch.stop_reason.name == "MIN_STEP" and not args.backward \
                 and args.equilibrium is None and args.segments == 1:
@@ -965,6 +968,41 @@ def cmd_continue(args: argparse.Namespace) -> int:
     print(_special_points_text(records))
     print(f"written to {out}/{stem}_*")
     return 0
+
+
+def _through_boundary_equilibria(flow, overrides: dict, parameter: str, settings, branch, *, sliding: bool) -> list:
+    """From each boundary equilibrium of an equilibrium branch, the other branch through it, both ways: a mode's
+    equilibria from a branch of pseudo-equilibria, the pseudo-equilibria on the surface from a mode's branch
+    (where the surface slides there).  A branch that cannot start is left out."""
+    from saltation.branches.branch import SpecialPointKind
+    from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
+    from saltation.orbits.shooting import EquilibriumProblem
+    from saltation.special_points.continuation import Continuation
+
+    others = []
+    for sp in branch.special_points:
+        if sp.kind is not SpecialPointKind.BOUNDARY_EQUILIBRIUM:
+            continue
+        values = overrides | {parameter: sp.parameter}
+        try:
+            if sliding:  # from the pseudo-equilibria to the mode's equilibria
+                problem = EquilibriumProblem(flow, sp.touch_mode, values, continuation_parameter=parameter)
+                u0 = problem.solve(sp.state, sp.parameter).state
+            else:
+                point = find_pseudo_equilibrium(flow, sp.touch_surface, sp.state, parameters=flow.parameters(values))
+                problem = PseudoEquilibriumProblem(flow, sp.touch_surface, point.modes, values,
+                                                   continuation_parameter=parameter)
+                u0 = PseudoEquilibriumProblem.unknowns(point)
+            for direction in (1, -1):
+                cont = Continuation(problem, settings)
+                for _ in cont.run(u0, sp.parameter, direction=direction):
+                    pass
+                cont.branch.label = f"{'equilibrium of ' + sp.touch_mode if sliding else 'pseudo-equilibria on ' + sp.touch_surface}"
+                if len(cont.branch) > 1:
+                    others.append(cont.branch)
+        except SaltationError:
+            continue
+    return others
 
 
 def _add_continue_parser(sub) -> None:
