@@ -152,7 +152,8 @@ def lyapunov_exponents(
     if transient > 0.0:
         run = flow.run(x, t, t + transient, p, tolerances=tolerances)
         x, t, mode = run.x1, run.t1, _next_mode(run.mode1)
-    per_block = max(1, int(math.ceil(time / blocks / interval)))
+    per_block = max(1, int(math.ceil(time / blocks / interval * (1.0 - 1e-12))))  # (a whole number of intervals
+    #                                                                     is not rounded up by a last ulp)
     step = time / (blocks * per_block)  # every block of the same length, whole intervals
     q = np.eye(n)
     block_logs = np.zeros((blocks, n))
