@@ -168,3 +168,19 @@ def test_the_exponents_add_up_to_the_divergence_and_the_saltation_determinants()
     zeta, r = system.defaults["zeta"], system.defaults["r"]
     expected = -2 * zeta + 2 * math.log(r) * values["omega"] / (2 * math.pi)
     assert result.exponents.sum() == pytest.approx(expected, abs=1e-9)
+
+
+def test_a_strongly_damped_direction_has_a_finite_exponent():
+    """x' = -40 x, y' = -y (two modes split by y = 0, the same field): over one time unit the x direction contracts
+    by e^-39 against y, past what one QR step resolves; with no singular saltation matrix there, the interval is
+    cut into pieces and the exponents are -1 and -40 (not -inf)."""
+    field = ["-40*x", "-y"]
+    system = PiecewiseSystem(
+        "test_lyapunov_stiff", states=["x", "y"], parameters={"k": 1.0},
+        modes=[Mode("upper", field, domain=["y >= 0"]), Mode("lower", field, domain=["y < 0"])],
+        surfaces={"axis": "y"},
+        transitions=[Transition("upper", "axis", Crossing.FALLING, "lower"),
+                     Transition("lower", "axis", Crossing.RISING, "upper")],
+    )
+    result = lyapunov_exponents(Flow(system), [1.0, 1.0], time=20.0)
+    np.testing.assert_allclose(result.exponents, [-1.0, -40.0], rtol=0, atol=1e-6)

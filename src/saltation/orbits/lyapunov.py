@@ -10,7 +10,9 @@ the discontinuities handled as by Müller).
 A saltation matrix may be singular: the start of a sliding motion or of a stick phase maps a whole
 direction onto the surface.  Volume in that direction is lost in finite time, not exponentially, and
 its exponent is reported as ``-inf`` (exactly: its ``accuracy`` is 0).  Numerically a direction counts
-as collapsed when, within one interval, it contracts below ``COLLAPSE`` times the largest stretch.
+as collapsed when, within one interval, it contracts below ``COLLAPSE`` times the largest stretch and
+an event of that interval has a singular saltation matrix; without one, the interval is integrated in
+shorter pieces until the contraction is resolved (a strongly damped direction has a finite exponent).
 """
 
 from __future__ import annotations
@@ -27,6 +29,11 @@ from saltation.errors import ModelError
 #: A direction contracted below this fraction of the largest stretch within one interval is collapsed
 #: (a singular saltation matrix): its exponent is ``-inf``.
 COLLAPSE = 1e3 * np.finfo(float).eps
+
+#: An interval is cut into pieces (each a quarter of the last) while a direction contracts past ``COLLAPSE``
+#: within one piece and no event there has a singular saltation matrix, down to this fraction of it: a
+#: strong exponential contraction is resolved, not mistaken for a collapse.
+MIN_PIECE = 1e-4
 
 
 @dataclass(frozen=True)
@@ -159,14 +166,21 @@ def lyapunov_exponents(
     block_logs = np.zeros((blocks, n))
     for b in range(blocks):
         for _ in range(per_block):
-            run = flow.run(x, t, t + step, p, mode0=mode, variational=True, phi0=q, tolerances=tolerances)
-            q, r = np.linalg.qr(run.monodromy)
-            d = np.abs(np.diag(r))
-            collapsed = d <= COLLAPSE * max(float(d.max()), np.finfo(float).tiny)
-            with np.errstate(divide="ignore"):
-                block_logs[b] += np.where(collapsed, -np.inf, np.log(np.where(collapsed, 1.0, d)))
-            q = q * np.where(np.diag(r) < 0, -1.0, 1.0)  # (R with a positive diagonal: Q follows the frame)
-            x, t, mode = run.x1, run.t1, _next_mode(run.mode1)
+            end = t + step
+            while t < end:  # one interval, in pieces where a strong contraction needs them
+                h = end - t
+                while True:
+                    run = flow.run(x, t, t + h, p, mode0=mode, variational=True, phi0=q, tolerances=tolerances)
+                    q_new, r = np.linalg.qr(run.monodromy)
+                    d = np.abs(np.diag(r))
+                    collapsed = d <= COLLAPSE * max(float(d.max()), np.finfo(float).tiny)
+                    if not collapsed.any() or _singular_event(run) or h <= MIN_PIECE * step:
+                        break
+                    h *= 0.25  # an exponential contraction past the resolution of one piece: shorter pieces
+                with np.errstate(divide="ignore"):
+                    block_logs[b] += np.where(collapsed, -np.inf, np.log(np.where(collapsed, 1.0, d)))
+                q = q_new * np.where(np.diag(r) < 0, -1.0, 1.0)  # (R with a positive diagonal: Q follows the frame)
+                x, t, mode = run.x1, run.t1, _next_mode(run.mode1)
     block_time = step * per_block
     with np.errstate(invalid="ignore"):
         estimates = block_logs / block_time
@@ -182,10 +196,20 @@ def lyapunov_exponents(
                              block_exponents=estimates, state=np.array(x))
 
 
+def _singular_event(run) -> bool:
+    """Whether an event of the run has a singular saltation matrix (a sliding motion or a stick phase starts)."""
+    for event in run.events:
+        s = event.saltation
+        scale = max(float(np.abs(s).max()), np.finfo(float).tiny) ** s.shape[0]
+        if abs(float(np.linalg.det(s))) <= COLLAPSE * scale:
+            return True
+    return False
+
+
 def _next_mode(mode: str) -> str | None:
     """The mode a run continues in: the previous run's last mode, or the initial-mode rule after a sliding
     motion (named ``a|b``)."""
     return None if "|" in mode else mode
 
 
-__all__ = ["COLLAPSE", "LyapunovExponents", "lyapunov_exponents"]
+__all__ = ["COLLAPSE", "MIN_PIECE", "LyapunovExponents", "lyapunov_exponents"]
