@@ -997,7 +997,7 @@ def _through_boundary_equilibria(flow, overrides: dict, parameter: str, settings
                 cont = Continuation(problem, settings)
                 for _ in cont.run(u0, sp.parameter, direction=direction):
                     pass
-                cont.branch.label = f"{'equilibrium of ' + sp.touch_mode if sliding else 'pseudo-equilibria on ' + sp.touch_surface}"
+                cont.branch.label = f"equilibrium of {sp.touch_mode}" if sliding else f"pseudo-equilibria on {sp.touch_surface}"
                 if len(cont.branch) > 1:
                     others.append(cont.branch)
         except SaltationError:
