@@ -9,7 +9,7 @@ from scipy.linalg import expm
 from scipy.optimize import brentq, fsolve
 
 from saltation import Flow
-from saltation.special_points.detection import classify_nonsmooth
+from saltation.special_points.detection import classify_nonsmooth, symmetric_crossing
 from saltation.branches.branch import Limits, SpecialPointKind, SpecialPointStatus
 from saltation.special_points.continuation import Continuation, ContinuationSettings, continue_branch
 from saltation.models import block_on_belt, trilinear
@@ -105,6 +105,15 @@ def one_sided_monodromies(w):
     return m_minus, m_plus
 
 
+def one_sided_half_maps(w):
+    """The half-period maps' Jacobians ``-Phi(T/2)`` without and with the contact at the first touch."""
+    T = 2 * np.pi / w
+    det = (K - M * w**2) ** 2 + (C * w) ** 2
+    a, b = F0 * (K - M * w**2) / det, -F0 * C * w / det
+    t1 = (np.arctan2(a, b) / w) % (T / 2)  # the first touch (the other is half a period later)
+    return -expm(A_FREE * T / 2), -expm(A_FREE * (T / 2 - t1)) @ S_CONTACT @ expm(A_FREE * t1)
+
+
 def test_one_sided_multipliers_at_corners(tri_branch):
     """M- and M+ are the limits at the boundary orbit: eig(expm(A T)) and the same product with S_1a and
     S_2a inserted at the touching instants (the contact lasts zero time), at the located parameter."""
@@ -119,11 +128,18 @@ def test_one_sided_multipliers_at_corners(tri_branch):
         )
         np.testing.assert_allclose(np.sort_complex(free_side), np.sort_complex(np.linalg.eigvals(m_free)), rtol=0, atol=1e-9)
         np.testing.assert_allclose(np.sort_complex(contact_side), np.sort_complex(np.linalg.eigvals(m_contact)), rtol=0, atol=1e-9)
-        # the crossing of the set-valued multipliers, from the reference matrices
-        ref = classify_nonsmooth(*((m_free, m_contact) if not sp.event_labels_minus else (m_contact, m_free)))
+        # the crossing of the set-valued multipliers, from the reference matrices: the orbit is symmetric
+        # (x -> -x, t -> t + T/2), so the set is that of the half-period map, S Phi(T/2) with the contact
+        # saltation matrix at the touch of the first half; the full monodromies give the same kind
+        h_free, h_contact = one_sided_half_maps(sp.parameter)
+        ref = symmetric_crossing(classify_nonsmooth(*((h_free, h_contact) if not sp.event_labels_minus
+                                                      else (h_contact, h_free))))
         assert ref.kind is sp.kind
+        full = classify_nonsmooth(*((m_free, m_contact) if not sp.event_labels_minus else (m_contact, m_free)))
+        assert full.kind is sp.kind
         if ref.q is not None:
             assert sp.crossing_q == pytest.approx(ref.q, abs=1e-9)
+            assert sp.crossing_point == pytest.approx(ref.gamma**2, abs=1e-9)
         # the stated accuracy covers the distance to the exact corner (closed-form frequency)
         w_exact = min(corner_frequencies(), key=lambda w: abs(w - sp.parameter))
         m_free_exact, m_contact_exact = one_sided_monodromies(w_exact)

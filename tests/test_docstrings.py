@@ -60,6 +60,8 @@ MODULES = (
     "saltation.apps.sweeps",
     "saltation.output.io",
     "saltation.model.regularize",
+    "saltation.model.symmetry",
+    "saltation.orbits.symmetry",
 )
 
 #: Modules whose docstrings are being rewritten by another change at the same time.
@@ -91,6 +93,8 @@ RAISES_EXEMPT = {
     "saltation.output.io.branch_to_dict": "encodes a branch",
     "saltation.output.io.csv_metadata_path": "builds a path",
     "saltation.output.io.special_point_record": "encodes a special point",
+    "saltation.special_points.detection.symmetric_crossing": "relabels a given classification",
+    "saltation.orbits.symmetry.symmetry_breaking_test": "array arithmetic on the given multipliers",
 }
 
 #: Callables whose algorithm comes from the literature: they cite it.

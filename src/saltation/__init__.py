@@ -39,6 +39,7 @@ from saltation.errors import (
 from saltation.engine.flow import EventKind, Flow, Status, SwitchingEvent, Tolerances, Trajectory, simulate
 from saltation.orbits.lyapunov import LyapunovExponents, lyapunov_exponents
 from saltation.orbits.pseudo_equilibria import PseudoEquilibrium, find_pseudo_equilibrium
+from saltation.model.symmetry import Symmetry
 from saltation.model.system import Crossing, Mode, PiecewiseSystem, Transition
 from saltation.orbits.shooting import PeriodicOrbit, ShootingProblem, find_periodic_orbit
 from saltation.apps.sweeps import SweepStart, period_map, sweep
@@ -49,6 +50,7 @@ __all__ = [
     "Branch", "ChatteringError", "ContinuationSettings", "ConvergenceError", "Crossing", "InconsistentResultError", "EventKind", "Flow",
     "InitialModeError", "IntegrationError", "LyapunovExponents", "Mode", "ModelError", "NoOrbitNearGuessError", "NonFiniteError", "PeriodicOrbit",
     "PiecewiseSystem", "PseudoEquilibrium", "SaltationError", "ShootingProblem", "SlidingError", "SpecialPoint", "StartGuessError", "StationaryStateError", "SpecialPointKind",
+    "Symmetry",
     "Status", "StepSizeError", "SweepStart", "SwitchingEvent", "Tolerances", "Trajectory", "Transition", "continue_branch",
     "continue_orbit", "find_periodic_orbit", "find_pseudo_equilibrium", "lyapunov_exponents", "period_map", "simulate", "sweep",
 ]

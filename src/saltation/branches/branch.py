@@ -36,6 +36,11 @@ class SpecialPointKind(enum.Enum):
     #: an equilibrium of a mode reaches a switching surface, where a pseudo-equilibrium meets it
     #: (:attr:`SpecialPoint.classification`: ``persistence`` or ``nonsmooth_fold``)
     BOUNDARY_EQUILIBRIUM = "boundary_equilibrium"
+    #: a symmetric orbit's antisymmetric multiplier passes +1 (its half-period multiplier -1): two branches
+    #: of asymmetric orbits leave the symmetric branch, which goes on (a pitchfork, not a fold)
+    SYMMETRY_BREAKING = "symmetry_breaking"
+    #: the set-valued half-period multiplier of a symmetric orbit jumps through -1 at a corner
+    DISCONTINUOUS_SYMMETRY_BREAKING = "discontinuous_symmetry_breaking"
 
     @property
     def is_nonsmooth(self) -> bool:
@@ -47,6 +52,7 @@ NONSMOOTH_KINDS = frozenset(
         SpecialPointKind.DISCONTINUOUS_FOLD,
         SpecialPointKind.DISCONTINUOUS_FLIP,
         SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER,
+        SpecialPointKind.DISCONTINUOUS_SYMMETRY_BREAKING,
         SpecialPointKind.NONSMOOTH_NO_CROSSING,
         SpecialPointKind.GRAZING,
         SpecialPointKind.GRAZING_SLIDING,

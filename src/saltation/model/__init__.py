@@ -6,9 +6,10 @@ surfaces) and :mod:`~saltation.model.regularize` (the smoothed model the paper w
 here integrates; every other layer depends on this one.
 """
 
+from saltation.model.symmetry import Symmetry
 from saltation.model.system import TIME, Crossing, Mode, PiecewiseSystem, Transition
 
-__all__ = ["TIME", "Crossing", "Mode", "PiecewiseSystem", "Transition"]
+__all__ = ["TIME", "Crossing", "Mode", "PiecewiseSystem", "Symmetry", "Transition"]
 
 
 def __getattr__(name: str):

@@ -41,6 +41,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from saltation.errors import InitialModeError, ModelError
 from saltation.model.nonsmooth import Expansion, expand_nonsmooth
+from saltation.model.symmetry import Symmetry, SymmetryMap, check_symmetry
 
 TIME = sp.Symbol("t", real=True)
 
@@ -441,6 +442,10 @@ class PiecewiseSystem(NamedParts):
         an underscore as a subscript.
     units : mapping of str to str, optional
         Their units, written after the label (``{"omega": "rad/s"}``).
+    symmetry : Symmetry, optional
+        A symmetry ``x -> S x``, ``t -> t + T/2`` of the model (:mod:`saltation.model.symmetry`),
+        verified when the model is built.  Its symmetric orbits then get their multipliers split into
+        symmetric and antisymmetric ones, and symmetry-breaking bifurcations are told from folds.
 
     Raises
     ------
@@ -462,6 +467,7 @@ class PiecewiseSystem(NamedParts):
         period: Expr | None = None,
         labels: Mapping[str, str] | None = None,
         units: Mapping[str, str] | None = None,
+        symmetry: Symmetry | None = None,
     ):
         if not isinstance(name, str) or not name.replace("_", "").isalnum():
             raise ModelError(f"model name {name!r} must be a string of letters and digits (underscores allowed)")
@@ -576,6 +582,12 @@ class PiecewiseSystem(NamedParts):
         if self.period_expr is None and any(TIME in f.free_symbols for f in self.fields):
             raise ModelError("a vector field depends on time t but no forcing period is given (period=...)")
         self.check_parameters(np.array([self.defaults[k] for k in self.parameter_names]))
+        if symmetry is not None and not isinstance(symmetry, Symmetry):
+            raise ModelError(f"symmetry must be a Symmetry(...), got {symmetry!r}")
+        #: the declared symmetry (None without one)
+        self.symmetry: Symmetry | None = symmetry
+        #: how the symmetry permutes modes and surfaces (None without one)
+        self.symmetry_map: SymmetryMap | None = None if symmetry is None else check_symmetry(self, symmetry)
 
     # -- construction helpers ---------------------------------------------------------------
     def _expressions(self):

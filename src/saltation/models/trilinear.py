@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import functools
 
-from ..model import Crossing, Mode, PiecewiseSystem, Transition
+from ..model import Crossing, Mode, PiecewiseSystem, Symmetry, Transition
 from .shipped import ShippedModel
 
 RISING, FALLING = Crossing.RISING, Crossing.FALLING
@@ -56,6 +56,8 @@ def trilinear(**overrides: float) -> PiecewiseSystem:
             Transition("contact_2", "h2a", RISING, "free"),
         ],
         period="2*pi/omega",
+        # x -> -x, t -> t + T/2: the supports mirror each other and the forcing changes sign
+        symmetry=Symmetry.of_signs([-1, -1]),
     )
 
 

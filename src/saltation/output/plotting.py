@@ -68,6 +68,8 @@ SPECIAL_POINT_MARKERS: dict[SpecialPointKind, tuple[str, str]] = {
     SpecialPointKind.CYCLE_COLLAPSE: ("8", "cycle collapses onto an equilibrium"),
     SpecialPointKind.CODIMENSION_TWO: ("p", "codimension-two point of a curve"),
     SpecialPointKind.BOUNDARY_EQUILIBRIUM: ("+", "boundary equilibrium"),
+    SpecialPointKind.SYMMETRY_BREAKING: ("1", "symmetry breaking"),
+    SpecialPointKind.DISCONTINUOUS_SYMMETRY_BREAKING: ("2", "discontinuous symmetry breaking"),
 }
 
 #: Axis label per amplitude measure (mathtext); ``{x}`` is the first state as mathtext.

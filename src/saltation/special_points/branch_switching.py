@@ -1,4 +1,5 @@
-"""Branch switching: the branch of period-2 orbits born at a period doubling.
+"""Branch switching: the branch of period-2 orbits born at a period doubling, and the asymmetric orbits
+born at a symmetry breaking.
 
 At a period doubling of a forced orbit ``x*`` (parameter ``lam*``) a multiplier
 of its monodromy ``M`` is -1, with eigenvector ``v``.  Over two forcing
@@ -19,6 +20,7 @@ from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind
 from saltation.special_points.continuation import ContinuationSettings, Corrector, continue_branch
 from saltation.errors import ConvergenceError, ModelError, SaltationError
 from saltation.orbits.shooting import ShootingProblem
+from saltation.orbits.symmetry import symmetric_multipliers
 
 
 def period_doubling_direction(problem: ShootingProblem, point: SpecialPoint) -> np.ndarray:
@@ -125,36 +127,161 @@ def follow_period_doubled_branch(
     if problem.autonomous:
         raise ModelError("branch switching at period doubling is implemented for forced models")
     doubled = period_doubled_problem(problem)
-    settings = settings or ContinuationSettings()
-    corrector = Corrector(doubled, settings)
     v = period_doubling_direction(problem, point)
+
+    def closes_after_one_period(first) -> bool:
+        # a period-1 orbit on the other branch would have moved back onto x* (its v-component is fixed,
+        # so it cannot): check that the orbit found does not close after one period
+        single = problem.evaluate(first.u, first.lam, need_lam=False)
+        return bool(np.linalg.norm(single.residual) <= 1e-6 * (1.0 + float(np.linalg.norm(point.state))))
+
+    return _leave_along(doubled, point, v, closes_after_one_period, settings=settings, epsilon=epsilon, label=label,
+                        what="period-2 orbit", at="period doubling")
+
+
+def _leave_along(problem: ShootingProblem, point: SpecialPoint, v: np.ndarray, reject, *,
+                 settings: ContinuationSettings | None, epsilon: float, label: str, what: str, at: str) -> Branch:
+    """The first orbit of a new branch, found at a distance from ``point`` along ``v`` with the parameter
+    free (Keller's bordered system), and the branch followed from it; ``reject(first)`` says when the orbit
+    found is on the old branch."""
+    settings = settings or ContinuationSettings()
+    corrector = Corrector(problem, settings)
     x_star = np.asarray(point.state, dtype=float)
-    normal = np.append(v, 0.0)
+    u_star = problem.pack(x_star, point.period if problem.autonomous else None)
+    along = np.zeros(u_star.size)
+    along[: v.size] = v
+    normal = np.append(along, 0.0)
     scale = 1.0 + float(np.linalg.norm(x_star))
     last: Exception | None = None
     for eps in (epsilon, 3 * epsilon, 0.3 * epsilon, 10 * epsilon, 0.1 * epsilon):
-        z_pred = np.append(x_star + eps * scale * v, point.parameter)
+        z_pred = np.append(u_star + eps * scale * along, point.parameter)
         try:
             first = corrector.solve_bordered(z_pred, normal)
         except SaltationError as exc:
             last = exc
             continue
-        # a period-1 orbit on the other branch would have moved back onto x* (its v-component is fixed,
-        # so it cannot): check that the orbit found does not close after one period
-        single = problem.evaluate(first.u, first.lam, need_lam=False)
-        if np.linalg.norm(single.residual) <= 1e-6 * scale:
+        if reject(first):
             continue
         lo, hi = settings.bounds
         if not lo <= first.lam <= hi:
             continue
         direction = 1 if first.lam >= point.parameter else -1
-        branch = continue_branch(doubled, first.u, first.lam, settings=settings, directions=(direction,), label=label)
-        return branch
+        return continue_branch(problem, first.u, first.lam, settings=settings, directions=(direction,), label=label)
     raise ConvergenceError(
-        f"no period-2 orbit found near the period doubling at {problem.lam_name} = {point.parameter:.10g}"
+        f"no {what} found near the {at} at {problem.lam_name} = {point.parameter:.10g}"
         + (f" (last failure: {last})" if last else ""),
         [],
     )
 
 
-__all__ = ["follow_period_doubled_branch", "period_doubled_problem", "period_doubling_direction"]
+def symmetry_breaking_direction(problem: ShootingProblem, point: SpecialPoint) -> np.ndarray:
+    """The unit eigenvector of the half-period map at a symmetry breaking for its eigenvalue nearest -1.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        The problem of the branch of symmetric orbits.
+    point : SpecialPoint
+        The symmetry breaking (its state and parameter).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The real part of that (antisymmetric) eigenvector, normalised.
+
+    Raises
+    ------
+    ModelError
+        If the model declares no symmetry.
+    SaltationError
+        If the orbit at the point cannot be evaluated.
+    """
+    half = symmetric_multipliers(
+        problem.flow, point.state, parameters=problem.parameters_at(point.parameter),
+        period=point.period if problem.autonomous else None, t0=problem.t0, backward=problem.backward,
+        tolerances=problem.tolerances,
+    )
+    gamma, vectors = np.linalg.eig(half.half_map)
+    if problem.backward:
+        gamma = 1.0 / gamma
+    k = int(np.argmin(np.abs(gamma + 1.0)))
+    v = np.real(vectors[:, k])
+    return v / np.linalg.norm(v)
+
+
+def follow_asymmetric_branch(
+    problem: ShootingProblem,
+    point: SpecialPoint,
+    *,
+    settings: ContinuationSettings | None = None,
+    epsilon: float = 1e-3,
+    label: str = "asymmetric",
+) -> Branch:
+    """Follow a branch of asymmetric orbits born at a symmetry breaking of a branch of symmetric ones.
+
+    At a symmetry breaking the half-period map ``G`` of the symmetric orbit ``x*`` has the eigenvalue -1
+    with an eigenvector ``v``, and the period map ``G^2`` the multiplier +1 along it: a pitchfork of the
+    period map, whose two new branches leave ``x*`` along ``+v`` and ``-v`` and are mirror images of each
+    other (``x(t) -> S x(t + T/2)``).  The branch along ``+v`` is found by the bordered Newton system of
+    the same one-period problem, with the step along ``v`` fixed and the parameter free, and followed by
+    pseudo-arclength continuation; the mirror images of its orbits are the other branch.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        The one-period problem of the symmetric branch (its continuation parameter set).
+    point : SpecialPoint
+        A special point of kind ``symmetry_breaking`` (or ``discontinuous_symmetry_breaking``: the
+        direction is then the eigenvector of the orbit's half-period map on the side of the point's
+        state).
+    settings : ContinuationSettings, optional
+        For the new branch.
+    epsilon : float
+        Distance along ``v`` of the first asymmetric orbit, relative to ``1 + |x*|`` (tried smaller and
+        larger if Newton fails there).
+    label : str
+        The label of the new branch.
+
+    Returns
+    -------
+    Branch
+        The branch of asymmetric orbits, followed away from the symmetry breaking.
+
+    Raises
+    ------
+    ModelError
+        If the point is not a symmetry breaking, or the model declares no symmetry.
+    ConvergenceError
+        If no asymmetric orbit is found near the point.
+    SaltationError
+        If the orbit at the point cannot be evaluated.
+
+    References
+    ----------
+    Golubitsky, Stewart and Schaeffer (1988), *Singularities and Groups in Bifurcation Theory*, vol. II,
+    Springer (symmetry-breaking pitchforks).  Keller (1977), "Numerical solution of bifurcation and
+    nonlinear eigenvalue problems", in Rabinowitz (ed.), *Applications of Bifurcation Theory*, Academic
+    Press (bordered systems and branch switching).
+    """
+    kinds = (SpecialPointKind.SYMMETRY_BREAKING, SpecialPointKind.DISCONTINUOUS_SYMMETRY_BREAKING)
+    if point.kind not in kinds:
+        raise ModelError(f"branch switching to asymmetric orbits needs a symmetry_breaking point, got {point.kind.value}")
+    v = symmetry_breaking_direction(problem, point)
+    n = problem.system.n
+
+    def symmetric(first) -> bool:
+        half = symmetric_multipliers(
+            problem.flow, first.u[:n], parameters=problem.parameters_at(first.lam),
+            period=problem.period_of(first.u, first.lam) if problem.autonomous else None, t0=problem.t0,
+            backward=problem.backward, tolerances=problem.tolerances,
+        )
+        return half.symmetric
+
+    return _leave_along(problem, point, v, symmetric, settings=settings, epsilon=epsilon, label=label,
+                        what="asymmetric orbit", at="symmetry breaking")
+
+
+__all__ = [
+    "follow_asymmetric_branch", "follow_period_doubled_branch", "period_doubled_problem", "period_doubling_direction",
+    "symmetry_breaking_direction",
+]

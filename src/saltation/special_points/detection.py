@@ -32,6 +32,13 @@ from saltation.orbits.floquet import eigenvalues, multipliers_from_monodromy, se
 from saltation.special_points.grazing import grazing_candidates, locate_grazing
 from saltation.engine.flow import EventKind
 from saltation.orbits.shooting import ShootingProblem
+from saltation.orbits.symmetry import (
+    SymmetricMultipliers,
+    half_period_trajectory,
+    split_half_map,
+    symmetry_breaking_test,
+)
+from saltation.errors import IntegrationError
 from saltation.special_points.sliding import locate_adding_sliding, locate_tangent_arrival, sliding_change
 
 
@@ -48,11 +55,15 @@ class SetValuedCrossing:
         Where the crossing happens on the convex combination ``(1 - q) M- + q M+`` (None without one).
     point : complex or None
         The forward-time multiplier on the unit circle there (None without a crossing).
+    gamma : complex or None
+        For a symmetric orbit classified by its half-period map: the half-period multiplier on the
+        unit circle (``point = gamma**2``).
     """
 
     kind: SpecialPointKind
     q: float | None
     point: complex | None
+    gamma: complex | None = None
 
 
 def classify_nonsmooth(
@@ -210,6 +221,10 @@ class SpecialPointDetector:
         self.tol = corrector.settings.locate_tol
         self.equilibrium = branch.kind is BranchKind.EQUILIBRIUM
         self.autonomous = branch.autonomous and not self.equilibrium
+        symmetry = getattr(problem.system, "symmetry", None)
+        # the half-period map splits the multipliers of the symmetric orbits of one-period shooting
+        self.symmetry = (symmetry.S if symmetry is not None and isinstance(problem, ShootingProblem)
+                         and problem.periods == 1 else None)
 
     def past_failure(self, prev: Solution) -> tuple[Solution, SpecialPoint] | None:
         """Past a grazing that stopped the corrector: ``(first solution beyond, grazing special point)`` or None.
@@ -308,7 +323,7 @@ class SpecialPointDetector:
         """
         if canonical_events(a.summary.event_ids) != canonical_events(b.summary.event_ids):
             lo, hi = self._bisect_event_change(a, b)
-            corner = self.nonsmooth_point(lo, hi, index, far=(a, b))
+            corner = self._symmetry_breaking_corner(self.nonsmooth_point(lo, hi, index, far=(a, b)), a, b)
             before = self._smooth_points(a, lo, index) if lo is not a else []
             after = self._smooth_points(hi, b, index) if hi is not b else []
             return [*before, corner, *after]
@@ -332,7 +347,56 @@ class SpecialPointDetector:
             g = _remembered(kind.value, lambda s, test=test: test(_nontrivial(s, self.autonomous)))
             if _crosses(g(a), g(b)):
                 found.append(self.locate_smooth(a, b, index, kind, g))
+        if self.symmetry is not None:
+            g = _remembered("symmetry_breaking", self._symmetry_breaking_test)
+            if _crosses(g(a), g(b)):
+                found.append(self.locate_smooth(a, b, index, SpecialPointKind.SYMMETRY_BREAKING, g))
         return [sp for sp in found if sp is not None]
+
+    # -- symmetric orbits -----------------------------------------------------------------------
+    def half_map(self, sol: Solution) -> SymmetricMultipliers | None:
+        """The half-period map of a solution's orbit and its split multipliers (kept on the solution).
+
+        Parameters
+        ----------
+        sol : Solution
+            A corrected branch point.
+
+        Returns
+        -------
+        SymmetricMultipliers or None
+            None without a declared symmetry or when the half shot fails.
+
+        Raises
+        ------
+        numpy.linalg.LinAlgError
+            If the half-period map's Jacobian is not finite.
+        """
+        if self.symmetry is None:
+            return None
+        if "half_map" not in sol.tests:
+            prob = self.problem
+            n = prob.system.n
+            try:
+                traj = half_period_trajectory(
+                    prob.flow, sol.u[:n], prob.parameters_at(sol.lam), t0=prob.t0, period=prob.period_of(sol.u, sol.lam),
+                    backward=prob.backward, tolerances=prob.tolerances,
+                )
+            except IntegrationError:
+                sol.tests["half_map"] = None
+            else:
+                # not checked against the monodromy: next to a corner the monodromy moves like the square root
+                # of the distance to it, and the two shots' rounding differs by more than the check allows
+                # (the model's equations were checked for the symmetry when it was built)
+                sol.tests["half_map"] = split_half_map(self.symmetry, traj, sol.u[:n], backward=prob.backward)
+        return sol.tests["half_map"]
+
+    def _symmetry_breaking_test(self, sol: Solution) -> float:
+        """``prod(gamma + 1)`` of a symmetric orbit's half-period multipliers (nan for an asymmetric one)."""
+        half = self.half_map(sol)
+        if half is None or not half.symmetric:
+            return float("nan")
+        return symmetry_breaking_test(half.gamma)
 
     def _oriented_tangent(self, sol: Solution, direction: np.ndarray) -> np.ndarray:
         """The unit tangent at ``sol`` oriented along ``direction`` (the one continuation computed, if any)."""
@@ -435,6 +499,10 @@ class SpecialPointDetector:
             multipliers_accuracy = abs(near[0] - near[1]) + max(self._matrix_error(lo), self._matrix_error(hi))
             if not abs(near[2] - target) <= multipliers_accuracy:
                 return None
+        note = ""
+        if kind is SpecialPointKind.SYMMETRY_BREAKING:
+            gamma = _nearest(self.half_map(best).gamma, -1.0)
+            note = f"symmetric orbit: its antisymmetric half-period multiplier is {_complex_text(gamma)}"
         return SpecialPoint(
             kind=kind,
             parameter=best.lam,
@@ -446,6 +514,7 @@ class SpecialPointDetector:
             amplitude=best.summary.amplitude,
             multipliers=best.summary.multipliers,
             multipliers_accuracy=multipliers_accuracy,
+            note=note,
         )
 
     def _matrix_error(self, sol: Solution) -> float:
@@ -568,6 +637,15 @@ class SpecialPointDetector:
         crossing = classify_nonsmooth(
             m_lo, m_hi, backward=self.branch.backward, autonomous=self.autonomous, mu_minus=mu_lo, mu_plus=mu_hi,
         )
+        half = self._half_limits(lo, hi, exact=limits is not None)
+        if half is not None:
+            crossing = symmetric_crossing(classify_nonsmooth(
+                half[0], half[1], backward=self.branch.backward, autonomous=self.autonomous,
+            ))
+            if crossing.point is not None:
+                note = (note + "; " if note else "") + (
+                    f"symmetric orbit: the half-period multiplier crosses the unit circle at "
+                    f"{_complex_text(crossing.gamma)}")
         sp = special_point_between(
             lo, hi, crossing, index=index, bracket=bracket, accuracy=accuracy, monodromy_plus=m_hi, note=note,
         )
@@ -579,6 +657,57 @@ class SpecialPointDetector:
             multipliers_minus=mu_lo, multipliers_plus=mu_hi, monodromy_minus=m_lo,
             multipliers_accuracy=mu_accuracy, limits=how,
         )
+
+    def _symmetry_breaking_corner(self, point: SpecialPoint, lo: Solution, hi: Solution) -> SpecialPoint:
+        """``point`` as a discontinuous symmetry breaking where the branch passes there from symmetric to
+        asymmetric orbits, from ``a`` to ``b`` (how the full multipliers classified it is kept in the note).
+        The bisection's ``lo`` and ``hi`` may both be symmetric: at a grazing of a symmetric orbit the
+        symmetric orbits with both mirror contacts and the asymmetric ones with one meet."""
+        broken = self._symmetry_lost(lo, hi)
+        if broken is None:
+            return point
+        was = f"; its full multipliers alone: {point.kind.value}"
+        note = (point.note + "; " if point.note else "") + broken + was
+        return replace(point, kind=SpecialPointKind.DISCONTINUOUS_SYMMETRY_BREAKING, note=note)
+
+    def _symmetry_lost(self, lo: Solution, hi: Solution) -> str | None:
+        """Where the orbits on one side of a non-smooth point are symmetric and those on the other side are
+        not, a note saying so (the point is then a discontinuous symmetry breaking: asymmetric orbits, in
+        mirror pairs, branch off the symmetric ones there); None otherwise."""
+        h_lo, h_hi = self.half_map(lo), self.half_map(hi)
+        if h_lo is None or h_hi is None or h_lo.symmetric == h_hi.symmetric:
+            return None
+        before, after = ("symmetric", "asymmetric") if h_lo.symmetric else ("asymmetric", "symmetric")
+        return (f"the branch passes from {before} to {after} orbits here (symmetry error "
+                f"{max(h_lo.symmetry_error, h_hi.symmetry_error):.2g}); the mirror images of the asymmetric "
+                "orbits are a second branch through this point")
+
+    def _half_limits(self, lo: Solution, hi: Solution, *, exact: bool) -> tuple[np.ndarray, np.ndarray] | None:
+        """The one-sided half-period maps ``(DG on lo's side, DG on hi's side)`` of a symmetric orbit at a
+        non-smooth point: exact limits where the sides differ by zero-length segments (``exact``), else
+        the maps of ``lo`` and ``hi``; None without a symmetry or when either side is not symmetric."""
+        h_lo, h_hi = self.half_map(lo), self.half_map(hi)
+        if h_lo is None or h_hi is None or not (h_lo.symmetric and h_hi.symmetric):
+            return None
+        if exact:
+            prob = self.problem
+            lo_fewer, without, with_, _, _ = _sides(lo, hi)
+            p = prob.parameters_at(without.lam)
+            n = prob.system.n
+            try:
+                shots = [
+                    half_period_trajectory(prob.flow, s.u[:n], prob.parameters_at(s.lam), t0=prob.t0,
+                                           period=prob.period_of(s.u, s.lam), backward=prob.backward,
+                                           tolerances=prob.tolerances)
+                    for s in (without, with_)
+                ]
+                lim = one_sided_limits(prob.flow, shots[0], shots[1], p, tolerances=prob.tolerances)
+            except SaltationError:
+                lim = None
+            if lim is not None:
+                g_wo, g_w = self.symmetry @ lim.monodromy_without, self.symmetry @ lim.monodromy_with
+                return (g_wo, g_w) if lo_fewer else (g_w, g_wo)
+        return h_lo.half_map, h_hi.half_map
 
     def _limits(self, lo: Solution, hi: Solution, far: tuple[Solution, Solution] | None):
         """Exact one-sided monodromies ``(M_lo, M_hi, how, accuracy, boundary solution)``, or None."""
@@ -956,6 +1085,37 @@ def _sqrt_extrapolated_error(lo: Solution, hi: Solution, far: tuple[Solution, So
     return worst
 
 
+def symmetric_crossing(half: SetValuedCrossing) -> SetValuedCrossing:
+    """The kind of a symmetric orbit's non-smooth point from how its set-valued *half-period* multiplier
+    ``gamma`` crosses the unit circle: through +1 a discontinuous fold, through -1 a discontinuous
+    symmetry breaking, through +-i (``gamma^2 = -1``) a discontinuous flip, elsewhere a discontinuous
+    Neimark-Sacker.  ``point`` becomes the full multiplier ``gamma^2``; ``gamma`` is kept.
+
+    Parameters
+    ----------
+    half : SetValuedCrossing
+        :func:`classify_nonsmooth` of the one-sided half-period maps.
+
+    Returns
+    -------
+    SetValuedCrossing
+    """
+    if half.point is None:
+        return half
+    gamma = complex(half.point)
+    if abs(gamma.imag) <= 1e-6:
+        kind = SpecialPointKind.DISCONTINUOUS_FOLD if gamma.real > 0 else SpecialPointKind.DISCONTINUOUS_SYMMETRY_BREAKING
+    elif abs(gamma.real) <= 1e-6:
+        kind = SpecialPointKind.DISCONTINUOUS_FLIP
+    else:
+        kind = SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER
+    return SetValuedCrossing(kind, half.q, gamma * gamma, gamma)
+
+
+def _complex_text(z: complex) -> str:
+    return f"{z.real:.9g}" if abs(z.imag) <= 1e-12 else f"{z.real:.9g}{z.imag:+.9g}i"
+
+
 def _remembered(name: str, test: Callable[[Solution], float]) -> Callable[[Solution], float]:
     """``test``, evaluated once per solution (the value is kept in ``solution.tests``)."""
 
@@ -972,6 +1132,7 @@ def _remembered(name: str, test: Callable[[Solution], float]) -> Callable[[Solut
 _CRITICAL_MULTIPLIER = {
     (SpecialPointKind.FOLD, False): 1.0,
     (SpecialPointKind.PERIOD_DOUBLING, False): -1.0,
+    (SpecialPointKind.SYMMETRY_BREAKING, False): 1.0,
     (SpecialPointKind.FOLD, True): 0.0,
 }
 

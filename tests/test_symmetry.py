@@ -1,0 +1,185 @@
+"""Symmetric orbits: the declared symmetry, the half-period map and symmetry breaking.
+
+References: the free oscillator's half-period map ``-expm(A T/2)`` (closed form), central differences
+of the half-period map ``G(x) = S phi(T/2; 0, x)``, the whole period's monodromy (``M = DG^2``), and the
+period map itself for the mirror images of asymmetric orbits.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.linalg import expm
+
+from conftest import TIGHT, central_difference_jacobian
+from saltation import Flow, Mode, PiecewiseSystem, Symmetry, find_periodic_orbit
+from saltation.branches.branch import SpecialPointKind
+from saltation.errors import InconsistentResultError, ModelError
+from saltation.models import trilinear
+from saltation.models.trilinear import DEFAULTS as TRI
+from saltation.orbits.symmetry import SYMMETRIC_TOL, symmetric_multipliers, symmetry_breaking_test
+
+
+# -- the declaration ------------------------------------------------------------------------------
+def test_the_trilinear_system_maps_its_supports_onto_each_other():
+    system = trilinear()
+    assert system.symmetry == Symmetry.of_signs([-1, -1])
+    names = system.mode_names
+    image = {names[i]: names[k] for i, k in enumerate(system.symmetry_map.modes)}
+    assert image == {"contact_1": "contact_2", "contact_2": "contact_1", "free": "free"}
+    surfaces = system.surface_names
+    assert {surfaces[j]: surfaces[k] for j, k in enumerate(system.symmetry_map.surfaces)} == {
+        "h1a": "h2a", "h1b": "h2b", "h2a": "h1a", "h2b": "h1b"}
+    assert set(system.symmetry_map.surface_signs) == {-1}  # h1a(-x) = -(x + x_c) = -h2a(x)
+
+
+def _oscillator(field_v: str, symmetry: Symmetry, **kw) -> PiecewiseSystem:
+    return PiecewiseSystem("sym_check", ["x", "v"], {"w": 1.3}, [Mode("m", ["v", field_v])], {}, [],
+                           period="2*pi/w", symmetry=symmetry, **kw)
+
+
+@pytest.mark.parametrize(("field_v", "matrix", "message"), [
+    ("-x - 0.1*v + cos(w*t) + 0.2", [[-1, 0], [0, -1]], "mirror image of mode 'm'"),  # a constant force
+    ("-x - 0.1*v + cos(w*t) + 0.3*x**2", [[-1, 0], [0, -1]], "mirror image of mode 'm'"),  # an even term
+    ("-x - 0.1*v + cos(w*t)", [[1, 0], [0, -1]], "mirror image of mode 'm'"),  # not the right matrix
+    ("-x - 0.1*v + cos(w*t)", [[-1, 0], [0, -1], [0, 0]], "square"),
+    ("-x - 0.1*v + cos(w*t)", [[2, 0], [0, 0.5]], "involution"),
+    ("-x - 0.1*v + cos(w*t)", [[-1, 0, 0], [0, -1, 0], [0, 0, 1]], "3 x 3"),
+])
+def test_a_symmetry_the_equations_do_not_have_is_refused(field_v, matrix, message):
+    with pytest.raises(ModelError, match=message):
+        _oscillator(field_v, Symmetry(matrix))
+
+
+def test_only_half_period_shifts_are_accepted():
+    with pytest.raises(ModelError, match="0.5"):
+        Symmetry([[-1, 0], [0, -1]], shift=0.25)
+    with pytest.raises(ModelError, match="Symmetry"):
+        _oscillator("-x + cos(w*t)", "x -> -x")
+
+
+def test_a_transition_without_a_mirror_image_is_named():
+    """An impact on one stop only: the modes and the surface's image exist, the transition's does not."""
+    with pytest.raises(ModelError, match=r"transition 0 .*has no mirror image"):
+        PiecewiseSystem(
+            "one_stop", ["x", "v"], {"w": 1.3, "d": 1.0},
+            [Mode("free", ["v", "-x - 0.1*v + cos(w*t)"])],
+            {"right": "x - d", "left": "x + d"},
+            [__import__("saltation").Transition("free", "right", 1, "free", reset=["x", "-0.8*v"])],
+            period="2*pi/w", symmetry=Symmetry.of_signs([-1, -1]),
+        )
+
+
+# -- the half-period map --------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def tri_flow():
+    return Flow(trilinear())
+
+
+def _a_free(p: dict) -> np.ndarray:
+    return np.array([[0.0, 1.0], [-p["k"] / p["m"], -p["c"] / p["m"]]])
+
+
+@settings(max_examples=15, deadline=None)
+@given(omega=st.floats(0.3, 3.0), c=st.floats(0.0, 0.5))
+def test_the_free_orbit_half_map_is_minus_the_exponential_of_half_a_period(tri_flow, omega, c):
+    """Without contact (small forcing) the half-period map's Jacobian is -expm(A T/2) exactly, the
+    multipliers are the squares of its eigenvalues, and the orbit is symmetric."""
+    p = dict(TRI) | {"omega": omega, "c": c, "f0": 1e-3}
+    det = (p["k"] - omega**2) ** 2 + (c * omega) ** 2
+    a, b = p["f0"] * (p["k"] - omega**2) / det, -p["f0"] * c * omega / det  # x = a sin(wt) + b cos(wt)
+    x0 = np.array([b, a * omega])
+    T = 2 * np.pi / omega
+    half = symmetric_multipliers(tri_flow, x0, parameters=p, monodromy=expm(_a_free(p) * T))
+    np.testing.assert_allclose(half.half_map, -expm(_a_free(p) * T / 2), rtol=0, atol=1e-10)
+    assert half.symmetric and half.symmetry_error < 1e-10
+    gamma = np.linalg.eigvals(-expm(_a_free(p) * T / 2))
+    np.testing.assert_allclose(np.sort_complex(half.gamma), np.sort_complex(gamma), atol=1e-10)
+    np.testing.assert_allclose(np.sort_complex(half.multipliers), np.sort_complex(np.linalg.eigvals(expm(_a_free(p) * T))),
+                               atol=1e-10)
+
+
+@pytest.mark.parametrize("omega", [0.95, 1.0])
+def test_the_half_map_of_a_contact_orbit_is_the_derivative_of_the_half_period_map(tri_flow, omega):
+    """Reference: central differences of G(x) = -phi(T/2; 0, x) (no saltation matrices), and the whole
+    period's monodromy, which must be DG^2."""
+    p = tri_flow.parameters({"omega": omega})
+    orbit = find_periodic_orbit(tri_flow, [1.5, 0.0], parameters={"omega": omega})
+    assert len(orbit.event_labels) == 4  # both supports touched: the saltation matrices are in the map
+    T = 2 * np.pi / omega
+    half = symmetric_multipliers(tri_flow, orbit.state0, parameters=p, monodromy=orbit.monodromy, tolerances=TIGHT)
+    assert half.symmetric
+    fd = central_difference_jacobian(lambda x: -tri_flow.run(x, 0.0, T / 2, p, tolerances=TIGHT).x1, orbit.state0, 1e-6)
+    np.testing.assert_allclose(half.half_map, fd, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(half.half_map @ half.half_map, orbit.monodromy, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(np.sort_complex(half.multipliers), np.sort_complex(orbit.multipliers), atol=1e-8)
+
+
+def test_a_monodromy_that_is_not_the_square_of_the_half_map_is_an_error(tri_flow):
+    orbit = find_periodic_orbit(tri_flow, [1.5, 0.0], parameters={"omega": 1.0})
+    with pytest.raises(InconsistentResultError, match="declared symmetry"):
+        symmetric_multipliers(tri_flow, orbit.state0, parameters={"omega": 1.0}, monodromy=orbit.monodromy + 0.01)
+
+
+def test_an_autonomous_orbit_needs_its_period():
+    relay = PiecewiseSystem("sym_relay", ["x", "v"], {"a": 0.1},
+                            [Mode("m", ["v", "-x - a*v"])], {}, [], symmetry=Symmetry.of_signs([-1, -1]))
+    with pytest.raises(ModelError, match="period"):
+        symmetric_multipliers(Flow(relay), [1.0, 0.0])
+
+
+def test_the_symmetry_breaking_test_changes_sign_where_a_real_gamma_passes_minus_one():
+    assert symmetry_breaking_test(np.array([-0.9, 0.3])) > 0
+    assert symmetry_breaking_test(np.array([-1.1, 0.3])) < 0
+    assert symmetry_breaking_test(np.array([-0.5 + 0.9j, -0.5 - 0.9j])) > 0  # a complex pair never
+
+
+# -- symmetry breaking where the orbit touches both supports at once ---------------------------------
+#: stiff, lightly damped supports and strong forcing (as in tests/test_continuation.py): the no-contact
+#: symmetric orbit touches both supports at once, and the branch goes on with asymmetric orbits that
+#: touch one support
+IMPACTING = {"k_f": 25.0, "c": 0.01, "f0": 0.6, "c_f": 0.5}
+
+
+@pytest.fixture(scope="module")
+def one_sided_branch(tri_flow):
+    from saltation.apps.paper import linear_response_state
+    from saltation.orbits.shooting import ShootingProblem
+    from saltation.special_points.continuation import ContinuationSettings, continue_branch
+
+    problem = ShootingProblem(tri_flow, IMPACTING | {"omega": 0.5}, continuation_parameter="omega")
+    x0 = linear_response_state(dict(TRI) | IMPACTING | {"omega": 0.5})
+    settings_ = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(0.5, 0.7), max_points=60)
+    return continue_branch(problem, x0, 0.5, settings=settings_, directions=(1,))
+
+
+def test_the_branch_leaves_the_symmetric_orbits_at_a_discontinuous_symmetry_breaking(tri_flow, one_sided_branch):
+    """Where the no-contact orbit reaches x = +-x_c (the closed form of the linear response), the branch
+    passes onto orbits that touch one support: the point is a discontinuous symmetry breaking, the
+    orbits before it are symmetric, those after it are not, and the mirror image S x(t + T/2) of each
+    asymmetric orbit is another periodic orbit (checked with the period map)."""
+    first = one_sided_branch.special_points[0]
+    assert first.kind is SpecialPointKind.DISCONTINUOUS_SYMMETRY_BREAKING
+    assert "from symmetric to asymmetric" in first.note
+    # the no-contact orbit's amplitude f0 / sqrt((k - m w^2)^2 + (c w)^2) reaches x_c there
+    k, m, c, f0 = TRI["k"], TRI["m"], IMPACTING["c"], IMPACTING["f0"]
+    amplitude = lambda w: f0 / np.sqrt((k - m * w**2) ** 2 + (c * w) ** 2)  # noqa: E731
+    assert first.bracket[0] - 1e-9 <= first.parameter <= first.bracket[1] + 1e-9
+    assert amplitude(first.bracket[0]) <= TRI["x_c"] + 1e-9 and amplitude(first.bracket[1]) >= TRI["x_c"] - 1e-9
+    S = np.diag([-1.0, -1.0])
+    before = one_sided_branch.points[: first.index + 1]
+    after = one_sided_branch.points[first.index + 1: first.index + 6]
+    for pt in before[-3:]:
+        p = tri_flow.parameters(IMPACTING | {"omega": pt.parameter})
+        assert symmetric_multipliers(tri_flow, pt.state, parameters=p).symmetric
+    for pt in after:
+        p = tri_flow.parameters(IMPACTING | {"omega": pt.parameter})
+        T = 2 * np.pi / pt.parameter
+        half = symmetric_multipliers(tri_flow, pt.state, parameters=p)
+        assert not half.symmetric and half.symmetry_error > 100 * SYMMETRIC_TOL
+        mirror = S @ tri_flow.run(pt.state, 0.0, T / 2, p, tolerances=TIGHT).x1  # S x(T/2): the mirror at t = 0
+        again = tri_flow.run(mirror, 0.0, T, p, tolerances=TIGHT).x1
+        assert np.linalg.norm(again - mirror) < 1e-8 * (1 + np.linalg.norm(mirror))
+        assert np.linalg.norm(mirror - pt.state) > 1e-4  # another orbit, not the same one
