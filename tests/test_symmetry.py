@@ -183,3 +183,114 @@ def test_the_branch_leaves_the_symmetric_orbits_at_a_discontinuous_symmetry_brea
         again = tri_flow.run(mirror, 0.0, T, p, tolerances=TIGHT).x1
         assert np.linalg.norm(again - mirror) < 1e-8 * (1 + np.linalg.norm(mirror))
         assert np.linalg.norm(mirror - pt.state) > 1e-4  # another orbit, not the same one
+
+
+# -- smooth symmetry breaking against an independent reference (tests/symmetry_reference.py) ------------
+import symmetry_reference as reference  # noqa: E402  (numpy and scipy only: a closed-form flow)
+
+from saltation.orbits.shooting import ShootingProblem  # noqa: E402
+from saltation.special_points.branch_switching import follow_asymmetric_branch  # noqa: E402
+from saltation.special_points.continuation import ContinuationSettings, continue_branch  # noqa: E402
+
+#: the reference locates the parameter to 1e-11 (its closed-form and variational Jacobians agree to 3e-13,
+#: its module docstring says); the library's brentq on the half-period map to 1e-13
+REFERENCE_ACCURACY = 1e-11
+STRONG = {"f0": 2.0}
+
+
+@pytest.fixture(scope="module")
+def strong_branch(tri_flow):
+    problem = ShootingProblem(tri_flow, STRONG | {"omega": 0.84}, continuation_parameter="omega")
+    orbit = problem.solve(np.array([-0.27, 0.84]), 0.84)
+    settings_ = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(0.7, 0.84))
+    return problem, continue_branch(problem, orbit.state0, 0.84, settings=settings_, directions=(-1,))
+
+
+@pytest.fixture(scope="module")
+def strong_references():
+    p = dict(TRI) | STRONG
+    first = reference.trilinear_symmetry_breaking(p, 0.83, 0.836, np.array([-0.2738, 0.8268]))
+    second = reference.trilinear_symmetry_breaking(p, 0.73, 0.74, np.array([-0.2797, 0.5836]))
+    return first, second
+
+
+def test_symmetry_breaking_of_the_trilinear_system_against_a_closed_form_flow(strong_branch, strong_references):
+    """With strong forcing the symmetric orbit's antisymmetric multiplier passes +1 twice (its half-period
+    multiplier -1): two symmetry breakings, no fold, the branch unstable between them."""
+    _, branch = strong_branch
+    points = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.SYMMETRY_BREAKING]
+    assert len(points) == 2 and len(branch.special_points) == 2  # not folds
+    for sp, (omega, state, gamma) in zip(points, strong_references):
+        assert sp.status == "located"
+        assert sp.parameter == pytest.approx(omega, abs=REFERENCE_ACCURACY + sp.accuracy)
+        np.testing.assert_allclose(sp.state, state, atol=1e-9)
+        assert _nearest_to(sp.multipliers, 1.0) == pytest.approx(1.0, abs=1e-9)
+        assert gamma == pytest.approx(-1.0, abs=1e-9)
+    between = [pt for pt in branch.points if points[1].parameter < pt.parameter < points[0].parameter]
+    assert between and not any(pt.stable for pt in between)
+    outside = [pt for pt in branch.points if not points[1].parameter <= pt.parameter <= points[0].parameter]
+    assert outside and all(pt.stable for pt in outside)
+
+
+def _nearest_to(mu, target):
+    mu = np.asarray(mu)
+    return mu[np.argmin(np.abs(mu - target))]
+
+
+def test_the_asymmetric_branch_joins_the_two_symmetry_breakings(tri_flow, strong_branch, strong_references):
+    """The branch born at the first point: its orbits are not symmetric, the mirror image of each is an orbit
+    too, and it meets the symmetric orbits again at the second point (a supercritical pitchfork: stable)."""
+    problem, branch = strong_branch
+    first = branch.special_points[0]
+    settings_ = ContinuationSettings(ds=0.005, ds_max=0.02, bounds=(0.7, 0.84), max_points=400)
+    side = follow_asymmetric_branch(problem, first, settings=settings_)
+    met = [sp for sp in side.special_points if sp.kind is SpecialPointKind.SYMMETRY_BREAKING]
+    assert met, side.special_points
+    for sp in met:
+        ref = min(strong_references, key=lambda r: abs(r[0] - sp.parameter))
+        assert sp.parameter == pytest.approx(ref[0], abs=REFERENCE_ACCURACY + sp.accuracy)
+    S = np.diag([-1.0, -1.0])
+    for pt in side.points[1::10]:
+        p = tri_flow.parameters(STRONG | {"omega": pt.parameter})
+        T = 2 * np.pi / pt.parameter
+        assert not symmetric_multipliers(tri_flow, pt.state, parameters=p).symmetric
+        mirror = S @ tri_flow.run(pt.state, 0.0, T / 2, p, tolerances=TIGHT).x1
+        np.testing.assert_allclose(tri_flow.run(mirror, 0.0, T, p, tolerances=TIGHT).x1, mirror, atol=1e-8)
+        assert pt.stable  # born stable from a supercritical pitchfork
+
+
+def test_the_paper_folds_stay_folds(tri_flow):
+    """On the paper's branch (Appendix A) the smooth fold has its symmetric half-period multiplier at +1,
+    and no point is a symmetry breaking."""
+    problem = ShootingProblem(tri_flow, {"omega": 0.6}, continuation_parameter="omega")
+    orbit = problem.solve(np.zeros(2), 0.6)
+    branch = continue_branch(problem, orbit.state0, 0.6, settings=ContinuationSettings(bounds=(0.6, 1.6)),
+                             directions=(1,))
+    kinds = [sp.kind for sp in branch.special_points]
+    assert kinds == [SpecialPointKind.NONSMOOTH_NO_CROSSING, SpecialPointKind.FOLD, SpecialPointKind.DISCONTINUOUS_FOLD]
+    fold = branch.special_points[1]
+    half = symmetric_multipliers(tri_flow, fold.state, parameters={"omega": fold.parameter})
+    assert half.symmetric
+    assert _nearest_to(half.gamma, 1.0) == pytest.approx(1.0, abs=1e-6)
+    assert _nearest_to(half.gamma, -1.0).real > -0.9
+
+
+def test_symmetry_breaking_of_an_impact_oscillator_between_two_stops():
+    """Subcritical: the asymmetric orbits are born unstable on the side where the symmetric one is stable."""
+    from saltation.models import symmetric_impact_oscillator
+    from saltation.models.symmetric_impact_oscillator import DEFAULTS
+
+    flow = Flow(symmetric_impact_oscillator())
+    problem = ShootingProblem(flow, {"omega": 0.95}, continuation_parameter="omega")
+    orbit = problem.solve(np.array([0.92, 0.49]), 0.95)
+    branch = continue_branch(problem, orbit.state0, 0.95, settings=ContinuationSettings(bounds=(0.9, 1.05)),
+                             directions=(1,))
+    (sp,) = branch.special_points
+    assert sp.kind is SpecialPointKind.SYMMETRY_BREAKING
+    omega, state, _ = reference.impact_symmetry_breaking(dict(DEFAULTS), 0.97, 0.99, np.array([0.922, 0.4935]))
+    assert sp.parameter == pytest.approx(omega, abs=REFERENCE_ACCURACY + sp.accuracy)
+    np.testing.assert_allclose(sp.state, state, atol=1e-9)
+    side = follow_asymmetric_branch(problem, sp, settings=ContinuationSettings(ds=0.002, bounds=(0.9, 0.99),
+                                                                               max_points=6))
+    assert all(pt.parameter >= sp.parameter - 1e-9 for pt in side.points)
+    assert not any(pt.stable for pt in side.points[1:])

@@ -937,6 +937,8 @@ def cmd_continue(args: argparse.Namespace) -> int:
         if args.equilibrium is not None:
             branches += _through_boundary_equilibria(flow, overrides, args.param, settings, cont.branch,
                                                      sliding=args.equilibrium.startswith("sliding:"))
+        else:
+            branches += _asymmetric_branches(problem, cont.branch, settings)
         note = ""
         if cont.branch.stop_reason is not None and cont.branch.stop_reason.name == "MIN_STEP" and not args.backward \
                 and args.equilibrium is None and args.segments == 1:
@@ -968,6 +970,32 @@ def cmd_continue(args: argparse.Namespace) -> int:
     print(_special_points_text(records))
     print(f"written to {out}/{stem}_*")
     return 0
+
+
+def _asymmetric_branches(problem, branch, settings) -> list:
+    """From each symmetry breaking of a branch of symmetric orbits, the branch of asymmetric orbits born there
+    (one of each mirror pair; a branch that meets the symmetric orbits again at another symmetry breaking
+    is not started again from there).  A branch that cannot start is left out."""
+    from saltation.branches.branch import SpecialPointKind
+    from saltation.orbits.shooting import ShootingProblem
+    from saltation.special_points.branch_switching import follow_asymmetric_branch
+
+    if not isinstance(problem, ShootingProblem):
+        return []
+    others, reached = [], []
+    for sp in branch.special_points:
+        if sp.kind is not SpecialPointKind.SYMMETRY_BREAKING:
+            continue
+        if any(abs(sp.parameter - lam) <= 1e-8 * max(1.0, abs(lam)) for lam in reached):
+            continue
+        try:
+            side = follow_asymmetric_branch(problem, sp, settings=settings,
+                                            label=f"asymmetric, from {problem.lam_name} = {sp.parameter:.9g}")
+        except SaltationError:
+            continue
+        reached += [p.parameter for p in side.special_points if p.kind is SpecialPointKind.SYMMETRY_BREAKING]
+        others.append(side)
+    return others
 
 
 def _through_boundary_equilibria(flow, overrides: dict, parameter: str, settings, branch, *, sliding: bool) -> list:

@@ -41,7 +41,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Mapping
 
-from ..model import Crossing, Mode, PiecewiseSystem, Transition
+from ..model import Crossing, Mode, PiecewiseSystem, Symmetry, Transition
 from .shipped import ShippedModel
 
 DEFAULTS = {"zeta": 0.05, "w": 1.0, "lam": 0.05, "sigma": 0.5}
@@ -72,6 +72,7 @@ def relay_feedback(**overrides: float) -> PiecewiseSystem:
             Transition("u_plus", "y", Crossing.RISING, "u_minus"),
             Transition("u_minus", "y", Crossing.FALLING, "u_plus"),
         ],
+        symmetry=Symmetry.of_signs([-1, -1, -1]),  # x -> -x (the relay is odd, the plant linear)
     )
 
 

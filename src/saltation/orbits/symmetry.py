@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from saltation.errors import InconsistentResultError, ModelError
+from saltation.errors import ConvergenceError, InconsistentResultError, ModelError
 from saltation.orbits.floquet import eigenvalues, reciprocal, sort_multipliers
 
 #: an orbit is symmetric when ``|S^-1 x(t0 + T/2) - x0| <= SYMMETRIC_TOL (1 + |x0|)``: orbits are
@@ -271,6 +271,106 @@ def split_half_map(S: np.ndarray, traj, x0: np.ndarray, *, backward: bool = Fals
                                 symmetry_error=error, symmetric=symmetric)
 
 
+def solve_symmetric_orbit(
+    flow,
+    state0,
+    p: np.ndarray,
+    *,
+    t0: float = 0.0,
+    period: float | None = None,
+    backward: bool = False,
+    tolerances=None,
+    tol: float = 1e-12,
+    max_iter: int = 30,
+) -> tuple[np.ndarray, float, SymmetricMultipliers]:
+    """A symmetric periodic orbit as a fixed point of the half-period map, by Newton on ``G(x) - x = 0``.
+
+    Unlike the whole period's map, whose Jacobian ``DG^2 - I`` is singular at a symmetry breaking,
+    ``DG - I`` stays regular there (``gamma = -1``), so the symmetric orbits are found, and a symmetry
+    breaking located, to full accuracy.  An autonomous orbit's half period is an unknown too, fixed by
+    the phase condition ``f(x_start) . (x - x_start) = 0``.
+
+    Parameters
+    ----------
+    flow : Flow
+        The compiled flow of a model that declares a symmetry.
+    state0 : array_like, shape (n,)
+        The starting guess.
+    p : ndarray
+        Parameter values.
+    t0 : float
+        Initial time.
+    period : float, optional
+        A forced orbit's period (the forcing period by default); an autonomous orbit's starting guess.
+    backward : bool
+        Shoot in backward time.
+    tolerances : Tolerances, optional
+        Integration tolerances.
+    tol : float
+        Newton stops when ``|G(x) - x| <= tol (1 + |x|)``.
+    max_iter : int
+        Newton iterations at most.
+
+    Returns
+    -------
+    state : ndarray, shape (n,)
+    period : float
+    half : SymmetricMultipliers
+        Of the orbit found.
+
+    Raises
+    ------
+    ModelError
+        If the model declares no symmetry, or an autonomous orbit has no period guess.
+    ConvergenceError
+        If Newton does not converge.
+    IntegrationError
+        If a shot fails.
+
+    References
+    ----------
+    Stoer and Bulirsch, *Introduction to Numerical Analysis*, Springer, section 7.3 (shooting).
+    """
+    system = flow.system
+    S = symmetry_matrix(system)
+    autonomous = system.is_autonomous
+    if period is None:
+        if autonomous:
+            raise ModelError(f"model {system.name!r} is autonomous: give a guess of the orbit's period")
+        period = system.forcing_period(p)
+    n = system.n
+    sign = -1.0 if backward else 1.0
+    x = np.array(state0, dtype=float)
+    T = float(period)
+    f_ref = x_ref = None
+    if autonomous:
+        x_ref = x.copy()
+        f_ref = flow.vector_field(system.initial_mode(x, p, t0), t0, x, p)
+    history: list[float] = []
+    for _ in range(max_iter + 1):
+        traj = half_period_trajectory(flow, x, p, t0=t0, period=T, backward=backward, tolerances=tolerances)
+        r = S @ traj.x1 - x
+        J = S @ traj.monodromy - np.eye(n)
+        if autonomous:
+            r = np.append(r, f_ref @ (x - x_ref))
+            J = np.block([[J, (0.5 * sign * (S @ traj.velocity_end))[:, None]], [f_ref[None, :], np.zeros((1, 1))]])
+        size = float(np.linalg.norm(r))
+        history.append(size)
+        if not np.isfinite(size):
+            break
+        if size <= tol * (1.0 + float(np.linalg.norm(x))):
+            return x, T, split_half_map(S, traj, x, backward=backward)
+        try:
+            du = np.linalg.solve(J, -r)
+        except np.linalg.LinAlgError:
+            break
+        x = x + du[:n]
+        if autonomous:
+            T = T + du[n]
+    raise ConvergenceError(f"symmetric orbit of {system.name!r}: Newton on the half-period map did not converge",
+                           history)
+
+
 def symmetry_breaking_test(gamma: np.ndarray) -> float:
     """A test function that changes sign where a real ``gamma`` passes -1: ``prod(gamma + 1)``, real.
 
@@ -291,5 +391,5 @@ def symmetry_breaking_test(gamma: np.ndarray) -> float:
 
 __all__ = [
     "CONSISTENCY_TOL", "SYMMETRIC_TOL", "SymmetricMultipliers", "half_period_trajectory", "split_half_map",
-    "split_multipliers", "symmetric_multipliers", "symmetry_breaking_test", "symmetry_matrix",
+    "solve_symmetric_orbit", "split_multipliers", "symmetric_multipliers", "symmetry_breaking_test", "symmetry_matrix",
 ]

@@ -35,6 +35,7 @@ from saltation.orbits.shooting import ShootingProblem
 from saltation.orbits.symmetry import (
     SymmetricMultipliers,
     half_period_trajectory,
+    solve_symmetric_orbit,
     split_half_map,
     symmetry_breaking_test,
 )
@@ -350,7 +351,7 @@ class SpecialPointDetector:
         if self.symmetry is not None:
             g = _remembered("symmetry_breaking", self._symmetry_breaking_test)
             if _crosses(g(a), g(b)):
-                found.append(self.locate_smooth(a, b, index, SpecialPointKind.SYMMETRY_BREAKING, g))
+                found.append(self.locate_symmetry_breaking(a, b, index))
         return [sp for sp in found if sp is not None]
 
     # -- symmetric orbits -----------------------------------------------------------------------
@@ -390,6 +391,140 @@ class SpecialPointDetector:
                 # (the model's equations were checked for the symmetry when it was built)
                 sol.tests["half_map"] = split_half_map(self.symmetry, traj, sol.u[:n], backward=prob.backward)
         return sol.tests["half_map"]
+
+    def locate_symmetry_breaking(self, a: Solution, b: Solution, index: int) -> SpecialPoint | None:
+        """Locate a symmetry breaking between two symmetric orbits on the symmetric orbits themselves.
+
+        On the whole period's map the point is singular (``DG^2 - I`` has a two-dimensional kernel there), and
+        the corrector drifts off the symmetric orbits near it.  The symmetric orbit at each trial parameter is
+        instead a regular fixed point of the half-period map
+        (:func:`~saltation.orbits.symmetry.solve_symmetric_orbit`), and the parameter where its real
+        half-period multiplier passes -1 is found by Brent's method between ``a`` and ``b``.
+
+        Parameters
+        ----------
+        a, b : Solution
+            Symmetric branch points on either side.
+        index : int
+            The index of ``a`` on the branch.
+
+        Returns
+        -------
+        SpecialPoint or None
+            Of kind ``symmetry_breaking``, status ``located``, with the half-period multiplier in its note;
+            None where the parameter does not bracket the point (a fold between ``a`` and ``b``) or the
+            located orbit's half-period multiplier is not -1 within its accuracy.
+
+        Raises
+        ------
+        SaltationError
+            If the orbit at the located parameter cannot be evaluated.
+
+        References
+        ----------
+        Brent (1973), *Algorithms for Minimization without Derivatives*, Prentice-Hall (the root finder).
+        """
+        prob = self.problem
+        n = prob.system.n
+        la, lb = a.lam, b.lam
+        if la == lb:
+            return None
+        ta, tb = prob.period_of(a.u, la), prob.period_of(b.u, lb)
+        found: dict[float, tuple] = {}
+
+        def test(lam: float) -> float:
+            w = (lam - la) / (lb - la)
+            guess = (1.0 - w) * a.u[:n] + w * b.u[:n]
+            x, T, half = solve_symmetric_orbit(
+                prob.flow, guess, prob.parameters_at(lam), t0=prob.t0,
+                period=(1.0 - w) * ta + w * tb if prob.autonomous else None, backward=prob.backward,
+                tolerances=prob.tolerances,
+            )
+            found[lam] = (x, T, half)
+            return symmetry_breaking_test(half.gamma)
+
+        from scipy.optimize import brentq
+
+        xtol = 1e-13 * max(1.0, abs(la))
+        try:
+            lam = float(brentq(test, la, lb, xtol=xtol, rtol=4 * np.finfo(float).eps))
+        except (ValueError, SaltationError):
+            return None
+        if lam not in found:
+            test(lam)
+        x, T, half = found[lam]
+        u = prob.pack(x, T if prob.autonomous else None)
+        summary = prob.describe(u, lam, prob.evaluate(u, lam, need_lam=False))
+        gamma = _nearest(half.gamma, -1.0)
+        accuracy = max(self._matrix_error(a), self._matrix_error(b))
+        if not abs(gamma + 1.0) <= accuracy + 1e-9:
+            return None
+        return SpecialPoint(
+            kind=SpecialPointKind.SYMMETRY_BREAKING,
+            parameter=lam,
+            bracket=(lam - xtol, lam + xtol),
+            accuracy=xtol,
+            index=index,
+            state=summary.state,
+            period=summary.period,
+            amplitude=summary.amplitude,
+            multipliers=summary.multipliers,
+            multipliers_accuracy=accuracy,
+            status=SpecialPointStatus.LOCATED,
+            note=(f"symmetric orbit: its antisymmetric half-period multiplier is {_complex_text(gamma)} "
+                  f"(located on the half-period map)"),
+        )
+
+    def _meets_symmetric_orbits(self, sol: Solution, index: int) -> SpecialPoint | None:
+        """At a turning point of a branch of asymmetric orbits: the symmetry breaking where the branch meets the
+        symmetric orbits (the pitchfork seen from its side branch, which turns back there as the mirror
+        images of its orbits), located on the symmetric orbits; None if the turning point is not one."""
+        half = self.half_map(sol)
+        if half is None or half.symmetric:
+            return None
+        prob = self.problem
+        n = prob.system.n
+
+        def symmetric_at(lam: float, guess: np.ndarray):
+            return solve_symmetric_orbit(
+                prob.flow, guess, prob.parameters_at(lam), t0=prob.t0,
+                period=prob.period_of(sol.u, sol.lam) if prob.autonomous else None, backward=prob.backward,
+                tolerances=prob.tolerances,
+            )
+
+        try:
+            x, _, sym = symmetric_at(sol.lam, sol.u[:n])
+            if float(np.linalg.norm(x - sol.u[:n])) > 1e-3 * (1.0 + float(np.linalg.norm(x))):
+                return None  # another symmetric orbit, not the one this branch meets
+            # the secant method on gamma + 1 along the symmetric orbits (regular there)
+            lam0, g0 = sol.lam, float(np.real(_nearest(sym.gamma, -1.0))) + 1.0
+            lam1 = sol.lam + 1e-6 * max(1.0, abs(sol.lam))
+            for _ in range(12):
+                x, _, sym = symmetric_at(lam1, x)
+                g1 = float(np.real(_nearest(sym.gamma, -1.0))) + 1.0
+                if g1 == g0 or abs(lam1 - lam0) <= 1e-14 * max(1.0, abs(lam1)):
+                    break
+                lam0, lam1, g0 = lam1, lam1 - g1 * (lam1 - lam0) / (g1 - g0), g1
+            x, _, sym = symmetric_at(lam1, x)
+        except SaltationError:
+            return None
+        gamma = _nearest(sym.gamma, -1.0)
+        accuracy = self._matrix_error(sol)
+        if not (abs(gamma + 1.0) <= accuracy + 1e-9 and abs(lam1 - sol.lam) <= 1e-4 * max(1.0, abs(sol.lam))):
+            return None
+        u = prob.pack(x, None)
+        if prob.autonomous:
+            u = prob.pack(x, prob.period_of(sol.u, sol.lam))
+        summary = prob.describe(u, lam1, prob.evaluate(u, lam1, need_lam=False))
+        step = abs(lam1 - lam0)
+        return SpecialPoint(
+            kind=SpecialPointKind.SYMMETRY_BREAKING, parameter=lam1, bracket=(lam1 - step, lam1 + step),
+            accuracy=step, index=index, state=summary.state, period=summary.period, amplitude=summary.amplitude,
+            multipliers=summary.multipliers, multipliers_accuracy=accuracy, status=SpecialPointStatus.LOCATED,
+            note=(f"the branch of asymmetric orbits meets the symmetric orbits here and turns back as the mirror "
+                  f"images of its orbits; the symmetric orbit's antisymmetric half-period multiplier is "
+                  f"{_complex_text(gamma)} (located on the half-period map)"),
+        )
 
     def _symmetry_breaking_test(self, sol: Solution) -> float:
         """``prod(gamma + 1)`` of a symmetric orbit's half-period multipliers (nan for an asymmetric one)."""
@@ -499,10 +634,10 @@ class SpecialPointDetector:
             multipliers_accuracy = abs(near[0] - near[1]) + max(self._matrix_error(lo), self._matrix_error(hi))
             if not abs(near[2] - target) <= multipliers_accuracy:
                 return None
-        note = ""
-        if kind is SpecialPointKind.SYMMETRY_BREAKING:
-            gamma = _nearest(self.half_map(best).gamma, -1.0)
-            note = f"symmetric orbit: its antisymmetric half-period multiplier is {_complex_text(gamma)}"
+        if kind is SpecialPointKind.FOLD and self.symmetry is not None:
+            meets = self._meets_symmetric_orbits(best, index)
+            if meets is not None:
+                return meets
         return SpecialPoint(
             kind=kind,
             parameter=best.lam,
