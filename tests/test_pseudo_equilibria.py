@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -9,7 +10,9 @@ import pytest
 
 from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition
 from saltation.errors import ModelError
+from saltation.apps import cli
 from saltation.orbits.pseudo_equilibria import find_pseudo_equilibrium
+from saltation.orbits.shooting import EquilibriumProblem
 
 A, B, C, D = 1.0, 2.0, 0.5, 0.3
 
@@ -231,3 +234,53 @@ def test_a_boundary_equilibrium_without_sliding_is_classified_by_the_other_modes
     (point,) = boundary_equilibria_of_mode(problem, branch)
     assert point.classification == classification
     assert point.parameter == pytest.approx(0.0, abs=1e-12)
+
+
+# -- two-parameter curves of boundary equilibria ---------------------------------------------------------
+def curve_model() -> PiecewiseSystem:
+    """x + nu^2 < 0: ``x' = -(x + mu)``, ``y' = -(y - nu)``, equilibrium (-mu, nu); beyond it ``x' = -1``.  The
+    equilibrium reaches the surface ``x + nu^2 = 0`` where ``mu = nu^2``: the closed form of the curve."""
+    return PiecewiseSystem(
+        "test_boundary_equilibrium_curve", ["x", "y"], {"mu": 0.5, "nu": 0.5},
+        [Mode("left", ["-(x + mu)", "-(y - nu)"], domain=["x + nu**2 < 0"]), Mode("right", ["-1", "-y"])],
+        {"s": "x + nu**2"},
+        [Transition("left", "s", Crossing.RISING, "right"), Transition("right", "s", Crossing.FALLING, "left")],
+    )
+
+
+def test_a_boundary_equilibrium_curve_against_its_closed_form():
+    from saltation.special_points.boundary_equilibria import boundary_equilibria_of_mode, follow_boundary_equilibrium_curve
+    from saltation.special_points.continuation import ContinuationSettings, continue_branch
+
+    flow = Flow(curve_model())
+    problem = EquilibriumProblem(flow, "left", continuation_parameter="mu")
+    x0 = problem.solve([-0.5, 0.5], 0.5).state
+    branch = continue_branch(problem, x0, 0.5, settings=ContinuationSettings(bounds=(0.0, 1.0)), directions=(-1,))
+    (point,) = boundary_equilibria_of_mode(problem, branch)
+    assert point.parameter == pytest.approx(0.25, abs=1e-12)
+    settings = ContinuationSettings(tol=1e-12)
+    locus = follow_boundary_equilibrium_curve(flow, point, "mu", "nu", (-1.0, 1.0), settings=settings)
+    mu, nu = locus.values.T
+    assert nu.min() == pytest.approx(-1.0) and nu.max() == pytest.approx(1.0)  # both directions to the bounds
+    assert "reached a parameter bound" in locus.stop_reason
+    # on the curve: mu = nu^2, the equilibrium (-mu, nu) on the surface; the corrector's tolerance 1e-12
+    np.testing.assert_allclose(mu, nu**2, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(locus.states[:, 0], -mu, atol=1e-11)
+    np.testing.assert_allclose(locus.states[:, 1], nu, atol=1e-11)
+
+
+def test_the_locus_command_continues_boundary_equilibria(tmp_path, capsys):
+    path = tmp_path / "curve_model.py"
+    path.write_text("import sys\nsys.path.insert(0, %r)\nfrom test_pseudo_equilibria import curve_model\n"
+                    % str(Path(__file__).parent))
+    status = cli.main(["locus", f"{path}:curve_model", "--kind", "boundary_equilibrium", "--equilibrium", "left",
+                       "--param", "mu", "--range", "0.5,0", "--param2", "nu", "--range2", "0,0.8", "--x0", "-0.5,0.5",
+                       "--json", "--no-progress"])
+    assert status == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["kind"] == "boundary_equilibrium" and len(record["curves"]) == 1
+    points = np.array(record["curves"][0]["points"])
+    np.testing.assert_allclose(points[:, 0], points[:, 1] ** 2, atol=1e-9)  # the corrector's default tolerance
+    assert cli.main(["locus", f"{path}:curve_model", "--kind", "boundary_equilibrium", "--param", "mu", "--range",
+                     "0.5,0", "--param2", "nu", "--range2", "0,0.8", "--no-progress"]) == 2
+    assert "--equilibrium" in capsys.readouterr().err

@@ -870,26 +870,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
                          "longer than the largest")
     ds = min(0.01, args.ds_max) if args.ds is None else args.ds
     if args.equilibrium is not None:
-        if not system.is_autonomous:
-            raise UsageError(
-                f"--equilibrium {args.equilibrium}: model {system.name!r} is forced (forcing period "
-                f"{system.period_expr}): it has no equilibria; continue its periodic orbits (drop --equilibrium)"
-            )
-        sliding_on = args.equilibrium.partition("sliding:")[2] if args.equilibrium.startswith("sliding:") else None
-        if sliding_on is not None and sliding_on not in system.surface_names:
-            raise UsageError(f"unknown surface {sliding_on!r} in --equilibrium sliding:SURFACE for model {system.name!r}; "
-                             f"surfaces are {', '.join(system.surface_names)}")
-        try:
-            if sliding_on is None:
-                system.mode_index(args.equilibrium)
-        except SaltationError:
-            raise UsageError(f"unknown mode {args.equilibrium!r} in --equilibrium for model {system.name!r}; modes "
-                             f"are {', '.join(system.mode_names)} (or sliding:SURFACE for pseudo-equilibria)") from None
-        for flag, given in (("--period", args.period is not None), ("--backward", args.backward),
-                            ("--segments", args.segments != 1)):
-            if given:
-                raise UsageError(f"{flag} does not apply to --equilibrium (an equilibrium has no period and no "
-                                 "direction of time)")
+        check_equilibrium_option(args, system)
     overrides[args.param] = start
     for flag, value in (("--to", stop), ("--from", start)):
         p0 = usable_parameters(system, overrides | {args.param: value}, f"{flag} {_fmt(value)}")
@@ -909,18 +890,8 @@ def cmd_continue(args: argparse.Namespace) -> int:
     counter = (lambda point: update(f"{args.model}: {args.param}", 0)) if update else None
     branches = []
     try:
-        if args.equilibrium is not None and args.equilibrium.startswith("sliding:"):
-            from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
-
-            surface = args.equilibrium.partition(":")[2]
-            guess = x0 if x0 is not None else np.zeros(system.n)
-            first = find_pseudo_equilibrium(flow, surface, guess, parameters=p)
-            problem = PseudoEquilibriumProblem(flow, surface, first.modes, overrides, continuation_parameter=args.param)
-            u0 = PseudoEquilibriumProblem.unknowns(first)
-        elif args.equilibrium is not None:
-            problem = EquilibriumProblem(flow, args.equilibrium, overrides, continuation_parameter=args.param)
-            guess = x0 if x0 is not None else np.zeros(system.n)
-            u0 = problem.solve(guess, start).state
+        if args.equilibrium is not None:
+            problem, u0 = equilibrium_start(args.equilibrium, flow, overrides, args.param, x0, start)
         else:
             problem, u0 = periodic_start(args, flow, overrides, p, x0)
         cont = Continuation(problem, settings)
@@ -970,6 +941,54 @@ def cmd_continue(args: argparse.Namespace) -> int:
     print(_special_points_text(records))
     print(f"written to {out}/{stem}_*")
     return 0
+
+
+def check_equilibrium_option(args: argparse.Namespace, system) -> None:
+    """``--equilibrium MODE`` or ``sliding:SURFACE``: a mode or surface of an autonomous model, and no option that
+    applies to periodic orbits only.
+
+    Raises
+    ------
+    UsageError
+        Naming the option and what is wrong.
+    """
+    if not system.is_autonomous:
+        raise UsageError(
+            f"--equilibrium {args.equilibrium}: model {system.name!r} is forced (forcing period "
+            f"{system.period_expr}): it has no equilibria; continue its periodic orbits (drop --equilibrium)"
+        )
+    sliding_on = args.equilibrium.partition("sliding:")[2] if args.equilibrium.startswith("sliding:") else None
+    if sliding_on is not None and sliding_on not in system.surface_names:
+        raise UsageError(f"unknown surface {sliding_on!r} in --equilibrium sliding:SURFACE for model {system.name!r}; "
+                         f"surfaces are {', '.join(system.surface_names)}")
+    try:
+        if sliding_on is None:
+            system.mode_index(args.equilibrium)
+    except SaltationError:
+        raise UsageError(f"unknown mode {args.equilibrium!r} in --equilibrium for model {system.name!r}; modes "
+                         f"are {', '.join(system.mode_names)} (or sliding:SURFACE for pseudo-equilibria)") from None
+    for flag, given in (("--period", args.period is not None), ("--backward", args.backward),
+                        ("--segments", args.segments != 1)):
+        if given:
+            raise UsageError(f"{flag} does not apply to --equilibrium (an equilibrium has no period and no "
+                             "direction of time)")
+
+
+def equilibrium_start(which: str, flow, overrides: dict, parameter: str, x0, start: float):
+    """The problem and first point of an equilibrium branch: ``which`` is a mode (its equilibria) or
+    ``sliding:SURFACE`` (pseudo-equilibria), ``x0`` the guess (the origin when None)."""
+    from saltation.orbits.shooting import EquilibriumProblem
+
+    guess = x0 if x0 is not None else np.zeros(flow.system.n)
+    if which.startswith("sliding:"):
+        from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
+
+        surface = which.partition(":")[2]
+        first = find_pseudo_equilibrium(flow, surface, guess, parameters=flow.parameters(overrides))
+        problem = PseudoEquilibriumProblem(flow, surface, first.modes, overrides, continuation_parameter=parameter)
+        return problem, PseudoEquilibriumProblem.unknowns(first)
+    problem = EquilibriumProblem(flow, which, overrides, continuation_parameter=parameter)
+    return problem, problem.solve(guess, start).state
 
 
 def _asymmetric_branches(problem, branch, settings) -> list:
@@ -1108,6 +1127,11 @@ def cmd_locus(args: argparse.Namespace) -> int:
     system = build_model(args.model)
     for name, flag in ((args.param, "--param"), (args.param2, "--param2")):
         check_parameter(system, name, flag)
+    if (kind is SpecialPointKind.BOUNDARY_EQUILIBRIUM) != (args.equilibrium is not None):
+        raise UsageError("--kind boundary_equilibrium needs --equilibrium MODE or --equilibrium sliding:SURFACE "
+                         "(the branch of equilibria it lies on), and --equilibrium applies to it only")
+    if args.equilibrium is not None:
+        check_equilibrium_option(args, system)
     if args.param == args.param2:
         raise UsageError("--param and --param2 must differ")
     (start, stop), (lo2, hi2) = args.range, args.range2
@@ -1130,17 +1154,33 @@ def cmd_locus(args: argparse.Namespace) -> int:
     update, close = _progress_bar(not args.no_progress)
     counter = (lambda point: update(f"{args.model}: {args.param}", 0)) if update else None
     try:
-        problem, u0 = periodic_start(args, flow, overrides, p, x0)
+        if args.equilibrium is not None:
+            problem, u0 = equilibrium_start(args.equilibrium, flow, overrides, args.param, x0, start)
+        else:
+            problem, u0 = periodic_start(args, flow, overrides, p, x0)
         cont = Continuation(problem, settings)
         for point in cont.run(u0, start, direction=1 if stop > start else -1):
             if counter:
                 counter(point)
-        points = [sp for sp in cont.branch.special_points if sp.kind is kind]
         curve_settings = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(min(lo2, hi2), max(lo2, hi2)))
         counter2 = (lambda point: update(f"{args.model}: {kind.value} over {args.param2}", 0)) if update else None
-        # with --segments the curves' defining systems shoot by segments too
-        loci = [follow_locus(problem, sp, args.param2, curve_settings.bounds, settings=curve_settings, progress=counter2)
-                for sp in points]
+        if args.equilibrium is not None:
+            from saltation.special_points.boundary_equilibria import (
+                boundary_equilibria,
+                boundary_equilibria_of_mode,
+                follow_boundary_equilibrium_curve,
+            )
+
+            find = boundary_equilibria if args.equilibrium.startswith("sliding:") else boundary_equilibria_of_mode
+            loci = [follow_boundary_equilibrium_curve(flow, sp, args.param, args.param2, curve_settings.bounds,
+                                                      parameters=overrides, settings=curve_settings, progress=counter2)
+                    for sp in find(problem, cont.branch)]
+        else:
+            points = [sp for sp in cont.branch.special_points if sp.kind is kind]
+            # with --segments the curves' defining systems shoot by segments too
+            loci = [follow_locus(problem, sp, args.param2, curve_settings.bounds, settings=curve_settings,
+                                 progress=counter2)
+                    for sp in points]
     finally:
         close()
     record = {
@@ -1177,7 +1217,9 @@ def _add_locus_parser(sub) -> None:
             curve in (--param, --param2) with --param2 in --range2, in both directions, by its defining
             system: grazing and corner collisions by periodicity plus tangency, folds and period
             doublings by periodicity plus a bordered test function. Where the kind of a corner changes
-            along its curve (a codimension-two point) the curve records it. --json prints
+            along its curve (a codimension-two point) the curve records it. With --kind
+            boundary_equilibrium and --equilibrium MODE (or sliding:SURFACE) the branch is of equilibria, and
+            each boundary equilibrium is continued by the mode's equilibrium plus h = 0. --json prints
             {"model", "kind", "param", "param2", "curves": [{"points": [[value of param, value of
             param2], ...], "stop_reason", "special_points"}]}; --out writes the same and a plot."""
         ),
@@ -1200,6 +1242,10 @@ def _add_locus_parser(sub) -> None:
         help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
         "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models (for the branch; the curves' defining systems use single shooting)",
     )
+    p.add_argument("--equilibrium", metavar="MODE",
+                   help="with --kind boundary_equilibrium: the branch is of this mode's equilibria (or, as "
+                   "sliding:SURFACE, of the pseudo-equilibria on that surface), and its boundary equilibria are "
+                   "continued by the mode's equilibrium plus h = 0")
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(handler=cmd_locus)
 

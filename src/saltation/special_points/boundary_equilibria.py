@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind, SpecialPointStatus
-from saltation.errors import ConvergenceError, SaltationError
+from saltation.errors import ConvergenceError, ModelError, SaltationError
 from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
 from saltation.orbits.pseudo_equilibria import sliding_weight as pseudo_weight
 from saltation.orbits.shooting import EquilibriumProblem
@@ -223,4 +223,241 @@ def _admissible_side(problem, surface: str, mode: int, sign: float, x: np.ndarra
     return 0.0
 
 
-__all__ = ["boundary_equilibria", "boundary_equilibria_of_mode", "sliding_weight"]
+class BoundaryEquilibriumCurve:
+    """Boundary equilibria in two parameters, in the continuation protocol.
+
+    The defining system of a boundary equilibrium, ``f_mode(x, p) = 0`` and ``h(x, p) = 0``, with the first
+    parameter one more unknown: ``u = (x, lam1)``, and the second parameter the continuation parameter.
+    Exact Jacobians (the compiled field's and indicator's derivatives).
+
+    Parameters
+    ----------
+    flow : Flow
+        The compiled flow of an autonomous model.
+    mode : str or int
+        The mode whose equilibrium reaches the surface.
+    surface : str
+        The switching surface.
+    parameters : mapping or ndarray, optional
+        Parameter values (the model's defaults otherwise).
+    first, second : str
+        The two parameters: the first is an unknown of the curve, the second its continuation parameter.
+
+    Raises
+    ------
+    ModelError
+        For an unknown mode, surface or parameter, two equal parameters, or a forced model.
+    """
+
+    autonomous = True
+    backward = False
+
+    def __init__(self, flow, mode, surface: str, parameters=None, *, first: str, second: str):
+        self.flow = flow
+        self.system = flow.system
+        if not self.system.is_autonomous:
+            raise ModelError(f"model {self.system.name!r} is forced: it has no equilibria")
+        self.mode = self.system.mode_index(mode)
+        self.surface = surface
+        self.system.surface_index(surface)
+        if first == second:
+            raise ModelError(f"the two parameters of a curve must differ, got {first!r} twice")
+        self.first, self.first_index = first, self.system.parameter_index(first)
+        self.lam_name, self.lam_index = second, self.system.parameter_index(second)
+        self.p = flow.parameters(parameters)
+
+    @property
+    def dimension(self) -> int:
+        return self.system.n + 1
+
+    def parameters_at(self, lam: float | None, first: float | None = None) -> np.ndarray:
+        """The parameters with the second parameter at ``lam`` and the first at ``first`` (where given).
+
+        Parameters
+        ----------
+        lam : float or None
+        first : float or None
+
+        Returns
+        -------
+        ndarray
+        """
+        p = self.p.copy()
+        if lam is not None:
+            p[self.lam_index] = lam
+        if first is not None:
+            p[self.first_index] = first
+        return p
+
+    def lam0(self) -> float:
+        """The second parameter's value in the problem's parameters.
+
+        Returns
+        -------
+        float
+        """
+        return float(self.p[self.lam_index])
+
+    def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True):
+        """``(f_mode, h)`` at ``u = (x, lam1)`` and their Jacobians.
+
+        Parameters
+        ----------
+        u : ndarray, shape (n + 1,)
+        lam : float, optional
+            The second parameter.
+        need_lam : bool
+            Compute ``jac_lam`` too.
+
+        Returns
+        -------
+        Evaluation
+        """
+        from saltation.orbits.records import Evaluation
+
+        flow, n = self.flow, self.system.n
+        x = np.asarray(u[:n], dtype=float)
+        p = self.parameters_at(lam, float(u[n]))
+        hx, _, hp = flow.indicator_gradient(self.surface, 0.0, x, p)
+        fp = flow.vector_field_parameters(self.mode, 0.0, x, p)
+        r = np.append(flow.vector_field(self.mode, 0.0, x, p), flow.indicator(self.surface, 0.0, x, p))
+        J = np.zeros((n + 1, n + 1))
+        J[:n, :n] = flow.vector_field_jacobian(self.mode, 0.0, x, p)
+        J[:n, n] = fp[:, self.first_index]
+        J[n, :n], J[n, n] = hx, hp[self.first_index]
+        jl = None
+        if need_lam and lam is not None:
+            jl = np.append(fp[:, self.lam_index], hp[self.lam_index])
+        return Evaluation(residual=r, jac_u=J, jac_lam=jl)
+
+    def describe(self, u: np.ndarray, lam: float | None, ev):
+        """A curve point: the equilibrium, the first parameter as ``parameter``, the second as
+        ``second_parameter``, and the mode's eigenvalues as ``multipliers``.
+
+        Parameters
+        ----------
+        u : ndarray
+        lam : float or None
+        ev : Evaluation
+
+        Returns
+        -------
+        BranchPoint
+        """
+        from saltation.orbits.records import BranchPoint
+
+        n = self.system.n
+        eig = np.linalg.eigvals(ev.jac_u[:n, :n]).astype(complex)
+        eig = eig[np.lexsort((-eig.imag, -eig.real))]
+        return BranchPoint(
+            parameter=float(u[n]), state=np.array(u[:n]), period=math.nan, amplitude=float(abs(u[0])),
+            half_peak_to_peak=0.0, multipliers=eig, stable=bool(np.all(eig.real < 0)), event_labels=(),
+            second_parameter=math.nan if lam is None else float(lam),
+        )
+
+    def accept(self, u: np.ndarray, lam: float | None) -> None:
+        """Nothing to re-anchor.
+
+        Parameters
+        ----------
+        u : ndarray
+        lam : float or None
+        """
+
+
+def follow_boundary_equilibrium_curve(
+    flow,
+    point: SpecialPoint,
+    first: str,
+    second: str,
+    bounds: tuple[float, float],
+    *,
+    parameters=None,
+    settings=None,
+    progress=None,
+):
+    """Continue a boundary equilibrium in a second parameter, in both directions.
+
+    Parameters
+    ----------
+    flow : Flow
+        The compiled flow of the model.
+    point : SpecialPoint
+        A located ``boundary_equilibrium`` (its ``touch_mode``, ``touch_surface``, state and parameter).
+    first : str
+        The parameter of the branch it was found on.
+    second : str
+        The second parameter.
+    bounds : (float, float)
+        The range of the second parameter.
+    parameters : mapping or ndarray, optional
+        The other parameters' values (the model's defaults otherwise).
+    settings : ContinuationSettings, optional
+        Step sizes (``bounds`` overrides theirs).
+    progress : callable, optional
+        Called with each new curve point.
+
+    Returns
+    -------
+    Locus
+        The curve (``parameter`` the first parameter, ``second_parameter`` the second), with a stop reason
+        per direction.
+
+    Raises
+    ------
+    ModelError
+        If the point is not a boundary equilibrium, or a name is unknown.
+    SaltationError
+        If the curve cannot start from the point.
+
+    References
+    ----------
+    M. di Bernardo, C. J. Budd, A. R. Champneys and P. Kowalczyk (2008), *Piecewise-smooth Dynamical
+    Systems: Theory and Applications*, Springer, section 5.2.
+    """
+    from dataclasses import replace
+
+    from saltation.branches.branch import BranchKind
+    from saltation.branches.continuation import Continuation, ContinuationSettings
+    from saltation.special_points.loci import Locus
+
+    if point.kind is not SpecialPointKind.BOUNDARY_EQUILIBRIUM:
+        raise ModelError(f"a boundary-equilibrium curve starts at a boundary_equilibrium point, got {point.kind.value}")
+    values = flow.parameters(parameters)
+    values[flow.system.parameter_index(first)] = point.parameter
+    curve = BoundaryEquilibriumCurve(flow, point.touch_mode, point.touch_surface, values, first=first, second=second)
+    settings = replace(settings or ContinuationSettings(), bounds=(min(bounds), max(bounds)), detect=False)
+    u0 = np.append(np.asarray(point.state, dtype=float), point.parameter)
+    lam0 = curve.lam0()
+    runs, reasons = [], []
+    for direction in (1, -1):
+        cont = Continuation(curve, settings)
+        way = f"{'increasing' if direction > 0 else 'decreasing'} {second}"
+        failure = None
+        try:
+            for pt in cont.run(u0, lam0, direction=direction):
+                if progress is not None:
+                    progress(pt)
+        except (SaltationError, np.linalg.LinAlgError) as exc:
+            if not cont.solutions:
+                raise SaltationError(f"the boundary_equilibrium curve in {second} cannot start from the point at "
+                                     f"{first} = {point.parameter:.10g}: {exc}") from exc
+            failure = f"failed after {len(cont.solutions)} points: {exc}"
+        n = flow.system.n  # the engine records the continuation parameter as ``parameter``: put both back
+        runs.append([replace(bp, parameter=float(sol.z[n]), second_parameter=float(sol.z[-1]))
+                     for bp, sol in zip(cont.branch.points, cont.solutions)])
+        reasons.append(f"{way}: {failure or cont.branch.stop_reason.value}")
+    points = list(reversed(runs[1]))[:-1] + runs[0]
+    return Locus(
+        model=flow.system.name, parameter_name=first, kind=BranchKind.EQUILIBRIUM, points=points,
+        fixed_parameters=dict(zip(flow.system.parameter_names, map(float, values))),
+        label="boundary_equilibrium curve", autonomous=True, second_parameter_name=second,
+        curve_of=SpecialPointKind.BOUNDARY_EQUILIBRIUM, stop_reason="; ".join(reasons),
+        state_names=tuple(flow.system.state_names),
+    )
+
+
+__all__ = [
+    "BoundaryEquilibriumCurve", "boundary_equilibria", "boundary_equilibria_of_mode", "follow_boundary_equilibrium_curve",
+    "sliding_weight",
+]

@@ -649,7 +649,6 @@ class SpecialPointDetector:
             amplitude=best.summary.amplitude,
             multipliers=best.summary.multipliers,
             multipliers_accuracy=multipliers_accuracy,
-            note=note,
         )
 
     def _matrix_error(self, sol: Solution) -> float:
