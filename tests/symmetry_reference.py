@@ -42,23 +42,24 @@ its own closed-form flow, and solve_ivp, DOP853, rtol = atol = 1e-12, with event
 variational equations plus saltation matrices):
 
 * trilinear spring, defaults below with ``f0 = 2``: SB1 ``omega* = 0.833169867909``, SB2
-  ``omega* = 0.736446390291`` (one contact per half period, no grazing nearby).  On 150 random states
-  (``f0`` in {0.5, 1, 2}, ``omega`` in [0.4, 2], up to 8 events per half period) G and DG agree with
-  the earlier closed form to 2e-14 and with solve_ivp to 2e-11.  The located points agree with the earlier closed form to 4e-14 in omega*, 5e-14 in
-  (x0, v0) and 3e-14 in gamma (the digits it printed), which agreed with the solve_ivp search to
-  3e-13 in omega* and with Richardson finite differences to 7e-12.  ``det DG`` equals
+  ``omega* = 0.736446390291`` (one contact per half period, no grazing nearby).  On 150 random
+  states (``f0`` in {0.5, 1, 2}, ``omega`` in [0.4, 2], up to 8 events per half period) G and DG
+  agree with the earlier closed form to 2e-14 and with solve_ivp to 2e-11.  The located points
+  agree with the earlier closed form to 4e-14 in omega*, 5e-14 in (x0, v0) and 3e-14 in gamma (the
+  digits it printed); that one agreed with the solve_ivp search to 3e-13 in omega* and with
+  Richardson finite differences to 7e-12.  ``det DG`` equals its analytic value
   ``exp(-c T / (2 m) - c_f tau_contact / m)`` to 4e-16.  Error of omega*: below 1e-11.
 * impact oscillator, ``zeta = 0.05, d = 1, r = 0.8, f0 = 0.5``: ``omega* = 0.981953574906`` (one
-  impact per half period).  Along the symmetric branch (``omega`` in [0.982, 1.5]) G and
-  DG agree with solve_ivp to 6e-13 and 3e-12; on 176 of 180 random states (``omega`` in [0.75, 2],
-  up to 3 impacts per half period) to 8e-12 and 7e-11.  At the other 4 (slow impacts, ``v- < 0.3``)
-  solve_ivp is the one in error: it misses a near-grazing impact (``v- = 0.04``), and elsewhere its
-  DG error, amplified by ``1 / v-``, falls from up to 6e-9 to below 1e-10 at rtol = atol = 1e-14.
-  The same search with the solve_ivp map gives omega* 4e-13 lower, (x0, v0) within 1e-13 and gamma within 2e-12, and solve_ivp at
-  rtol = atol = 1e-10 and Richardson finite differences agree to 7e-12.  ``det DG = r^2 exp(-zeta T)``
-  to 1e-16.  Error of omega*: below 1e-11.
+  impact per half period).  Along the symmetric branch (``omega`` in [0.982, 1.5]) G and DG agree
+  with solve_ivp to 6e-13 and 3e-12; on 176 of 180 random states (``omega`` in [0.75, 2], up to 3
+  impacts per half period) to 8e-12 and 7e-11.  At the other 4 (slow impacts, ``v- < 0.3``)
+  solve_ivp is the one in error: it misses a near-grazing impact (``v- = 0.04``), and elsewhere
+  its DG error, amplified by ``1 / v-``, falls from up to 6e-9 to below 1e-10 with rtol = 2.2e-14,
+  atol = 1e-14.  The same search with the solve_ivp map gives omega* 4e-13 lower, (x0, v0) within
+  1e-13 and gamma within 2e-12; solve_ivp at rtol = atol = 1e-10 and Richardson finite differences
+  agree to 7e-12.  ``det DG`` equals ``r^2 exp(-zeta T)`` to 1e-16.  Error of omega*: below 1e-11.
 
-Each search takes about 0.05 s.  Run this file to print the three points and the time each search takes.
+Each search takes about 0.05 s.  Run this file to print the three points and the time of each search.
 """
 
 from __future__ import annotations
@@ -141,10 +142,10 @@ class _Linear:
 
 # A guard is (h, direction, target mode, jump): leave the mode when h(y) crosses 0 in `direction`
 # (+1 rising, -1 falling); jump(t, y-) returns (y+, saltation matrix).
-Guard = tuple[Callable, int, int, Callable]
+_Guard = tuple[Callable, int, int, Callable]
 
 
-def _half_flow(y0, t_end: float, mode: int, modes: dict[int, tuple[_Linear, list[Guard]]]):
+def _half_flow(y0, t_end: float, mode: int, modes: dict[int, tuple[_Linear, list[_Guard]]]):
     """Closed-form flow from ``t = 0`` to ``t_end``, event by event.
 
     Parameters

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition
 from saltation.errors import ModelError
@@ -284,3 +286,36 @@ def test_the_locus_command_continues_boundary_equilibria(tmp_path, capsys):
     assert cli.main(["locus", f"{path}:curve_model", "--kind", "boundary_equilibrium", "--param", "mu", "--range",
                      "0.5,0", "--param2", "nu", "--range2", "0,0.8", "--no-progress"]) == 2
     assert "--equilibrium" in capsys.readouterr().err
+
+
+# -- the sticking set of a friction oscillator on a resting ground ------------------------------------------
+def sticking_model() -> PiecewiseSystem:
+    """``x'' + c x' + k x = -mu sgn(x')``: on ``x' = 0`` the sliding field vanishes wherever ``|k x| < mu``."""
+    return PiecewiseSystem(
+        "test_sticking_set", ["x", "v"], {"k": 2.0, "mu": 0.5, "c": 0.1},
+        [Mode("forward", ["v", "-k*x - c*v - mu"], domain=["v > 0"]), Mode("backward", ["v", "-k*x - c*v + mu"])],
+        {"s": "v"},
+        [Transition("forward", "s", Crossing.FALLING, "backward"), Transition("backward", "s", Crossing.RISING, "forward")],
+    )
+
+
+@pytest.fixture(scope="module")
+def sticking_flow():
+    return Flow(sticking_model())
+
+
+@settings(max_examples=25, deadline=None)
+@given(x=st.floats(-0.5, 0.5))
+def test_the_sticking_set_is_a_continuum_of_pseudo_equilibria(sticking_flow, x):
+    """Closed form: every (x, 0) with |k x| < mu is a pseudo-equilibrium with the weight
+    a = (mu - k x) / (2 mu) of the forward-slip field; it is not isolated (the sliding field's Jacobian on
+    the surface is 0), so it is neither stable nor unstable; beyond |x| = mu / k it is virtual."""
+    k, mu = 2.0, 0.5
+    point = find_pseudo_equilibrium(sticking_flow, "s", [x, 0.0])
+    np.testing.assert_allclose(point.state, [x, 0.0], atol=1e-12)
+    assert point.modes == ("backward", "forward")
+    assert point.weights[1] == pytest.approx((mu - k * x) / (2 * mu), abs=1e-12)
+    assert point.admissible == (abs(k * x) < mu)
+    assert not point.isolated and not point.stable
+    if point.admissible:
+        assert "continuum" in repr(point)

@@ -214,7 +214,8 @@ def strong_references():
     return first, second
 
 
-def test_symmetry_breaking_of_the_trilinear_system_against_a_closed_form_flow(strong_branch, strong_references):
+def test_symmetry_breaking_of_the_trilinear_system_against_a_closed_form_flow(tri_flow, strong_branch,
+                                                                            strong_references):
     """With strong forcing the symmetric orbit's antisymmetric multiplier passes +1 twice (its half-period
     multiplier -1): two symmetry breakings, no fold, the branch unstable between them."""
     _, branch = strong_branch
@@ -225,7 +226,10 @@ def test_symmetry_breaking_of_the_trilinear_system_against_a_closed_form_flow(st
         assert sp.parameter == pytest.approx(omega, abs=REFERENCE_ACCURACY + sp.accuracy)
         np.testing.assert_allclose(sp.state, state, atol=1e-9)
         assert _nearest_to(sp.multipliers, 1.0) == pytest.approx(1.0, abs=1e-9)
-        assert gamma == pytest.approx(-1.0, abs=1e-9)
+        # both half-period multipliers (the reference's are -1 and the other one), and the full ones their squares
+        half = symmetric_multipliers(tri_flow, sp.state, parameters=STRONG | {"omega": sp.parameter}, tolerances=TIGHT)
+        np.testing.assert_allclose(np.sort(half.gamma.real), np.sort(gamma), atol=1e-9)
+        np.testing.assert_allclose(np.sort(sp.multipliers.real), np.sort(gamma**2), atol=1e-9)
     between = [pt for pt in branch.points if points[1].parameter < pt.parameter < points[0].parameter]
     assert between and not any(pt.stable for pt in between)
     outside = [pt for pt in branch.points if not points[1].parameter <= pt.parameter <= points[0].parameter]

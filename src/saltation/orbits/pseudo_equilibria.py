@@ -59,10 +59,23 @@ class PseudoEquilibrium:
         """Admissible and attracting in the sliding motion."""
         return bool(self.admissible and np.all(self.eigenvalues.real < 0))
 
+    @property
+    def isolated(self) -> bool:
+        """False where the sliding field's Jacobian on the surface has an eigenvalue 0 (to 1e-9 of the largest):
+        the point then lies on a continuum of pseudo-equilibria, as on the sticking set of a friction
+        oscillator on a resting ground, where the sliding field vanishes identically, and it is neither
+        stable nor unstable along the continuum."""
+        if self.eigenvalues.size == 0:
+            return True
+        scale = 1.0 + float(np.max(np.abs(self.eigenvalues)))
+        return bool(np.all(np.abs(self.eigenvalues) > 1e-9 * scale))
+
     def __repr__(self) -> str:
         x = ", ".join(f"{v:.8g}" for v in self.state)
+        how = ("virtual" if not self.admissible else "stable" if self.stable else
+               "unstable" if self.isolated else "not isolated: on a continuum of pseudo-equilibria")
         return (f"PseudoEquilibrium(on {self.surface}, x=[{x}], weights={self.weights[0]:.6g}/{self.weights[1]:.6g}, "
-                f"{'stable' if self.stable else 'unstable' if self.admissible else 'virtual'})")
+                f"{how})")
 
 
 def find_pseudo_equilibrium(
