@@ -22,6 +22,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg.lapack import dgeqrf, dorgqr
 
 from saltation.engine.flow import Flow, Tolerances
 from saltation.errors import ModelError
@@ -53,7 +54,8 @@ class LyapunovExponents:
     transient : float
         The time integrated before averaging.
     interval : float
-        The time between reorthonormalisations.
+        The base time between reorthonormalisations (while the frame stays well conditioned, several
+        intervals pass between two, see :data:`MAX_CONDITION`).
     block_exponents : ndarray, shape (blocks, n)
         The exponents of each block.
     state : ndarray, shape (n,)
@@ -108,7 +110,9 @@ def lyapunov_exponents(
         The start time (the forcing's phase).
     interval : float, optional
         Time between reorthonormalisations: by default the forcing period of a forced model, or 1
-        time unit for an autonomous one, and never more than ``time / blocks``.
+        time unit for an autonomous one, and never more than ``time / blocks``.  Where the fundamental
+        matrix stays well conditioned over an interval, the next factorisation waits several (as many as
+        keep its condition number under :data:`MAX_CONDITION`, at most 64), never past a block's end.
     blocks : int
         The run is cut into this many equal blocks; the spread of their estimates gives ``accuracy``.
     tolerances : Tolerances, optional
@@ -164,23 +168,30 @@ def lyapunov_exponents(
     step = time / (blocks * per_block)  # every block of the same length, whole intervals
     q = np.eye(n)
     block_logs = np.zeros((blocks, n))
+    span = 1  # intervals per QR: more while the frame stays well conditioned over them
     for b in range(blocks):
-        for _ in range(per_block):
-            end = t + step
-            while t < end:  # one interval, in pieces where a strong contraction needs them
+        done = 0
+        while done < per_block:
+            k = min(span, per_block - done)
+            end = t + k * step
+            pieces = False
+            while t < end:  # k intervals, in pieces where a strong contraction needs them
                 h = end - t
                 while True:
                     run = flow.run(x, t, t + h, p, mode0=mode, variational=True, phi0=q, tolerances=tolerances)
-                    q_new, r = np.linalg.qr(run.monodromy)
-                    d = np.abs(np.diag(r))
+                    q_new, r_diag = _qr(run.monodromy)
+                    d = np.abs(r_diag)
                     collapsed = d <= COLLAPSE * max(float(d.max()), np.finfo(float).tiny)
                     if not collapsed.any() or _singular_event(run) or h <= MIN_PIECE * step:
                         break
                     h *= 0.25  # an exponential contraction past the resolution of one piece: shorter pieces
+                    pieces = True
                 with np.errstate(divide="ignore"):
                     block_logs[b] += np.where(collapsed, -np.inf, np.log(np.where(collapsed, 1.0, d)))
-                q = q_new * np.where(np.diag(r) < 0, -1.0, 1.0)  # (R with a positive diagonal: Q follows the frame)
+                q = q_new * np.where(r_diag < 0, -1.0, 1.0)  # (R with a positive diagonal: Q follows the frame)
                 x, t, mode = run.x1, run.t1, _next_mode(run.mode1)
+            done += k
+            span = _next_span(d, k, pieces or collapsed.any())
     block_time = step * per_block
     with np.errstate(invalid="ignore"):
         estimates = block_logs / block_time
@@ -194,6 +205,34 @@ def lyapunov_exponents(
         accuracy[finite] = np.nanstd(spread, axis=0, ddof=1) / math.sqrt(blocks)
     return LyapunovExponents(exponents=exponents, accuracy=accuracy, time=time, transient=transient, interval=step,
                              block_exponents=estimates, state=np.array(x))
+
+
+#: the largest condition number the fundamental matrix may reach between two QR factorisations: its smallest
+#: direction then keeps about 10 of its 16 digits
+MAX_CONDITION = 1e6
+
+
+def _next_span(d: np.ndarray, k: int, irregular: bool) -> int:
+    """How many intervals the next QR may wait: as many as keep the frame's condition number (the spread of
+    ``|diag R|`` over ``k`` intervals, extrapolated) under :data:`MAX_CONDITION`; one after a collapse or pieces."""
+    if irregular or d.size < 2:
+        return 1
+    growth = math.log10(float(d.max()) / float(d.min())) / k
+    if growth <= 0.0:
+        return 64
+    return int(min(64, max(1, math.log10(MAX_CONDITION) // growth)))
+
+
+def _qr(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(Q, diag(R))`` of ``a = Q R``, by LAPACK's dgeqrf and dorgqr (numpy's ``qr`` costs ten times as much
+    on the small matrices of one interval)."""
+    qr, tau, _, info = dgeqrf(a)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"QR factorisation failed (LAPACK info {info})")
+    q, _, info = dorgqr(qr, tau)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"QR factorisation failed (LAPACK info {info})")
+    return q, np.diagonal(qr).copy()
 
 
 def _singular_event(run) -> bool:
@@ -212,4 +251,4 @@ def _next_mode(mode: str) -> str | None:
     return None if "|" in mode else mode
 
 
-__all__ = ["COLLAPSE", "MIN_PIECE", "LyapunovExponents", "lyapunov_exponents"]
+__all__ = ["COLLAPSE", "MAX_CONDITION", "MIN_PIECE", "LyapunovExponents", "lyapunov_exponents"]
