@@ -84,6 +84,7 @@ TARGETS = {
     "fold_curve_s_per_200_points": 0.3,
     "sliding_curve_s_per_200_points": 1.0,
     "lyapunov_1000_periods_ms": 50.0,
+    "lyapunov_map_100x100_s": 60.0,
 }
 
 
@@ -570,8 +571,20 @@ def bench_lyapunov(quick: bool) -> dict:
 
     t_s, result = timed_runs(once, quick)
     plain = min(_time_of(lambda: flow.run(start, 0.0, 1000 * T, p)) for _ in range(3))
+    # a Lyapunov map of the impact oscillator's route to chaos (omega, r), 100 x 100 cells on this machine's
+    # cores, 200 transient periods and 64 sampled per cell (--quick: 25 x 25, scaled by 16)
+    from saltation.apps.sweeps import period_map
+    from saltation.models import impact_oscillator
+
+    size = 25 if quick else 100
+    t = time.perf_counter()
+    pm = period_map(impact_oscillator(s=1.0), "omega", np.linspace(2.0, 3.0, size), "r", np.linspace(0.5, 0.9, size),
+                    lyapunov=True)
+    map_s = (time.perf_counter() - t) * (100 / size) ** 2
     return {"lyapunov_1000_periods_ms": 1e3 * t_s, "lyapunov_plain_run_ms": 1e3 * plain,
-            "lyapunov_exponents": [float(e) for e in result.exponents]}
+            "lyapunov_exponents": [float(e) for e in result.exponents],
+            "lyapunov_map_100x100_s": map_s, "lyapunov_map_estimated": size < 100,
+            "lyapunov_map_cells_without_period": int(np.sum(pm.periods == 0))}
 
 
 def _time_of(fn) -> float:
@@ -674,6 +687,7 @@ def table(results: dict) -> str:
         ("sliding curve, 200 points (s)", "sliding_curve_s_per_200_points", None, None),
         ("Lyapunov exponents, 1000 periods (ms)", "lyapunov_1000_periods_ms", None, None),
         ("  the same periods, no variational equation (ms)", "lyapunov_plain_run_ms", None, None),
+        ("Lyapunov map, 100 x 100 cells (s)", "lyapunov_map_100x100_s", None, None),
     ]
     lines = [f"{'benchmark':42s} {'saltation':>11s} {'scipy':>11s} {'ratio':>8s}  target"]
     for label, k, kb, kr in rows:
