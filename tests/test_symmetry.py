@@ -298,3 +298,23 @@ def test_symmetry_breaking_of_an_impact_oscillator_between_two_stops():
                                                                                max_points=6))
     assert all(pt.parameter >= sp.parameter - 1e-9 for pt in side.points)
     assert not any(pt.stable for pt in side.points[1:])
+
+
+def test_an_autonomous_symmetric_orbit_of_the_relay_feedback_system():
+    """The relay oscillation is symmetric (x -> -x after half its period): its half-period map has the trivial
+    eigenvalue +1 (the flow direction), the squares of its eigenvalues are the Floquet multipliers of the
+    whole period, and Newton on the half-period map (with the half period an unknown) finds the same
+    period and multipliers from a perturbed guess."""
+    from saltation.models import relay_feedback
+    from saltation.orbits.symmetry import solve_symmetric_orbit
+
+    flow = Flow(relay_feedback())
+    orbit = find_periodic_orbit(flow, [0.1, 0.0, 0.0])
+    half = symmetric_multipliers(flow, orbit.state0, period=orbit.period, monodromy=orbit.monodromy,
+                                 tolerances=TIGHT)
+    assert half.symmetric
+    assert _nearest_to(half.gamma, 1.0) == pytest.approx(1.0, abs=1e-8)
+    np.testing.assert_allclose(np.sort_complex(half.multipliers), np.sort_complex(orbit.multipliers), atol=1e-8)
+    x, T, again = solve_symmetric_orbit(flow, orbit.state0 + 1e-3, flow.parameters(), period=1.001 * orbit.period)
+    assert T == pytest.approx(orbit.period, abs=1e-9)
+    np.testing.assert_allclose(np.sort_complex(again.gamma), np.sort_complex(half.gamma), atol=1e-8)
