@@ -41,7 +41,7 @@ from collections.abc import Mapping
 from ..model import Crossing, Mode, PiecewiseSystem, Transition
 from .shipped import ShippedModel
 
-DEFAULTS = {"k": 2.0, "c": 0.5, "U": 1.0, "lam": 1.0, "r": 0.25}
+DEFAULTS = {"k": 3.0, "c": 0.5, "U": 1.0, "lam": 2.0, "r": 0.2}
 
 
 @functools.lru_cache(maxsize=64)

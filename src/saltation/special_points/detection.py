@@ -349,8 +349,11 @@ class SpecialPointDetector:
             if _crosses(g(a), g(b)):
                 found.append(self.locate_smooth(a, b, index, kind, g))
         if self.symmetry is not None:
+            # a half-period multiplier through -1 takes a full one through +1: the half-period shots are taken
+            # only where a full multiplier passes +1 (prod(mu - 1) changes sign)
+            plus = _remembered("plus_one", lambda s: _plus_one_test(_nontrivial(s, self.autonomous)))
             g = _remembered("symmetry_breaking", self._symmetry_breaking_test)
-            if _crosses(g(a), g(b)):
+            if _crosses(plus(a), plus(b)) and _crosses(g(a), g(b)):
                 found.append(self.locate_symmetry_breaking(a, b, index))
         return [sp for sp in found if sp is not None]
 
@@ -1302,6 +1305,12 @@ def _flip_test(mu: np.ndarray) -> float:
     """``prod(mu + 1)`` over the finite multipliers (changes sign at period doubling)."""
     mu = mu[np.isfinite(mu)]
     return float(np.real(np.prod(mu + 1.0)))
+
+
+def _plus_one_test(mu: np.ndarray) -> float:
+    """``prod(mu - 1)`` over the finite multipliers (changes sign where a real one passes +1)."""
+    mu = mu[np.isfinite(mu)]
+    return float(np.real(np.prod(mu - 1.0)))
 
 
 def _ns_test(mu: np.ndarray) -> float:
