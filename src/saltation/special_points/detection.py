@@ -15,6 +15,13 @@ Floquet multipliers, the eigenvalues of ``(1 - q) M- + q M+`` for ``q`` in
 ``[0, 1]``.  Where that set crosses the unit circle the point is a
 discontinuous fold (through +1), flip (through -1) or Neimark-Sacker (a
 complex pair); if it stays on one side it is a jump without crossing.
+
+For a model that declares a symmetry (:mod:`saltation.model.symmetry`), the symmetric orbits' multipliers
+are split by the half-period map (:mod:`saltation.orbits.symmetry`): where a real half-period multiplier
+passes -1 the point is a ``symmetry_breaking`` (the full multiplier passes +1, but the branch goes on),
+located on the half-period map, where it is regular; at corners the set-valued half-period multipliers
+classify the point (``discontinuous_symmetry_breaking`` through -1), and a branch that passes at a
+non-smooth point from symmetric to asymmetric orbits records a ``discontinuous_symmetry_breaking`` too.
 """
 
 from __future__ import annotations
