@@ -319,3 +319,83 @@ def test_the_sticking_set_is_a_continuum_of_pseudo_equilibria(sticking_flow, x):
     assert not point.isolated and not point.stable
     if point.admissible:
         assert "continuum" in repr(point)
+
+
+# -- a cycle born at a boundary focus -------------------------------------------------------------------------
+SIGMA = 0.2
+
+
+def focus_model() -> PiecewiseSystem:
+    """x < 0: the unstable focus ``z' = A (z - (-mu, 0))``, ``A = [[s, -1], [1, s]]``; x > 0: ``x' = -1``, ``y' = -y``.
+    For mu > 0 the focus is admissible and the orbits spiral out onto the surface, slide up to the visible
+    tangency at (0, s mu) and leave it: an attracting sliding cycle, which shrinks onto the point as mu -> 0."""
+    return PiecewiseSystem(
+        "test_boundary_focus", ["x", "y"], {"mu": 0.1, "s": SIGMA},
+        [Mode("left", ["s*(x + mu) - y", "(x + mu) + s*y"], domain=["x < 0"]), Mode("right", ["-1", "-y"])],
+        {"h": "x"},
+        [Transition("left", "h", Crossing.RISING, "right"), Transition("right", "h", Crossing.FALLING, "left")],
+    )
+
+
+def reference_sliding_cycle(mu: float, s: float = SIGMA) -> tuple[float, float]:
+    """The sliding cycle's period and size in closed form: the focus's arc from the tangency point (0, s mu)
+    back to x = 0 (matrix exponential, its return found by brentq), then the sliding motion on x = 0, where
+    ``y' = (y^2 + s (1 - mu) y + mu) / (s mu - y + 1)`` (Filippov's combination), from the arc's end up to
+    the tangency point (quadrature)."""
+    from scipy.integrate import quad
+    from scipy.linalg import expm
+    from scipy.optimize import brentq
+
+    A = np.array([[s, -1.0], [1.0, s]])
+    z_eq, z0 = np.array([-mu, 0.0]), np.array([0.0, s * mu])
+    arc = lambda t: z_eq + expm(A * t) @ (z0 - z_eq)  # noqa: E731
+    ts = np.linspace(1e-6, 2 * np.pi, 20001)
+    xs = np.array([arc(t)[0] for t in ts])
+    k = int(np.argmax(xs[1:] >= 0.0))  # the first return to x = 0
+    t_hit = brentq(lambda t: arc(t)[0], ts[k], ts[k + 1], xtol=1e-15)
+    y_hit = arc(t_hit)[1]
+    assert y_hit < s * mu  # it lands on the sliding segment, below the tangency
+    t_slide = quad(lambda y: (s * mu - y + 1.0) / (y**2 + s * (1.0 - mu) * y + mu), y_hit, s * mu, epsabs=1e-14)[0]
+    fine = np.array([arc(t) for t in np.linspace(0.0, t_hit, 200001)])
+    size = max(np.ptp(fine[:, 0]), np.ptp(np.append(fine[:, 1], [y_hit, s * mu])))
+    return t_hit + t_slide, size
+
+
+def test_a_boundary_focus_creates_a_sliding_cycle_against_its_closed_form():
+    from saltation.special_points.boundary_equilibria import boundary_equilibria_of_mode, cycle_at_boundary_equilibrium
+    from saltation.special_points.continuation import ContinuationSettings, continue_branch
+
+    flow = Flow(focus_model())
+    problem = EquilibriumProblem(flow, "left", continuation_parameter="mu")
+    branch = continue_branch(problem, [-0.1, 0.0], 0.1, settings=ContinuationSettings(bounds=(-0.1, 0.1)),
+                             directions=(-1,))
+    (point,) = boundary_equilibria_of_mode(problem, branch)
+    assert point.parameter == pytest.approx(0.0, abs=1e-12)
+    assert "attracting sliding cycle surrounds it for mu > 0" in point.note
+    span = abs(branch.points[point.index + 1].parameter - branch.points[point.index].parameter)
+    cycle = cycle_at_boundary_equilibrium(problem, point, span)
+    assert cycle.kind == "sliding" and cycle.side == 1
+    period, size = reference_sliding_cycle(cycle.parameter)
+    # the shooting converges to 1e-10; the size is read from the dense output's extremes
+    assert cycle.period == pytest.approx(period, rel=1e-8)
+    assert cycle.size == pytest.approx(size, rel=1e-6)
+    assert cycle.sizes[1] / cycle.sizes[0] == pytest.approx(0.5, abs=0.05)  # it shrinks linearly onto the point
+
+
+def test_a_stable_boundary_focus_creates_no_cycle():
+    from saltation.special_points.boundary_equilibria import boundary_equilibria_of_mode
+
+    system = PiecewiseSystem(
+        "test_stable_boundary_focus", ["x", "y"], {"mu": 0.1, "s": -SIGMA},
+        [Mode("left", ["s*(x + mu) - y", "(x + mu) + s*y"], domain=["x < 0"]), Mode("right", ["-1", "-y"])],
+        {"h": "x"},
+        [Transition("left", "h", Crossing.RISING, "right"), Transition("right", "h", Crossing.FALLING, "left")],
+    )
+    from saltation.special_points.continuation import ContinuationSettings, continue_branch
+
+    flow = Flow(system)
+    problem = EquilibriumProblem(flow, "left", continuation_parameter="mu")
+    branch = continue_branch(problem, [-0.1, 0.0], 0.1, settings=ContinuationSettings(bounds=(-0.1, 0.1)),
+                             directions=(-1,))
+    (point,) = boundary_equilibria_of_mode(problem, branch)
+    assert point.classification == "persistence" and "cycle" not in point.note

@@ -26,7 +26,8 @@ systems*, Int. J. Bifurcation and Chaos 13, 2003; di Bernardo, Budd, Champneys a
 *Piecewise-smooth Dynamical Systems*, Springer 2008, section 5.2).  For ``k > 0`` (a stable plant) the
 equilibrium and the pseudo-equilibrium are admissible on opposite sides: it persists as the other
 (``persistence``).  For ``k < 0`` both are admissible for ``|r| < U / |k|``: a saddle and the
-pseudo-node meet and disappear (``nonsmooth_fold``), and beyond, nothing holds the plant.
+pseudo-node meet and disappear (``nonsmooth_fold``); beyond, only the other saddle is left, and no
+rest state attracts.
 
 Defaults (``k = 2, c = 0.5, U = 1, lam = 1, r = 0.25``): the pseudo-equilibrium ``(0.25, 0)`` is
 admissible, the plant's equilibria ``(+-0.5, 0)`` (foci, eigenvalues ``-0.25 +- 1.392 i``) are not,

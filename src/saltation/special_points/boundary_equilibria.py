@@ -12,6 +12,7 @@ one persists as the other (``persistence``); on the same side they meet and vani
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, replace as _replace
 
 import numpy as np
 
@@ -88,8 +89,9 @@ def boundary_equilibria(problem: PseudoEquilibriumProblem, branch: Branch, *, to
             sign = -1.0 if mode == problem.minus else 1.0  # the negative side's mode lives where h < 0
             span = abs(points[i + 1].parameter - points[i].parameter)
             regular_side = _admissible_side(problem, problem.surface, mode, sign, x, lam, span)
-            found.append(_record(problem, problem.surface, mode, x, lam, step, i, points,
-                                 "nonsmooth_fold" if regular_side == pseudo_side else "persistence"))
+            found.append(_with_cycle(problem, _record(problem, problem.surface, mode, x, lam, step, i, points,
+                                                      "nonsmooth_fold" if regular_side == pseudo_side else "persistence"),
+                                     span))
     return found
 
 
@@ -142,8 +144,9 @@ def boundary_equilibria_of_mode(problem: EquilibriumProblem, branch: Branch, *, 
             span = abs(points[i + 1].parameter - points[i].parameter)
             regular_side = _admissible_side(problem, surface, mode, sign, x, lam, span)
             partner_side = _partner_side(problem, surface, system.mode_index(transition.target), -sign, x, lam, span)
-            found.append(_record(problem, surface, mode, x, lam, step, i, points,
-                                 "nonsmooth_fold" if regular_side == partner_side else "persistence"))
+            found.append(_with_cycle(problem, _record(problem, surface, mode, x, lam, step, i, points,
+                                                      "nonsmooth_fold" if regular_side == partner_side else "persistence"),
+                                     span))
     return found
 
 
@@ -158,6 +161,160 @@ def _record(problem, surface: str, mode: int, x: np.ndarray, lam: float, step: f
         note=f"the equilibrium of {name!r} on surface {surface!r}", touch_surface=surface, touch_mode=name,
         status=SpecialPointStatus.LOCATED, classification=classification,
     )
+
+
+#: how long a planar system is simulated near a boundary equilibrium to see whether a cycle attracts: this
+#: many turns of the mode's focus (or time units where its eigenvalues are real)
+CYCLE_TURNS = 60
+
+
+@dataclass(frozen=True)
+class BoundaryCycle:
+    """An attracting cycle that a boundary equilibrium creates or destroys (planar models).
+
+    Attributes
+    ----------
+    kind : str
+        ``sliding`` (the cycle has a sliding segment) or ``crossing``.
+    side : int
+        +1 where it exists for parameters above the point, -1 below.
+    parameter : float
+        Where it was computed (``delta`` from the point).
+    period : float
+    size : float
+        Its largest extent in any state.
+    state : ndarray
+        A state of it.
+    sizes : tuple of float
+        Its sizes at ``delta`` and ``delta / 2``: it shrinks onto the point.
+    """
+
+    kind: str
+    side: int
+    parameter: float
+    period: float
+    size: float
+    state: np.ndarray
+    sizes: tuple[float, float]
+
+    def describe(self, name: str, at: float) -> str:
+        """The sentence a special point's note carries.
+
+        Parameters
+        ----------
+        name : str
+            The parameter's name.
+        at : float
+            The boundary equilibrium's parameter.
+
+        Returns
+        -------
+        str
+        """
+        where = f"{name} {'>' if self.side > 0 else '<'} {at:.6g}"
+        return (f"an attracting {self.kind} cycle surrounds it for {where} (period {self.period:.4g}, size "
+                f"{self.size:.3g} at {name} = {self.parameter:.6g}), shrinking onto it")
+
+
+def cycle_at_boundary_equilibrium(problem, point: SpecialPoint, span: float) -> BoundaryCycle | None:
+    """For a planar model: the attracting cycle that a boundary equilibrium creates or destroys (None where
+    none is found).
+
+    On each side of the point, at ``delta = span / 20`` and ``delta / 2`` from it, the model is simulated from
+    beside the mode's equilibrium (virtual or not) for :data:`CYCLE_TURNS` turns; where the motion does not
+    come to rest, the cycle it reaches is found by shooting
+    (:func:`~saltation.orbits.shooting.find_periodic_orbit`).  A cycle that shrinks onto the point with
+    ``delta`` (its size at ``delta / 2`` between 0.3 and 0.8 of its size at ``delta``: the linear scaling of
+    a piecewise-linear normal form, or a square root) is reported, named by its events: a *sliding* cycle
+    (a sliding segment) or a *crossing* cycle.  Only attracting cycles are found (a Filippov system is not
+    simulated in backward time).
+
+    Parameters
+    ----------
+    problem : EquilibriumProblem or PseudoEquilibriumProblem
+        The branch's problem (its flow and continuation parameter).
+    point : SpecialPoint
+        A located ``boundary_equilibrium`` (its state, parameter and ``touch_mode``).
+    span : float
+        The length of the branch step that held the point (sets ``delta``).
+
+    Returns
+    -------
+    BoundaryCycle or None
+        None when the model is not planar or no such cycle is found.
+
+    Raises
+    ------
+    SaltationError
+        Never: a side whose simulation or shooting fails is reported as having no cycle.
+
+    References
+    ----------
+    Yu. A. Kuznetsov, S. Rinaldi and A. Gragnani (2003), "One-parameter bifurcations in planar Filippov
+    systems", International Journal of Bifurcation and Chaos 13 (boundary foci and the cycles they create).
+    """
+    from saltation.engine.flow import EventKind
+    from saltation.orbits.shooting import find_periodic_orbit
+
+    flow, system = problem.flow, problem.system
+    if system.n != 2:
+        return None
+    mode = system.mode_index(point.touch_mode)
+    eig = np.asarray(point.multipliers, dtype=complex)
+    turn = 2.0 * math.pi / float(np.max(np.abs(eig.imag))) if np.max(np.abs(eig.imag)) > 1e-9 else 1.0
+    delta = max(span, 1e-6) / 20.0
+    for side in (1.0, -1.0):
+        sizes = []
+        for d in (delta, 0.5 * delta):
+            lam = point.parameter + side * d
+            p = problem.parameters_at(lam)
+            try:
+                near = _mode_equilibrium(flow, mode, np.asarray(point.state, dtype=float), p)
+                reach = max(float(np.linalg.norm(near - point.state)), 1e-12)
+                start = near + 0.5 * reach * np.array([1.0, 1.0]) / math.sqrt(2.0)
+                end = flow.run(start, 0.0, CYCLE_TURNS * turn, p).x1
+                last = flow.run(end, 0.0, 2.0 * turn, p)
+                if float(np.max(last.x_max - last.x_min)) <= 1e-6 * reach:
+                    break  # the motion comes to rest: no attracting cycle on this side
+                orbit = find_periodic_orbit(flow, end, parameters=p, period=_recurrence(last.events))
+                once = flow.run(orbit.state0, 0.0, orbit.period, p)
+            except (SaltationError, np.linalg.LinAlgError):
+                break
+            sizes.append((lam, orbit, float(np.max(once.x_max - once.x_min))))
+        if len(sizes) == 2 and sizes[0][2] > 0.0 and 0.3 <= sizes[1][2] / sizes[0][2] <= 0.8:
+            lam, orbit, size = sizes[0]
+            kind = "sliding" if any(e.kind == EventKind.SLIDING_START for e in orbit.events) else "crossing"
+            return BoundaryCycle(kind=kind, side=int(side), parameter=lam, period=float(orbit.period), size=size,
+                                 state=np.array(orbit.state0), sizes=(sizes[0][2], sizes[1][2]))
+    return None
+
+
+def _with_cycle(problem, point: SpecialPoint, span: float) -> SpecialPoint:
+    """The point, its note naming the attracting cycle it creates or destroys (planar models), if any."""
+    cycle = cycle_at_boundary_equilibrium(problem, point, span)
+    if cycle is None:
+        return point
+    return _replace(point, note=f"{point.note}; {cycle.describe(problem.lam_name, point.parameter)}")
+
+
+def _recurrence(events) -> float | None:
+    """The time between the first event of a run and the next event of the same signature (None without)."""
+    if not events:
+        return None
+    first = events[0]
+    again = next((e for e in events[1:] if e.signature == first.signature), None)
+    return None if again is None else abs(again.t - first.t)
+
+
+def _mode_equilibrium(flow, mode: int, x: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Newton on one mode's field from ``x`` (the equilibrium may be virtual)."""
+    y = x.copy()
+    for _ in range(30):
+        dy = np.linalg.solve(flow.vector_field_jacobian(mode, 0.0, y, p), flow.vector_field(mode, 0.0, y, p))
+        y = y - dy
+        if np.linalg.norm(dy) <= 1e-14 * (1.0 + np.linalg.norm(y)):
+            return y
+    raise ConvergenceError("the mode's equilibrium near a boundary equilibrium: Newton did not converge", [])
 
 
 def _partner_side(problem, surface: str, other: int, other_sign: float, x: np.ndarray, lam: float, span: float) -> float:
@@ -458,6 +615,6 @@ def follow_boundary_equilibrium_curve(
 
 
 __all__ = [
-    "BoundaryEquilibriumCurve", "boundary_equilibria", "boundary_equilibria_of_mode", "follow_boundary_equilibrium_curve",
+    "CYCLE_TURNS", "BoundaryCycle", "BoundaryEquilibriumCurve", "boundary_equilibria", "cycle_at_boundary_equilibrium", "boundary_equilibria_of_mode", "follow_boundary_equilibrium_curve",
     "sliding_weight",
 ]
