@@ -17,13 +17,16 @@ u_minus (u = -U) where s > 0.  By hand (and sympy):
 from __future__ import annotations
 
 import csv
-import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from saltation import ContinuationSettings, Flow, continue_branch, find_pseudo_equilibrium
+from saltation import (
+    ContinuationSettings,
+    Flow,
+    continue_branch,
+    find_pseudo_equilibrium,
+)
 from saltation.branches.branch import SpecialPointKind
 from saltation.models.sliding_mode import DEFAULTS, sliding_mode
 from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem
@@ -75,7 +78,7 @@ def test_the_defaults_are_the_gallery_stable_plant():
 @pytest.mark.parametrize("r", [-0.45, 0.0, 0.3, 0.9])
 def test_a_pseudo_equilibrium_against_its_closed_form(flow, setting, r):
     """(r, 0), the weight (U - k r) / (2 U) of u_minus, admissible for |k r| < U, the sliding eigenvalue -lam."""
-    k, c, U, lam = setting
+    k, _c, U, lam = setting
     point = find_pseudo_equilibrium(flow, "s", [r + 0.4, 0.3], parameters=values(setting, r))
     a = (U - k * r) / (2 * U)
     np.testing.assert_allclose(point.state, [r, 0.0], rtol=0, atol=TOL)
@@ -119,7 +122,7 @@ def test_a_branch_of_pseudo_equilibria_and_its_boundary_equilibria(flow, setting
 def test_the_modes_equilibria_and_the_same_boundary_equilibria(flow, setting):
     """Each mode's equilibrium (+-U / k, 0), admissible for r > U / k (u_plus) or r < -U / k (u_minus), crosses the
     line at the same r, with the same classification, seen from the mode's branch."""
-    k, c, U, lam = setting
+    k, c, U, _lam = setting
     expected = "persistence" if k > 0 else "nonsmooth_fold"
     for mode, sign in (("u_plus", 1.0), ("u_minus", -1.0)):
         problem = EquilibriumProblem(flow, mode, values(setting), continuation_parameter="r")
@@ -183,4 +186,3 @@ def test_the_command_continues_the_pseudo_equilibria_through_a_boundary_equilibr
     assert through
     for b in through:
         np.testing.assert_allclose(b.states, np.tile([U / kv if kv > 0 else -U / kv, 0.0], (len(b), 1)), atol=TOL)
-    json.loads(records.read_text())  # (a valid JSON file)

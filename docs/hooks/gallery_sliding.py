@@ -79,7 +79,10 @@ def _diagram(ax, flow, k: float, title: str):
     from saltation import ContinuationSettings, continue_branch, find_pseudo_equilibrium
     from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem
     from saltation.orbits.shooting import EquilibriumProblem
-    from saltation.special_points.boundary_equilibria import boundary_equilibria, sliding_weight
+    from saltation.special_points.boundary_equilibria import (
+        boundary_equilibria,
+        sliding_weight,
+    )
 
     settings = ContinuationSettings(ds=0.05, ds_max=0.1, bounds=R_RANGE)
     first = find_pseudo_equilibrium(flow, "s", [R_PHASE, 0.0], parameters={"k": k, "r": R_PHASE})
