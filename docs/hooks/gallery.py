@@ -34,13 +34,15 @@ import sys
 import time
 from pathlib import Path
 
+from gallery_chaos import figure_impact_chaos  # noqa: F401  (compute() finds figure_<model> in globals())
+
 log = logging.getLogger("mkdocs.hooks.gallery")
 
 REPO = Path(__file__).resolve().parents[2]
 SRC = REPO / "src"
 
 #: Gallery models, each a function below that returns ``(Figure, special points)``.
-MODELS = ("impact_oscillator", "bouncing_ball", "friction_oscillator", "relay_feedback", "buck_converter",
+MODELS = ("impact_oscillator", "impact_chaos", "bouncing_ball", "friction_oscillator", "relay_feedback", "buck_converter",
           "two_mass_stops", "tilted_relay")
 
 _RESULTS: dict[str, dict] = {}
