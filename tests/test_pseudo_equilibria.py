@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition
+from saltation import find_periodic_orbit as saltation_find_periodic_orbit
 from saltation.errors import ModelError
 from saltation.apps import cli
 from saltation.orbits.pseudo_equilibria import find_pseudo_equilibrium
@@ -399,3 +400,30 @@ def test_a_stable_boundary_focus_creates_no_cycle():
                              directions=(-1,))
     (point,) = boundary_equilibria_of_mode(problem, branch)
     assert point.classification == "persistence" and "cycle" not in point.note
+
+
+def test_a_branch_point_exactly_on_the_edge_still_gives_its_boundary_equilibrium():
+    """sliding_mode(k=-1, U=1): the branch of pseudo-equilibria (r, 0) has the weight (U - k r) / (2U), which is
+    1 at r = 1; a branch point lands there to the last bit (r = 0.9999999999999999, weight exactly 1.0), and
+    the boundary equilibrium is found once, from the step that ends on it."""
+    from saltation.models import sliding_mode
+    from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem
+    from saltation.special_points.boundary_equilibria import boundary_equilibria, sliding_weight
+    from saltation.special_points.continuation import ContinuationSettings, continue_branch
+
+    flow = Flow(sliding_mode(k=-1.0, U=1.0))
+    first = find_pseudo_equilibrium(flow, "s", [0.25, 0.0], parameters={"r": 0.25})
+    problem = PseudoEquilibriumProblem(flow, "s", first.modes, {"r": 0.25}, continuation_parameter="r")
+    branch = continue_branch(problem, PseudoEquilibriumProblem.unknowns(first), 0.25,
+                             settings=ContinuationSettings(ds=0.05, ds_max=0.1, bounds=(-1.5, 1.5)))
+    weights = [sliding_weight(problem, pt.state, pt.parameter) for pt in branch.points]
+    found = boundary_equilibria(problem, branch)
+    assert sorted(round(sp.parameter, 12) for sp in found) == [-1.0, 1.0]
+    assert 1.0 in weights  # the case this test is about: a branch point exactly on the edge
+
+
+def test_a_periodic_orbit_search_takes_a_parameter_vector():
+    flow = Flow(focus_model())
+    p = flow.parameters({"mu": 0.01})
+    orbit = saltation_find_periodic_orbit(flow, [-0.02, 0.0], parameters=p)
+    assert orbit.period > 0

@@ -35,6 +35,7 @@ import time
 from pathlib import Path
 
 from gallery_chaos import figure_impact_chaos  # noqa: F401  (compute() finds figure_<model> in globals())
+from gallery_sliding import figure_sliding_mode  # noqa: F401
 
 log = logging.getLogger("mkdocs.hooks.gallery")
 
@@ -43,7 +44,7 @@ SRC = REPO / "src"
 
 #: Gallery models, each a function below that returns ``(Figure, special points)``.
 MODELS = ("impact_oscillator", "impact_chaos", "bouncing_ball", "friction_oscillator", "relay_feedback", "buck_converter",
-          "two_mass_stops", "tilted_relay")
+          "two_mass_stops", "tilted_relay", "sliding_mode")
 
 _RESULTS: dict[str, dict] = {}
 

@@ -14,6 +14,7 @@ from .friction_oscillator import friction_oscillator
 from .impact_oscillator import impact_oscillator
 from .relay_feedback import relay_feedback
 from .shipped import ShippedModel
+from .sliding_mode import sliding_mode
 from .symmetric_impact_oscillator import symmetric_impact_oscillator
 from .tilted_relay import tilted_relay
 from .trilinear import trilinear
@@ -27,13 +28,14 @@ SHIPPED: dict[str, ShippedModel] = {
     for m in (
         import_module(f"{__name__}.{name}")
         for name in ("trilinear", "block_on_belt", "impact_oscillator", "bouncing_ball", "friction_oscillator",
-                     "relay_feedback", "buck_converter", "two_mass_stops", "tilted_relay", "symmetric_impact_oscillator")
+                     "relay_feedback", "buck_converter", "two_mass_stops", "tilted_relay", "symmetric_impact_oscillator",
+                     "sliding_mode")
     )
 }
 
 __all__ = [
     "SHIPPED", "ShippedModel",
     "WRegion", "block_on_belt", "bouncing_ball", "buck_converter", "chain", "friction_oscillator",
-    "impact_oscillator", "relay_feedback", "symmetric_impact_oscillator", "tilted_relay", "trilinear",
+    "impact_oscillator", "relay_feedback", "sliding_mode", "symmetric_impact_oscillator", "tilted_relay", "trilinear",
     "two_mass_stops",
 ]

@@ -1,8 +1,8 @@
 """A second-order plant under sliding-mode (relay) control: a planar autonomous Filippov system.
 
-The classical example of variable-structure control (Utkin, *Sliding Modes in Control and
-Optimization*, Springer 1992, ch. 1; Edwards and Spurgeon, *Sliding Mode Control: Theory and
-Applications*, Taylor & Francis 1998, ch. 1): a mass-spring-damper ``y'' + c y' + k y = u`` is
+After the classical example of variable-structure control (Utkin, *Sliding Modes in Control and
+Optimization*, Springer 1992; Edwards and Spurgeon, *Sliding Mode Control: Theory and
+Applications*, Taylor & Francis 1998): a mass-spring-damper ``y'' + c y' + k y = u`` is
 driven by a relay of level ``U`` switched on the line ``s = 0``,
 
     x1' = x2,    x2' = -k x1 - c x2 + u,    u = -U sgn(s),    s = x2 + lam (x1 - r),
@@ -25,13 +25,15 @@ bifurcations, Kuznetsov, Rinaldi and Gragnani, *One-parameter bifurcations in pl
 systems*, Int. J. Bifurcation and Chaos 13, 2003; di Bernardo, Budd, Champneys and Kowalczyk,
 *Piecewise-smooth Dynamical Systems*, Springer 2008, section 5.2).  For ``k > 0`` (a stable plant) the
 equilibrium and the pseudo-equilibrium are admissible on opposite sides: it persists as the other
-(``persistence``).  For ``k < 0`` both are admissible for ``|r| < U / |k|``: a saddle and the
-pseudo-node meet and disappear (``nonsmooth_fold``); beyond, only the other saddle is left, and no
-rest state attracts.
+(``persistence``).  For ``k < 0`` the pseudo-equilibrium and both saddles are admissible for
+``|r| < U / |k|``: at each end a saddle and the pseudo-node meet and disappear (``nonsmooth_fold``);
+beyond, only the other saddle is left, and no rest state attracts.
 
-Defaults (``k = 2, c = 0.5, U = 1, lam = 1, r = 0.25``): the pseudo-equilibrium ``(0.25, 0)`` is
-admissible, the plant's equilibria ``(+-0.5, 0)`` (foci, eigenvalues ``-0.25 +- 1.392 i``) are not,
-and the boundary equilibria lie at ``r = +-0.5``.
+Defaults (chosen for the gallery, ``k = 3, c = 0.5, U = 1, lam = 2, r = 0.2``): the pseudo-equilibrium
+``(0.2, 0)`` is admissible (weight 0.2, sliding eigenvalue -2, on the sliding segment
+``-1/15 < x1 < 4/15``); the plant's equilibria ``(+-1/3, 0)``, stable foci with the eigenvalues
+``-0.25 +- 1.7139 i``, are virtual; the boundary equilibria lie at ``r = +-1/3``.  With ``k = -1.5``
+the saddles ``(-+2/3, 0)`` (eigenvalues 1 and -1.5) meet the pseudo-node at ``r = +-2/3``.
 """
 
 from __future__ import annotations

@@ -1335,7 +1335,7 @@ def find_periodic_orbit(
     if state0 is not None and np.ndim(state0) == 2 and period is None and flow.system.is_autonomous:
         raise ModelError(f"a guess of every node of the autonomous model {flow.system.name!r} needs a period guess")
     if state0 is None or (flow.system.is_autonomous and period is None):
-        state0, period = starting_guess(flow, flow.parameters(parameters or {}), state0, period, t0=t0,
+        state0, period = starting_guess(flow, flow.parameters(parameters), state0, period, t0=t0,
                                         backward=backward, length=transient_length)
     prob = ShootingProblem(flow, parameters, backward=backward, t0=t0, tolerances=tolerances)
     if not prob.autonomous and period is not None:

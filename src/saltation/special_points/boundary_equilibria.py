@@ -78,7 +78,7 @@ def boundary_equilibria(problem: PseudoEquilibriumProblem, branch: Branch, *, to
     for i in range(len(points) - 1):
         for edge, mode in ((0.0, problem.minus), (1.0, problem.plus)):
             w0, w1 = weights[i] - edge, weights[i + 1] - edge
-            if not (math.isfinite(w0) and math.isfinite(w1)) or w0 * w1 >= 0.0:
+            if not (math.isfinite(w0) and math.isfinite(w1)) or not _changes_sign(w0, w1):
                 continue
             s = w0 / (w0 - w1)
             x = (1 - s) * points[i].state + s * points[i + 1].state
@@ -135,7 +135,7 @@ def boundary_equilibria_of_mode(problem: EquilibriumProblem, branch: Branch, *, 
         surface, sign = transition.surface, -float(int(transition.direction))  # the mode lives where h has this sign
         values = [flow.indicator(surface, 0.0, pt.state, problem.parameters_at(pt.parameter)) for pt in points]
         for i in range(len(points) - 1):
-            if not values[i] * values[i + 1] < 0.0:
+            if not _changes_sign(values[i], values[i + 1]):
                 continue
             s = values[i] / (values[i] - values[i + 1])
             x = (1 - s) * points[i].state + s * points[i + 1].state
@@ -148,6 +148,12 @@ def boundary_equilibria_of_mode(problem: EquilibriumProblem, branch: Branch, *, 
                                                       "nonsmooth_fold" if regular_side == partner_side else "persistence"),
                                      span))
     return found
+
+
+def _changes_sign(a: float, b: float) -> bool:
+    """``a`` and ``b`` on opposite sides of 0, a zero at ``b`` counting (a branch point exactly on the edge is
+    found once, from the step that ends on it) and a zero at ``a`` not."""
+    return (a < 0.0 <= b) or (a > 0.0 >= b)
 
 
 def _record(problem, surface: str, mode: int, x: np.ndarray, lam: float, step: float, i: int, points,
@@ -270,11 +276,12 @@ def cycle_at_boundary_equilibrium(problem, point: SpecialPoint, span: float) -> 
             p = problem.parameters_at(lam)
             try:
                 near = _mode_equilibrium(flow, mode, np.asarray(point.state, dtype=float), p)
-                reach = max(float(np.linalg.norm(near - point.state)), 1e-12)
+                # (an equilibrium that stays put while the surface moves: the start is set off by delta)
+                reach = max(float(np.linalg.norm(near - point.state)), d)
                 start = near + 0.5 * reach * np.array([1.0, 1.0]) / math.sqrt(2.0)
                 end = flow.run(start, 0.0, CYCLE_TURNS * turn, p).x1
                 last = flow.run(end, 0.0, 2.0 * turn, p)
-                if float(np.max(last.x_max - last.x_min)) <= 1e-6 * reach:
+                if float(np.max(last.x_max - last.x_min)) <= max(1e-6 * reach, 1e-9 * (1.0 + float(np.linalg.norm(end)))):
                     break  # the motion comes to rest: no attracting cycle on this side
                 orbit = find_periodic_orbit(flow, end, parameters=p, period=_recurrence(last.events))
                 once = flow.run(orbit.state0, 0.0, orbit.period, p)
