@@ -318,3 +318,24 @@ def test_an_autonomous_symmetric_orbit_of_the_relay_feedback_system():
     x, T, again = solve_symmetric_orbit(flow, orbit.state0 + 1e-3, flow.parameters(), period=1.001 * orbit.period)
     assert T == pytest.approx(orbit.period, abs=1e-9)
     np.testing.assert_allclose(np.sort_complex(again.gamma), np.sort_complex(half.gamma), atol=1e-8)
+
+
+def test_the_command_follows_the_asymmetric_branch(tmp_path, capsys, strong_references):
+    """``saltation continue`` writes the symmetric branch and the asymmetric one born at its first symmetry
+    breaking (which meets the second: it is not started again from there)."""
+    import json
+
+    from saltation.apps import cli
+
+    status = cli.main(["continue", "trilinear", "--set", "f0=2.0", "--param", "omega", "--from", "0.84", "--to", "0.7",
+                       "--x0", "-0.27,0.84", "--out", str(tmp_path), "--no-progress"])
+    assert status == 0
+    out = capsys.readouterr().out
+    assert "on 2 branches" in out
+    records = json.loads((tmp_path / "trilinear_omega_special_points.json").read_text())
+    breaks = sorted(r["value"] for r in records if r["kind"] == "symmetry_breaking")
+    assert len(breaks) == 4  # two on the symmetric branch, the same two where the asymmetric one meets it
+    for value in breaks:
+        ref = min((r[0] for r in strong_references), key=lambda w: abs(w - value))
+        assert value == pytest.approx(ref, abs=REFERENCE_ACCURACY + 1e-13)
+    assert (tmp_path / "trilinear_omega_branch_1.json").exists()

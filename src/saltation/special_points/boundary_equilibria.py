@@ -582,8 +582,8 @@ def follow_boundary_equilibrium_curve(
     from dataclasses import replace
 
     from saltation.branches.branch import BranchKind
-    from saltation.branches.continuation import Continuation, ContinuationSettings
-    from saltation.special_points.loci import Locus
+    from saltation.branches.continuation import ContinuationSettings
+    from saltation.special_points.loci import Locus, run_curve
 
     if point.kind is not SpecialPointKind.BOUNDARY_EQUILIBRIUM:
         raise ModelError(f"a boundary-equilibrium curve starts at a boundary_equilibrium point, got {point.kind.value}")
@@ -595,18 +595,11 @@ def follow_boundary_equilibrium_curve(
     lam0 = curve.lam0()
     runs, reasons = [], []
     for direction in (1, -1):
-        cont = Continuation(curve, settings)
-        way = f"{'increasing' if direction > 0 else 'decreasing'} {second}"
-        failure = None
-        try:
-            for pt in cont.run(u0, lam0, direction=direction):
-                if progress is not None:
-                    progress(pt)
-        except (SaltationError, np.linalg.LinAlgError) as exc:
-            if not cont.solutions:
-                raise SaltationError(f"the boundary_equilibrium curve in {second} cannot start from the point at "
-                                     f"{first} = {point.parameter:.10g}: {exc}") from exc
-            failure = f"failed after {len(cont.solutions)} points: {exc}"
+        cont, way, failure = run_curve(
+            curve, settings, u0, lam0, direction, progress,
+            f"the boundary_equilibrium curve in {second} cannot start from the point at {first} = {point.parameter:.10g}",
+            second=second,
+        )
         n = flow.system.n  # the engine records the continuation parameter as ``parameter``: put both back
         runs.append([replace(bp, parameter=float(sol.z[n]), second_parameter=float(sol.z[-1]))
                      for bp, sol in zip(cont.branch.points, cont.solutions)])

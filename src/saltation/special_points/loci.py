@@ -475,18 +475,11 @@ def follow_locus(
     n = problem.system.n
     for direction in (1, -1):
         curve.restore(start)  # each direction starts from the special point's own guesses
-        cont = Continuation(curve, settings)
-        way = f"{'increasing' if direction > 0 else 'decreasing'} {second}"
-        failure = None
-        try:
-            for pt in cont.run(u0, lam0, direction=direction):
-                if progress is not None:
-                    progress(pt)
-        except (SaltationError, np.linalg.LinAlgError) as exc:
-            if not cont.solutions:
-                raise SaltationError(f"the {point.kind.value} curve in {second} cannot start from the point at "
-                                     f"{problem.lam_name} = {point.parameter:.10g}: {exc}") from exc
-            failure = f"failed after {len(cont.solutions)} points: {exc}"
+        cont, way, failure = run_curve(
+            curve, settings, u0, lam0, direction, progress,
+            f"the {point.kind.value} curve in {second} cannot start from the point at "
+            f"{problem.lam_name} = {point.parameter:.10g}", second=second,
+        )
         # the curve's points in the single-shooting layout (x0, the first parameter, extras, the second)
         runs.append([np.concatenate([sol.z[:n], sol.z[curve.n_base:]]) for sol in cont.solutions])
         # the curve's points carry both parameters: the first (an unknown of the curve) and the second
@@ -531,6 +524,52 @@ def follow_locus(
     # a corner that ends a run lies beyond its last point: the curve's last (increasing) or first (decreasing)
     locus.special_points.extend(replace(e, index=(len(zs) - 1 if run == 0 else 0)) for run, e in ends)
     return locus
+
+
+def run_curve(curve, settings: ContinuationSettings, u0: np.ndarray, lam0: float, direction: int,
+              progress: Callable | None, cannot_start: str, *, second: str) -> tuple[Continuation, str, str | None]:
+    """One direction of a two-parameter curve: ``(the continuation, "increasing NAME", the failure or None)``.
+
+    Parameters
+    ----------
+    curve
+        The curve's problem (continuation protocol; its continuation parameter is the second parameter).
+    settings : ContinuationSettings
+    u0 : ndarray
+        The unknowns at the special point.
+    lam0 : float
+        The second parameter there.
+    direction : int
+        +1 or -1.
+    progress : callable or None
+        Called with each new curve point.
+    cannot_start : str
+        The message of the error raised when not even the first point is found.
+    second : str
+        The second parameter's name (for the direction in words).
+
+    Returns
+    -------
+    tuple
+        The finished :class:`Continuation`, the direction in words, and a sentence on why it failed (None when
+        it stopped for another reason, which its branch's ``stop_reason`` gives).
+
+    Raises
+    ------
+    SaltationError
+        If the curve cannot start (``cannot_start: <the error>``).
+    """
+    cont = Continuation(curve, settings)
+    way = f"{'increasing' if direction > 0 else 'decreasing'} {second}"
+    try:
+        for pt in cont.run(u0, lam0, direction=direction):
+            if progress is not None:
+                progress(pt)
+    except (SaltationError, np.linalg.LinAlgError) as exc:
+        if not cont.solutions:
+            raise SaltationError(f"{cannot_start}: {exc}") from exc
+        return cont, way, f"failed after {len(cont.solutions)} points: {exc}"
+    return cont, way, None
 
 
 def _touch_of(problem: ShootingProblem, point: SpecialPoint) -> tuple[int, float] | None:
@@ -804,5 +843,5 @@ class MultiplierCurve(_Curve):
 
 __all__ = [
     "SLIDING_KINDS", "GrazingCurve", "Locus", "MultiplierCurve", "SlidingCurve", "arrival_identity",
-    "follow_locus", "grazed_transitions",
+    "follow_locus", "grazed_transitions", "run_curve",
 ]
