@@ -339,3 +339,25 @@ def test_the_command_follows_the_asymmetric_branch(tmp_path, capsys, strong_refe
         ref = min((r[0] for r in strong_references), key=lambda w: abs(w - value))
         assert value == pytest.approx(ref, abs=REFERENCE_ACCURACY + 1e-13)
     assert (tmp_path / "trilinear_omega_branch_1.json").exists()
+
+
+def test_a_symmetry_that_holds_at_some_parameter_values_only():
+    """A bias b breaks x -> -x: the declaration is checked at the defaults (b = 0), and again at a branch's
+    parameters, where the half-period analysis is left out if the symmetry does not hold."""
+    from saltation.model.symmetry import check_symmetry
+    from saltation.special_points.detection import SpecialPointDetector
+    from saltation.branches.branch import Branch, BranchKind
+    from saltation.branches.corrector import Corrector
+
+    system = PiecewiseSystem("biased_backlash", ["x", "v"], {"w": 1.3, "b": 0.0},
+                             [Mode("m", ["v", "-x - 0.1*v + cos(w*t) + b"])], {}, [], period="2*pi/w",
+                             symmetry=Symmetry.of_signs([-1, -1]))
+    check_symmetry(system, system.symmetry, np.array([1.3, 0.0]))
+    with pytest.raises(ModelError, match="mirror image of mode 'm'"):
+        check_symmetry(system, system.symmetry, np.array([1.3, 0.3]))
+    flow = Flow(system)
+    for b, symmetric in ((0.0, True), (0.3, False)):
+        problem = ShootingProblem(flow, {"b": b}, continuation_parameter="w")
+        branch = Branch(model=system.name, parameter_name="w", kind=BranchKind.PERIODIC, points=[])
+        detector = SpecialPointDetector(problem, Corrector(problem, ContinuationSettings()), branch)
+        assert (detector.symmetry is not None) == symmetric

@@ -118,9 +118,10 @@ class SymmetryMap:
     surface_signs: tuple[int, ...]
 
 
-def _evaluator(system, exprs: Sequence[sp.Expr]):
-    """``f(x, t)`` for expressions of the model at its default parameters (numpy, vectorised over samples)."""
-    subs = {sym: system.defaults[sym.name] for sym in system.p}
+def _evaluator(system, exprs: Sequence[sp.Expr], values: np.ndarray):
+    """``f(x, t)`` for expressions of the model at the parameter values ``values`` (numpy, vectorised over
+    samples)."""
+    subs = {sym: float(v) for sym, v in zip(system.p, values)}
     args = [*system.x, system.t]
     fn = sp.lambdify(args, [sp.sympify(e).xreplace(subs) for e in exprs], modules="numpy")
 
@@ -140,7 +141,7 @@ def _close(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.all(np.abs(a[ok] - b[ok]) <= _TOLERANCE * scale))
 
 
-def check_symmetry(system, symmetry: Symmetry) -> SymmetryMap:
+def check_symmetry(system, symmetry: Symmetry, parameters: np.ndarray | None = None) -> SymmetryMap:
     """Verify that a model has the symmetry it declares, and find how its parts map.
 
     The model is equivariant if, with ``y = S x`` and ``s = t + T/2``, for every mode ``m`` there is a
@@ -156,6 +157,9 @@ def check_symmetry(system, symmetry: Symmetry) -> SymmetryMap:
         The model.
     symmetry : Symmetry
         Its declared symmetry.
+    parameters : ndarray, optional
+        The parameter values to check at (the model's defaults otherwise): a symmetry may hold only at
+        some values (a bias parameter at 0, say).
 
     Returns
     -------
@@ -175,14 +179,16 @@ def check_symmetry(system, symmetry: Symmetry) -> SymmetryMap:
                          f"the model has {n} states")
     rng = np.random.default_rng(20021125)
     X = rng.normal(scale=2.0, size=(_SAMPLES, n))
+    values = (np.array([system.defaults[name] for name in system.parameter_names]) if parameters is None
+              else np.asarray(parameters, dtype=float))
     if system.period_expr is None:
         half = 0.0
     else:
-        half = 0.5 * float(system.period_expr.xreplace({s: system.defaults[s.name] for s in system.p}))
+        half = 0.5 * float(system.period_expr.xreplace(dict(zip(system.p, map(float, values)))))
     t = rng.uniform(0.0, 7.0, size=_SAMPLES)
     Y, s = X @ S.T, t + half
 
-    fields = [_evaluator(system, list(f)) for f in system.fields]
+    fields = [_evaluator(system, list(f), values) for f in system.fields]
     here = [f(X, t) @ S.T for f in fields]  # S f_m(t, x)
     there = [f(Y, s) for f in fields]  # f_m'(s, S x)
     modes = []
@@ -193,7 +199,7 @@ def check_symmetry(system, symmetry: Symmetry) -> SymmetryMap:
                              f"mirror image of mode {name!r}'s (f'(t + T/2, S x) = S f(t, x) fails for every mode)")
         modes.append(image)
 
-    h = _evaluator(system, list(system.indicators))
+    h = _evaluator(system, list(system.indicators), values)
     h_here, h_there = h(X, t), h(Y, s)
     surfaces, signs = [], []
     for j, name in enumerate(system.surface_names):
@@ -213,7 +219,7 @@ def check_symmetry(system, symmetry: Symmetry) -> SymmetryMap:
 
     index = {name: i for i, name in enumerate(system.mode_names)}
     surface_index = {name: j for j, name in enumerate(system.surface_names)}
-    resets = [None if g is None else _evaluator(system, list(g)) for g in system.resets]
+    resets = [None if g is None else _evaluator(system, list(g), values) for g in system.resets]
     for k, tr in enumerate(system.transitions):
         j = surface_index[tr.surface]
         want = (modes[index[tr.source]], surfaces[j], int(tr.direction) * signs[j], modes[index[tr.target]])

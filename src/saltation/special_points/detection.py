@@ -46,7 +46,8 @@ from saltation.orbits.symmetry import (
     split_half_map,
     symmetry_breaking_test,
 )
-from saltation.errors import IntegrationError
+from saltation.errors import IntegrationError, ModelError
+from saltation.model.symmetry import check_symmetry
 from saltation.special_points.sliding import locate_adding_sliding, locate_tangent_arrival, sliding_change
 
 
@@ -230,9 +231,17 @@ class SpecialPointDetector:
         self.equilibrium = branch.kind is BranchKind.EQUILIBRIUM
         self.autonomous = branch.autonomous and not self.equilibrium
         symmetry = getattr(problem.system, "symmetry", None)
-        # the half-period map splits the multipliers of the symmetric orbits of one-period shooting
-        self.symmetry = (symmetry.S if symmetry is not None and isinstance(problem, ShootingProblem)
-                         and problem.periods == 1 else None)
+        # the half-period map splits the multipliers of the symmetric orbits of one-period shooting, where the
+        # model has its symmetry at the branch's parameters (it may hold at some values only)
+        self.symmetry = None
+        if symmetry is not None and isinstance(problem, ShootingProblem) and problem.periods == 1:
+            try:
+                check_symmetry(problem.system, symmetry, problem.parameters_at(branch.points[0].parameter
+                                                                               if branch.points else None))
+            except ModelError:
+                pass
+            else:
+                self.symmetry = symmetry.S
 
     def past_failure(self, prev: Solution) -> tuple[Solution, SpecialPoint] | None:
         """Past a grazing that stopped the corrector: ``(first solution beyond, grazing special point)`` or None.
