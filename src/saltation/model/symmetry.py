@@ -118,16 +118,19 @@ class SymmetryMap:
     surface_signs: tuple[int, ...]
 
 
-def _evaluator(system, exprs: Sequence[sp.Expr], values: np.ndarray):
+def _evaluator(system, key: str, exprs: Sequence[sp.Expr], values: np.ndarray):
     """``f(x, t)`` for expressions of the model at the parameter values ``values`` (numpy, vectorised over
-    samples)."""
-    subs = {sym: float(v) for sym, v in zip(system.p, values)}
-    args = [*system.x, system.t]
-    fn = sp.lambdify(args, [sp.sympify(e).xreplace(subs) for e in exprs], modules="numpy")
+    samples).  The lambdified functions are kept on the model (``_symmetry_functions``): a branch checks the
+    symmetry again at its own parameters."""
+    cache = system.__dict__.setdefault("_symmetry_functions", {})
+    fn = cache.get(key)
+    if fn is None:
+        fn = cache[key] = sp.lambdify([*system.x, system.t, *system.p], [sp.sympify(e) for e in exprs],
+                                      modules="numpy")
 
     def evaluate(X: np.ndarray, t: np.ndarray) -> np.ndarray:
         with np.errstate(all="ignore"):
-            out = fn(*X.T, t)
+            out = fn(*X.T, t, *values)
         return np.array([np.broadcast_to(np.asarray(v, dtype=float), t.shape) for v in out]).T  # (samples, k)
 
     return evaluate
@@ -188,7 +191,7 @@ def check_symmetry(system, symmetry: Symmetry, parameters: np.ndarray | None = N
     t = rng.uniform(0.0, 7.0, size=_SAMPLES)
     Y, s = X @ S.T, t + half
 
-    fields = [_evaluator(system, list(f), values) for f in system.fields]
+    fields = [_evaluator(system, f"field {i}", list(f), values) for i, f in enumerate(system.fields)]
     here = [f(X, t) @ S.T for f in fields]  # S f_m(t, x)
     there = [f(Y, s) for f in fields]  # f_m'(s, S x)
     modes = []
@@ -199,7 +202,7 @@ def check_symmetry(system, symmetry: Symmetry, parameters: np.ndarray | None = N
                              f"mirror image of mode {name!r}'s (f'(t + T/2, S x) = S f(t, x) fails for every mode)")
         modes.append(image)
 
-    h = _evaluator(system, list(system.indicators), values)
+    h = _evaluator(system, "indicators", list(system.indicators), values)
     h_here, h_there = h(X, t), h(Y, s)
     surfaces, signs = [], []
     for j, name in enumerate(system.surface_names):
@@ -219,7 +222,8 @@ def check_symmetry(system, symmetry: Symmetry, parameters: np.ndarray | None = N
 
     index = {name: i for i, name in enumerate(system.mode_names)}
     surface_index = {name: j for j, name in enumerate(system.surface_names)}
-    resets = [None if g is None else _evaluator(system, list(g), values) for g in system.resets]
+    resets = [None if g is None else _evaluator(system, f"reset {k}", list(g), values)
+              for k, g in enumerate(system.resets)]
     for k, tr in enumerate(system.transitions):
         j = surface_index[tr.surface]
         want = (modes[index[tr.source]], surfaces[j], int(tr.direction) * signs[j], modes[index[tr.target]])

@@ -742,6 +742,7 @@ class PiecewiseSystem(NamedParts):
         state = dict(self.__dict__)
         state.pop("_period_functions", None)
         state.pop("_parameter_divisors", None)
+        state.pop("_symmetry_functions", None)
         return state
 
     def axis_label(self, name: str) -> str:
