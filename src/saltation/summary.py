@@ -58,6 +58,12 @@ def system_summary(system) -> str:
     for k, tr in enumerate(system.transitions):
         reset = " with a reset" if system.resets[k] is not None else ""
         rows.append((f"transition {k}", f"{tr.source} -> {tr.target} on {tr.surface} ({tr.direction.name.lower()}){reset}"))
+    symmetry = getattr(system, "symmetry", None)
+    if symmetry is not None:
+        pairs = sorted({tuple(sorted((system.mode_names[i], system.mode_names[k])))
+                        for i, k in enumerate(system.symmetry_map.modes)})
+        modes = ", ".join(f"{a} <-> {b}" if a != b else a for a, b in pairs)
+        rows.append(("symmetry", f"x -> S x, t -> t + T/2, S = {[list(r) for r in symmetry.matrix]} (modes: {modes})"))
     return f"**{system.name}** (piecewise-smooth model)\n\n" + _table(rows)
 
 
