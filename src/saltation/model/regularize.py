@@ -59,8 +59,9 @@ def regularize(system: PiecewiseSystem, epsilon: float, *, name: str | None = No
 
     References
     ----------
-    Sotomayor and Teixeira (1996), "Regularization of discontinuous vector fields", Proceedings of
-    the International Conference on Differential Equations (Lisboa 1995), World Scientific.
+    Sotomayor and Teixeira (1998), "Regularization of discontinuous vector fields", in Magalhaes et al.
+    (eds.), *International Conference on Differential Equations* (Equadiff 95, Lisboa 1995), World
+    Scientific, 207-223.
     Leine and Van Campen, "Fold bifurcations in discontinuous systems" (on what smoothing loses).
     """
     if not epsilon > 0:
