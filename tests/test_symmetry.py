@@ -361,3 +361,24 @@ def test_a_symmetry_that_holds_at_some_parameter_values_only():
         branch = Branch(model=system.name, parameter_name="w", kind=BranchKind.PERIODIC, points=[])
         detector = SpecialPointDetector(problem, Corrector(problem, ContinuationSettings()), branch)
         assert (detector.symmetry is not None) == symmetric
+
+
+def test_a_symmetry_breaking_that_cannot_be_located_is_reported_as_failed(tri_flow, monkeypatch):
+    """Where the half-period multiplier changes sign of ``gamma + 1`` between two branch points but Newton on
+    the half-period map fails, the point is kept, with status failed and the two points' bracket."""
+    import saltation.special_points.detection as detection
+    from saltation.errors import ConvergenceError
+
+    def fails(*args, **kwargs):
+        raise ConvergenceError("no symmetric orbit (test)", [1.0])
+
+    monkeypatch.setattr(detection, "solve_symmetric_orbit", fails)
+    problem = ShootingProblem(tri_flow, STRONG | {"omega": 0.84}, continuation_parameter="omega")
+    orbit = problem.solve(np.array([-0.27, 0.84]), 0.84)
+    branch = continue_branch(problem, orbit.state0, 0.84, settings=ContinuationSettings(ds=0.01, ds_max=0.02,
+                                                                                       bounds=(0.8, 0.84)),
+                             directions=(-1,))
+    (sp,) = branch.special_points
+    assert sp.kind is SpecialPointKind.SYMMETRY_BREAKING and sp.status == "failed"
+    assert sp.bracket[0] < 0.8331698679 < sp.bracket[1]
+    assert "no symmetric orbit (test)" in sp.note

@@ -411,7 +411,7 @@ class SpecialPointDetector:
                 sol.tests["half_map"] = split_half_map(self.symmetry, traj, sol.u[:n], backward=prob.backward)
         return sol.tests["half_map"]
 
-    def locate_symmetry_breaking(self, a: Solution, b: Solution, index: int) -> SpecialPoint | None:
+    def locate_symmetry_breaking(self, a: Solution, b: Solution, index: int) -> SpecialPoint:
         """Locate a symmetry breaking between two symmetric orbits on the symmetric orbits themselves.
 
         On the whole period's map the point is singular (``DG^2 - I`` has a two-dimensional kernel there), and
@@ -429,10 +429,11 @@ class SpecialPointDetector:
 
         Returns
         -------
-        SpecialPoint or None
-            Of kind ``symmetry_breaking``, status ``located``, with the half-period multiplier in its note;
-            None where the parameter does not bracket the point (a fold between ``a`` and ``b``) or the
-            located orbit's half-period multiplier is not -1 within its accuracy.
+        SpecialPoint
+            Of kind ``symmetry_breaking``, status ``located``, with the half-period multiplier in its note; where
+            the location fails (the parameter does not bracket the point, a fold between ``a`` and ``b``, or the
+            located orbit's half-period multiplier is not -1 within its accuracy), status ``failed`` with the
+            bracket of the two branch points and the reason in its note.
 
         Raises
         ------
@@ -467,17 +468,18 @@ class SpecialPointDetector:
         xtol = 1e-13 * max(1.0, abs(la))
         try:
             lam = float(brentq(test, la, lb, xtol=xtol, rtol=4 * np.finfo(float).eps))
-        except (ValueError, SaltationError):
-            return None
-        if lam not in found:
-            test(lam)
+            if lam not in found:
+                test(lam)
+        except (ValueError, SaltationError) as exc:
+            return self._unlocated_symmetry_breaking(a, b, index, f"its location on the half-period map failed ({exc})")
         x, T, half = found[lam]
         u = prob.pack(x, T if prob.autonomous else None)
         summary = prob.describe(u, lam, prob.evaluate(u, lam, need_lam=False))
         gamma = _nearest(half.gamma, -1.0)
         accuracy = max(self._matrix_error(a), self._matrix_error(b))
         if not abs(gamma + 1.0) <= accuracy + 1e-9:
-            return None
+            return self._unlocated_symmetry_breaking(
+                a, b, index, f"the located orbit's half-period multiplier nearest -1 is {_complex_text(gamma)}")
         return SpecialPoint(
             kind=SpecialPointKind.SYMMETRY_BREAKING,
             parameter=lam,
@@ -492,6 +494,17 @@ class SpecialPointDetector:
             status=SpecialPointStatus.LOCATED,
             note=(f"symmetric orbit: its antisymmetric half-period multiplier is {_complex_text(gamma)} "
                   f"(located on the half-period map)"),
+        )
+
+    def _unlocated_symmetry_breaking(self, a: Solution, b: Solution, index: int, why: str) -> SpecialPoint:
+        """A symmetry breaking known only to lie between ``a`` and ``b`` (status ``failed``, ``why`` in its note):
+        the test function changed sign there, so it is reported, not dropped."""
+        return SpecialPoint(
+            kind=SpecialPointKind.SYMMETRY_BREAKING, parameter=0.5 * (a.lam + b.lam),
+            bracket=(min(a.lam, b.lam), max(a.lam, b.lam)), accuracy=float(np.linalg.norm(b.z - a.z)), index=index,
+            state=a.summary.state, period=a.summary.period, amplitude=a.summary.amplitude,
+            multipliers=a.summary.multipliers, status=SpecialPointStatus.FAILED,
+            note=f"a real half-period multiplier passes -1 between two branch points, but {why}",
         )
 
     def _meets_symmetric_orbits(self, sol: Solution, index: int) -> SpecialPoint | None:
