@@ -87,6 +87,11 @@ STATIONARY_FACTOR = 100.0
 PERIOD_GROWTH = 100.0
 
 
+#: the kernel's event kinds as plain integers (an Enum member costs an attribute lookup in a hot path)
+_TRANSITION, _SLIDING_START, _SLIDING_END = (int(EventKind.TRANSITION), int(EventKind.SLIDING_START),
+                                             int(EventKind.SLIDING_END))
+
+
 @dataclass(frozen=True)
 class PeriodicOrbit:
     """A periodic solution found by shooting.
@@ -766,9 +771,10 @@ class ShootingProblem:
         ev_t, ev_int = traj.event_log[0], traj.event_log[1]  # the kernel's log: read without building records
         if len(ev_t) >= 2:
             delta = 1e-7 * max(1.0, abs(traj.t1 - traj.t0))
+            first_kind, last_kind = int(ev_int[0, 0]), int(ev_int[-1, 0])
             # (or the last event, a sliding motion's end, enters the mode the first has entered)
-            if (ev_int[0, 0] == EventKind.TRANSITION and ev_int[-1, 0] in (EventKind.TRANSITION, EventKind.SLIDING_END)
-                    and ev_int[0, 4] == ev_int[-1, 4] and (ev_int[-1, 0] != EventKind.TRANSITION or ev_int[0, 1] == ev_int[-1, 1])
+            if (first_kind == _TRANSITION and last_kind in (_TRANSITION, _SLIDING_END)
+                    and ev_int[0, 4] == ev_int[-1, 4] and (last_kind != _TRANSITION or ev_int[0, 1] == ev_int[-1, 1])
                     and abs(ev_t[0] - traj.t0) <= delta and abs(traj.t1 - ev_t[-1]) <= delta):
                 first = traj.events[0]
                 if sys_.resets[first.transition] is not None:
@@ -780,8 +786,8 @@ class ShootingProblem:
                 traj = self.flow.run(traj.x0, traj.t0, traj.t1, p, mode0=first.mode_to, variational=True,
                                      sensitivity=sensitivity, tolerances=self.tolerances,
                                      disabled=disabled)  # then as below
-            elif (len(ev_t) >= 3 and ev_int[0, 0] == EventKind.SLIDING_START and ev_int[1, 0] == EventKind.SLIDING_END
-                  and ev_int[-1, 0] == EventKind.SLIDING_END and ev_int[1, 4] == ev_int[-1, 4]
+            elif (len(ev_t) >= 3 and first_kind == _SLIDING_START and ev_int[1, 0] == _SLIDING_END
+                  and last_kind == _SLIDING_END and ev_int[1, 4] == ev_int[-1, 4]
                   and abs(ev_t[0] - traj.t0) <= delta and abs(ev_t[1] - traj.t0) <= delta
                   and abs(traj.t1 - ev_t[-1]) <= delta):
                 # a sliding motion ends at the seam (logged at t0 + T) and is met again at t0, with no length:
