@@ -239,19 +239,19 @@ def _aug_rhs(model, mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
             dy[off + i] = acc + (fpc[i] if pidx >= 0 else 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _aug_rhs_called(model, mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv):
     """:func:`_aug_rhs` as a call, for the places outside the stepper (inlining there only costs compile time)."""
     _aug_rhs(model, mode, slide, t, y, p, var, pidx, dy, W, WJ, WP, wv)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _field_called(model, mode, slide, t, x, p, f, WJ, WP, wv, W):
     """The field (no derivatives) of a mode or sliding motion, as a call."""
     _field(model, mode, slide, t, x, p, False, -1, f, WJ[0], wv[1], wv[2], wv[3], wv[4], WJ[1], WJ[2], WP, wv[5], wv[6], W[0], W[1])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _rk_step(model, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err):
     """One DOP853 step from ``(t, y)`` with ``K[0] = f(t, y)`` given; returns the error norm.
 
@@ -286,7 +286,7 @@ def _rk_step(model, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytm
     return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * n_err)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _dense_coefficients(model, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv):
     """Coefficients of the 7th-order continuous extension of the state ``x`` only."""
     n = N_STATE or F.shape[1]
@@ -340,7 +340,7 @@ def _lobatto_interpolation():
 LOBATTO_NODES, LOBATTO_TO_DENSE, LOBATTO_BOUND = _lobatto_interpolation()
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _affine_norm(A, B, om):
     """Row-sum norm of the augmented matrix ``[[A, B], [0, omega J]]`` of an affine mode."""
     n = N_STATE or A.shape[0]
@@ -355,7 +355,7 @@ def _affine_norm(A, B, om):
     return mnorm
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _exact_end(mode, t_end, x, y, tail, rtol, atol, AFF_A, AFF_B, AFF_W, K):
     """End of an exact step at ``t_end`` in state ``x`` (from ``y``): ``K[12] = f(t_end, x)``; returns the
     error norm of the step's dense output, whose bound per component is ``tail``."""
@@ -376,7 +376,7 @@ def _exact_end(mode, t_end, x, y, tail, rtol, atol, AFF_A, AFF_B, AFF_W, K):
     return math.sqrt(err / n)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, K, ynew, TW, TP, TC):
     """One step of the exact flow of an affine mode; returns the dense output's error norm.
 
@@ -519,7 +519,7 @@ def _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_A
     return _exact_end(mode, t + h, xs, y, tail, rtol, atol, AFF_A, AFF_B, AFF_W, K)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _exact_fraction(mode, t, y, h, theta, var, rtol, atol, AFF_A, AFF_B, AFF_W, K, ynew, TW, TC):
     """The exact step of ``theta * h`` (``0 <= theta <= 1``) from the series of a step of ``h`` in ``TC``.
 
@@ -547,7 +547,7 @@ def _exact_fraction(mode, t, y, h, theta, var, rtol, atol, AFF_A, AFF_B, AFF_W, 
     return _exact_end(mode, t + theta * h, ynew, y, tail, rtol, atol, AFF_A, AFF_B, AFF_W, K)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _exact_dense(y, ynew, TC, F):
     """Dense output of an exact step: its Taylor series interpolated at the Chebyshev-Lobatto points
     (of the fraction of the series' step that was taken, see :func:`_exact_fraction`)."""
@@ -566,7 +566,7 @@ def _exact_dense(y, ynew, TC, F):
                 F[r, i] += LOBATTO_TO_DENSE[r, j - 1] * v
 
 
-@njit(cache=True, inline="always")  # inlined: a call passing this many arrays costs more than a short step's work
+@njit(cache=True, _nrt=False)  # a call, not inlined: without reference counting, passing arrays costs little
 def _step(model, exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
           AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC):
     """A step of the exact flow (affine mode, not sliding) or of DOP853; returns the error norm.
@@ -586,7 +586,7 @@ def _step(model, exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew,
     return _rk_step(model, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC):
     """Dense-output coefficients of the step just taken (by :func:`_step`)."""
     if exact:
@@ -595,7 +595,7 @@ def _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, w
         _dense_coefficients(model, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _dense_eval(F, y, s, out):
     n = N_STATE or F.shape[1]
     for i in range(n):
@@ -609,7 +609,7 @@ def _dense_eval(F, y, s, out):
         out[i] = v + y[i]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _event_value(model, kind, idx, slide, t, x, p, gtmp, gptmp):
     """Event function: an indicator (kind 0) or a sliding-exit function (kind 1: side a, 2: side b)."""
     if kind == 0:
@@ -619,7 +619,7 @@ def _event_value(model, kind, idx, slide, t, x, p, gtmp, gptmp):
     return -slide[4] * slide[5] * model[LIE_DERIVATIVE](slide[2], slide[3], t, x, p, gtmp, gptmp)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _series_eval(TC, theta, out):
     """The state of an exact step at the fraction ``theta`` of its series' step (``TC``, see
     :func:`_exact_step`): the series itself, exact to rounding, not its degree-7 interpolant."""
@@ -632,7 +632,7 @@ def _series_eval(TC, theta, out):
         out[i] = v + TC[0, i]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _state_at(exact, TC, F, y, s, h, out):
     """The state at the fraction ``s`` of the step ``h`` just taken: on the exact flow's own series
     (an exact step: exact to rounding, so that event location does not depend on the tolerances),
@@ -644,14 +644,14 @@ def _state_at(exact, TC, F, y, s, h, out):
         _dense_eval(F, y, s, out)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _dense_event(model, kind, idx, slide, sgn, t, h, F, y, s, p, xtmp, gtmp, gptmp, exact, TC):
     """``sgn`` times an event function at the fraction ``s`` of the step ``h`` (see :func:`_state_at`)."""
     _state_at(exact, TC, F, y, s, h, xtmp)
     return sgn * _event_value(model, kind, idx, slide, t + s * h, xtmp, p, gtmp, gptmp)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _bracket_root(model, kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp, gtmp, gptmp, exact, TC):
     """Illinois root finding of ``sgn * event`` on the dense output in ``[sa, sb]`` (value > 0 at sa, <= 0 at sb)."""
     ga = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, sa, p, xtmp, gtmp, gptmp, exact, TC)
@@ -682,7 +682,7 @@ def _bracket_root(model, kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp,
     return sb
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, lo, hi, exact, TC):
     """Golden-section search for the minimum of ``sgn * event`` on ``[lo, hi]`` of the step; returns (s, value).
 
@@ -740,7 +740,7 @@ def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, 
     return d, fd
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _surface_resolution(model, s, t, x, p, hx, hp):
     """How near zero the indicator of surface ``s`` is rounding, at ``(t, x)``: 16 rounding units of
     the terms it is made of, ``|h_x_i| max(1, |x_i|)``, ``|h_t| max(1, |t|)`` and ``|h_p_j p_j|`` (a state
@@ -755,7 +755,7 @@ def _surface_resolution(model, s, t, x, p, hx, hp):
     return 16.0 * EPS * scale
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _surface_crossings(model, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, exact, TC, v_start, res, slope_start,
                        v_end, slope_end, dip):
     """Where surface ``idx``, on side ``sg`` at the step's start, is crossed within the step:
@@ -806,7 +806,7 @@ def _surface_crossings(model, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 
     return s1, s2, 0.0, smin, False
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _firing_transition(model, mode, idx, cross, t_e, x_e, p, tr_table):
     """The first transition out of ``mode`` on surface ``idx`` that fires crossing to side ``cross``
     at ``(t_e, x_e)`` (its direction and guard hold), or -1."""
@@ -821,7 +821,7 @@ def _firing_transition(model, mode, idx, cross, t_e, x_e, p, tr_table):
     return NONE
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _slope(model, mode, slide, kind, idx, t, x, f, p, hx, hp, gtmp, gptmp):
     """Time derivative of an event function along ``f`` (indicators: ``h_x f + h_t``; sliding exits:
     the Lie derivative's ``s_x f + s_t``)."""
@@ -876,7 +876,7 @@ def _record_step(rec, rec_F, n_rec, t, h, s_end, x, F):
     return rec, rec_F, n_rec + 1
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _dense_component(F, y, s, i):
     """Component ``i`` of the continuous extension at fraction ``s`` of the step."""
     v = 0.0
@@ -889,7 +889,7 @@ def _dense_component(F, y, s, i):
     return v + y[i]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _track_extrema(F, y, s_end, xmin, xmax, f0, f1, xtmp, direction):
     """Update per-component extrema over a step segment ``s in [0, s_end]`` of the dense output.
 
@@ -945,7 +945,7 @@ def _track_extrema(F, y, s_end, xmin, xmax, f0, f1, xtmp, direction):
                 xmin[i] = v
 
 
-@njit(cache=True, inline="always")  # once per mode entered; its arrays are the integrator's own
+@njit(cache=True, _nrt=False)  # once per mode entered; not inlined, no reference counting
 def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_table, watched, fires, surf_old, surf_res,
                     slope_old, surf_sign, fixed_sign, hx, hp, gtmp, gptmp):
     """Entering a mode (or a sliding motion): which surfaces its transitions watch, which way each
@@ -988,7 +988,7 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
                 surf_sign[s] = 1.0 if v >= 0 else -1.0
 
 
-@njit(cache=True, inline="always")  # once per mode entered; its arrays are the integrator's own
+@njit(cache=True, _nrt=False)  # once per mode entered; not inlined, no reference counting
 def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surface, drift, last_kind, jumped, n_ev,
                   tr_table, surf_old, surf_res, slope_old, surf_sign, fixed_sign, xtmp):
     """A transition out of the mode just entered that fires at once, without a step: at the start, on a
@@ -1055,7 +1055,7 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surfac
     return pending, STATUS_OK
 
 
-@njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
+@njit(cache=True, _nrt=False)  # once per event; not inlined, no reference counting
 def _refine_event(model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, s_e, kind, idx, sgn_ev, s_lo, s_hi, p, var,
                   pidx, rtol, atol, ytmp, work, n_err, affine, taylor, gradients):
     """Refine an event bracketed at the fraction ``s_e`` of the step ``h`` from ``(t, y)`` (``ynew``: the
@@ -1145,7 +1145,7 @@ def _chatter_width(t, h_scale):
     return 16.0 * EPS * abs(t) + 1e-9 * h_scale
 
 
-@njit(cache=True)  # not inlined: called only for transitions with a reset, it keeps the integrator's loop lean
+@njit(cache=True, _nrt=False)  # not inlined: called only for transitions with a reset, it keeps the integrator's loop lean
 def _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cross, den, sig_b, ht, hx, fb, n_ev,
                    chatter_ring, slide, h_scale, xn, fn, wn, wp):
     """After the reset of transition ``k`` on surface ``s``: where the state lies on the surface (or as far
@@ -1198,7 +1198,7 @@ def _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cro
     return STATUS_OK, back
 
 
-@njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
+@njit(cache=True, _nrt=False)  # once per event; not inlined, no reference counting
 def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, known_side, n_ev, chatter_ring, hx, hp, fa,
                       fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding, h_scale, xn, fn, wn,
                       wp):
@@ -1293,7 +1293,7 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, known
     return STATUS_OK, mode_to, kind_logged, den
 
 
-@njit(cache=True, inline="always")  # once per event; its arrays are the integrator's own
+@njit(cache=True, _nrt=False)  # once per event; not inlined, no reference counting
 def _leave_sliding(model, kind, mode, slide, t_e, x_e, p, hx, hp, fa, fplus, xplus, WJ, WP, wv, W, surf_sign,
                    fixed_sign):
     """End a sliding motion where side a (``kind`` 1) or side b (``kind`` 2) turns tangent: the event
@@ -1328,7 +1328,7 @@ def _leave_sliding(model, kind, mode, slide, t_e, x_e, p, hx, hp, fa, fplus, xpl
     return mode_from, mode_to, den
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _sliding_side(model, slide, side, t, x, p, hs, hsp, out):
     """A sliding state ``x`` moved a hair (``SIDE_NUDGE`` of its size) to the side of its surface where
     the indicator has the sign ``side`` (mode a's side is ``-slide[4]``, b's ``slide[4]``), into
@@ -1355,7 +1355,7 @@ def _sliding_side(model, slide, side, t, x, p, hs, hsp, out):
     return abs(c) * math.sqrt(g2)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _sliding_match(model, slide, w, cross, t, x, p, tr_table, hs, hsp, xside):
     """Where a sliding motion crosses surface ``w`` (not its own) to the side ``cross``: ``(ka, kb)``, the
     first transition out of its mode a (b) on ``w`` in that direction whose guard holds on a's (b's) side of
@@ -1385,7 +1385,7 @@ def _sliding_match(model, slide, w, cross, t, x, p, tr_table, hs, hsp, xside):
     return ka, kb
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _sliding_transition(model, slide, ka, kb, t_e, x_e, p, tr_table, direction, hs, hsp, fc, fd):
     """Which transition ends a sliding motion (modes a, b on surface s) where it meets another surface on
     which a transition out of a (``ka``) or b (``kb``, -1 for none) holds: ``(transition, mode, status)``.
@@ -1423,7 +1423,7 @@ def _sliding_transition(model, slide, ka, kb, t_e, x_e, p, tr_table, direction, 
     return ka, NONE, STATUS_OK
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _sliding_region_margin(model, slide, t, x, p, hs, hsp, xside):
     """How far a sliding state lies inside the domains of the motion's two modes, each taken on its own
     side of the surface (``_sliding_side``), relative to the state's size (negative: outside):
@@ -1446,7 +1446,7 @@ def _sliding_region_margin(model, slide, t, x, p, hs, hsp, xside):
     return best, which
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _sliding_region_end(model, slide, t, h, F, y, p, hs, hsp, xside, xtmp, n_surfaces):
     """A sliding step that ends outside the domain of one of the motion's modes (by more than
     DOMAIN_TOLERANCE): the fraction of the step where it leaves it (bisection on the dense output),
@@ -1488,7 +1488,7 @@ def _sliding_region_end(model, slide, t, h, F, y, p, hs, hsp, xside, xtmp, n_sur
     return hi, mode_out, surface
 
 
-@njit(cache=True, inline="always")  # once per event; a call costs more than it saves here
+@njit(cache=True, _nrt=False)  # once per event; not inlined, no reference counting
 def _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, w, Phi_tmp, psi_tmp):
     """The saltation matrix of eq. (9), with a reset ``g`` (the identity without one), and the jumps of
     the fundamental solution matrix and the parameter sensitivity: the one place where they happen.
@@ -1663,7 +1663,7 @@ def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, x
     return best_s, best_kind, best_idx, best_hi, have_dense
 
 
-@njit(cache=True)  # a call per watched surface and step (its 33 arguments are too many to inline)
+@njit(cache=True, _nrt=False)  # a call per watched surface and step (its 33 arguments are too many to inline)
 def _surface_step(model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, gtmp, gptmp, hx,
                   hp, direction, fires, surf_sign, surf_old, surf_res, surf_new, slope_old, slope_new, no_dip, have_dense):
     """Surface ``s`` over the accepted step from ``(t, y)`` to ``(t_new, ynew)``, of a mode or of a sliding
@@ -1690,7 +1690,7 @@ def _surface_step(model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp
     return True, s1, s2, s_lo, s_dip, known, True
 
 
-@njit(cache=True)  # a call, not inlined: a step that does not slide never comes here
+@njit(cache=True, _nrt=False)  # a call, not inlined: a step that does not slide never comes here
 def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp,
                     gptmp, hx, hp, hs, hsp, xside, direction, tr_table, watched, fires, surf_sign, surf_old, surf_res,
                     surf_new, slope_old, slope_new, no_dip):
@@ -1753,7 +1753,7 @@ def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp,
             mode_out, surface_out)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _needs_extrema(K, xmin):
     n = N_STATE or xmin.shape[0]
     for i in range(n):
@@ -2317,7 +2317,7 @@ def _periodic_shot(model, integrate, addresses, affine_modes, z, t0, sign, auton
     return period > 0.0, res
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _periodic_residual(out, z, autonomous, x_ref, f_ref, r):
     """Residual of the periodic-orbit equations at ``z`` into ``r``: ``x(t0 + sign T) - x0`` and,
     autonomous, the phase condition ``f_ref . (x0 - x_ref)``; returns its norm."""
@@ -2336,7 +2336,7 @@ def _periodic_residual(out, z, autonomous, x_ref, f_ref, r):
     return math.sqrt(rn)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _solve_pivoted(A, b, x):
     """Solve ``A x = b`` by Gaussian elimination with partial pivoting (LAPACK's ``dgesv`` algorithm),
     overwriting ``A`` and ``b``; False for a zero or not finite pivot.
