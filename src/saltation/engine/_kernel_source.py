@@ -860,12 +860,9 @@ def _resized_steps(a, m):
     return b
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _record_step(rec, rec_F, n_rec, t, h, s_end, x, F):
-    """Append a step's dense output: row ``(start, size, end fraction, start state)`` and coefficients."""
-    if n_rec == rec.shape[0]:
-        rec = _resized_rows(rec, 2 * n_rec)
-        rec_F = _resized_steps(rec_F, 2 * n_rec)
+    """Append a step's dense output: row ``(start, size, end fraction, start state)`` and coefficients; the caller has made room for it.  Returns the number of rows."""
     rec[n_rec, 0] = t
     rec[n_rec, 1] = h
     rec[n_rec, 2] = s_end
@@ -873,7 +870,7 @@ def _record_step(rec, rec_F, n_rec, t, h, s_end, x, F):
         rec[n_rec, 3 + i] = x[i]
         for r in range(7):
             rec_F[n_rec, r, i] = F[r, i]
-    return rec, rec_F, n_rec + 1
+    return n_rec + 1
 
 
 @njit(cache=True, _nrt=False)
@@ -1528,14 +1525,11 @@ def _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, w, Phi_
             y[off + i] = psi_tmp[i]
 
 
-@njit(cache=True, inline="always")  # once per event; a call costs more than it saves here
+@njit(cache=True, inline="always")  # once per event; inlined into the loop, it allocates nothing
 def _log_event(ev, ev_int, n_ev, t_e, kind, transition, surface, mode_from, mode_to, x_minus, x_plus, S):
     """Append an event to the log (rows ``(t, x-, x+, S)`` and ``(kind, transition, surface, mode from,
-    mode to)``, as ``_contract.py`` lays them out), doubling it when full; returns the log."""
+    mode to)``, as ``_contract.py`` lays them out); the caller has made room for it."""
     n = N_STATE or x_minus.shape[0]
-    if n_ev == ev.shape[0]:
-        ev = _resized_rows(ev, 2 * n_ev)
-        ev_int = _resized_rows(ev_int, 2 * n_ev)
     ev[n_ev, 0] = t_e
     ev_int[n_ev, 0] = kind
     ev_int[n_ev, 1] = transition
@@ -1547,7 +1541,6 @@ def _log_event(ev, ev_int, n_ev, t_e, kind, transition, surface, mode_from, mode
         ev[n_ev, 1 + n + i] = x_plus[i]
         for j in range(n):
             ev[n_ev, 1 + 2 * n + i * n + j] = S[i, j]
-    return ev, ev_int
 
 
 @njit(cache=True, inline="always")  # its arrays are the kernel's own: inlined, nothing is passed
@@ -1773,6 +1766,404 @@ def _needs_extrema(K, xmin):
 # (some 4 s each on the one-time build).
 # --------------------------------------------------------------------------------------------------
 
+@njit(cache=True, _nrt=False)  # the integrator's loop, without reference counting (see integrate_kernel)
+def _integrate_steps(model, exact_affine, t_end, p, var, pidx, rtol, atol, max_step, max_events, max_steps, tr_table,
+                     n_surfaces, record, n_err, direction, sliding_step_cap, vectors, matrices, work, affine, taylor,
+                     gradients, surfaces, flags, slide, fires, log, state_f, state_i):
+    """The step-and-event loop of :func:`integrate_kernel`, on the arrays it has allocated.
+
+    It resumes from, and leaves, its scalar state in ``state_f`` (t, step, drift, the longest step to an
+    event) and ``state_i`` (see :func:`_loop_state`).  Returns True when it has stopped because the event
+    log or the record of steps is full (it allocates nothing): the caller doubles them and calls again.
+    """
+    (y, ynew, ytmp, ysave, xtmp, fa, fb, fplus, xplus, gt, wvec, psi_tmp, samples, chatter_ring, h_mode, xmin,
+     xmax) = vectors
+    K, Ksave, F, gx, gp, S, Phi_tmp = matrices
+    W, WJ, WP, wv = work
+    AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP = affine
+    TW, TP, TC = taylor
+    hx, hp, gtmp, gptmp = gradients
+    surf_sign, surf_old, surf_res, slope_old, surf_new, slope_new = surfaces
+    watched, fixed_sign, no_dip = flags
+    ev, ev_int, rec, rec_F = log
+    n = N_STATE or xmin.shape[0]
+    N = y.shape[0]
+    hs = psi_tmp
+    hsp = W[1]
+    xside = wvec
+    K0 = K[0]
+    K12 = K[12]
+    y_x = y[:n]
+    ynew_x = ynew[:n]
+    t = state_f[0]
+    habs = state_f[1]
+    drift = state_f[2]
+    h_events = state_f[3]
+    (mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode, info_surface, pending, last_kind,
+     after_sliding) = (state_i[0], state_i[1], state_i[2], state_i[3], state_i[4], state_i[5], state_i[6], state_i[7],
+                       state_i[8], state_i[9], state_i[10])
+    need_signs = state_i[11] != 0
+    last_jump = state_i[12] != 0
+    at_start = state_i[13] != 0
+    full = False
+    while status == STATUS_OK and (t_end - t) * direction > 0.0:
+        if n_ev >= ev.shape[0] or (record and n_rec >= rec.shape[0]):
+            full = True  # the caller doubles the logs and calls again: the loop resumes here
+            break
+        if need_signs:
+            _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_table, watched, fires, surf_old,
+                            surf_res, slope_old, surf_sign, fixed_sign, hx, hp, gtmp, gptmp)
+            pending, status = _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start or after_sliding >= 0,
+                                            after_sliding, drift, last_kind, last_jump, n_ev, tr_table, surf_old, surf_res,
+                                            slope_old, surf_sign, fixed_sign, xtmp)
+            at_start = False
+            after_sliding = NONE
+            drift = 0.0
+            if status != STATUS_OK:
+                info_mode = mode
+                break
+            for s in range(n_surfaces):
+                fixed_sign[s] = False
+            need_signs = False
+
+        at_once = pending >= 0
+        if at_once:
+            # a transition has just led into a mode whose exit already holds: that exit fires at once,
+            # a segment of zero length, with both saltation matrices (never a step outside the domain)
+            best_kind = KIND_INDICATOR
+            best_idx = tr_table[pending, 1]
+            best_tr = pending
+            best_tr2 = NONE
+            best_known = False
+            pending = NONE
+            s_e = 0.0
+            h = direction * habs
+            for i in range(N):
+                ynew[i] = y[i]
+        else:
+            if n_steps >= max_steps:
+                status = STATUS_MAX_STEPS
+                info_mode = mode
+                break
+            remaining = abs(t_end - t)
+            habs = min(habs, max_step)
+            if slide[0] == 1 and sliding_step_cap > 0.0:
+                habs = min(habs, sliding_step_cap)
+            if habs >= remaining or remaining - habs < 1e-12 * remaining:
+                habs = remaining
+            exact = exact_affine and slide[0] == 0 and model[AFFINE_MODES][mode]
+            # attempt a step
+            rejected = False
+            while True:
+                h = direction * habs
+                err = _step(model, exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+                            AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
+                finite = math.isfinite(err)
+                if finite and err <= 1.0:
+                    break
+                n_rejected += 1
+                rejected = True
+                if not finite:
+                    fin = True
+                    for i in range(N):
+                        if not math.isfinite(ynew[i]):
+                            fin = False
+                    if not fin and habs < 1e-10 * max(1.0, abs(t)):
+                        status = STATUS_NON_FINITE
+                        info_mode = mode
+                        break
+                    habs *= 0.2
+                else:
+                    habs *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
+                if habs < 10.0 * EPS * max(1.0, abs(t)):
+                    status = STATUS_STEP_TOO_SMALL
+                    info_mode = mode
+                    break
+            if status != STATUS_OK:
+                break
+            n_steps += 1
+            t_new = t + h
+            if habs == remaining:
+                t_new = t_end
+            for i in range(n):
+                if not math.isfinite(ynew[i]) or not math.isfinite(K[12, i]):
+                    status = STATUS_NON_FINITE
+                    info_mode = mode
+            if status != STATUS_OK:
+                break
+
+            # ---------------------------------------------------------------- events
+            have_dense = False
+            best_s = 2.0
+            best_kind = NONE
+            best_idx = NONE
+            best_tr = NONE
+            best_tr2 = NONE
+            best_sgn = 1.0  # the event function's sign, the bracket of its root and whether it is a dip's
+            best_lo = 0.0
+            best_hi = 1.0
+            best_dip = False
+            best_known = False  # whether the side it leads to is known (the way back of a shallow excursion)
+            if slide[0] == 0:
+                for s in range(n_surfaces):
+                    if not watched[s]:
+                        continue
+                    crossing, s1, s2, s_lo, s_dip, known, have_dense = _surface_step(
+                        model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, gtmp, gptmp,
+                        hx, hp, direction, fires, surf_sign, surf_old, surf_res, surf_new, slope_old, slope_new, no_dip,
+                        have_dense)
+                    if not crossing:
+                        continue
+                    sg = surf_sign[s]
+                    for which in range(2):
+                        # the way in, then (where no transition fires there) the way back of a dip
+                        sr = s1 if which == 0 else s2
+                        if sr >= best_s:
+                            continue
+                        _state_at(exact, TC, F, y, sr, h, xtmp)
+                        cross = -sg if which == 0 else sg  # new side in the direction of travel
+                        k = _firing_transition(model, mode, s, cross, t + sr * h, xtmp, p, tr_table)
+                        if k >= 0:
+                            best_s = sr
+                            best_kind = KIND_INDICATOR
+                            best_idx = s
+                            best_tr = k
+                            best_sgn = -cross
+                            best_lo = s_lo if which == 0 else s_dip
+                            best_hi = s_dip if which == 0 else 1.0
+                            best_dip = s_dip < 1.0
+                            best_known = known and which == 0
+                            break
+            else:
+                (best_s, best_kind, best_idx, best_tr, best_tr2, best_sgn, best_lo, best_hi, best_dip, have_dense, s_out,
+                 mode_out, surface_out) = _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ,
+                                                          WP, wv, TC, p, samples, gtmp, gptmp, hx, hp, hs, hsp, xside,
+                                                          direction, tr_table, watched, fires, surf_sign, surf_old,
+                                                          surf_res, surf_new, slope_old, slope_new, no_dip)
+                if s_out < best_s:
+                    # the motion leaves the domain of one of its modes before any event: not defined
+                    status = STATUS_SLIDING_UNDEFINED
+                    info_mode = mode_out
+                    info_surface = surface_out
+                    slide[0] = SLIDE_LEAVES_REGION
+                    t = t + s_out * h
+                    _dense_eval(F, y, s_out, xtmp)
+                    for i in range(n):
+                        y[i] = xtmp[i]
+                    break
+
+            if best_kind < 0:
+                # ----------------------------------------------------------- accept whole step
+                if record or _needs_extrema(K, xmin):
+                    if not have_dense:
+                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
+                        have_dense = True
+                    _track_extrema(F, y, 1.0, xmin, xmax, K0, K12, xtmp, direction)
+                for i in range(n):
+                    xmin[i] = min(xmin[i], ynew[i])
+                    xmax[i] = max(xmax[i], ynew[i])
+                if record:
+                    n_rec = _record_step(rec, rec_F, n_rec, t, h, 1.0, y_x, F)
+                t = t_new
+                TC[MAX_TAYLOR + 3, 0] = 0.0  # the series starts at the old (t, y)
+                for i in range(N):
+                    y[i] = ynew[i]
+                for i in range(N):
+                    K[0, i] = K[12, i]
+                for s in range(n_surfaces):
+                    if watched[s]:
+                        surf_old[s] = surf_new[s]
+                        slope_old[s] = slope_new[s]
+                        if surf_new[s] != 0.0:
+                            surf_sign[s] = 1.0 if surf_new[s] > 0 else -1.0
+                fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
+                if rejected and not exact:
+                    # no growth right after a rejection (Hairer & Wanner, II.4); an exact step's error
+                    # (of its dense output) is a smooth function of h and needs no such caution
+                    fac = min(fac, 1.0)
+                habs = abs(h) * fac
+                if slide[0] == 0:
+                    h_mode[mode] = habs
+                for s in range(no_dip.shape[0]):
+                    no_dip[s] = False
+                continue
+
+            # --------------------------------------------------------------- an event
+            if best_dip and not exact:
+                # a dip through the switching set seen on the dense output: the step's own solution must
+                # lie across at the dip's bottom too, else the two differ within the tolerance there and
+                # there is no crossing: the step is taken again, without that dip
+                second = best_lo > 0.0  # (the event is a dip's way back: its bottom starts the bracket)
+                bottom = best_lo if second else best_hi
+                _step(model, exact, mode, slide, t, y, bottom * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
+                      n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
+                g_bottom = best_sgn * _event_value(model, best_kind, best_idx, slide, t + bottom * h, ynew_x, p, gtmp,
+                                                   gptmp)
+                if (g_bottom < 0.0) if second else (g_bottom > 0.0):
+                    no_dip[best_idx if best_kind == KIND_INDICATOR else n_surfaces - 1 + best_kind] = True
+                    continue
+            # the shortened step that ends at the event must pass the error test too: a step can
+            # straddle a thin layer (e.g. where a sliding motion ends) that its own estimate missed
+            err_e = _step(model, exact, mode, slide, t, y, best_s * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
+                          AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
+            if err_e > 1.0 and best_s * habs > 100.0 * EPS * max(1.0, abs(t)):
+                n_rejected += 1
+                habs = best_s * habs * max(0.2, 0.9 * err_e ** (-1.0 / 8.0))
+                continue
+            _track_extrema(F, y, best_s, xmin, xmax, K0, K12, xtmp, direction)
+            if record:
+                n_rec = _record_step(rec, rec_F, n_rec, t, h, best_s, y_x, F)
+            s_e = _refine_event(
+                model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, best_s, best_kind, best_idx, best_sgn, best_lo,
+                best_hi, p, var, pidx, rtol, atol, ytmp, work, n_err, affine,
+                taylor, gradients)
+            for s in range(no_dip.shape[0]):
+                no_dip[s] = False
+        t_e = t + s_e * h
+        # state at the event (before it)
+        for i in range(N):
+            y[i] = ynew[i]
+        x_e = y_x
+        mode_from = mode
+        kind_logged = EVENT_TRANSITION
+        mode_to = mode
+        den = 0.0
+        # S and the jump of psi are built from: n (hx, hp, ht), f-, f+, g_x, g_t, g_p
+        for i in range(n):
+            for j in range(n):
+                gx[i, j] = 1.0 if i == j else 0.0
+            gt[i] = 0.0
+            for j in range(gp.shape[1]):
+                gp[i, j] = 0.0
+        if best_kind == 0:
+            from_sliding = slide[0] != 0
+            if from_sliding:
+                # a sliding motion meets another surface where a transition out of one of its modes
+                # holds: the motion ends, from its own field (f-), by the transition that decides
+                best_tr, info_mode, status = _sliding_transition(model, slide, best_tr, best_tr2, t_e, x_e, p, tr_table,
+                                                                 direction, hx, hp, fb, fplus)
+                if status == STATUS_OK:
+                    _field_called(model, mode, slide, t_e, x_e, p, fa, WJ, WP, wv, W)
+                    mode = tr_table[best_tr, 0]
+                    mode_from = mode
+                    slide[0] = 0
+                    if tr_table[best_tr, 4] == 0:
+                        # the state stays on the sliding surface, on the side of the mode whose
+                        # transition fired: a new field that crosses the surface fires at once
+                        # (_exit_at_once), or at the first step's sign change
+                        side = -slide[4] if mode == slide[1] else slide[4]
+                        drift = _sliding_side(model, slide, side, t_e, x_e, p, hs, hsp, xside)
+                        after_sliding = slide[3]
+                        surf_sign[slide[3]] = side
+                        fixed_sign[slide[3]] = True
+            if status == STATUS_OK:
+                known_side = 0.0
+                if at_once:
+                    known_side = 1.0 if tr_table[best_tr, 2] > 0 else -1.0
+                elif best_known:
+                    known_side = -2.0 * best_sgn
+                status, mode_to, kind_logged, den = _apply_transition(
+                    model, best_tr, best_idx, mode, t_e, x_e, p, tr_table, direction, known_side, n_ev, chatter_ring, hx, hp,
+                    fa, fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding,
+                    abs(h), xtmp, wvec, gtmp, gptmp)
+                info_mode = mode_to if from_sliding and status == STATUS_SLIDING_UNDEFINED else mode
+            if status != STATUS_OK:
+                info_surface = best_idx
+                if from_sliding and status == STATUS_SLIDING_UNDEFINED:
+                    slide[0] = SLIDE_BLOCKED  # (the motion's modes, surface and crossing are kept for the message)
+                    t = t_e
+                if status == STATUS_CHATTERING or status == STATUS_STEP_TOO_SMALL or slide[0] == SLIDE_RESET_INTO:
+                    t = t_e
+                break
+        else:
+            mode_from, mode_to, den = _leave_sliding(
+                model, best_kind, mode, slide, t_e, x_e, p, hx, hp, fa, fplus, xplus, WJ, WP, wv, W, surf_sign,
+                fixed_sign)
+            kind_logged = EVENT_SLIDING_END
+        mode = mode_to
+        # the saltation matrix, eq. (9), and the jumps of Phi and psi
+        _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, wvec, Phi_tmp, psi_tmp)
+        # log
+        _log_event(ev, ev_int, n_ev, t_e, kind_logged, best_tr, best_idx, mode_from, mode_to, x_e, xplus, S)
+        chatter_ring[n_ev % CHATTER_WINDOW] = t_e
+        h_events = max(h_events, abs(h))
+        last_kind = kind_logged
+        last_jump = best_kind == KIND_INDICATOR and tr_table[best_tr, 4] != 0
+        n_ev += 1
+        for i in range(n):
+            y[i] = xplus[i]
+            xmin[i] = min(xmin[i], x_e[i], xplus[i])
+            xmax[i] = max(xmax[i], x_e[i], xplus[i])
+        if n_ev >= max_events:
+            status = STATUS_MAX_EVENTS
+            info_mode = mode
+            info_surface = best_idx
+            t = t_e
+            break
+        if 100.0 * EPS * abs(t_e) > h_events:
+            # the time axis at t_e cannot resolve the motion: a step is no more than 100 rounding units of t,
+            # and event times (each rounded to t's grid) would be off by a sizeable part of a step
+            status = STATUS_STEP_TOO_SMALL
+            info_mode = mode
+            info_surface = best_idx
+            t = t_e
+            break
+        if n_ev >= CHATTER_WINDOW:
+            oldest = chatter_ring[n_ev % CHATTER_WINDOW]
+            # events that crowd below the resolution of the motion: 1e-9 of the step (the time scale of
+            # the motion), or a few rounding units of t (not a fraction of |t| or of the span: events
+            # well apart at t = 1e12 are no chattering)
+            if abs(t_e - oldest) <= _chatter_width(t_e, abs(h)):
+                if EPS * abs(t_e) > 1e-9 * h_events:
+                    slide[0] = TIME_UNRESOLVED  # a rounding unit of t is not small beside the motion's steps
+                status = STATUS_CHATTERING
+                info_mode = mode
+                info_surface = best_idx
+                t = t_e
+                break
+        t = t_e
+        TC[MAX_TAYLOR + 3, 0] = 0.0
+        if abs(t_end - t) <= 4.0 * EPS * max(1.0, abs(t)):
+            t = t_end
+        _aug_rhs_called(model, mode, slide, t, y, p, var, pidx, K0, W, WJ, WP, wv)
+        for i in range(n):
+            if not math.isfinite(K[0, i]):
+                status = STATUS_NON_FINITE
+                info_mode = mode
+        if slide[0] == 0 and h_mode[mode] > 0.0:
+            habs = h_mode[mode]  # the step that suited this mode when it was left: a better guess than the old mode's
+        else:
+            habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
+        need_signs = True
+    state_f[0] = t
+    state_f[1] = habs
+    state_f[2] = drift
+    state_f[3] = h_events
+    _loop_state(state_i, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode, info_surface, pending, last_kind,
+                after_sliding, need_signs, last_jump, at_start)
+    return full
+
+
+@njit(cache=True, _nrt=False)
+def _loop_state(state_i, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode, info_surface, pending, last_kind,
+                after_sliding, need_signs, last_jump, at_start):
+    """The integrator loop's integer state, in ``state_i``'s order (booleans as 0 and 1)."""
+    state_i[0] = mode
+    state_i[1] = n_ev
+    state_i[2] = n_rec
+    state_i[3] = n_steps
+    state_i[4] = n_rejected
+    state_i[5] = status
+    state_i[6] = info_mode
+    state_i[7] = info_surface
+    state_i[8] = pending
+    state_i[9] = last_kind
+    state_i[10] = after_sliding
+    state_i[11] = 1 if need_signs else 0
+    state_i[12] = 1 if last_jump else 0
+    state_i[13] = 1 if at_start else 0
+
+
 @njit(cache=True, nogil=True)  # compiled for INTEGRATE_SIGNATURE only, by saltation.engine.codegen.load_engine
 def integrate_kernel(
     addresses, affine_modes, t0, t_end, x0, mode0, p, var, pidx, rtol, atol, h_init, max_step, max_events, max_steps,
@@ -1944,336 +2335,56 @@ def integrate_kernel(
     h_events = 0.0  # the longest step that ended at an event: the time scale of the motion, for a message
     h_mode = np.zeros(n_modes)  # the step proposed last in each mode (0: none yet), to re-enter it with
 
+    # views and tuples the loop passes on, made once: each one made in the loop is a reference count
+    # taken and dropped (atomic operations that cost more than the work of a short step)
+    K0 = K[0]
+    K12 = K[12]
+    y_x = y[:n]
+    ynew_x = ynew[:n]
+    work = (W, WJ, WP, wv)
+    affine = (AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP)
+    taylor = (TW, TP, TC)
+    gradients = (hx, hp, gtmp, gptmp)
     t_far = max(abs(t0), abs(t_end))
     if tspan > 0.0 and 100.0 * EPS * t_far > tspan and EPS * t_far > 1e-9:
         # far from t = 0 (a rounding unit of t above 1e-9), a span of less than a hundred of them: the time
         # axis cannot resolve the motion (nor the end time asked for)
         status = STATUS_STEP_TOO_SMALL
         info_mode = mode
-    while status == STATUS_OK and (t_end - t) * direction > 0.0:
-        if need_signs:
-            _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_table, watched, fires, surf_old,
-                            surf_res, slope_old, surf_sign, fixed_sign, hx, hp, gtmp, gptmp)
-            pending, status = _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start or after_sliding >= 0,
-                                            after_sliding, drift, last_kind, last_jump, n_ev, tr_table, surf_old, surf_res,
-                                            slope_old, surf_sign, fixed_sign, xtmp)
-            at_start = False
-            after_sliding = NONE
-            drift = 0.0
-            if status != STATUS_OK:
-                info_mode = mode
-                break
-            for s in range(n_surfaces):
-                fixed_sign[s] = False
-            need_signs = False
-
-        at_once = pending >= 0
-        if at_once:
-            # a transition has just led into a mode whose exit already holds: that exit fires at once,
-            # a segment of zero length, with both saltation matrices (never a step outside the domain)
-            best_kind = KIND_INDICATOR
-            best_idx = tr_table[pending, 1]
-            best_tr = pending
-            best_tr2 = NONE
-            best_known = False
-            pending = NONE
-            s_e = 0.0
-            h = direction * habs
-            for i in range(N):
-                ynew[i] = y[i]
-        else:
-            if n_steps >= max_steps:
-                status = STATUS_MAX_STEPS
-                info_mode = mode
-                break
-            remaining = abs(t_end - t)
-            habs = min(habs, max_step)
-            if slide[0] == 1 and sliding_step_cap > 0.0:
-                habs = min(habs, sliding_step_cap)
-            if habs >= remaining or remaining - habs < 1e-12 * remaining:
-                habs = remaining
-            exact = exact_affine and slide[0] == 0 and model[AFFINE_MODES][mode]
-            # attempt a step
-            rejected = False
-            while True:
-                h = direction * habs
-                err = _step(model, exact, mode, slide, t, y, h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
-                            AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
-                finite = math.isfinite(err)
-                if finite and err <= 1.0:
-                    break
-                n_rejected += 1
-                rejected = True
-                if not finite:
-                    fin = True
-                    for i in range(N):
-                        if not math.isfinite(ynew[i]):
-                            fin = False
-                    if not fin and habs < 1e-10 * max(1.0, abs(t)):
-                        status = STATUS_NON_FINITE
-                        info_mode = mode
-                        break
-                    habs *= 0.2
-                else:
-                    habs *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
-                if habs < 10.0 * EPS * max(1.0, abs(t)):
-                    status = STATUS_STEP_TOO_SMALL
-                    info_mode = mode
-                    break
-            if status != STATUS_OK:
-                break
-            n_steps += 1
-            t_new = t + h
-            if habs == remaining:
-                t_new = t_end
-            for i in range(n):
-                if not math.isfinite(ynew[i]) or not math.isfinite(K[12, i]):
-                    status = STATUS_NON_FINITE
-                    info_mode = mode
-            if status != STATUS_OK:
-                break
-
-            # ---------------------------------------------------------------- events
-            have_dense = False
-            best_s = 2.0
-            best_kind = NONE
-            best_idx = NONE
-            best_tr = NONE
-            best_tr2 = NONE
-            best_sgn = 1.0  # the event function's sign, the bracket of its root and whether it is a dip's
-            best_lo = 0.0
-            best_hi = 1.0
-            best_dip = False
-            best_known = False  # whether the side it leads to is known (the way back of a shallow excursion)
-            if slide[0] == 0:
-                for s in range(n_surfaces):
-                    if not watched[s]:
-                        continue
-                    crossing, s1, s2, s_lo, s_dip, known, have_dense = _surface_step(
-                        model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, gtmp, gptmp,
-                        hx, hp, direction, fires, surf_sign, surf_old, surf_res, surf_new, slope_old, slope_new, no_dip,
-                        have_dense)
-                    if not crossing:
-                        continue
-                    sg = surf_sign[s]
-                    for which in range(2):
-                        # the way in, then (where no transition fires there) the way back of a dip
-                        sr = s1 if which == 0 else s2
-                        if sr >= best_s:
-                            continue
-                        _state_at(exact, TC, F, y, sr, h, xtmp)
-                        cross = -sg if which == 0 else sg  # new side in the direction of travel
-                        k = _firing_transition(model, mode, s, cross, t + sr * h, xtmp, p, tr_table)
-                        if k >= 0:
-                            best_s = sr
-                            best_kind = KIND_INDICATOR
-                            best_idx = s
-                            best_tr = k
-                            best_sgn = -cross
-                            best_lo = s_lo if which == 0 else s_dip
-                            best_hi = s_dip if which == 0 else 1.0
-                            best_dip = s_dip < 1.0
-                            best_known = known and which == 0
-                            break
-            else:
-                (best_s, best_kind, best_idx, best_tr, best_tr2, best_sgn, best_lo, best_hi, best_dip, have_dense, s_out,
-                 mode_out, surface_out) = _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ,
-                                                          WP, wv, TC, p, samples, gtmp, gptmp, hx, hp, hs, hsp, xside,
-                                                          direction, tr_table, watched, fires, surf_sign, surf_old,
-                                                          surf_res, surf_new, slope_old, slope_new, no_dip)
-                if s_out < best_s:
-                    # the motion leaves the domain of one of its modes before any event: not defined
-                    status = STATUS_SLIDING_UNDEFINED
-                    info_mode = mode_out
-                    info_surface = surface_out
-                    slide[0] = SLIDE_LEAVES_REGION
-                    t = t + s_out * h
-                    _dense_eval(F, y, s_out, xtmp)
-                    for i in range(n):
-                        y[i] = xtmp[i]
-                    break
-
-            if best_kind < 0:
-                # ----------------------------------------------------------- accept whole step
-                if record or _needs_extrema(K, xmin):
-                    if not have_dense:
-                        _dense(model, exact, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ, WP, wv, TC)
-                        have_dense = True
-                    _track_extrema(F, y, 1.0, xmin, xmax, K[0], K[12], xtmp, direction)
-                for i in range(n):
-                    xmin[i] = min(xmin[i], ynew[i])
-                    xmax[i] = max(xmax[i], ynew[i])
-                if record:
-                    rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, 1.0, y[:n], F)
-                t = t_new
-                TC[MAX_TAYLOR + 3, 0] = 0.0  # the series starts at the old (t, y)
-                for i in range(N):
-                    y[i] = ynew[i]
-                for i in range(N):
-                    K[0, i] = K[12, i]
-                for s in range(n_surfaces):
-                    if watched[s]:
-                        surf_old[s] = surf_new[s]
-                        slope_old[s] = slope_new[s]
-                        if surf_new[s] != 0.0:
-                            surf_sign[s] = 1.0 if surf_new[s] > 0 else -1.0
-                fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
-                if rejected and not exact:
-                    # no growth right after a rejection (Hairer & Wanner, II.4); an exact step's error
-                    # (of its dense output) is a smooth function of h and needs no such caution
-                    fac = min(fac, 1.0)
-                habs = abs(h) * fac
-                if slide[0] == 0:
-                    h_mode[mode] = habs
-                no_dip[:] = False
-                continue
-
-            # --------------------------------------------------------------- an event
-            if best_dip and not exact:
-                # a dip through the switching set seen on the dense output: the step's own solution must
-                # lie across at the dip's bottom too, else the two differ within the tolerance there and
-                # there is no crossing: the step is taken again, without that dip
-                second = best_lo > 0.0  # (the event is a dip's way back: its bottom starts the bracket)
-                bottom = best_lo if second else best_hi
-                _step(model, exact, mode, slide, t, y, bottom * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv,
-                      n_err, AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
-                g_bottom = best_sgn * _event_value(model, best_kind, best_idx, slide, t + bottom * h, ynew[:n], p, gtmp,
-                                                   gptmp)
-                if (g_bottom < 0.0) if second else (g_bottom > 0.0):
-                    no_dip[best_idx if best_kind == KIND_INDICATOR else n_surfaces - 1 + best_kind] = True
-                    continue
-            # the shortened step that ends at the event must pass the error test too: a step can
-            # straddle a thin layer (e.g. where a sliding motion ends) that its own estimate missed
-            err_e = _step(model, exact, mode, slide, t, y, best_s * h, p, var, pidx, rtol, atol, K, ynew, ytmp, W, WJ, WP, wv, n_err,
-                          AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP, TW, TP, TC)
-            if err_e > 1.0 and best_s * habs > 100.0 * EPS * max(1.0, abs(t)):
-                n_rejected += 1
-                habs = best_s * habs * max(0.2, 0.9 * err_e ** (-1.0 / 8.0))
-                continue
-            _track_extrema(F, y, best_s, xmin, xmax, K[0], K[12], xtmp, direction)
-            if record:
-                rec, rec_F, n_rec = _record_step(rec, rec_F, n_rec, t, h, best_s, y[:n], F)
-            s_e = _refine_event(
-                model, exact, mode, slide, t, h, y, ynew, ysave, K, Ksave, best_s, best_kind, best_idx, best_sgn, best_lo,
-                best_hi, p, var, pidx, rtol, atol, ytmp, (W, WJ, WP, wv), n_err, (AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP),
-                (TW, TP, TC), (hx, hp, gtmp, gptmp))
-            no_dip[:] = False
-        t_e = t + s_e * h
-        # state at the event (before it)
-        for i in range(N):
-            y[i] = ynew[i]
-        x_e = y[:n]
-        mode_from = mode
-        kind_logged = EVENT_TRANSITION
-        mode_to = mode
-        den = 0.0
-        # S and the jump of psi are built from: n (hx, hp, ht), f-, f+, g_x, g_t, g_p
-        for i in range(n):
-            for j in range(n):
-                gx[i, j] = 1.0 if i == j else 0.0
-            gt[i] = 0.0
-            for j in range(gp.shape[1]):
-                gp[i, j] = 0.0
-        if best_kind == 0:
-            from_sliding = slide[0] != 0
-            if from_sliding:
-                # a sliding motion meets another surface where a transition out of one of its modes
-                # holds: the motion ends, from its own field (f-), by the transition that decides
-                best_tr, info_mode, status = _sliding_transition(model, slide, best_tr, best_tr2, t_e, x_e, p, tr_table,
-                                                                 direction, hx, hp, fb, fplus)
-                if status == STATUS_OK:
-                    _field_called(model, mode, slide, t_e, x_e, p, fa, WJ, WP, wv, W)
-                    mode = tr_table[best_tr, 0]
-                    mode_from = mode
-                    slide[0] = 0
-                    if tr_table[best_tr, 4] == 0:
-                        # the state stays on the sliding surface, on the side of the mode whose
-                        # transition fired: a new field that crosses the surface fires at once
-                        # (_exit_at_once), or at the first step's sign change
-                        side = -slide[4] if mode == slide[1] else slide[4]
-                        drift = _sliding_side(model, slide, side, t_e, x_e, p, hs, hsp, xside)
-                        after_sliding = slide[3]
-                        surf_sign[slide[3]] = side
-                        fixed_sign[slide[3]] = True
-            if status == STATUS_OK:
-                known_side = 0.0
-                if at_once:
-                    known_side = 1.0 if tr_table[best_tr, 2] > 0 else -1.0
-                elif best_known:
-                    known_side = -2.0 * best_sgn
-                status, mode_to, kind_logged, den = _apply_transition(
-                    model, best_tr, best_idx, mode, t_e, x_e, p, tr_table, direction, known_side, n_ev, chatter_ring, hx, hp,
-                    fa, fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding,
-                    abs(h), xtmp, wvec, gtmp, gptmp)
-                info_mode = mode_to if from_sliding and status == STATUS_SLIDING_UNDEFINED else mode
-            if status != STATUS_OK:
-                info_surface = best_idx
-                if from_sliding and status == STATUS_SLIDING_UNDEFINED:
-                    slide[0] = SLIDE_BLOCKED  # (the motion's modes, surface and crossing are kept for the message)
-                    t = t_e
-                if status == STATUS_CHATTERING or status == STATUS_STEP_TOO_SMALL or slide[0] == SLIDE_RESET_INTO:
-                    t = t_e
-                break
-        else:
-            mode_from, mode_to, den = _leave_sliding(
-                model, best_kind, mode, slide, t_e, x_e, p, hx, hp, fa, fplus, xplus, WJ, WP, wv, W, surf_sign,
-                fixed_sign)
-            kind_logged = EVENT_SLIDING_END
-        mode = mode_to
-        # the saltation matrix, eq. (9), and the jumps of Phi and psi
-        _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, wvec, Phi_tmp, psi_tmp)
-        # log
-        ev, ev_int = _log_event(ev, ev_int, n_ev, t_e, kind_logged, best_tr, best_idx, mode_from, mode_to, x_e, xplus, S)
-        chatter_ring[n_ev % CHATTER_WINDOW] = t_e
-        h_events = max(h_events, abs(h))
-        last_kind = kind_logged
-        last_jump = best_kind == KIND_INDICATOR and tr_table[best_tr, 4] != 0
-        n_ev += 1
-        for i in range(n):
-            y[i] = xplus[i]
-            xmin[i] = min(xmin[i], x_e[i], xplus[i])
-            xmax[i] = max(xmax[i], x_e[i], xplus[i])
-        if n_ev >= max_events:
-            status = STATUS_MAX_EVENTS
-            info_mode = mode
-            info_surface = best_idx
-            t = t_e
-            break
-        if 100.0 * EPS * abs(t_e) > h_events:
-            # the time axis at t_e cannot resolve the motion: a step is no more than 100 rounding units of t,
-            # and event times (each rounded to t's grid) would be off by a sizeable part of a step
-            status = STATUS_STEP_TOO_SMALL
-            info_mode = mode
-            info_surface = best_idx
-            t = t_e
-            break
-        if n_ev >= CHATTER_WINDOW:
-            oldest = chatter_ring[n_ev % CHATTER_WINDOW]
-            # events that crowd below the resolution of the motion: 1e-9 of the step (the time scale of
-            # the motion), or a few rounding units of t (not a fraction of |t| or of the span: events
-            # well apart at t = 1e12 are no chattering)
-            if abs(t_e - oldest) <= _chatter_width(t_e, abs(h)):
-                if EPS * abs(t_e) > 1e-9 * h_events:
-                    slide[0] = TIME_UNRESOLVED  # a rounding unit of t is not small beside the motion's steps
-                status = STATUS_CHATTERING
-                info_mode = mode
-                info_surface = best_idx
-                t = t_e
-                break
-        t = t_e
-        TC[MAX_TAYLOR + 3, 0] = 0.0
-        if abs(t_end - t) <= 4.0 * EPS * max(1.0, abs(t)):
-            t = t_end
-        _aug_rhs_called(model, mode, slide, t, y, p, var, pidx, K[0], W, WJ, WP, wv)
-        for i in range(n):
-            if not math.isfinite(K[0, i]):
-                status = STATUS_NON_FINITE
-                info_mode = mode
-        if slide[0] == 0 and h_mode[mode] > 0.0:
-            habs = h_mode[mode]  # the step that suited this mode when it was left: a better guess than the old mode's
-        else:
-            habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
-        need_signs = True
+    # The loop runs in a function compiled without reference counting: every array this function passes
+    # to a call is otherwise counted up and down around it (two atomic operations), which cost more than
+    # a short step's work.  It allocates nothing: when a log is full it returns, and resumes once doubled.
+    vectors = (y, ynew, ytmp, ysave, xtmp, fa, fb, fplus, xplus, gt, wvec, psi_tmp, samples, chatter_ring, h_mode, xmin,
+               xmax)
+    matrices = (K, Ksave, F, gx, gp, S, Phi_tmp)
+    surfaces = (surf_sign, surf_old, surf_res, slope_old, surf_new, slope_new)
+    flags = (watched, fixed_sign, no_dip)
+    state_f = np.zeros(4)
+    state_f[0] = t
+    state_f[1] = habs
+    state_f[2] = drift
+    state_f[3] = h_events
+    state_i = np.zeros(14, dtype=np.int64)
+    _loop_state(state_i, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode, info_surface, pending, last_kind,
+                after_sliding, need_signs, last_jump, at_start)
+    while _integrate_steps(model, exact_affine, t_end, p, var, pidx, rtol, atol, max_step, max_events, max_steps, tr_table,
+                           n_surfaces, record, n_err, direction, sliding_step_cap, vectors, matrices, work, affine, taylor,
+                           gradients, surfaces, flags, slide, fires, (ev, ev_int, rec, rec_F), state_f, state_i):
+        if state_i[1] >= ev.shape[0]:
+            ev = _resized_rows(ev, 2 * ev.shape[0])
+            ev_int = _resized_rows(ev_int, 2 * ev_int.shape[0])
+        if record and state_i[2] >= rec.shape[0]:
+            rec = _resized_rows(rec, 2 * rec.shape[0])
+            rec_F = _resized_steps(rec_F, 2 * rec_F.shape[0])
+    t = state_f[0]
+    mode = state_i[0]
+    n_ev = state_i[1]
+    n_rec = state_i[2]
+    n_steps = state_i[3]
+    n_rejected = state_i[4]
+    status = state_i[5]
+    info_mode = state_i[6]
+    info_surface = state_i[7]
 
     return _pack_result(t, y, var, xmin, xmax, K, ev, ev_int, n_ev, rec, rec_F, n_rec, status, info_mode, info_surface,
                         n_steps, n_rejected, mode, slide, mode0)
