@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from saltation import (
     Crossing,
@@ -239,3 +241,35 @@ def test_a_sliding_motion_that_ends_at_the_seam_is_logged_with_the_engines_salta
     assert [e.kind for e in seam.events].count(last.kind) == 1
     np.testing.assert_allclose(last.saltation, exit_.saltation, rtol=0, atol=1e-9)
     np.testing.assert_allclose(seam.multipliers, inside.multipliers, rtol=0, atol=1e-9)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.floats(-10, 10), min_size=4, max_size=4), st.floats(0, 2 * math.pi), st.floats(1e-3, 1e3))
+def test_planar_deflation_matches_the_general_path(entries, angle, speed):
+    """The two-state multipliers (plain floats) against the general Householder path on the same
+    matrix embedded in three states, ``diag(M, 0.25)`` with ``f = (f, 0)``: the extra multiplier is
+    0.25 and the other two must agree to rounding; backward, each is the reciprocal of its forward one
+    (or infinite, at or below the trivial error)."""
+    backward = False
+    M = np.array(entries, dtype=float).reshape(2, 2)
+    f = speed * np.array([math.cos(angle), math.sin(angle)])
+    two = autonomous_multipliers(M, f, backward=backward)
+    M3 = np.zeros((3, 3))
+    M3[:2, :2] = M
+    M3[2, 2] = 0.25
+    three = autonomous_multipliers(M3, np.append(f, 0.0), backward=backward)
+    extra = 0.25
+    rest = list(three.multipliers)
+    rest.pop(int(np.argmin([abs(m - extra) if np.isfinite(m) else np.inf for m in rest])))
+    scale = 1.0 + float(np.abs(M).max())
+    assert two.trivial_error == pytest.approx(three.trivial_error, rel=1e-12, abs=1e-13 * scale)
+    for a, b in zip(sorted(two.multipliers, key=lambda z: (abs(z), z.real)), sorted(rest, key=lambda z: (abs(z), z.real))):
+        if np.isinf(a) or np.isinf(b):
+            assert np.isinf(a) and np.isinf(b)
+        else:
+            assert abs(a - b) <= 1e-12 * scale * max(1.0, abs(b)) ** 2
+    back = autonomous_multipliers(M, f, backward=True)
+    zero = max(1e-13, two.trivial_error)
+    expected = [complex(np.inf) if abs(m) <= zero else 1.0 / m for m in two.multipliers]
+    for a, b in zip(sorted(back.multipliers, key=lambda z: (abs(z), z.real)), sorted(expected, key=lambda z: (abs(z), z.real))):
+        assert (np.isinf(a) and np.isinf(b)) or abs(a - b) <= 1e-14 * abs(b)

@@ -98,6 +98,8 @@ def autonomous_multipliers(monodromy: np.ndarray, velocity: np.ndarray, *, backw
     """
     M = np.asarray(monodromy, dtype=float)
     f = np.asarray(velocity, dtype=float)
+    if f.shape == (2,) and M.shape == (2, 2):
+        return _autonomous_multipliers_2(M, f, backward)
     norm = float(np.linalg.norm(f))
     if not norm > 0.0 or not math.isfinite(norm):
         raise ValueError("the velocity is zero or not finite: no flow direction to deflate")
@@ -112,6 +114,29 @@ def autonomous_multipliers(monodromy: np.ndarray, velocity: np.ndarray, *, backw
     error = float(np.linalg.norm(Mn - n_dir))
     mu = np.append(complex(trivial), eigenvalues(Q.T @ M @ Q)) if len(f) > 1 else np.array([complex(trivial)])
     if backward:  # a backward multiplier within the monodromy's accuracy of zero is an infinite forward one
+        mu = reciprocal(mu, zero=max(1e-13, error))
+    return AutonomousMultipliers(sort_multipliers(mu), error)
+
+
+def _autonomous_multipliers_2(M: np.ndarray, f: np.ndarray, backward: bool) -> AutonomousMultipliers:
+    """:func:`autonomous_multipliers` of a two-state orbit, in plain floats (it runs at every branch point
+    of a planar model, where numpy's per-call cost is most of the work): with ``n = f / |f|`` and the
+    unit normal ``q = (-n_1, n_0)``, the multipliers are ``n.T M n`` and the 1 x 1 deflated ``q.T M q``."""
+    (m00, m01), (m10, m11) = M.tolist()
+    f0, f1 = f.tolist()
+    norm = math.hypot(f0, f1)
+    if not norm > 0.0 or not math.isfinite(norm):
+        raise ValueError("the velocity is zero or not finite: no flow direction to deflate")
+    if not all(map(math.isfinite, (m00, m01, m10, m11))):
+        raise np.linalg.LinAlgError("matrix contains infs or NaNs: no eigenvalues")
+    n0, n1 = f0 / norm, f1 / norm
+    mn0, mn1 = m00 * n0 + m01 * n1, m10 * n0 + m11 * n1
+    trivial = n0 * mn0 + n1 * mn1
+    error = math.hypot(mn0 - n0, mn1 - n1)
+    q0, q1 = -n1, n0
+    other = q0 * (m00 * q0 + m01 * q1) + q1 * (m10 * q0 + m11 * q1)
+    mu = np.array([trivial, other], dtype=complex)
+    if backward:
         mu = reciprocal(mu, zero=max(1e-13, error))
     return AutonomousMultipliers(sort_multipliers(mu), error)
 
