@@ -104,6 +104,16 @@ class _Printer(PythonCodePrinter):
     def _print_Integer(self, expr):
         return repr(float(expr))
 
+    def _print_Pow(self, expr, rational=False):
+        # a small integer power as products: the float exponent the other integers get would call libm's
+        # pow, some 20 times a multiplication (a Duffing field's x**3 was a sixth of its orbit's time)
+        base, exponent = expr.as_base_exp()
+        if exponent.is_Integer and 2 <= abs(int(exponent)) <= 8:
+            factor = f"({self._print(base)})"
+            product = "*".join([factor] * abs(int(exponent)))
+            return f"({product})" if exponent > 0 else f"(1.0/({product}))"
+        return super()._print_Pow(expr, rational=rational)
+
 
 def _rate_symbol(i: int) -> sp.Symbol:
     """Component ``i`` of the velocity ``f`` an indicator's rate is taken along (printed ``f[i]``)."""
