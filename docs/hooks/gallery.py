@@ -16,7 +16,7 @@ Nothing is checked in: the PNGs exist only in memory and in the built site.
 A figure whose computation fails fails the build (an error, not a warning).
 Compiled kernels are cached in ``~/.cache/saltation`` (or
 ``$SALTATION_CACHE_DIR``): the first build on a machine compiles each model
-once (about 40 s each), later builds take seconds per figure.
+once (about 25 s each), later builds take seconds per figure.
 
 Run ``python docs/hooks/gallery.py MODEL OUT.png`` to compute one figure by hand.
 """

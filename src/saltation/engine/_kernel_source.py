@@ -78,6 +78,9 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         INFO_STEPS,
         INITIAL_MODE,
         INTEGRATOR_ROW,
+        SLIDING_EVENTS_ROW,
+        STEPS_ROW,
+        SURFACE_STEP_ROW,
         LIE_DERIVATIVE,
         LIE_DERIVATIVE_DT,
         MODEL_TYPE,
@@ -124,6 +127,24 @@ INTEGRATE_RESULT = nt.Tuple((nt.int64[::1], nt.float64[::1]))  # (ints, floats):
 INTEGRATOR_TYPE = nt.FunctionType(INTEGRATE_RESULT(*INTEGRATE_SIGNATURE))
 CORRECT_SIGNATURE = (*_A, _V, _V, _R, _R, _B, _I, _R, _V, _V, _V, _R, _I, _R, _B, _R, _R, _R, _I, _I, _T, _I, _M, _V, _B,
                      _B)
+# The step-and-event loop and the two largest helpers it calls are compiled on their own too (see
+# ``saltation.engine.codegen.ENTRY_POINTS``) and called through their addresses (the rows STEPS_ROW,
+# SURFACE_STEP_ROW and SLIDING_EVENTS_ROW of ``addresses``, after the integrator's): a direct call links
+# the callee into its caller's library and optimizes it there again, and keeps both in one process on a
+# cold cache, where these compile side by side.
+_F3, _VI, _VB = nt.float64[:, :, ::1], nt.int64[::1], nt.boolean[::1]
+SURFACE_STEP_SIGNATURE = (MODEL_TYPE, _B, _I, _VI, _I, _R, _R, _V, _V, _R, _M, _M, _V, _M, _F3, _M, _M, _M, _V, _V, _V, _V,
+                          _V, _R, _VI, _V, _V, _V, _V, _V, _V, _VB, _B)
+SURFACE_STEP_TYPE = nt.FunctionType(nt.Tuple((_B, _R, _R, _R, _R, _B, _B))(*SURFACE_STEP_SIGNATURE))
+SLIDING_EVENTS_SIGNATURE = (MODEL_TYPE, SURFACE_STEP_TYPE, _B, _I, _VI, _R, _R, _V, _V, _R, _M, _M, _V, _M, _F3, _M, _M,
+                            _M, _V, _V, _V, _V, _V, _V, _V, _V, _V, _R, _T, _VB, _VI, _V, _V, _V, _V, _V, _V, _VB)
+SLIDING_EVENTS_TYPE = nt.FunctionType(
+    nt.Tuple((_R, _I, _I, _I, _I, _R, _R, _R, _B, _B, _R, _I, _I))(*SLIDING_EVENTS_SIGNATURE))
+STEPS_SIGNATURE = (MODEL_TYPE, SURFACE_STEP_TYPE, SLIDING_EVENTS_TYPE, _B, _R, _V, _B, _I, _R, _R, _R, _I, _I, _T, _I, _B,
+                   _I, _R, _R, nt.UniTuple(_V, 17), nt.UniTuple(_M, 7), nt.Tuple((_M, _F3, _M, _M)),
+                   nt.Tuple((_F3, _F3, _M, _F3, _F3)), nt.Tuple((_M, _F3, _M)), nt.UniTuple(_V, 4), nt.UniTuple(_V, 6),
+                   nt.UniTuple(_VB, 3), _VI, _VI, nt.Tuple((_M, _T, _M, _F3)), _V, _VI)
+STEPS_TYPE = nt.FunctionType(_B(*STEPS_SIGNATURE))
 
 
 
@@ -1684,7 +1705,7 @@ def _surface_step(model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp
 
 
 @njit(cache=True, _nrt=False)  # a call, not inlined: a step that does not slide never comes here
-def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp,
+def _sliding_events(model, surface_step, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp,
                     gptmp, hx, hp, hs, hsp, xside, direction, tr_table, watched, fires, surf_sign, surf_old, surf_res,
                     surf_new, slope_old, slope_new, no_dip):
     """The first event of a sliding step from ``(t, y)`` to ``(t_new, ynew)``: an exit (kind 1 or 2,
@@ -1705,7 +1726,7 @@ def _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp,
     for s in range(watched.shape[0]):
         if not watched[s]:
             continue
-        crossing, s1, s2, s_lo, s_dip, known, have_dense = _surface_step(
+        crossing, s1, s2, s_lo, s_dip, known, have_dense = surface_step(
             model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, gtmp, gptmp, hx, hp,
             direction, fires, surf_sign, surf_old, surf_res, surf_new, slope_old, slope_new, no_dip, have_dense)
         if not crossing:
@@ -1767,7 +1788,7 @@ def _needs_extrema(K, xmin):
 # --------------------------------------------------------------------------------------------------
 
 @njit(cache=True, _nrt=False)  # the integrator's loop, without reference counting (see integrate_kernel)
-def _integrate_steps(model, exact_affine, t_end, p, var, pidx, rtol, atol, max_step, max_events, max_steps, tr_table,
+def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p, var, pidx, rtol, atol, max_step, max_events, max_steps, tr_table,
                      n_surfaces, record, n_err, direction, sliding_step_cap, vectors, matrices, work, affine, taylor,
                      gradients, surfaces, flags, slide, fires, log, state_f, state_i):
     """The step-and-event loop of :func:`integrate_kernel`, on the arrays it has allocated.
@@ -1908,7 +1929,7 @@ def _integrate_steps(model, exact_affine, t_end, p, var, pidx, rtol, atol, max_s
                 for s in range(n_surfaces):
                     if not watched[s]:
                         continue
-                    crossing, s1, s2, s_lo, s_dip, known, have_dense = _surface_step(
+                    crossing, s1, s2, s_lo, s_dip, known, have_dense = surface_step(
                         model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, gtmp, gptmp,
                         hx, hp, direction, fires, surf_sign, surf_old, surf_res, surf_new, slope_old, slope_new, no_dip,
                         have_dense)
@@ -1936,7 +1957,7 @@ def _integrate_steps(model, exact_affine, t_end, p, var, pidx, rtol, atol, max_s
                             break
             else:
                 (best_s, best_kind, best_idx, best_tr, best_tr2, best_sgn, best_lo, best_hi, best_dip, have_dense, s_out,
-                 mode_out, surface_out) = _sliding_events(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ,
+                 mode_out, surface_out) = sliding_events(model, surface_step, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ,
                                                           WP, wv, TC, p, samples, gtmp, gptmp, hx, hp, hs, hsp, xside,
                                                           direction, tr_table, watched, fires, surf_sign, surf_old,
                                                           surf_res, surf_new, slope_old, slope_new, no_dip)
@@ -2367,7 +2388,10 @@ def integrate_kernel(
     state_i = np.zeros(14, dtype=np.int64)
     _loop_state(state_i, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode, info_surface, pending, last_kind,
                 after_sliding, need_signs, last_jump, at_start)
-    while _integrate_steps(model, exact_affine, t_end, p, var, pidx, rtol, atol, max_step, max_events, max_steps, tr_table,
+    surface_step = _function_at(SURFACE_STEP_TYPE, addresses[SURFACE_STEP_ROW, 0], addresses[SURFACE_STEP_ROW, 1])
+    sliding_events = _function_at(SLIDING_EVENTS_TYPE, addresses[SLIDING_EVENTS_ROW, 0], addresses[SLIDING_EVENTS_ROW, 1])
+    integrate_steps = _function_at(STEPS_TYPE, addresses[STEPS_ROW, 0], addresses[STEPS_ROW, 1])
+    while integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p, var, pidx, rtol, atol, max_step, max_events, max_steps, tr_table,
                            n_surfaces, record, n_err, direction, sliding_step_cap, vectors, matrices, work, affine, taylor,
                            gradients, surfaces, flags, slide, fires, (ev, ev_int, rec, rec_F), state_f, state_i):
         if state_i[1] >= ev.shape[0]:

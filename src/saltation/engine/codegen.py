@@ -478,18 +478,21 @@ def _model_from_addresses_source() -> str:
 def model_addresses(model: tuple, engine: ModuleType | None = None) -> np.ndarray:
     """The addresses the engine takes for a model tuple's functions: per function (in the contract's
     order) its C wrapper and its numba entry point, from numba's own helpers for first-class functions;
-    with an ``engine``, a last row (``INTEGRATOR_ROW``) for its integrator, which its Newton calls.
+    with an ``engine``, rows for its integrator (``INTEGRATOR_ROW``, which its Newton calls), and for the
+    integrator's loop and the two helpers it calls through their addresses (``STEPS_ROW``,
+    ``SURFACE_STEP_ROW``, ``SLIDING_EVENTS_ROW``).
     They stay valid while the functions live (:class:`~saltation.engine.flow.Flow` keeps them)."""
     from numba.experimental.function_type import _get_jit_address, _get_wrapper_address
 
     pairs = list(zip(model[: len(MODEL_FUNCTIONS)], MODEL_SIGNATURES.values()))
-    if engine is not None:
-        integrator = engine.integrate_kernel
-        signature = engine.INTEGRATOR_TYPE.signature
-        if integrator.nopython_signatures != [signature]:
-            raise RuntimeError(f"the engine's integrator is compiled as {integrator.nopython_signatures}, "
-                               f"not as its Newton calls it ({signature})")
-        pairs.append((integrator, signature))
+    if engine is not None:  # rows INTEGRATOR_ROW, STEPS_ROW, SURFACE_STEP_ROW, SLIDING_EVENTS_ROW
+        for name, kind in (("integrate_kernel", "INTEGRATOR_TYPE"), ("_integrate_steps", "STEPS_TYPE"),
+                           ("_surface_step", "SURFACE_STEP_TYPE"), ("_sliding_events", "SLIDING_EVENTS_TYPE")):
+            function, signature = getattr(engine, name), getattr(engine, kind).signature
+            if function.nopython_signatures != [signature]:
+                raise RuntimeError(f"the engine's {name} is compiled as {function.nopython_signatures}, "
+                                   f"not as it is called ({signature})")
+            pairs.append((function, signature))
     addresses = np.array([(_get_wrapper_address(f, sig), _get_jit_address(f, sig)) for f, sig in pairs], dtype=np.int64)
     if (addresses <= 0).any():
         raise RuntimeError("a model function has no compiled entry point for its signature in the contract")
@@ -943,10 +946,22 @@ def building(message: str, *, stream=None, interval: float = 1.0):
         stream.flush()
 
 
-ENTRY_POINTS = {"integrate_kernel": "INTEGRATE_SIGNATURE", "correct_periodic": "CORRECT_SIGNATURE"}
-"""The engine's entry points and the names of their signatures in its module.  Each is compiled for that
-signature alone, and on its own: ``correct_periodic`` calls the integrator through its address, so a
-cold cache compiles the two side by side (:func:`saltation.engine.precompile.compile_in_parallel`)."""
+ENTRY_POINTS = {
+    "_integrate_steps": "STEPS_SIGNATURE",
+    "_surface_step": "SURFACE_STEP_SIGNATURE",
+    "_sliding_events": "SLIDING_EVENTS_SIGNATURE",
+    "correct_periodic": "CORRECT_SIGNATURE",
+    "integrate_kernel": "INTEGRATE_SIGNATURE",
+}
+"""The engine's separately compiled functions and the names of their signatures in its module.  Each is
+compiled for that signature alone, and on its own: each calls the others through their addresses (the
+Newton the integrator, the integrator its step-and-event loop, the loop its surfaces' watch and its
+sliding steps' events), so none links another into its library, and a cold cache compiles them side by
+side (:func:`saltation.engine.precompile.compile_in_parallel`)."""
+
+COMPILE_GROUPS = (("_integrate_steps",), ("_surface_step", "_sliding_events", "correct_periodic", "integrate_kernel"))
+"""How a cold cache splits :data:`ENTRY_POINTS` between processes: the loop (the longest, some 20 s) in one,
+the rest (about as long together) in another, so that two cores finish at about the same time."""
 
 
 def _entry_points(names: tuple[str, ...]) -> Callable[[ModuleType], None]:

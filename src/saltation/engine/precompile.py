@@ -1,6 +1,6 @@
 """Compiling the engines and model functions several models need at once (a cold cache only).
 
-The engine of a state dimension (about 40 s) and a model's functions
+The engine of a state dimension (about 25 s on two cores, 40 s on one) and a model's functions
 (seconds) compile on first use and are cached per machine.  A process that
 needs several (the paper's figures, the test suite) compiles them here in
 parallel, one fresh interpreter each, the engines of the dimensions not yet
@@ -19,7 +19,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from saltation.engine.codegen import (
-    ENTRY_POINTS,
+    COMPILE_GROUPS,
     SPECIALIZED_DIMENSIONS,
     building,
     engine_dimension,
@@ -32,11 +32,11 @@ from saltation.model.system import PiecewiseSystem
 
 
 def _compile_in_worker(job: tuple[str, object]) -> None:
-    """Run in a fresh interpreter: compile one entry point of an engine, or one model's functions."""
+    """Run in a fresh interpreter: compile a group of an engine's functions, or one model's functions."""
     kind, what = job
     if kind == "engine":
-        dimension, entry_point = what
-        load_engine(int(dimension), (entry_point,))
+        dimension, entry_points = what
+        load_engine(int(dimension), tuple(entry_points))
     else:
         load_model_functions(what)
 
@@ -70,8 +70,8 @@ def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = No
     """
     todo = [s for s in systems if isinstance(s, PiecewiseSystem) and not is_compiled(s)]  # (not callables)
     dims = sorted({engine_dimension(s.n) for s in systems if not is_engine_compiled(s.n)})  # (callables' too)
-    # each entry point of an engine compiles on its own (the integrator is most of the time), 0: any larger dimension
-    engines = [("engine", (d or SPECIALIZED_DIMENSIONS.stop, name)) for d in dims for name in ENTRY_POINTS]
+    # an engine's functions compile in two groups of about equal time (COMPILE_GROUPS), 0: any larger dimension
+    engines = [("engine", (d or SPECIALIZED_DIMENSIONS.stop, group)) for d in dims for group in COMPILE_GROUPS]
     workers = workers or os.cpu_count() or 1
     if len(todo) + len(engines) <= 1 or workers <= 1:
         return []
@@ -82,7 +82,7 @@ def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = No
     models = f"{len(todo)} model{'s' if len(todo) != 1 else ''}"
     functions = f"the functions of {models}"
     if engines:
-        what = f"compiling the integrator for {' and '.join(sizes)} (about 40 s each, side by side on the cores)"
+        what = f"compiling the integrator for {' and '.join(sizes)} (about 25 s, side by side on the cores)"
         what += (f" and {functions}" if todo else "") + ", once for this machine"
     else:
         what = f"compiling {functions}"
