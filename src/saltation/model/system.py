@@ -788,7 +788,9 @@ def _simplify_on_surface(S: sp.Matrix, h: sp.Expr, x: sp.Matrix, reduce=sp.simpl
     """Eliminate one state using ``h = 0`` where the indicator is linear in it, then ``reduce`` each entry."""
     for xi in x:
         if h.has(xi) and h.is_polynomial(xi) and sp.degree(h, xi) == 1:
-            sol = sp.solve(sp.Eq(h, 0), xi)
-            if len(sol) == 1:
-                return S.xreplace({xi: sol[0]}).applyfunc(reduce)
+            # h = a xi + b with a, b free of xi: xi = -b / a (sympy's solve would simplify its solution,
+            # importing sympy.physics on the way: half a second at a diagram's first corner)
+            a, b = sp.diff(h, xi), h.xreplace({xi: 0})
+            if a != 0:
+                return S.xreplace({xi: sp.cancel(-b / a)}).applyfunc(reduce)
     return S
