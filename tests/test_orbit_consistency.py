@@ -27,8 +27,8 @@ from saltation import (
     Transition,
     find_periodic_orbit,
 )
-from saltation.orbits.floquet import autonomous_multipliers
 from saltation.models import block_on_belt, trilinear
+from saltation.orbits.floquet import autonomous_multipliers
 from saltation.orbits.shooting import TRIVIAL_MULTIPLIER_ACCURACY, newton
 
 

@@ -1677,7 +1677,7 @@ def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, x
     return best_s, best_kind, best_idx, best_hi, have_dense
 
 
-@njit(cache=True, _nrt=False)  # a call per watched surface and step (its 33 arguments are too many to inline)
+@njit(cache=True, _nrt=False)  # compiled for SURFACE_STEP_SIGNATURE only, called through SURFACE_STEP_ROW
 def _surface_step(model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, gtmp, gptmp, hx,
                   hp, direction, fires, surf_sign, surf_old, surf_res, surf_new, slope_old, slope_new, no_dip, have_dense):
     """Surface ``s`` over the accepted step from ``(t, y)`` to ``(t_new, ynew)``, of a mode or of a sliding
@@ -1704,7 +1704,7 @@ def _surface_step(model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp
     return True, s1, s2, s_lo, s_dip, known, True
 
 
-@njit(cache=True, _nrt=False)  # a call, not inlined: a step that does not slide never comes here
+@njit(cache=True, _nrt=False)  # compiled for SLIDING_EVENTS_SIGNATURE only, called through SLIDING_EVENTS_ROW
 def _sliding_events(model, surface_step, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp,
                     gptmp, hx, hp, hs, hsp, xside, direction, tr_table, watched, fires, surf_sign, surf_old, surf_res,
                     surf_new, slope_old, slope_new, no_dip):
@@ -1787,10 +1787,10 @@ def _needs_extrema(K, xmin):
 # (some 4 s each on the one-time build).
 # --------------------------------------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False)  # the integrator's loop, without reference counting (see integrate_kernel)
-def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p, var, pidx, rtol, atol, max_step, max_events, max_steps, tr_table,
-                     n_surfaces, record, n_err, direction, sliding_step_cap, vectors, matrices, work, affine, taylor,
-                     gradients, surfaces, flags, slide, fires, log, state_f, state_i):
+@njit(cache=True, _nrt=False)  # compiled for STEPS_SIGNATURE only, called through its address (STEPS_ROW)
+def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p, var, pidx, rtol, atol, max_step,
+                     max_events, max_steps, tr_table, n_surfaces, record, n_err, direction, sliding_step_cap, vectors,
+                     matrices, work, affine, taylor, gradients, surfaces, flags, slide, fires, log, state_f, state_i):
     """The step-and-event loop of :func:`integrate_kernel`, on the arrays it has allocated.
 
     It resumes from, and leaves, its scalar state in ``state_f`` (t, step, drift, the longest step to an
@@ -1809,9 +1809,12 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
     ev, ev_int, rec, rec_F = log
     n = N_STATE or xmin.shape[0]
     N = y.shape[0]
+    # while sliding: the sliding surface's gradient and a state moved to one of its sides (_sliding_side),
+    # in arrays that only an event's jump (wvec, psi_tmp) or a field's evaluation (W) use otherwise
     hs = psi_tmp
     hsp = W[1]
     xside = wvec
+    # views the loop passes on, made once
     K0 = K[0]
     K12 = K[12]
     y_x = y[:n]
@@ -2201,7 +2204,6 @@ def integrate_kernel(
     N = n + n * n + n if var else n
     n_err = N if (var and control_variational) else n
     direction = 1.0 if t_end >= t0 else -1.0
-    n_tr = tr_table.shape[0]
 
     y = np.zeros(N)
     ynew = np.zeros(N)
@@ -2230,11 +2232,6 @@ def integrate_kernel(
     wvec = np.zeros(n)
     Phi_tmp = np.zeros((n, n))
     psi_tmp = np.zeros(n)
-    # while sliding: the sliding surface's gradient and a state moved to one of its sides (_sliding_side),
-    # in arrays that only an event's jump (wvec, psi_tmp) or a field's evaluation (W) use otherwise
-    hs = psi_tmp
-    hsp = W[1]
-    xside = wvec
 
     # exact flows of affine modes: A, B, (omega, phase, d omega/dp, d phase/dp), dA/dp, dB/dp
     n_modes = model[AFFINE_MODES].shape[0]
@@ -2356,12 +2353,7 @@ def integrate_kernel(
     h_events = 0.0  # the longest step that ended at an event: the time scale of the motion, for a message
     h_mode = np.zeros(n_modes)  # the step proposed last in each mode (0: none yet), to re-enter it with
 
-    # views and tuples the loop passes on, made once: each one made in the loop is a reference count
-    # taken and dropped (atomic operations that cost more than the work of a short step)
-    K0 = K[0]
-    K12 = K[12]
-    y_x = y[:n]
-    ynew_x = ynew[:n]
+    # the tuples the loop takes its arrays in
     work = (W, WJ, WP, wv)
     affine = (AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP)
     taylor = (TW, TP, TC)
