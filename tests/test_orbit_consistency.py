@@ -249,27 +249,29 @@ def test_planar_deflation_matches_the_general_path(entries, angle, speed):
     """The two-state multipliers (plain floats) against the general Householder path on the same
     matrix embedded in three states, ``diag(M, 0.25)`` with ``f = (f, 0)``: the extra multiplier is
     0.25 and the other two must agree to rounding; backward, each is the reciprocal of its forward one
-    (or infinite, at or below the trivial error)."""
-    backward = False
+    (or infinite, at or below the trivial error).
+
+    Each multiplier, and ``|M n - n|``, is a quadratic form of ``M`` in unit vectors in either path: a
+    few products and sums of entries no larger than ``scale``, each rounded, so the two differ by a few
+    rounding units of ``scale`` (64 allowed); a backward multiplier is one complex division more."""
+    eps = np.finfo(float).eps
     M = np.array(entries, dtype=float).reshape(2, 2)
     f = speed * np.array([math.cos(angle), math.sin(angle)])
-    two = autonomous_multipliers(M, f, backward=backward)
+    two = autonomous_multipliers(M, f)
     M3 = np.zeros((3, 3))
     M3[:2, :2] = M
     M3[2, 2] = 0.25
-    three = autonomous_multipliers(M3, np.append(f, 0.0), backward=backward)
-    extra = 0.25
+    three = autonomous_multipliers(M3, np.append(f, 0.0))
     rest = list(three.multipliers)
-    rest.pop(int(np.argmin([abs(m - extra) if np.isfinite(m) else np.inf for m in rest])))
+    rest.pop(int(np.argmin([abs(m - 0.25) for m in rest])))
     scale = 1.0 + float(np.abs(M).max())
-    assert two.trivial_error == pytest.approx(three.trivial_error, rel=1e-12, abs=1e-13 * scale)
-    for a, b in zip(sorted(two.multipliers, key=lambda z: (abs(z), z.real)), sorted(rest, key=lambda z: (abs(z), z.real))):
-        if np.isinf(a) or np.isinf(b):
-            assert np.isinf(a) and np.isinf(b)
-        else:
-            assert abs(a - b) <= 1e-12 * scale * max(1.0, abs(b)) ** 2
+    assert abs(two.trivial_error - three.trivial_error) <= 64 * eps * scale
+    # matched by value, not by a sort: two multipliers of equal magnitude may swap places under rounding
+    assert max(min(abs(a - b) for b in rest) for a in two.multipliers) <= 64 * eps * scale
+    assert max(min(abs(a - b) for a in two.multipliers) for b in rest) <= 64 * eps * scale
     back = autonomous_multipliers(M, f, backward=True)
     zero = max(1e-13, two.trivial_error)
     expected = [complex(np.inf) if abs(m) <= zero else 1.0 / m for m in two.multipliers]
-    for a, b in zip(sorted(back.multipliers, key=lambda z: (abs(z), z.real)), sorted(expected, key=lambda z: (abs(z), z.real))):
-        assert (np.isinf(a) and np.isinf(b)) or abs(a - b) <= 1e-14 * abs(b)
+    for a in back.multipliers:
+        assert any((np.isinf(a) and np.isinf(b)) or abs(a - b) <= 4 * eps * abs(b) for b in expected)
+    assert sorted(np.isinf(back.multipliers)) == sorted(np.isinf(expected))
