@@ -333,6 +333,8 @@ def _dense_coefficients(model, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ,
 
 
 MAX_TAYLOR = 60  # terms of the exact flow's series; more means the step is too long
+EXACT_STEP_BOUND = 4.0  # longest exact step, times the row-sum norm of its generator: the magnitudes of its
+# series' terms sum to at most e^4 ~ 55 times the state's, so that summing them loses under two digits
 
 
 def _dense_basis(s):
@@ -428,7 +430,7 @@ def _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_A
     for i in range(n):
         for j in range(3):
             bmax = max(bmax, abs(B[i, j]))
-    if mnorm * abs(h) > 4.0:
+    if mnorm * abs(h) > EXACT_STEP_BOUND:
         return (mnorm * abs(h) / 2.0) ** 8
     xs = TW[0]
     xt = TW[1]
@@ -1876,6 +1878,14 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
             if habs >= remaining or remaining - habs < 1e-12 * remaining:
                 habs = remaining
             exact = exact_affine and slide[0] == 0 and model[AFFINE_MODES][mode]
+            if exact:
+                # the longest step whose series keeps its digits (_exact_step rejects longer ones): known
+                # before the step, so no step is attempted beyond it and rejected
+                h_series = (1.0 - 1e-12) * EXACT_STEP_BOUND / _affine_norm(AFF_A[mode], AFF_B[mode], AFF_W[mode, 0])
+                if habs > h_series:
+                    habs = h_series
+                    if habs >= remaining or remaining - habs < 1e-12 * remaining:
+                        habs = remaining
             # attempt a step
             rejected = False
             while True:

@@ -963,6 +963,10 @@ COMPILE_GROUPS = (("_integrate_steps",), ("_surface_step", "_sliding_events", "c
 """How a cold cache splits :data:`ENTRY_POINTS` between processes: the loop (the longest, some 20 s) in one,
 the rest (about as long together) in another, so that two cores finish at about the same time."""
 
+COMPILE_GROUP_SECONDS = (22.0, 18.0)
+"""About how long each of :data:`COMPILE_GROUPS` takes to compile (one core of a 2-core machine, 2-state
+engine): :mod:`saltation.engine.precompile` balances the processes of a cold build by them."""
+
 
 def _entry_points(names: tuple[str, ...]) -> Callable[[ModuleType], None]:
     def compile_them(module: ModuleType) -> None:
