@@ -319,9 +319,10 @@ def write(results: PaperResults, out: Path) -> list[Path]:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
+    figures = []  # drawn at the end, together (plotting.save_figures: on two cores where it can)
     tri = results.trilinear_branch
-    written += plotting.save_figure(plotting.plot_response([tri]), out / "fig3_trilinear_response", dpi=150)
-    written += plotting.save_figure(plotting.plot_multipliers(tri), out / "fig4_trilinear_multipliers", dpi=150)
+    figures.append((plotting.plot_response([tri]), out / "fig3_trilinear_response"))
+    figures.append((plotting.plot_multipliers(tri), out / "fig4_trilinear_multipliers"))
     pp = results.phase_plane
     curves = [
         plotting.PhaseCurve(pp["stable"], label="stable limit cycle", style=plotting.CurveStyle.STABLE),
@@ -334,8 +335,8 @@ def write(results: PaperResults, out: Path) -> list[Path]:
         stick_region=(float(pp["stick_x"][0]), float(pp["stick_x"][1])), regions=("V", "W", "D"),
         legend_below=True, labels=[(k, pp[f"flow_{k}"][0]) for k in ("I", "II", "III")], figsize=(6.0, 5.2),
     )
-    written += plotting.save_figure(fig6, out / "fig6_block_on_belt_phase_plane", dpi=150)
-    written += plotting.save_figure(plotting.plot_response(results.block_on_belt.branches), out / "fig7_block_on_belt_diagram", dpi=150)
+    figures.append((fig6, out / "fig6_block_on_belt_phase_plane"))
+    figures.append((plotting.plot_response(results.block_on_belt.branches), out / "fig7_block_on_belt_diagram"))
 
     written.append(io.save_branch_json(tri, out / "trilinear_branch.json"))
     written += _branch_csv(tri, out / "trilinear_branch.csv")
@@ -366,9 +367,9 @@ def write(results: PaperResults, out: Path) -> list[Path]:
         ax.set_title("Smoothed models follow the stable branch and stop at its fold (x: last point);\n"
                      "the infinitely unstable branch is found by backward shooting of the discontinuous model",
                      fontsize=8)
-        written += plotting.save_figure(fig8, out / "fig8_block_on_belt_smoothed", dpi=150)
+        figures.append((fig8, out / "fig8_block_on_belt_smoothed"))
         written.append(io.write_json([r.record() for r in results.smoothing], out / "smoothing_table.json"))
-    return written
+    return plotting.save_figures(figures, dpi=150) + written
 
 
 def special_point_table(records: list[dict]) -> str:
