@@ -203,6 +203,9 @@ def test_adding_sliding_curve_against_closed_form(adding):
         assert friction == pytest.approx(reference, abs=1e-9)
 
 
+# fsolve starts from the located event, often already a root to rounding: "not making good progress" then
+# says it cannot improve it, and the residual is checked below
+@pytest.mark.filterwarnings("ignore:The iteration is not making good progress:RuntimeWarning")
 def test_crossing_sliding_curve_against_independent_computation(branch):
     """The crossing-sliding continued in (v_b, F): every few curve points against fsolve on the closed-form
     two-slip orbit at that F."""
