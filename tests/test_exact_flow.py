@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.linalg
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
 import sympy as sp
 
 from saltation.engine._contract import AFFINE_PARTS, AFFINE_PARTS_DP
@@ -239,3 +241,44 @@ def test_phase_shifted_forcing_with_sliding(filippov_flow, name):
     np.testing.assert_allclose(fast.x1, ref.x1, rtol=0, atol=1e-9)
     np.testing.assert_allclose(fast.monodromy, ref.monodromy, rtol=1e-8, atol=1e-8)
     np.testing.assert_allclose(fast.parameter_sensitivity, ref.parameter_sensitivity, rtol=1e-8, atol=1e-8)
+
+
+# ---------------------------------------------------------------------------- the step's bound
+def _relaxation_system():
+    """``x' = -a x + c``: affine, its generator's norm ``max(a, |c|)`` (0 for ``a = c = 0``, a field that is zero)."""
+    from saltation import Mode, PiecewiseSystem
+
+    return PiecewiseSystem(name="test_relaxation", states=["x"], parameters={"a": 0.0, "c": 0.0},
+                           modes=[Mode("relax", ["-a*x + c"])], surfaces={}, transitions=[])
+
+
+@pytest.fixture(scope="module")
+def relaxation_flow():
+    from saltation import Flow
+
+    return Flow(_relaxation_system())
+
+
+@settings(max_examples=150, deadline=None)
+@example(a=0.0, c=0.0, x0=0.3, span=2.0)  # a zero field: no bound on the step, and nothing moves
+@example(a=0.0, c=1.5, x0=-0.2, span=-3.0)
+@example(a=40.0, c=0.5, x0=1.0, span=1.0)  # ten times the series' bound over the span
+@given(a=st.one_of(st.just(0.0), st.floats(1e-3, 40.0)), c=st.floats(-3.0, 3.0), x0=st.floats(-2.0, 2.0),
+       span=st.one_of(st.floats(-2.0, -1e-3), st.floats(1e-3, 2.0)))
+def test_exact_steps_of_any_norm_against_the_closed_form(relaxation_flow, a, c, x0, span):
+    """State and fundamental solution of ``x' = -a x + c`` against ``x = c/a + (x0 - c/a) e^(-a t)``
+    (``x0 + c t`` for ``a = 0``), forward and backward, for generator norms from 0 (a zero field, whose
+    steps have no bound) to ten times what one exact step may take.  Each step is exact to the
+    rounding of its series, at most ``e^4`` rounding units of the state's scale (``EXACT_STEP_BOUND``),
+    so the bound is that per step taken, with a factor 4 for the final sums."""
+    p = relaxation_flow.parameters({"a": a, "c": c})
+    r = relaxation_flow.run([x0], 0.0, span, p, variational=True)
+    if a == 0.0:
+        x_ref, phi_ref = x0 + c * span, 1.0
+    else:
+        phi_ref = np.exp(-a * span)
+        x_ref = c / a + (x0 - c / a) * phi_ref
+    scale = max(1.0, abs(x0), abs(x_ref), abs(c / a) if a else abs(c * span))
+    bound = 4.0 * (r.n_steps + 1) * np.exp(4.0) * np.finfo(float).eps
+    assert abs(r.x1[0] - x_ref) <= bound * scale
+    assert abs(r.monodromy[0, 0] - phi_ref) <= bound * max(1.0, phi_ref)

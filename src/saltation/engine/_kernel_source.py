@@ -1875,17 +1875,16 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
             habs = min(habs, max_step)
             if slide[0] == 1 and sliding_step_cap > 0.0:
                 habs = min(habs, sliding_step_cap)
-            if habs >= remaining or remaining - habs < 1e-12 * remaining:
-                habs = remaining
             exact = exact_affine and slide[0] == 0 and model[AFFINE_MODES][mode]
             if exact:
                 # the longest step whose series keeps its digits (_exact_step rejects longer ones): known
-                # before the step, so no step is attempted beyond it and rejected
-                h_series = (1.0 - 1e-12) * EXACT_STEP_BOUND / _affine_norm(AFF_A[mode], AFF_B[mode], AFF_W[mode, 0])
-                if habs > h_series:
-                    habs = h_series
-                    if habs >= remaining or remaining - habs < 1e-12 * remaining:
-                        habs = remaining
+                # before the step, so no step is attempted beyond it and rejected (a field that is zero
+                # has no such bound)
+                mnorm = _affine_norm(AFF_A[mode], AFF_B[mode], AFF_W[mode, 0])
+                if mnorm * habs > EXACT_STEP_BOUND:
+                    habs = (1.0 - 1e-12) * EXACT_STEP_BOUND / mnorm
+            if habs >= remaining or remaining - habs < 1e-12 * remaining:
+                habs = remaining
             # attempt a step
             rejected = False
             while True:
