@@ -522,6 +522,7 @@ def test_the_parallel_build_names_what_it_builds(monkeypatch, capsys):
     monkeypatch.setattr(precompile, "is_compiled", lambda system: False)
     monkeypatch.setattr(precompile, "is_engine_compiled", lambda n: False)
     monkeypatch.setattr(precompile, "_run_in_processes", lambda jobs, workers: None)
+    monkeypatch.setattr(precompile, "_start_worker", lambda: subprocess.Popen([sys.executable, "-c", ""], stdin=subprocess.PIPE))
     assert precompile.compile_in_parallel([trilinear(), block_on_belt()], workers=2) == ["trilinear", "block_on_belt"]
     err = capsys.readouterr().err
     assert "compiling the integrator for 2-state models" in err and "the functions of 2 models" in err

@@ -292,7 +292,8 @@ def smoothing_table(rows: list[SmoothingRow], unstable_amplitude: float | None =
 
 def compute(settings: PaperSettings = PaperSettings(), progress: Progress = None) -> PaperResults:
     """Compute the data of Figs. 3, 4, 6 and 7 and the smoothing study (compiling the models at once on a cold cache)."""
-    compile_in_parallel([trilinear(), block_on_belt(), smoothed_block_on_belt()])
+    # the engine's build starts before the models are built (they have two states: position and velocity)
+    compile_in_parallel((make() for make in (trilinear, block_on_belt, smoothed_block_on_belt)), dimensions=(2,))
     # the smoothing study runs beside the figures: the engine releases the GIL, and the two share nothing
     with ThreadPoolExecutor(1) as pool:
         smoothing = pool.submit(smoothing_study, settings, progress)

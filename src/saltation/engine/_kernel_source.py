@@ -319,7 +319,8 @@ def _dense_coefficients(model, mode, slide, t, y, ynew, h, p, K, F, xtmp, W, WJ,
                 if a != 0.0:
                     acc += a * K[j, i]
             xtmp[i] = y[i] + h * acc
-        _aug_rhs_called(model, mode, slide, t + RK_C[s] * h, xtmp, p, False, -1, K[s], W, WJ, WP, wv)  # noqa: F821
+        # (no variational part; the flags typed, not literal: literals would compile the call a second time)
+        _aug_rhs_called(model, mode, slide, t + RK_C[s] * h, xtmp, p, np.bool_(False), np.int64(-1), K[s], W, WJ, WP, wv)  # noqa: F821
     for i in range(n):
         dyi = ynew[i] - y[i]
         F[0, i] = dyi

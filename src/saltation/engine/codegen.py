@@ -897,7 +897,24 @@ def build_watcher(callback: Callable[[str | None, float], None]):
 def building(message: str, *, stream=None, interval: float = 1.0):
     """Say on standard error what is being built, and, on a terminal, keep the line moving with the
     seconds elapsed until it is done (a compile of a minute should not look like a hang).  With a
-    :func:`build_watcher` active, the watcher shows it instead."""
+    :func:`build_watcher` active, the watcher shows it instead.  A build within one already announced
+    (in this thread) is not announced again."""
+    if getattr(_BUILD_NOTICE, "active", False):  # (within a build already announced: that notice covers it)
+        yield
+        return
+    _BUILD_NOTICE.active = True
+    try:
+        with _announced(message, stream, interval):
+            yield
+    finally:
+        _BUILD_NOTICE.active = False
+
+
+_BUILD_NOTICE = threading.local()
+
+
+@contextlib.contextmanager
+def _announced(message: str, stream, interval: float):
     watchers = list(_BUILD_WATCHERS)
     if watchers:
         done = threading.Event()

@@ -3,12 +3,13 @@
 The engine of a state dimension (about 25 s on two cores, 40 s on one) and a model's functions
 (seconds) compile on first use and are cached per machine.  A process that
 needs several (the paper's figures, the test suite) compiles them here in
-parallel, one fresh interpreter per core, and then loads them all from the
+parallel: in this process and in fresh interpreters, one per further core, which
+start before the models are built and then load what they compiled from the
 cache.  The jobs (the groups of each engine's functions, each model's
-functions) are shared out longest first, each to the interpreter with the least
+functions) are shared out longest first, each to the process with the least
 work so far (:func:`schedule`): the models' functions fill in beside the
-engine's longer group, in an interpreter that has already imported and warmed
-up numba.
+engine's longer group, in a process that has already imported and warmed up
+numba.
 """
 
 from __future__ import annotations
@@ -17,9 +18,7 @@ import os
 import pickle
 import subprocess
 import sys
-import tempfile
-from concurrent.futures import ThreadPoolExecutor
-from pathlib import Path
+from collections.abc import Iterable
 
 from saltation.engine.codegen import (
     COMPILE_GROUP_SECONDS,
@@ -88,56 +87,114 @@ def schedule(costs: list[float], workers: int) -> list[list[int]]:
     return [share for share in shares if share]
 
 
-def _run_in_processes(jobs: list[Job], workers: int) -> None:
-    costs = [COMPILE_GROUP_SECONDS[COMPILE_GROUPS.index(tuple(what[1]))] if kind == "engine" else model_seconds(what)
-             for kind, what in jobs]
-    shares = [[jobs[k] for k in share] for share in schedule(costs, workers)]
-    code = (
-        "import pickle, sys; from saltation.engine.precompile import _compile_in_worker; "
-        "_compile_in_worker(pickle.load(open(sys.argv[1], 'rb')))"
-    )
-    with tempfile.TemporaryDirectory() as tmp:
-
-        def run(k: int) -> None:
-            path = Path(tmp) / f"jobs{k}.pickle"
-            path.write_bytes(pickle.dumps(shares[k]))
-            # a failure here is not fatal: the caller's first use compiles (and reports) it
-            subprocess.run([sys.executable, "-c", code, str(path)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                           check=False)
-
-        with ThreadPoolExecutor(len(shares)) as pool:
-            list(pool.map(run, range(len(shares))))
+_WORKER_CODE = (
+    "import os, pickle, sys; from saltation.engine.precompile import _compile_in_worker; "
+    "_compile_in_worker(pickle.load(sys.stdin.buffer)); os._exit(0)"
+)
+"""A worker's program: import saltation, read the jobs, compile them, and exit at once (what it compiled is
+in the cache, each file written whole; tearing numba's compiler down would keep the caller waiting a second)."""
 
 
-def compile_in_parallel(systems: list[PiecewiseSystem], workers: int | None = None) -> list[str]:
+def _start_worker() -> subprocess.Popen:
+    """A fresh interpreter that imports saltation at once, then waits for its jobs on standard input
+    (:func:`_give_jobs`): it gets through its imports while this process still builds the models."""
+    # a failure there is not fatal: the caller's first use compiles (and reports) what it did not
+    return subprocess.Popen([sys.executable, "-c", _WORKER_CODE], stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+
+
+def _give_jobs(worker: subprocess.Popen, jobs: list[Job]) -> None:
+    """Send a worker its jobs (none: it exits); a worker that has died is left to the first use."""
+    assert worker.stdin is not None
+    try:
+        worker.stdin.write(pickle.dumps(jobs))
+        worker.stdin.close()
+    except OSError:  # (BrokenPipeError: the interpreter failed to start or to import saltation)
+        pass
+
+
+def _job_cost(job: Job) -> float:
+    kind, what = job
+    if kind == "engine":
+        return COMPILE_GROUP_SECONDS[COMPILE_GROUPS.index(tuple(what[1]))]
+    return model_seconds(what)
+
+
+def _run_in_processes(jobs: list[Job], workers: list[subprocess.Popen]) -> None:
+    """Compile ``jobs`` here and in ``workers`` (started by :func:`_start_worker`), shared out by
+    :func:`schedule`: this process takes the share with the longest job (the loop of the integrator,
+    whose loading from the cache afterwards would cost most), each worker one of the others."""
+    shares = schedule([_job_cost(job) for job in jobs], len(workers) + 1)
+    for k, worker in enumerate(workers):
+        _give_jobs(worker, [jobs[j] for j in shares[k + 1]] if k + 1 < len(shares) else [])
+    _compile_in_worker([jobs[j] for j in shares[0]])
+    for worker in workers:
+        worker.wait()
+
+
+def compile_in_parallel(systems: Iterable[PiecewiseSystem], workers: int | None = None, *,
+                        dimensions: Iterable[int] = ()) -> list[str]:
     """Compile the engines and the functions of several models at once (a cold cache only).
 
-    Engines and models already cached are skipped; the rest is compiled in at
-    most ``workers`` (default: the number of cores) fresh interpreters (so this
-    is safe from any script), shared out by :func:`schedule`.  Returns the names
-    of the models compiled (none when there is at most one thing to compile:
-    the caller's first use compiles it as fast).
+    Engines and models already cached are skipped; the rest is compiled in this process and in
+    fresh interpreters (so this is safe from any script), at most ``workers`` (default: the number of
+    cores) in all, shared out by :func:`schedule`.
+
+    Parameters
+    ----------
+    systems : iterable of PiecewiseSystem
+        The models (callables' flows need their engines only).  A generator is consumed after the
+        interpreters have started, so that building the models overlaps their start.
+    workers : int, optional
+        Processes in all, this one included (default: the number of cores).
+    dimensions : iterable of int
+        State dimensions whose engines are needed, known before the models are built: when one is not
+        compiled, the interpreters start before ``systems`` is consumed.
+
+    Returns
+    -------
+    list of str
+        The names of the models compiled (none when there is at most one thing to compile: the caller's
+        first use compiles it as fast).
     """
-    todo = [s for s in systems if isinstance(s, PiecewiseSystem) and not is_compiled(s)]  # (not callables)
-    dims = sorted({engine_dimension(s.n) for s in systems if not is_engine_compiled(s.n)})  # (callables' too)
-    # an engine's functions compile in two groups of about equal time (COMPILE_GROUPS), 0: any larger dimension
-    engines = [("engine", (d or SPECIALIZED_DIMENSIONS.stop, group)) for d in dims for group in COMPILE_GROUPS]
     workers = workers or os.cpu_count() or 1
-    if len(todo) + len(engines) <= 1 or workers <= 1:
-        return []
-    # the models' functions do not need an engine to compile: they fill in beside the engines' longer groups
-    jobs = engines + [("model", s) for s in todo]
-    sizes = [f"{d}-state models" if d else f"models of {SPECIALIZED_DIMENSIONS.stop} or more states" for d in dims]
-    models = f"{len(todo)} model{'s' if len(todo) != 1 else ''}"
-    functions = f"the functions of {models}"
-    if engines:
-        what = f"compiling the integrator for {' and '.join(sizes)} (about 25 s, side by side on the cores)"
-        what += (f" and {functions}" if todo else "") + ", once for this machine"
-    else:
-        what = f"compiling {functions}"
-    with building(what):
-        _run_in_processes(jobs, min(workers, len(jobs)))
-    return [s.name for s in todo]
+    early = workers > 1 and any(not is_engine_compiled(n) for n in dimensions)
+    started = [_start_worker() for _ in range(workers - 1)] if early else []
+    finished = False
+    try:
+        systems = list(systems)
+        todo = [s for s in systems if isinstance(s, PiecewiseSystem) and not is_compiled(s)]  # (not callables)
+        needed = {s.n for s in systems} | set(dimensions)  # (callables' too)
+        dims = sorted({engine_dimension(n) for n in needed if not is_engine_compiled(n)})
+        # an engine's functions compile in two groups of about equal time (COMPILE_GROUPS), 0: any larger dimension
+        engines = [("engine", (d or SPECIALIZED_DIMENSIONS.stop, group)) for d in dims for group in COMPILE_GROUPS]
+        if len(todo) + len(engines) <= 1 or workers <= 1:
+            return []
+        # the models' functions do not need an engine to compile: they fill in beside the engines' longer groups
+        jobs = engines + [("model", s) for s in todo]
+        helpers = min(workers, len(jobs)) - 1
+        for worker in started[helpers:]:
+            _give_jobs(worker, [])  # (more were started than there are jobs to share)
+        started = started[:helpers] + [_start_worker() for _ in range(helpers - len(started))]
+        sizes = [f"{d}-state models" if d else f"models of {SPECIALIZED_DIMENSIONS.stop} or more states" for d in dims]
+        models = f"{len(todo)} model{'s' if len(todo) != 1 else ''}"
+        functions = f"the functions of {models}"
+        if engines:
+            what = f"compiling the integrator for {' and '.join(sizes)} (about 25 s, side by side on the cores)"
+            what += (f" and {functions}" if todo else "") + ", once for this machine"
+        else:
+            what = f"compiling {functions}"
+        with building(what):
+            _run_in_processes(jobs, started)
+        finished = True
+        return [s.name for s in todo]
+    finally:
+        for worker in started:
+            if not finished and worker.poll() is None:
+                worker.kill()  # (interrupted, or nothing to share out)
+            elif worker.stdin is not None and not worker.stdin.closed:
+                worker.stdin.close()  # (never given its jobs: it reads the end of its input, and exits)
+            worker.wait()
 
 
 __all__ = ["compile_in_parallel", "model_seconds", "schedule"]
