@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -63,3 +64,77 @@ def test_the_papers_cold_build_is_balanced():
     assert abs(loads[0] - loads[1]) < min(costs[2:])
     shorter_group = next(share for share in shares if 1 in share)
     assert 3 in shorter_group  # block_on_belt
+
+
+def test_the_interpreters_start_before_the_models_are_built(monkeypatch):
+    """Given the engines' dimensions, a cold build starts its interpreters first and only then builds
+    the models (a generator, consumed after the start), so that their imports overlap; this process
+    keeps a share, so two processes in all use one interpreter."""
+    import subprocess
+    import sys
+
+    from saltation.engine import precompile
+
+    events: list[str] = []
+
+    def start():
+        events.append("start")
+        return subprocess.Popen([sys.executable, "-c", ""], stdin=subprocess.PIPE)
+
+    def run(jobs, workers):
+        events.append(f"run {len(jobs)} jobs, {len(workers)} interpreter(s)")
+
+    def models():
+        for make in (trilinear, block_on_belt):
+            events.append("build")
+            yield make()
+
+    monkeypatch.setattr(precompile, "is_compiled", lambda system: False)
+    monkeypatch.setattr(precompile, "is_engine_compiled", lambda n: False)
+    monkeypatch.setattr(precompile, "_start_worker", start)
+    monkeypatch.setattr(precompile, "_run_in_processes", run)
+    assert precompile.compile_in_parallel(models(), workers=2, dimensions=(2,)) == ["trilinear", "block_on_belt"]
+    assert events == ["start", "build", "build", "run 4 jobs, 1 interpreter(s)"]
+
+
+def test_nothing_to_share_starts_no_interpreter(monkeypatch):
+    """One job (or none) is left to the caller's first use: no interpreter is started, and one started
+    early, for an engine that turns out to be the only job, is stopped."""
+    from saltation.engine import precompile
+
+    started = []
+    monkeypatch.setattr(precompile, "is_compiled", lambda system: True)
+    monkeypatch.setattr(precompile, "_run_in_processes", lambda jobs, workers: pytest.fail("nothing to run"))
+    real_start = precompile._start_worker
+    monkeypatch.setattr(precompile, "_start_worker", lambda: started.append(real_start()) or started[-1])
+    monkeypatch.setattr(precompile, "is_engine_compiled", lambda n: True)
+    assert precompile.compile_in_parallel([trilinear()], workers=2) == []
+    assert started == []
+    monkeypatch.setattr(precompile, "COMPILE_GROUPS", (("_integrate_steps",),))  # one group: a single job
+    monkeypatch.setattr(precompile, "is_engine_compiled", lambda n: False)
+    assert precompile.compile_in_parallel([trilinear()], workers=2, dimensions=(2,)) == []
+    assert len(started) == 1 and started[0].returncode is not None  # stopped, and waited for
+
+
+def test_a_worker_given_no_jobs_exits():
+    """A worker reads its jobs from standard input: given none, it exits at once, with status 0."""
+    from saltation.engine import precompile
+
+    worker = precompile._start_worker()
+    precompile._give_jobs(worker, [])
+    assert worker.wait(timeout=120) == 0
+
+
+def test_a_build_within_a_build_is_announced_once():
+    """The process's own share of a parallel build compiles through the calls a first use makes, which
+    announce themselves: within the build's notice they say nothing more."""
+    import io
+
+    from saltation.engine.codegen import building
+
+    log = io.StringIO()
+    with building("compiling the integrator", stream=log), building("compiling the integrator for N_STATE = 2", stream=log):
+        pass
+    with building("compiling the functions of 1 model", stream=log):
+        pass
+    assert log.getvalue() == "saltation: compiling the integrator\nsaltation: compiling the functions of 1 model\n"
