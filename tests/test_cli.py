@@ -459,3 +459,37 @@ def test_each_shipped_model_declares_itself_in_its_own_file():
             for backward in (False, True):
                 assert len(shipped.start(system.defaults, backward)) == system.n
     assert "two_mass_stops" in SHIPPED  # the newest gallery model is on the command line too
+
+
+def test_the_program_ends_at_once_after_its_exit_handlers(compiled, tmp_path):
+    """``saltation`` (``cli.run``) skips the interpreter's teardown but not the exit handlers: one registered
+    during the command runs, the output is whole, and the status is the command's."""
+    marker = tmp_path / "handler_ran"
+    code = (
+        "import atexit, pathlib, sys; "
+        f"atexit.register(lambda: pathlib.Path({str(marker)!r}).write_text('yes')); "
+        "sys.argv = ['saltation', 'orbit', 'trilinear', '--json', '--set', 'omega=0.7']; "
+        "from saltation.apps.cli import run; run()"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert marker.read_text() == "yes"
+    assert _strict_json(proc.stdout)["stable"] is True
+    bad = subprocess.run([sys.executable, "-c", code.replace("omega=0.7", "omgea=1")], capture_output=True, text=True,
+                         timeout=600, check=False)
+    assert bad.returncode == 2 and bad.stdout == "" and bad.stderr.startswith("saltation: error: unknown parameter")
+
+
+def test_the_program_waits_for_a_running_thread(compiled, tmp_path):
+    """Where a thread that is not a daemon still runs when the command returns, ``cli.run`` exits the usual
+    way, which waits for it: what the thread writes is there."""
+    marker = tmp_path / "thread_done"
+    code = (
+        "import pathlib, sys, threading, time; "
+        f"threading.Thread(target=lambda: (time.sleep(1.0), pathlib.Path({str(marker)!r}).write_text('done'))).start(); "
+        "sys.argv = ['saltation', '--version']; "
+        "from saltation.apps.cli import run; run()"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert marker.read_text() == "done"

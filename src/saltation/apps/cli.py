@@ -25,6 +25,7 @@ with its traceback instead.
 from __future__ import annotations
 
 import argparse
+import atexit
 import json
 import math
 import os
@@ -1674,6 +1675,29 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
 
 
+def run() -> None:
+    """The ``saltation`` program (and ``python -m saltation``): :func:`main`, then a quick exit.
+
+    The interpreter's own teardown frees numba's compiled code and type system object by object, which
+    takes over half a second after the work is done.  By then every result is written and closed, so the
+    program runs the exit handlers (``atexit``: temporary folders, logging, a Dask client's shutdown),
+    flushes its streams and ends the process at once, with :func:`main`'s status.  Where another thread
+    is still running, or the interpreter offers no way to run the handlers, it exits the usual way.
+    """
+    status = main()
+    run_handlers = getattr(atexit, "_run_exitfuncs", None)  # (CPython's; what the usual exit calls)
+    if run_handlers is None or any(t.is_alive() and not t.daemon for t in threading.enumerate()
+                                   if t is not threading.main_thread()):
+        sys.exit(status)
+    run_handlers()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # (a reader that has gone: nothing more to say, nowhere to say it)
+            pass
+    os._exit(status)
+
+
 def _fail(exc: BaseException | str) -> None:
     """Print ``saltation: error: MESSAGE`` as one line on stderr."""
     message = (" ".join(str(exc).split()) or type(exc).__name__) if isinstance(exc, BaseException) else exc
@@ -1681,4 +1705,4 @@ def _fail(exc: BaseException | str) -> None:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    run()
