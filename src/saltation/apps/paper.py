@@ -17,6 +17,7 @@ data (JSON, CSV) and ``special_points.json``.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -38,6 +39,7 @@ from saltation.orbits.floquet import multipliers_from_monodromy
 from saltation.engine.flow import Flow
 from saltation.models import SHIPPED, block_on_belt, trilinear
 from saltation.model.regularize import regularize
+from saltation.model.system import PiecewiseSystem
 from saltation.orbits.shooting import EquilibriumProblem, ShootingProblem, find_periodic_orbit
 from saltation.orbits.start import estimate_period, transient
 
@@ -230,7 +232,8 @@ def phase_plane(v_dr: float = 1.0) -> dict[str, np.ndarray]:
     }
 
 
-def smoothed_block_on_belt():
+@functools.cache  # a model is immutable (as the shipped models, built once): regularizing it again is wasted
+def smoothed_block_on_belt() -> PiecewiseSystem:
     """The block-on-belt model smoothed by :func:`saltation.regularize.regularize` (width a parameter)."""
     return regularize(block_on_belt(), SMOOTHING_WIDTHS[0])
 
