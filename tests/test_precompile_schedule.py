@@ -97,6 +97,34 @@ def test_the_interpreters_start_before_the_models_are_built(monkeypatch):
     assert events == ["start", "build", "build", "run 4 jobs, 1 interpreter(s)"]
 
 
+def test_a_machine_of_many_cores_starts_what_the_jobs_keep_busy(monkeypatch):
+    """With 8 cores, two interpreters start early (the engine's two groups), a third once the models are
+    known (four jobs: this process and three interpreters), and no more."""
+    import subprocess
+    import sys
+
+    from saltation.engine import precompile
+
+    events: list[str] = []
+
+    def start():
+        events.append("start")
+        return subprocess.Popen([sys.executable, "-c", ""], stdin=subprocess.PIPE)
+
+    def models():
+        for make in (trilinear, block_on_belt):
+            events.append("build")
+            yield make()
+
+    monkeypatch.setattr(precompile, "is_compiled", lambda system: False)
+    monkeypatch.setattr(precompile, "is_engine_compiled", lambda n: False)
+    monkeypatch.setattr(precompile, "_start_worker", start)
+    monkeypatch.setattr(precompile, "_run_in_processes",
+                        lambda jobs, workers: events.append(f"run {len(jobs)} jobs, {len(workers)} interpreter(s)"))
+    precompile.compile_in_parallel(models(), workers=8, dimensions=(2,))
+    assert events == ["start", "start", "build", "build", "start", "run 4 jobs, 3 interpreter(s)"]
+
+
 def test_nothing_to_share_starts_no_interpreter(monkeypatch):
     """One job (or none) is left to the caller's first use: no interpreter is started, and one started
     early, for an engine that turns out to be the only job, is stopped."""

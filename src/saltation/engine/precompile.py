@@ -177,8 +177,10 @@ def compile_in_parallel(systems: Iterable[PiecewiseSystem], workers: int | None 
         first use compiles it as fast).
     """
     workers = workers or os.cpu_count() or 1
-    early = workers > 1 and any(not is_engine_compiled(n) for n in dimensions)
-    started = [_start_worker() for _ in range(workers - 1)] if early else []
+    early = sorted({engine_dimension(n) for n in dimensions if not is_engine_compiled(n)})
+    # as many as the engines' groups will keep busy (more, once the models' jobs are known)
+    started = [_start_worker() for _ in range(min(workers - 1, len(early) * len(COMPILE_GROUPS)))]
+    spare: list[subprocess.Popen] = []
     finished = False
     try:
         systems = list(systems)
@@ -192,8 +194,9 @@ def compile_in_parallel(systems: Iterable[PiecewiseSystem], workers: int | None 
         # the models' functions do not need an engine to compile: they fill in beside the engines' longer groups
         jobs = engines + [("model", s) for s in todo]
         helpers = min(workers, len(jobs)) - 1
-        for worker in started[helpers:]:
-            _give_jobs(worker, [])  # (more were started than there are jobs to share)
+        spare = started[helpers:]
+        for worker in spare:
+            _give_jobs(worker, [])  # (more were started than there are jobs to share: each exits)
         started = started[:helpers] + [_start_worker() for _ in range(helpers - len(started))]
         sizes = [f"{d}-state models" if d else f"models of {SPECIALIZED_DIMENSIONS.stop} or more states" for d in dims]
         models = f"{len(todo)} model{'s' if len(todo) != 1 else ''}"
@@ -208,7 +211,7 @@ def compile_in_parallel(systems: Iterable[PiecewiseSystem], workers: int | None 
         finished = True
         return [s.name for s in todo]
     finally:
-        for worker in started:
+        for worker in started + spare:
             if not finished and worker.poll() is None:
                 worker.kill()  # (interrupted, or nothing to share out)
             elif worker.stdin is not None and not worker.stdin.closed:
