@@ -461,35 +461,31 @@ def test_each_shipped_model_declares_itself_in_its_own_file():
     assert "two_mass_stops" in SHIPPED  # the newest gallery model is on the command line too
 
 
+def _run_program(setup: str, argv: list[str]) -> subprocess.CompletedProcess:
+    """``cli.run`` in a fresh interpreter, after the statements ``setup``, with ``argv``."""
+    code = f"import atexit, pathlib, sys, threading, time; {setup}; sys.argv = {['saltation', *argv]!r}; " \
+           "from saltation.apps.cli import run; run()"
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=False)
+
+
 def test_the_program_ends_at_once_after_its_exit_handlers(compiled, tmp_path):
     """``saltation`` (``cli.run``) skips the interpreter's teardown but not the exit handlers: one registered
     during the command runs, the output is whole, and the status is the command's."""
     marker = tmp_path / "handler_ran"
-    code = (
-        "import atexit, pathlib, sys; "
-        f"atexit.register(lambda: pathlib.Path({str(marker)!r}).write_text('yes')); "
-        "sys.argv = ['saltation', 'orbit', 'trilinear', '--json', '--set', 'omega=0.7']; "
-        "from saltation.apps.cli import run; run()"
-    )
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=False)
+    handler = f"atexit.register(lambda: pathlib.Path({str(marker)!r}).write_text('yes'))"
+    proc = _run_program(handler, ["orbit", "trilinear", "--json", "--set", "omega=0.7"])
     assert proc.returncode == 0, proc.stderr
     assert marker.read_text() == "yes"
     assert _strict_json(proc.stdout)["stable"] is True
-    bad = subprocess.run([sys.executable, "-c", code.replace("omega=0.7", "omgea=1")], capture_output=True, text=True,
-                         timeout=600, check=False)
+    bad = _run_program(handler, ["orbit", "trilinear", "--json", "--set", "omgea=1"])
     assert bad.returncode == 2 and bad.stdout == "" and bad.stderr.startswith("saltation: error: unknown parameter")
 
 
-def test_the_program_waits_for_a_running_thread(compiled, tmp_path):
+def test_the_program_waits_for_a_running_thread(tmp_path):
     """Where a thread that is not a daemon still runs when the command returns, ``cli.run`` exits the usual
     way, which waits for it: what the thread writes is there."""
     marker = tmp_path / "thread_done"
-    code = (
-        "import pathlib, sys, threading, time; "
-        f"threading.Thread(target=lambda: (time.sleep(1.0), pathlib.Path({str(marker)!r}).write_text('done'))).start(); "
-        "sys.argv = ['saltation', '--version']; "
-        "from saltation.apps.cli import run; run()"
-    )
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=False)
+    thread = f"threading.Thread(target=lambda: (time.sleep(1.0), pathlib.Path({str(marker)!r}).write_text('done'))).start()"
+    proc = _run_program(thread, ["--version"])
     assert proc.returncode == 0, proc.stderr
     assert marker.read_text() == "done"

@@ -66,40 +66,9 @@ def test_the_papers_cold_build_is_balanced():
     assert 3 in shorter_group  # block_on_belt
 
 
-def test_the_interpreters_start_before_the_models_are_built(monkeypatch):
-    """Given the engines' dimensions, a cold build starts its interpreters first and only then builds
-    the models (a generator, consumed after the start), so that their imports overlap; this process
-    keeps a share, so two processes in all use one interpreter."""
-    import subprocess
-    import sys
-
-    from saltation.engine import precompile
-
-    events: list[str] = []
-
-    def start():
-        events.append("start")
-        return subprocess.Popen([sys.executable, "-c", ""], stdin=subprocess.PIPE)
-
-    def run(jobs, workers):
-        events.append(f"run {len(jobs)} jobs, {len(workers)} interpreter(s)")
-
-    def models():
-        for make in (trilinear, block_on_belt):
-            events.append("build")
-            yield make()
-
-    monkeypatch.setattr(precompile, "is_compiled", lambda system: False)
-    monkeypatch.setattr(precompile, "is_engine_compiled", lambda n: False)
-    monkeypatch.setattr(precompile, "_start_worker", start)
-    monkeypatch.setattr(precompile, "_run_in_processes", run)
-    assert precompile.compile_in_parallel(models(), workers=2, dimensions=(2,)) == ["trilinear", "block_on_belt"]
-    assert events == ["start", "build", "build", "run 4 jobs, 1 interpreter(s)"]
-
-
-def test_a_machine_of_many_cores_starts_what_the_jobs_keep_busy(monkeypatch):
-    """With 8 cores, two interpreters start early (the engine's two groups), a third once the models are
-    known (four jobs: this process and three interpreters), and no more."""
+def _record_a_cold_build(monkeypatch) -> tuple[list[str], object]:
+    """Nothing cached, interpreters that do nothing: the events of a build (starts, models built, the
+    run's jobs and interpreters) and a generator of two models that records each build."""
     import subprocess
     import sys
 
@@ -121,7 +90,27 @@ def test_a_machine_of_many_cores_starts_what_the_jobs_keep_busy(monkeypatch):
     monkeypatch.setattr(precompile, "_start_worker", start)
     monkeypatch.setattr(precompile, "_run_in_processes",
                         lambda jobs, workers: events.append(f"run {len(jobs)} jobs, {len(workers)} interpreter(s)"))
-    precompile.compile_in_parallel(models(), workers=8, dimensions=(2,))
+    return events, models()
+
+
+def test_the_interpreters_start_before_the_models_are_built(monkeypatch):
+    """Given the engines' dimensions, a cold build starts its interpreters first and only then builds
+    the models (a generator, consumed after the start), so that their imports overlap; this process
+    keeps a share, so two processes in all use one interpreter."""
+    from saltation.engine import precompile
+
+    events, models = _record_a_cold_build(monkeypatch)
+    assert precompile.compile_in_parallel(models, workers=2, dimensions=(2,)) == ["trilinear", "block_on_belt"]
+    assert events == ["start", "build", "build", "run 4 jobs, 1 interpreter(s)"]
+
+
+def test_a_machine_of_many_cores_starts_what_the_jobs_keep_busy(monkeypatch):
+    """With 8 cores, two interpreters start early (the engine's two groups), a third once the models are
+    known (four jobs: this process and three interpreters), and no more."""
+    from saltation.engine import precompile
+
+    events, models = _record_a_cold_build(monkeypatch)
+    assert precompile.compile_in_parallel(models, workers=8, dimensions=(2,)) == ["trilinear", "block_on_belt"]
     assert events == ["start", "start", "build", "build", "start", "run 4 jobs, 3 interpreter(s)"]
 
 
