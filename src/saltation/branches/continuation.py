@@ -390,17 +390,19 @@ class Continuation:
             return False
         start = self.solutions[0]
         step = new.z - prev.z
-        length = float(np.linalg.norm(step))
-        if length == 0.0 or step @ start.tangent <= 0.0:
+        length2 = float(step @ step)
+        if length2 == 0.0 or step @ start.tangent <= 0.0:
             return False
-        along = float(np.clip((start.z - prev.z) @ step / length**2, 0.0, 1.0))
-        gap = float(np.linalg.norm(prev.z + along * step - start.z))
-        return 0.0 < along < 1.0 and gap <= 0.05 * length
+        along = min(max(float((start.z - prev.z) @ step) / length2, 0.0), 1.0)
+        if not 0.0 < along < 1.0:
+            return False
+        offset = prev.z + along * step - start.z
+        return float(offset @ offset) <= 0.0025 * length2  # a gap of at most 5 % of the step
 
     def _accept(self, sol: Solution) -> None:
         self.problem.accept(sol.u, sol.lam)
         self.solutions.append(sol)
-        self.branch.points.append(replace(sol.summary, parameter=sol.lam, step=sol.step, iterations=sol.iterations))
+        self.branch.points.append(sol.summary.recorded(sol.lam, sol.step, sol.iterations))
 
 
 def _same_special_point(a, b, rtol: float = 1e-6) -> bool:

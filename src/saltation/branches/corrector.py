@@ -8,10 +8,13 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Protocol
 
 import numpy as np
+from scipy.linalg import lapack
 
 from saltation.errors import ConvergenceError
 from saltation.orbits.records import BranchPoint, Evaluation
@@ -80,8 +83,19 @@ def canonical_events(events: tuple) -> tuple:
     """
     if not events:
         return events
-    rotations = [events[k:] + events[:k] for k in range(len(events))]
-    return min(rotations)
+    if type(events) is tuple:
+        try:
+            return _least_rotation(events)
+        except TypeError:  # unhashable items
+            pass
+    return min(events[k:] + events[:k] for k in range(len(events)))
+
+
+@lru_cache(maxsize=512)
+def _least_rotation(events: tuple) -> tuple:
+    """The least rotation of a sequence (cached: continuation compares the same few sequences at every
+    point)."""
+    return min(events[k:] + events[:k] for k in range(len(events)))
 
 
 def bordered(jac_u: np.ndarray, jac_lam: np.ndarray, row: np.ndarray) -> np.ndarray:
@@ -216,11 +230,15 @@ class Corrector:
         J = bordered(ev.jac_u, ev.jac_lam, previous)
         rhs = np.zeros(J.shape[0])
         rhs[-1] = 1.0
-        try:
-            t = np.linalg.solve(J, rhs)
-        except np.linalg.LinAlgError:
+        # LAPACK's dgesv (what numpy.linalg.solve calls), without numpy's per-call cost: this runs for every
+        # branch point, on a matrix of a few rows
+        _, _, t, info = lapack.dgesv(J, rhs)
+        with np.errstate(over="ignore", invalid="ignore"):
+            size = float(t @ t)
+        if info != 0 or not math.isfinite(size) or size == 0.0:  # singular: info > 0
             t = previous.copy()
-        t /= np.linalg.norm(t)
+            size = float(t @ t)
+        t /= math.sqrt(size)
         if t @ previous < 0:
             t = -t
         return t

@@ -421,7 +421,13 @@ def _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_A
     A = AFF_A[mode]
     B = AFF_B[mode]
     om = AFF_W[mode, 0]
-    sens = var  # the sensitivity is carried whenever Phi is (its forcing terms are zero when pidx < 0)
+    # the sensitivity is carried whenever Phi is, except where it is zero and stays so: no parameter
+    # (its forcing terms are zero when pidx < 0) and psi = 0 at the step's start (a period map's shots)
+    sens = var and pidx >= 0
+    if var and not sens:
+        for i in range(n):
+            if y[n + n * n + i] != 0.0:
+                sens = True
     Ap = AFF_AP[mode]
     Bp = AFF_BP[mode]
     omp = AFF_W[mode, 2]
@@ -457,8 +463,8 @@ def _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_A
         if sens:
             ss[i] = y[n + n * n + i]
             st[i] = ss[i]
-            TC[0, n + n * n + i] = ss[i]
         if var:
+            TC[0, n + n * n + i] = y[n + n * n + i]
             for j in range(n):
                 Ps[i, j] = y[n + i * n + j]
                 Pt[i, j] = Ps[i, j]
@@ -485,6 +491,9 @@ def _exact_step(mode, t, y, h, var, pidx, rtol, atol, AFF_A, AFF_B, AFF_W, AFF_A
                 st[i] = sn[i]
                 ss[i] += st[i]
                 TC[k, n + n * n + i] = st[i]
+        elif var:
+            for i in range(n):
+                TC[k, n + n * n + i] = 0.0  # (summed by _exact_fraction)
         z1, z2 = -c * om * z2, c * om * z1
         bz0 = 0.0
         for i in range(n):

@@ -333,6 +333,27 @@ class NamedParts:
         """
         if overrides is not None and not isinstance(overrides, Mapping):
             raise ModelError(f"parameter overrides must be a mapping of names to values, got {overrides!r}")
+        # the vectors of the last few sets of overrides are kept (every orbit found asks again for the same)
+        try:
+            key = (tuple(self.defaults.items()), tuple(overrides.items()) if overrides else ())
+            known = self._parameter_vectors.get(key)
+        except TypeError:  # a value that is not hashable: no memory
+            key, known = None, None
+        if known is not None:
+            return known.copy()
+        p = self._checked_parameter_vector(overrides)
+        if key is not None:
+            if len(self._parameter_vectors) >= 64:
+                self._parameter_vectors.clear()
+            self._parameter_vectors[key] = p.copy()
+        return p
+
+    @cached_property
+    def _parameter_vectors(self) -> dict:
+        """Parameter vectors by ``(defaults, overrides)``, for :meth:`parameter_vector`."""
+        return {}
+
+    def _checked_parameter_vector(self, overrides: Mapping[str, float] | None) -> np.ndarray:
         values = dict(self.defaults)
         for key, val in (overrides or {}).items():
             self.parameter_index(key)
@@ -743,6 +764,7 @@ class PiecewiseSystem(NamedParts):
         state.pop("_period_functions", None)
         state.pop("_parameter_divisors", None)
         state.pop("_symmetry_functions", None)
+        state.pop("_parameter_vectors", None)
         return state
 
     def axis_label(self, name: str) -> str:

@@ -164,7 +164,8 @@ def eigenvalues(matrix: np.ndarray) -> np.ndarray:
         If the matrix is not finite or the QR algorithm does not converge.
     """
     a = np.asarray(matrix, dtype=float)
-    if not np.isfinite(a).all():
+    # a small matrix is checked in plain floats (numpy's reduction costs more than the check)
+    if not (all(map(math.isfinite, a.ravel().tolist())) if a.size <= 64 else np.isfinite(a).all()):
         raise np.linalg.LinAlgError("matrix contains infs or NaNs: no eigenvalues")
     wr, wi, _, _, info = lapack.dgeev(a, compute_vl=0, compute_vr=0)
     if info != 0:
@@ -249,8 +250,10 @@ def is_stable(mu: np.ndarray, *, autonomous: bool, tol: float = 1e-6) -> bool:
         True for a stable orbit.
     """
     mu = np.asarray(mu, dtype=complex)
+    if not autonomous:
+        return all(abs(m) < 1.0 + tol for m in mu.tolist())  # plain complex numbers: a few of them
     keep = np.abs(mu) < 1.0 + tol
-    if autonomous and mu.size:
+    if mu.size:
         keep[int(np.argmin(np.where(np.isfinite(mu), np.abs(mu - 1.0), np.inf)))] = True  # the trivial one
     return bool(np.all(keep))
 

@@ -6,6 +6,7 @@ that each can build them, and the continuation engine reads them.
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field
 
@@ -79,6 +80,30 @@ class BranchPoint:
     excursion: float = float("nan")
     second_parameter: float = float("nan")
 
+    def recorded(self, parameter: float, step: float, iterations: int) -> BranchPoint:
+        """This point as a branch records it: with its parameter, the step that led to it and the corrector's
+        iterations (``dataclasses.replace``, without its per-call field checks: this runs for every point).
+
+        Parameters
+        ----------
+        parameter : float
+            Value of the continuation parameter.
+        step : float
+            Arclength step that led to the point.
+        iterations : int
+            Newton iterations of the corrector.
+
+        Returns
+        -------
+        BranchPoint
+            A new record; this one is unchanged.
+        """
+        point = copy.copy(self)
+        object.__setattr__(point, "parameter", parameter)  # (a fresh copy: the record itself stays frozen)
+        object.__setattr__(point, "step", step)
+        object.__setattr__(point, "iterations", iterations)
+        return point
+
     def __repr__(self) -> str:
         where = f"{self.parameter:.10g}" + ("" if not math.isfinite(self.second_parameter) else f", {self.second_parameter:.10g}")
         mu = ", ".join(f"{abs(m):.4g}" for m in np.asarray(self.multipliers)[:4])
@@ -93,11 +118,11 @@ SolutionSummary = BranchPoint
 def amplitude_measures(traj: Trajectory) -> dict[str, float]:
     """The amplitude measures of an orbit's period, computed in one place: ``amplitude = max |x_1|``,
     ``half_peak_to_peak = (max x_1 - min x_1) / 2`` and ``excursion = max_i (max x_i - min x_i)``."""
-    lo, hi = traj.x_min, traj.x_max
+    lo, hi = traj.x_min.tolist(), traj.x_max.tolist()  # plain floats: this runs for every branch point
     return {
-        "amplitude": float(max(abs(hi[0]), abs(lo[0]))),
-        "half_peak_to_peak": float(0.5 * (hi[0] - lo[0])),
-        "excursion": float(np.max(hi - lo)),
+        "amplitude": max(abs(hi[0]), abs(lo[0])),
+        "half_peak_to_peak": 0.5 * (hi[0] - lo[0]),
+        "excursion": max(map(float.__sub__, hi, lo)),
     }
 
 
@@ -123,23 +148,35 @@ def event_ids(traj: Trajectory) -> tuple[tuple[int, int, int], ...]:
     label but not the same index; a sliding motion's end is told by the mode
     it leaves into.  Detectors of non-smooth points compare these.
     """
-    names = traj.system.mode_names
-    return tuple((int(e.kind), int(e.transition), names.index(e.mode_to)) for e in orbit_events(traj))
+    return tuple((kind, transition, mode_to) for kind, transition, _, _, mode_to in _orbit_event_rows(traj))
 
 
 def event_labels(traj: Trajectory) -> tuple[str, ...]:
     """Readable labels of a trajectory's events (see :func:`orbit_events`): the transition, or the sliding
     motion started or ended."""
     sys_ = traj.system
+    names, surfaces = sys_.mode_names, sys_.surface_names
     labels = []
-    for e in orbit_events(traj):
-        if e.kind == EventKind.TRANSITION:
-            labels.append(sys_.transitions[e.transition].label)
-        elif e.kind == EventKind.SLIDING_START:
-            labels.append(f"slide on {e.surface} ({e.mode_from}|{e.mode_to})")
+    for kind, transition, surface, mode_from, mode_to in _orbit_event_rows(traj):
+        if kind == EventKind.TRANSITION:
+            labels.append(sys_.transitions[transition].label)
+        elif kind == EventKind.SLIDING_START:
+            labels.append(f"slide on {surfaces[surface]} ({names[mode_from]}|{names[mode_to]})")
         else:
-            labels.append(f"leave {e.surface} sliding -> {e.mode_to}")
+            labels.append(f"leave {surfaces[surface]} sliding -> {names[mode_to]}")
     return tuple(labels)
+
+
+def _orbit_event_rows(traj: Trajectory) -> list[list[int]]:
+    """:func:`orbit_events` as rows ``(kind, transition, surface, mode from, mode to)`` of the
+    trajectory's event log (plain integers, without building the events: this runs for every branch
+    point)."""
+    ev_t, ev_int = traj.event_log[0], traj.event_log[1]
+    rows = ev_int.tolist()
+    if (rows and rows[0][0] == EventKind.SLIDING_START and float(ev_t[0]) == traj.t0 and traj.sliding_at_end
+            and any(r[0] == EventKind.SLIDING_START and r[2] == rows[0][2] for r in rows[1:])):
+        return rows[1:]
+    return rows
 
 
 __all__ = ["BranchPoint", "Evaluation", "SolutionSummary", "amplitude_measures", "event_ids", "event_labels", "orbit_events"]

@@ -26,6 +26,7 @@ non-smooth point from symmetric to asymmetric orbits records a ``discontinuous_s
 
 from __future__ import annotations
 
+import cmath
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
@@ -1321,8 +1322,11 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 def _nontrivial(sol: Solution, autonomous: bool) -> np.ndarray:
     """Multipliers without the trivial one (closest to 1) of an autonomous orbit."""
-    mu = np.asarray(sol.summary.multipliers, dtype=complex)
-    if autonomous and mu.size:
+    mu = sol.summary.multipliers
+    if not autonomous:
+        return mu
+    mu = np.asarray(mu, dtype=complex)
+    if mu.size:
         finite = np.where(np.isfinite(mu), np.abs(mu - 1.0), np.inf)
         keep = np.ones(mu.size, dtype=bool)
         keep[int(np.argmin(finite))] = False
@@ -1330,24 +1334,32 @@ def _nontrivial(sol: Solution, autonomous: bool) -> np.ndarray:
     return mu
 
 
+def _finite(mu: np.ndarray) -> list[complex]:
+    """The finite multipliers, as plain complex numbers (the tests below run for every branch point, on a
+    few numbers: numpy's per-call cost would exceed the arithmetic)."""
+    return [m for m in np.asarray(mu, dtype=complex).tolist() if cmath.isfinite(m)]
+
+
 def _flip_test(mu: np.ndarray) -> float:
     """``prod(mu + 1)`` over the finite multipliers (changes sign at period doubling)."""
-    mu = mu[np.isfinite(mu)]
-    return float(np.real(np.prod(mu + 1.0)))
+    prod = 1.0 + 0.0j
+    for m in _finite(mu):
+        prod *= m + 1.0
+    return prod.real
 
 
 def _plus_one_test(mu: np.ndarray) -> float:
     """``prod(mu - 1)`` over the finite multipliers (changes sign where a real one passes +1)."""
-    mu = mu[np.isfinite(mu)]
-    return float(np.real(np.prod(mu - 1.0)))
+    prod = 1.0 + 0.0j
+    for m in _finite(mu):
+        prod *= m - 1.0
+    return prod.real
 
 
 def _ns_test(mu: np.ndarray) -> float:
     """``|mu| - 1`` of the largest complex multiplier (nan when there is none: never a crossing)."""
-    cplx = mu[np.isfinite(mu) & (np.abs(mu.imag) > 1e-8)]
-    if cplx.size == 0:
-        return float("nan")
-    return float(np.max(np.abs(cplx)) - 1.0)
+    sizes = [abs(m) for m in _finite(mu) if abs(m.imag) > 1e-8]
+    return max(sizes) - 1.0 if sizes else float("nan")
 
 
 def _hopf_test(sol: Solution) -> float:
