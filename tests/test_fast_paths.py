@@ -10,13 +10,18 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from saltation import Flow
 from saltation.branches.corrector import Corrector, Solution, canonical_events
 from saltation.engine.flow import EventKind
 from saltation.errors import ModelError
 from saltation.models import block_on_belt, trilinear
 from saltation.orbits.floquet import eigenvalues, is_stable
-from saltation.orbits.records import BranchPoint, Evaluation, event_ids, event_labels, orbit_events
+from saltation.orbits.records import (
+    BranchPoint,
+    Evaluation,
+    event_ids,
+    event_labels,
+    orbit_events,
+)
 from saltation.special_points.detection import _flip_test, _ns_test, _plus_one_test
 
 finite = st.floats(-1e3, 1e3, allow_nan=False, allow_infinity=False)
