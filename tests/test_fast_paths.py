@@ -172,8 +172,13 @@ def test_parameter_vectors_are_fresh_copies_and_follow_the_defaults():
     p[:] = -7.0  # the caller's array: what is remembered is not touched
     again = system.parameter_vector({"omega": 1.3})
     assert again[i] == 1.3 and again[system.parameter_index("m")] == system.defaults["m"]
-    system.defaults["m"] = 2.5  # defaults changed after a vector was remembered
-    assert system.parameter_vector({"omega": 1.3})[system.parameter_index("m")] == 2.5
+    m = system.defaults["m"]
+    try:  # (the shipped model is shared by every test: its defaults are put back)
+        system.defaults["m"] = 2.5  # defaults changed after a vector was remembered
+        assert system.parameter_vector({"omega": 1.3})[system.parameter_index("m")] == 2.5
+    finally:
+        system.defaults["m"] = m
+    assert system.parameter_vector({"omega": 1.3})[system.parameter_index("m")] == m
     for _ in range(2):  # refused every time, never remembered
         with pytest.raises(ModelError, match="divides by m"):
             system.parameter_vector({"m": 0.0})

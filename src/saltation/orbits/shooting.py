@@ -356,7 +356,7 @@ class ShootingProblem:
             raise ModelError(f"t0 must be finite, got {t0}")
         # an autonomous field does not depend on time: integrate from 0; a forced one from the phase of the
         # forcing at t0 (a time of 1e12 keeps only 4 decimals: the orbit there is the orbit at t0 mod T)
-        self.t0 = 0.0 if self.autonomous else math.fmod(t0, self.system.forcing_period(self.p))
+        self.t0 = 0.0 if self.autonomous or t0 == 0.0 else math.fmod(t0, self.system.forcing_period(self.p))
         self.x_ref: np.ndarray | None = None
         self.f_ref: np.ndarray | None = None
 

@@ -27,6 +27,7 @@ non-smooth point from symmetric to asymmetric orbits records a ``discontinuous_s
 from __future__ import annotations
 
 import cmath
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
@@ -1317,7 +1318,7 @@ def _crosses(ga: float, gb: float) -> bool:
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v)
+    return v / math.sqrt(float(v @ v))  # numpy's norm of a vector, without its per-call dispatch
 
 
 def _nontrivial(sol: Solution, autonomous: bool) -> np.ndarray:
