@@ -354,6 +354,7 @@ class NamedParts:
         return {}
 
     def _checked_parameter_vector(self, overrides: Mapping[str, float] | None) -> np.ndarray:
+        """:meth:`parameter_vector` built and checked (what is remembered)."""
         values = dict(self.defaults)
         for key, val in (overrides or {}).items():
             self.parameter_index(key)
