@@ -70,8 +70,8 @@ def test_the_bracket_holds_the_closed_form_corner(monkeypatch, grazing_fails):
         assert spent[0] >= 20
     else:
         # the grazing orbit is missed by the first try (from the far end, the mirror grazing at -F is
-        # found), found by the second after 8 halvings, then two corrections, up to three pairs
-        assert spent[0] <= 8 + 6
+        # found), found by the second after 7 halvings, then two corrections, up to three pairs
+        assert spent[0] <= 7 + 6
 
 
 def test_a_grazing_outside_the_bracket_is_not_used(monkeypatch):

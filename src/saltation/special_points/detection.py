@@ -737,7 +737,7 @@ class SpecialPointDetector:
         seq_a = canonical_events(a.summary.event_ids)
         lo, hi = a, b
         sa, sb = 0.0, 1.0
-        trials = [0, 8]  # the grazing is tried at the start and, if it failed, once more 8 bisections on
+        trials = [0, 8]  # the grazing is tried at the start and, if that failed, once more after 7 halvings
         for it in range(80):
             if np.linalg.norm(hi.z - lo.z) <= self.tol:
                 break
