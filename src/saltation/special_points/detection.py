@@ -729,7 +729,7 @@ class SpecialPointDetector:
         Where the two sides differ by an excursion through a surface that the orbit on one side misses,
         the boundary orbit is first located by its defining system (a grazing,
         :func:`~saltation.special_points.grazing.locate_grazing`) and the bracket is closed around it with
-        two corrections (:meth:`_bracket_at_grazing`): some 4 corrections in place of 25 bisections.
+        two corrections (:meth:`_bracket_at_grazing`, up to three pairs), in place of some 25 halvings.
         Every corrected point moves the end of the bracket whose event sequence it shares, as a
         bisection's does, so the bracket holds the change whether or not the grazing orbit is found
         (bisection along the secant then goes on from it).
