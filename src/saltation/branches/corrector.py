@@ -227,19 +227,25 @@ class Corrector:
             The unit tangent, with ``t . previous >= 0``.
         """
         ev = sol.evaluation
-        J = bordered(ev.jac_u, ev.jac_lam, previous)
-        rhs = np.zeros(J.shape[0])
-        rhs[-1] = 1.0
-        # LAPACK's dgesv (what numpy.linalg.solve calls), without numpy's per-call cost: this runs for every
-        # branch point, on a matrix of a few rows
-        _, _, t, info = lapack.dgesv(J, rhs)
-        with np.errstate(over="ignore", invalid="ignore"):
-            size = float(t @ t)
+        known = ev.bordered_tangent
+        if known is not None and known[0] is previous:
+            # solved by the compiled corrector with this very row, by the same elimination with partial
+            # pivoting (zero where singular: then as below)
+            t, info = known[1].copy(), 0
+        else:
+            J = bordered(ev.jac_u, ev.jac_lam, previous)
+            rhs = np.zeros(J.shape[0])
+            rhs[-1] = 1.0
+            # LAPACK's dgesv (what numpy.linalg.solve calls), without numpy's per-call cost: this runs for
+            # every branch point, on a matrix of a few rows
+            _, _, t, info = lapack.dgesv(J, rhs)
+        # in plain floats (an overflow is inf, without numpy's error state): a few numbers per branch point
+        size = sum(v * v for v in t.tolist())
         if info != 0 or not math.isfinite(size) or size == 0.0:  # singular: info > 0
             t = previous.copy()
-            size = float(t @ t)
+            size = sum(v * v for v in t.tolist())
         t /= math.sqrt(size)
-        if t @ previous < 0:
+        if sum(a * b for a, b in zip(t.tolist(), previous.tolist())) < 0:
             t = -t
         return t
 

@@ -686,7 +686,13 @@ def _dense_event(model, kind, idx, slide, sgn, t, h, F, y, s, p, xtmp, gtmp, gpt
 
 @njit(cache=True, _nrt=False)
 def _bracket_root(model, kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp, gtmp, gptmp, exact, TC):
-    """Illinois root finding of ``sgn * event`` on the dense output in ``[sa, sb]`` (value > 0 at sa, <= 0 at sb)."""
+    """Regula falsi with the Anderson-Bjorck modification, for the root of ``sgn * event`` on the dense output
+    in ``[sa, sb]`` (value > 0 at sa, <= 0 at sb), to a bracket of a few rounding units.
+
+    Where the same end is kept twice, the value at the other end is scaled by ``1 - g_new / g_old`` (half
+    where that is not positive: Illinois).  Anderson and Bjorck (1973), "A new high order method of regula
+    falsi type for computing a root of an equation", BIT 13, 253-264.
+    """
     ga = _dense_event(model, kind, idx, slide, sgn, t, h, F, y, sa, p, xtmp, gtmp, gptmp, exact, TC)
     if ga <= 0.0:
         ga = 1e-300
@@ -2224,50 +2230,74 @@ def integrate_kernel(
     n_err = N if (var and control_variational) else n
     direction = 1.0 if t_end >= t0 else -1.0
 
-    y = np.zeros(N)
-    ynew = np.zeros(N)
-    ytmp = np.zeros(N)
-    ysave = np.zeros(N)
-    K = np.zeros((16, N))
-    Ksave = np.zeros((16, N))
-    F = np.zeros((7, n))
-    W = np.zeros((2, max(npar, 1)))
-    WJ = np.zeros((3, n, n))
-    WP = np.zeros((n, max(npar, 1)))
-    wv = np.zeros((7, n))
-    xtmp = np.zeros(n)
-    hx = np.zeros(n)
-    hp = np.zeros(max(npar, 1))
-    gtmp = np.zeros(n)
-    gptmp = np.zeros(max(npar, 1))
-    fa = np.zeros(n)
-    fb = np.zeros(n)
-    fplus = np.zeros(n)
-    xplus = np.zeros(n)
-    gx = np.zeros((n, n))
-    gt = np.zeros(n)
-    gp = np.zeros((n, max(npar, 1)))
-    S = np.zeros((n, n))
-    wvec = np.zeros(n)
-    Phi_tmp = np.zeros((n, n))
-    psi_tmp = np.zeros(n)
-
-    # exact flows of affine modes: A, B, (omega, phase, d omega/dp, d phase/dp), dA/dp, dB/dp
+    # The work arrays are views of one block of floats, one of integers and one of flags: three allocations
+    # a run, not fifty (and fewer array constructors to compile).
     n_modes = model[AFFINE_MODES].shape[0]
-    AFF_A = np.zeros((n_modes, n, n))
-    AFF_B = np.zeros((n_modes, n, 3))
-    AFF_W = np.zeros((n_modes, 4))
-    AFF_AP = np.zeros((n_modes, n, n))
-    AFF_BP = np.zeros((n_modes, n, 3))
-    TW = np.zeros((7, n))
-    TP = np.zeros((3, n, n))
+    np1 = max(npar, 1)
+    n_float = (36 + MAX_TAYLOR + 4) * N + 21 * n + 10 * n * n + 14 * n + 4 * np1 + 3 * n * np1
+    n_float += n_modes * (2 * n * n + 6 * n + 5) + (np1 * (n * n + 3 * n + 2) if exact_affine else 0)
+    n_float += 6 * n_surfaces + SLIDING_EXIT_SAMPLES + 1 + CHATTER_WINDOW + 4
+    floats = np.zeros(n_float)
+    at = 0
+    y = floats[at:at + N]
+    ynew = floats[at + N:at + 2 * N]
+    ytmp = floats[at + 2 * N:at + 3 * N]
+    ysave = floats[at + 3 * N:at + 4 * N]
+    at += 4 * N
+    K = floats[at:at + 16 * N].reshape((16, N))
+    Ksave = floats[at + 16 * N:at + 32 * N].reshape((16, N))
+    at += 32 * N
     # Taylor coefficients of [x, Phi, psi] of the last exact step; then their number, the fraction of
     # the step taken and the step (see ``_step``)
-    TC = np.zeros((MAX_TAYLOR + 4, N))
+    TC = floats[at:at + (MAX_TAYLOR + 4) * N].reshape((MAX_TAYLOR + 4, N))
+    at += (MAX_TAYLOR + 4) * N
+    F = floats[at:at + 7 * n].reshape((7, n))
+    wv = floats[at + 7 * n:at + 14 * n].reshape((7, n))
+    TW = floats[at + 14 * n:at + 21 * n].reshape((7, n))
+    at += 21 * n
+    WJ = floats[at:at + 3 * n * n].reshape((3, n, n))
+    TP = floats[at + 3 * n * n:at + 6 * n * n].reshape((3, n, n))
+    at += 6 * n * n
+    gx = floats[at:at + n * n].reshape((n, n))
+    S = floats[at + n * n:at + 2 * n * n].reshape((n, n))
+    Phi_tmp = floats[at + 2 * n * n:at + 3 * n * n].reshape((n, n))
+    at += 4 * n * n  # (one n x n spare)
+    xtmp = floats[at:at + n]
+    hx = floats[at + n:at + 2 * n]
+    gtmp = floats[at + 2 * n:at + 3 * n]
+    fa = floats[at + 3 * n:at + 4 * n]
+    fb = floats[at + 4 * n:at + 5 * n]
+    fplus = floats[at + 5 * n:at + 6 * n]
+    xplus = floats[at + 6 * n:at + 7 * n]
+    gt = floats[at + 7 * n:at + 8 * n]
+    wvec = floats[at + 8 * n:at + 9 * n]
+    psi_tmp = floats[at + 9 * n:at + 10 * n]
+    xmin = floats[at + 10 * n:at + 11 * n]
+    xmax = floats[at + 11 * n:at + 12 * n]
+    at += 14 * n  # (two spare)
+    hp = floats[at:at + np1]
+    gptmp = floats[at + np1:at + 2 * np1]
+    at += 2 * np1
+    W = floats[at:at + 2 * np1].reshape((2, np1))
+    WP = floats[at + 2 * np1:at + 2 * np1 + n * np1].reshape((n, np1))
+    gp = floats[at + 2 * np1 + n * np1:at + 2 * np1 + 2 * n * np1].reshape((n, np1))
+    at += 2 * np1 + 3 * n * np1  # (one n x np1 spare)
+
+    # exact flows of affine modes: A, B, (omega, phase, d omega/dp, d phase/dp), dA/dp, dB/dp
+    AFF_A = floats[at:at + n_modes * n * n].reshape((n_modes, n, n))
+    AFF_AP = floats[at + n_modes * n * n:at + 2 * n_modes * n * n].reshape((n_modes, n, n))
+    at += 2 * n_modes * n * n
+    AFF_B = floats[at:at + n_modes * n * 3].reshape((n_modes, n, 3))
+    AFF_BP = floats[at + n_modes * n * 3:at + 2 * n_modes * n * 3].reshape((n_modes, n, 3))
+    at += 6 * n_modes * n
+    AFF_W = floats[at:at + 4 * n_modes].reshape((n_modes, 4))
+    h_mode = floats[at + 4 * n_modes:at + 5 * n_modes]  # the step proposed last in each mode (0: none yet)
+    at += 5 * n_modes
     if exact_affine:
-        Ap_all = np.zeros((max(npar, 1), n, n))
-        Bp_all = np.zeros((max(npar, 1), n, 3))
-        wp_all = np.zeros((max(npar, 1), 2))
+        Ap_all = floats[at:at + np1 * n * n].reshape((np1, n, n))
+        Bp_all = floats[at + np1 * n * n:at + np1 * (n * n + 3 * n)].reshape((np1, n, 3))
+        wp_all = floats[at + np1 * (n * n + 3 * n):at + np1 * (n * n + 3 * n + 2)].reshape((np1, 2))
+        at += np1 * (n * n + 3 * n + 2)
         for m in range(n_modes):
             if model[AFFINE_MODES][m]:
                 model[AFFINE_PARTS](m, p, AFF_A[m], AFF_B[m], AFF_W[m, :2])
@@ -2280,6 +2310,29 @@ def integrate_kernel(
                             AFF_BP[m, i, j] = Bp_all[pidx, i, j]
                     AFF_W[m, 2] = wp_all[pidx, 0]
                     AFF_W[m, 3] = wp_all[pidx, 1]
+    surf_sign = floats[at:at + n_surfaces]
+    surf_old = floats[at + n_surfaces:at + 2 * n_surfaces]
+    # how near zero each indicator is rounding where the mode was entered
+    surf_res = floats[at + 2 * n_surfaces:at + 3 * n_surfaces]
+    slope_old = floats[at + 3 * n_surfaces:at + 4 * n_surfaces]
+    surf_new = floats[at + 4 * n_surfaces:at + 5 * n_surfaces]
+    slope_new = floats[at + 5 * n_surfaces:at + 6 * n_surfaces]
+    at += 6 * n_surfaces
+    samples = floats[at:at + SLIDING_EXIT_SAMPLES + 1]
+    at += SLIDING_EXIT_SAMPLES + 1
+    chatter_ring = floats[at:at + CHATTER_WINDOW]
+    at += CHATTER_WINDOW
+    state_f = floats[at:at + 4]
+
+    ints = np.zeros(6 + n_surfaces + 14, dtype=np.int64)
+    slide = ints[:6]  # active, mode_a, mode_b, surface, crossing, time direction
+    fires = ints[6:6 + n_surfaces]  # new signs with a transition: 1 for -1, 2 for +1, 3 both
+    state_i = ints[6 + n_surfaces:]
+    bools = np.zeros(3 * n_surfaces + 2, dtype=np.bool_)
+    watched = bools[:n_surfaces]
+    fixed_sign = bools[n_surfaces:2 * n_surfaces]
+    # dips of the dense output the step's own solution did not confirm (surfaces, then a sliding motion's two exits)
+    no_dip = bools[2 * n_surfaces:]
 
     for i in range(n):
         y[i] = x0[i]
@@ -2290,7 +2343,6 @@ def integrate_kernel(
             y[n + n * n + i] = psi0[i]
 
     mode = mode0
-    slide = np.zeros(6, dtype=np.int64)  # active, mode_a, mode_b, surface, crossing, time direction
     slide[5] = 1 if direction > 0 else -1
     t = t0
 
@@ -2305,8 +2357,6 @@ def integrate_kernel(
     rec_F = np.zeros((rec_cap, 7, n))
     n_rec = np.int64(0)
 
-    xmin = np.zeros(n)
-    xmax = np.zeros(n)
     for i in range(n):
         xmin[i] = y[i]
         xmax[i] = y[i]
@@ -2316,18 +2366,6 @@ def integrate_kernel(
     info_surface = -1
     n_steps = 0
     n_rejected = 0
-
-    surf_sign = np.zeros(n_surfaces)
-    surf_old = np.zeros(n_surfaces)
-    surf_res = np.zeros(n_surfaces)  # how near zero each indicator is rounding where the mode was entered
-    slope_old = np.zeros(n_surfaces)
-    watched = np.zeros(n_surfaces, dtype=np.bool_)
-    fires = np.zeros(n_surfaces, dtype=np.int64)  # new signs with a transition: 1 for -1, 2 for +1, 3 both
-    fixed_sign = np.zeros(n_surfaces, dtype=np.bool_)
-    surf_new = np.zeros(n_surfaces)
-    slope_new = np.zeros(n_surfaces)
-    # dips of the dense output the step's own solution did not confirm (surfaces, then a sliding motion's two exits)
-    no_dip = np.zeros(n_surfaces + 2, dtype=np.bool_)
 
     _aug_rhs_called(model, mode, slide, t, y, p, var, pidx, K[0], W, WJ, WP, wv)
     for i in range(n):
@@ -2364,13 +2402,10 @@ def integrate_kernel(
     at_start = True
     after_sliding = NONE  # the surface of the sliding motion the last event (a transition) has ended
     drift = 0.0  # how far the state lies off that surface (the integration's drift along the motion)
-    samples = np.zeros(SLIDING_EXIT_SAMPLES + 1)
     # a sliding motion steps at most an eighth of the forcing period: its field can be so simple that
     # the error control allows any step, while its exit functions vary with the forcing
     sliding_step_cap = model[FORCING_PERIOD](p) / 8.0
-    chatter_ring = np.zeros(CHATTER_WINDOW)
     h_events = 0.0  # the longest step that ended at an event: the time scale of the motion, for a message
-    h_mode = np.zeros(n_modes)  # the step proposed last in each mode (0: none yet), to re-enter it with
 
     # the tuples the loop takes its arrays in
     work = (W, WJ, WP, wv)
@@ -2391,12 +2426,10 @@ def integrate_kernel(
     matrices = (K, Ksave, F, gx, gp, S, Phi_tmp)
     surfaces = (surf_sign, surf_old, surf_res, slope_old, surf_new, slope_new)
     flags = (watched, fixed_sign, no_dip)
-    state_f = np.zeros(4)
     state_f[0] = t
     state_f[1] = habs
     state_f[2] = drift
     state_f[3] = h_events
-    state_i = np.zeros(14, dtype=np.int64)
     _loop_state(state_i, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode, info_surface, pending, last_kind,
                 after_sliding, need_signs, last_jump, at_start)
     surface_step = _function_at(SURFACE_STEP_TYPE, addresses[SURFACE_STEP_ROW, 0], addresses[SURFACE_STEP_ROW, 1])
@@ -2519,11 +2552,11 @@ def _solve_pivoted(A, b, x):
 
 
 @njit(cache=True)
-def _newton_result(code, it, z, history, n_history, jac, res):
-    """``correct_periodic``'s result: ``(code, iterations, [z | residual history | jac], ints, floats)``,
-    the last two the kernel result at ``z`` (each returned array costs a conversion)."""
+def _newton_result(code, it, z, history, n_history, jac, tangent, res):
+    """``correct_periodic``'s result: ``(code, iterations, [z | residual history | jac | tangent], ints,
+    floats)``, the last two the kernel result at ``z`` (each returned array costs a conversion)."""
     m = z.shape[0]
-    packed = np.empty(m + n_history + jac.size)
+    packed = np.empty(m + n_history + jac.size + tangent.shape[0])
     for i in range(m):
         packed[i] = z[i]
     for i in range(n_history):
@@ -2533,6 +2566,8 @@ def _newton_result(code, it, z, history, n_history, jac, res):
         for j in range(jac.shape[1]):
             packed[at] = jac[i, j]
             at += 1
+    for i in range(tangent.shape[0]):
+        packed[at + i] = tangent[i]
     return code, it, packed, res[0], res[1]
 
 
@@ -2556,8 +2591,9 @@ def correct_periodic(addresses, affine_modes, z_pred, normal, t0, sign, autonomo
       decreases.
 
     Converged when ``|r| <= tol (1 + |u|)``.  Returns ``(code, iterations, [z |
-    residual history | r, J_u, J_lam by rows], ints, floats)``, the last two the
-    kernel result at z (see :func:`_newton_result`).
+    residual history | r, J_u, J_lam by rows | tangent], ints, floats)``, the last two the
+    kernel result at z (see :func:`_newton_result`); the tangent (bordered system only) solves
+    ``[[J_u, J_lam], [normal]] t = e_last`` at the converged z (zeros where singular or not converged).
     """
     model = model_from_addresses(addresses, affine_modes)  # noqa: F821
     integrate = _function_at(INTEGRATOR_TYPE, addresses[INTEGRATOR_ROW, 0], addresses[INTEGRATOR_ROW, 1])
@@ -2668,6 +2704,21 @@ def correct_periodic(addresses, affine_modes, z_pred, normal, t0, sign, autonomo
         for j in range(m_z):
             z[j] -= dz[j]
         it += 1
+    # the bordered system's tangent direction at the solution, [[J_u, J_lam], [normal]] t = e_last (what
+    # saltation.branches.corrector.Corrector.tangent solves next with normal as the previous tangent);
+    # zeros where it is singular or the iteration has not converged
+    tangent = np.zeros(m_z if m_z > m_u else 0)
+    if code == SHOOT_CONVERGED and m_z > m_u:
+        for i in range(m_u):
+            for j in range(m_z):
+                Jb[i, j] = jac[i, 1 + j]
+            rhs[i] = 0.0
+        for j in range(m_z):
+            Jb[m_u, j] = normal[j]
+        rhs[m_u] = 1.0
+        if not _solve_pivoted(Jb, rhs, tangent):
+            for j in range(m_z):
+                tangent[j] = 0.0
     # one call of the result (each literal code as an argument would compile it once more)
-    return _newton_result(code, it, z, history, n_history, jac, res)
+    return _newton_result(code, it, z, history, n_history, jac, tangent, res)
 

@@ -70,6 +70,10 @@ class CompiledNewton:
         ``[r | J_u | J_lam]`` at ``z`` (rows of the periodicity and phase conditions).
     shot : tuple
         The kernel's packed result of the shot from ``z`` (read by :meth:`Flow.shot_trajectory`).
+    tangent : ndarray or None
+        The bordered system only: ``t`` with ``[[J_u, J_lam], [normal]] t = e_last`` at the converged ``z``,
+        not normalised (the next tangent of pseudo-arclength continuation, whose ``normal`` is the last
+        tangent); None for the period map alone, or where the matrix is singular or Newton has not converged.
     """
 
     code: int
@@ -78,6 +82,7 @@ class CompiledNewton:
     history: list[float]
     jacobian: np.ndarray
     shot: tuple = field(repr=False)
+    tangent: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def converged(self) -> bool:
@@ -1007,9 +1012,9 @@ class Flow:
             self._n_surfaces, self._identity, self._zeros, *flags,
         )
         m_u = len(z0) - (0 if normal is None else 1)
-        z, history, jac = _newton_unpack(packed, len(z0), m_u)
+        z, history, jac, tangent = _newton_unpack(packed, len(z0), m_u)
         return CompiledNewton(code=int(code), iterations=int(it), z=z, history=history.tolist(), jacobian=jac,
-                              shot=out)
+                              shot=out, tangent=tangent if tangent.size and tangent.any() else None)
 
     def shot_trajectory(self, result: CompiledNewton, x0: np.ndarray, t0: float, p: np.ndarray, sensitivity: int) -> Trajectory:
         """The trajectory of the last shot of :meth:`compiled_newton`.
@@ -1093,10 +1098,14 @@ def _c_array(a) -> np.ndarray:
     return np.require(a, dtype=np.float64, requirements=("C", "W"))
 
 
-def _newton_unpack(packed: np.ndarray, m_z: int, m_u: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The kernel Newton's packed result: ``z``, the residual history and ``[r | J_u | J_lam]`` (``m_u`` rows)."""
+def _newton_unpack(packed: np.ndarray, m_z: int, m_u: int) -> tuple[np.ndarray, ...]:
+    """The kernel Newton's packed result: ``z``, the residual history, ``[r | J_u | J_lam]`` (``m_u`` rows)
+    and the bordered system's tangent direction (``m_z`` entries, none for the period map alone)."""
+    n_tan = m_z if m_z > m_u else 0
+    end = packed.size - n_tan
     n_jac = m_u * (m_u + 2)
-    return packed[:m_z], packed[m_z : packed.size - n_jac], packed[packed.size - n_jac :].reshape(m_u, m_u + 2)
+    return (packed[:m_z], packed[m_z : end - n_jac], packed[end - n_jac : end].reshape(m_u, m_u + 2),
+            packed[end:])
 
 
 def _steps(packed: np.ndarray, n: int) -> tuple[np.ndarray, ...]:

@@ -17,12 +17,18 @@ from saltation.engine.flow import EventKind, Trajectory
 
 @dataclass(frozen=True)
 class Evaluation:
-    """Residual and Jacobians of a problem at ``(u, lam)``."""
+    """Residual and Jacobians of a problem at ``(u, lam)``.
+
+    ``bordered_tangent``, where the compiled corrector has solved it, is ``(row, t)`` with
+    ``[[J_u, J_lam], [row]] t = e_last`` (``t`` not normalised): the tangent continuation computes next,
+    when ``row`` is the tangent it corrected along (:meth:`saltation.branches.corrector.Corrector.tangent`).
+    """
 
     residual: np.ndarray
     jac_u: np.ndarray
     jac_lam: np.ndarray | None
     trajectory: Trajectory | None = None
+    bordered_tangent: tuple[np.ndarray, np.ndarray] | None = None
 
 
 @dataclass(frozen=True)

@@ -919,7 +919,7 @@ class ShootingProblem:
             raise ConvergenceError("corrector did not converge", found.history)
         m, jac = len(z) - 1, found.jacobian
         ev = Evaluation(residual=jac[:, 0].copy(), jac_u=jac[:, 1 : 1 + m].copy(), jac_lam=jac[:, 1 + m].copy(),
-                        trajectory=traj)
+                        trajectory=traj, bordered_tangent=None if found.tangent is None else (normal, found.tangent))
         return z, ev, found.iterations
 
     def verify(self, u: np.ndarray, lam: float | None, traj: Trajectory) -> tuple[np.ndarray, float]:
