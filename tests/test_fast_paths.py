@@ -146,6 +146,31 @@ def test_tangent_of_a_singular_system_is_the_previous_direction():
     np.testing.assert_allclose(t, [0.0, 0.6, 0.8])
 
 
+def test_tangent_of_the_compiled_corrector_is_the_bordered_solve(trilinear_flow, contact_orbit):
+    """The compiled corrector solves the next tangent with the row it corrected along: Corrector.tangent takes
+    it for that very row, and it is the dgesv solution of [[J_u, J_lam], [row]] t = e_last (two backward-stable
+    solves of one system, each within a few eps cond(J) of the exact unit vector).  Another row (even an equal
+    copy) is solved afresh."""
+    from saltation.branches.continuation import ContinuationSettings
+    from saltation.orbits.shooting import ShootingProblem
+
+    problem = ShootingProblem(trilinear_flow, {"omega": 1.0}, continuation_parameter="omega")
+    row = np.array([0.3, -0.2, 0.9])
+    row /= np.linalg.norm(row)
+    z_pred = np.append(contact_orbit.state0, 1.0) + 1e-4 * row
+    corrector = Corrector(problem, ContinuationSettings())
+    sol = corrector.solve_bordered(z_pred, row)
+    ev = sol.evaluation
+    assert ev.bordered_tangent is not None and ev.bordered_tangent[0] is row
+    t = corrector.tangent(sol, row)
+    J = np.vstack([np.column_stack([ev.jac_u, ev.jac_lam]), row])
+    ref = np.linalg.solve(J, np.array([0.0, 0.0, 1.0]))
+    ref /= np.linalg.norm(ref)
+    ref = ref if ref @ row >= 0 else -ref
+    np.testing.assert_allclose(t, ref, rtol=0, atol=8 * EPS * np.linalg.cond(J))
+    np.testing.assert_allclose(corrector.tangent(sol, row.copy()), ref, rtol=0, atol=8 * EPS * np.linalg.cond(J))
+
+
 def test_canonical_events_keeps_the_sequence_type():
     """Cached for tuples; a list (as read from a file) is rotated as before, and stays a list."""
     assert canonical_events(((1, 2, 0), (1, 0, 1))) == ((1, 0, 1), (1, 2, 0))
