@@ -7,7 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from saltation.branches.corrector import Corrector, Solution, canonical_events
@@ -117,6 +117,7 @@ class _Problem:
 
 @settings(max_examples=100, deadline=None)
 @given(st.lists(finite, min_size=6, max_size=6), st.lists(finite, min_size=3, max_size=3))
+@example(entries=[1.0, 5.0, 0.0, 0.5, 0.0, 1.0], previous=[1.0, 5.0, -4.2839675029879674e-78])  # t all but normal to it
 def test_tangent_solves_the_bordered_system(entries, previous):
     """LAPACK's dgesv called directly: the unit tangent that numpy.linalg.solve gives, oriented along the previous
     one; a singular system keeps the previous direction."""

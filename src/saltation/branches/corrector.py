@@ -245,7 +245,7 @@ class Corrector:
             t = previous.copy()
             size = sum(v * v for v in t.tolist())
         t /= math.sqrt(size)
-        if sum(a * b for a, b in zip(t.tolist(), previous.tolist())) < 0:
+        if t @ previous < 0:  # (numpy's product: its sign where t is all but normal to previous, as callers check it)
             t = -t
         return t
 
