@@ -16,6 +16,8 @@ guesses near 0 (1e-300 .. 1e-3) and near the true one:
 * the forced relay ``x'' + 2 z x' + x = a cos(w t) - F sgn(x')`` (Coulomb friction on fixed ground,
   forced, ``F < a``): orbits that cross ``v = 0`` (saltation matrices ``diag(1, v'+ / v'-)``) or stick
   on it (Filippov; a multiplier 0), checked by the closed-form period map from the orbit's own state;
+* every tolerance: the forced bilinear orbit from next to it, at ``rtol`` from 1e-12 to 0.5, on the exact
+  flow (the closed-form orbit to rounding) and on DOP853 (an orbit or a named error, never a stationary state);
 * far times: a forced orbit at ``t0 = 1e12`` is the ``t0 = 0`` orbit at ``t0 mod T``; and a period
   guess that contradicts the forcing period is a ``ModelError`` (the shipped trilinear model).
 
@@ -57,6 +59,7 @@ from saltation import (
     Flow,
     Mode,
     PiecewiseSystem,
+    Tolerances,
     Transition,
     find_periodic_orbit,
 )
@@ -357,6 +360,33 @@ def test_forced_bilinear_oscillator(case):
         assert not (exact and period is None), f"no orbit from the {kind} guess {guess} at t0 = {t0}: {result!r}"
         return
     check_forced_orbit(result, ref, t0)
+
+
+@st.composite
+def loose_tolerances(draw):
+    """Tolerances from tight to very loose: ``rtol`` log-uniform in [1e-12, 0.5], ``atol`` 1e-4 to 1 times it."""
+    rtol = 10.0 ** draw(st.floats(-12.0, math.log10(0.5)))
+    return Tolerances(rtol=rtol, atol=rtol * 10.0 ** draw(st.floats(-4.0, 0.0)), exact_affine=draw(st.booleans()))
+
+
+@given(bilinear_cases(), loose_tolerances())
+@example((_BILINEAR, R.bilinear_orbit(**_BILINEAR), "on_orbit", 1.0, None, None), Tolerances(rtol=0.05, atol=0.005))
+@example((_BILINEAR, R.bilinear_orbit(**_BILINEAR), "on_orbit", 1.0, None, None),
+         Tolerances(rtol=0.05, atol=0.005, exact_affine=False))
+def test_forced_orbits_at_every_tolerance(case, tolerances):
+    """Near its orbit, a forced orbit is found at any tolerance, never taken for a stationary state (100 times a
+    loose tolerance is the orbit's own size: :func:`saltation.orbits.shooting.stationary_floor` caps it).  The
+    exact flow of its affine modes does not depend on the tolerances (they govern its dense output only): the
+    orbit is the closed-form one to rounding.  DOP853 at such tolerances is only as accurate as they are, or
+    Newton fails on its noise: a named error then."""
+    params, ref, _, t0, _, _ = case
+    guess = ref.state(t0) * (1.0 + 1e-3)
+    result = outcome(lambda: find_periodic_orbit(bilinear_flow(), guess, parameters=params, t0=t0,
+                                                 tolerances=tolerances))
+    assert not isinstance(result, saltation.StationaryStateError), (tolerances, result)
+    if tolerances.exact_affine:
+        assert not isinstance(result, saltation.SaltationError), (tolerances, result)
+        check_forced_orbit(result, ref, t0)
 
 
 @st.composite

@@ -82,6 +82,10 @@ TRIVIAL_MULTIPLIER_ACCURACY = 1e-6
 SEAM_MARGIN = 0.02
 #: A state whose excursion over the period is below this many times the integration tolerance does not move.
 STATIONARY_FACTOR = 100.0
+#: ... nor above this fraction of the state's scale ``1 + max |x_i|``: the cap applies from ``rtol = 1e-7`` on.  A
+#: stationary state's excursion is what rounding and Newton's tolerance leave, whatever the integration tolerance;
+#: at ``rtol = 1e-2``, 100 times the tolerance is the size of the orbits themselves.
+STATIONARY_FRACTION = 1e-5
 #: Newton steps of an autonomous orbit that make the period longer than this many times its guess are
 #: shortened (as steps that do not reduce the residual): a period near zero can throw the next iterate far away.
 PERIOD_GROWTH = 100.0
@@ -209,6 +213,29 @@ class PeriodicOrbit:
         return (f"PeriodicOrbit({self.system_name!r}, T={self.period:.10g}, x0=[{state}], max |mu|={mu}, "
                 f"{'stable' if self.stable else 'unstable'}, {len(self.events)} events, {how}"
                 + ("" if self.converged else ", NOT converged") + ")")
+
+
+def stationary_floor(tolerances: Tolerances, size: float) -> float:
+    """The excursion (or speed) below which a state of magnitude ``size`` does not move.
+
+    ``min(STATIONARY_FACTOR (atol + rtol s), STATIONARY_FRACTION s)`` with ``s = 1 + size``: many times the
+    integration tolerance at the state's scale, but never a sizeable part of that scale, so that a loose
+    tolerance does not make real orbits look stationary.
+
+    Parameters
+    ----------
+    tolerances : Tolerances
+        The integration tolerances.
+    size : float
+        ``max |x_i|`` of the state.
+
+    Returns
+    -------
+    float
+        The floor.
+    """
+    scale = 1.0 + size
+    return min(STATIONARY_FACTOR * (tolerances.atol + tolerances.rtol * scale), STATIONARY_FRACTION * scale)
 
 
 def newton(
@@ -971,7 +998,8 @@ class ShootingProblem:
         """Why a solved point is not a periodic orbit, or None: its state does not move over the period.
 
         The excursion ``max_i (max x_i - min x_i)`` over the period is compared with
-        :data:`STATIONARY_FACTOR` times the integration tolerance at the state's scale.  Below it, the
+        :func:`stationary_floor`: :data:`STATIONARY_FACTOR` times the integration tolerance at the state's
+        scale, at most :data:`STATIONARY_FRACTION` of that scale.  Below it, the
         point is an equilibrium of a mode, a pseudo-equilibrium (a point of a sliding or sticking set
         where the sliding motion stops), or a period shrunk to zero.
 
@@ -993,7 +1021,7 @@ class ShootingProblem:
         n = self.system.n
         # plain floats: this runs for every orbit and branch point, on a few numbers
         excursion = max(map(float.__sub__, traj.x_max.tolist(), traj.x_min.tolist()))
-        floor = STATIONARY_FACTOR * (tol.atol + tol.rtol * (1.0 + max(map(abs, u[:n].tolist()))))
+        floor = stationary_floor(tol, max(map(abs, u[:n].tolist())))
         if excursion > floor:
             return None
         x0 = np.asarray(u[:n], dtype=float)
@@ -1182,7 +1210,7 @@ class ShootingProblem:
         except SaltationError:
             return None
         tol = self.tolerances or self.flow.tolerances
-        floor = STATIONARY_FACTOR * (tol.atol + tol.rtol * (1.0 + float(np.abs(traj.x1).max())))
+        floor = stationary_floor(tol, float(np.abs(traj.x1).max()))
         if not float(np.linalg.norm(traj.velocity_end)) <= floor:
             return None
         where = np.array2string(traj.x1, precision=10)
