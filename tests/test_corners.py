@@ -73,3 +73,60 @@ def test_a_transition_beyond_an_exit_fires_the_exit_at_once(trilinear_flow):
     first = traj.events[0]
     assert first.t == 0.0 and first.mode_from == "contact_1" and first.mode_to == "free" and first.surface == "h1b"
     np.testing.assert_allclose(first.x_minus, x0, rtol=0, atol=0)
+
+
+def free_monodromy(omega: float) -> np.ndarray:
+    """The free mode's monodromy over the forcing period, expm(A T)."""
+    from scipy.linalg import expm
+
+    return expm(np.array([[0.0, 1.0], [-K / M, -C / M]]) * 2 * np.pi / omega)
+
+
+def free_amplitude_slope(omega: float) -> float:
+    """|dA/dw| of the free orbit's amplitude ``A = F0 / sqrt((K - M w^2)^2 + (C w)^2)``."""
+    q = (K - M * omega**2) ** 2 + (C * omega) ** 2
+    dq = -4 * M * omega * (K - M * omega**2) + 2 * C**2 * omega
+    return abs(-0.5 * F0 * q**-1.5 * dq)
+
+
+@pytest.mark.parametrize("exact, rtol", [(True, 1e-10), (False, 1e-10), (False, 1e-8), (False, 1e-6)],
+                         ids=["exact", "dop853-1e-10", "dop853-1e-8", "dop853-1e-6"])
+@pytest.mark.parametrize("corner", ["A", "B"])
+def test_the_symmetric_orbit_meets_both_corners_at_once_at_any_tolerance(exact, rtol, corner):
+    """At w_A and w_B (closed form) the symmetric free orbit reaches both supports' corners at once: one
+    non-smooth point, where the sequence passes from no contact to both contacts.  DOP853's error breaks the
+    symmetry by some 1e-10 in w, so that one contact comes a hair before the other (a sequence with one
+    contact, in a window narrower than the integration's resolution): that is still the one point, of the
+    kind the exact flow finds, not a corner with no crossing and the second change missed.
+
+    Located within its bracket plus the integration's error estimate over ``|dA/dw|`` (the free orbit's
+    amplitude against w); its free side's multipliers are eig(expm(A T)) there, within the stated accuracy
+    of the multipliers plus the integration's relative error times ``1 + |expm(A T)|``."""
+    from saltation import Flow
+    from saltation.branches.continuation import ContinuationSettings
+    from saltation.models import trilinear
+    from saltation.orbits.shooting import ShootingProblem
+    from saltation.special_points.continuation import continue_branch
+
+    w_star, start, bounds, direction, kind = {
+        "A": (W_A, 0.85, (0.85, 1.0), 1, "nonsmooth_no_crossing"),
+        "B": (W_B, 1.2, (1.0, 1.2), -1, "discontinuous_fold"),
+    }[corner]
+    flow = Flow(trilinear(), Tolerances(rtol=rtol, atol=1e-2 * rtol, exact_affine=exact))
+    params = dict(TRI) | {"omega": start}
+    problem = ShootingProblem(flow, {"omega": start}, continuation_parameter="omega")
+    branch = continue_branch(problem, linear_response_state(params), start, directions=(direction,),
+                             settings=ContinuationSettings(ds=0.015, ds_max=0.015, bounds=bounds))
+    points = [sp for sp in branch.special_points if sp.kind.value not in ("fold", "endpoint")]
+    assert [sp.kind.value for sp in points] == [kind], points
+    sp = points[0]
+    assert sorted([len(sp.event_labels_minus), len(sp.event_labels_plus)]) == [0, 4], sp
+    # Flow.integration_error on DOP853: rtol (1 + |x|) (1 + events), |x| at most the larger of A = x_c and w A
+    relative = 0.0 if exact else rtol * (1 + 4)
+    resolution = relative * (1 + max(1.0, w_star) * XC)
+    assert abs(sp.parameter - w_star) <= sp.accuracy + 1e-13 + resolution / free_amplitude_slope(w_star)
+    mu_free = sp.multipliers_minus if not sp.event_labels_minus else sp.multipliers_plus
+    monodromy = free_monodromy(w_star)
+    expected = np.sort_complex(np.linalg.eigvals(monodromy))
+    scale = 1.0 + np.linalg.norm(monodromy, 2)
+    assert np.abs(np.sort_complex(mu_free) - expected).max() <= sp.multipliers_accuracy + (1e-12 + relative) * scale

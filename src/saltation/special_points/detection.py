@@ -184,6 +184,22 @@ def classify_nonsmooth(
     return SetValuedCrossing(kind, qc, complex(point))
 
 
+def _squares_agree(half: tuple[np.ndarray, np.ndarray], mu_lo: np.ndarray, mu_hi: np.ndarray, *,
+                   backward: bool) -> bool:
+    """Whether the one-sided half-period maps ``half`` have, on each side, as many eigenvalues whose squares
+    lie outside the unit circle as the full one-sided multipliers ``mu_lo``, ``mu_hi`` (``M = G^2``).
+
+    Magnitudes within 1e-6 of 1 (a trivial multiplier, a side at a fold) count either way."""
+    for g, mu in zip(half, (mu_lo, mu_hi)):
+        if mu is None:
+            return False
+        squares = np.abs(multipliers_from_monodromy(g, backward=backward)) ** 2
+        full = np.abs(np.asarray(mu))
+        if np.sum(squares > 1.0 + 1e-6) > np.sum(full > 1.0 - 1e-6) or np.sum(full > 1.0 + 1e-6) > np.sum(squares > 1.0 - 1e-6):
+            return False
+    return True
+
+
 def _refine_crossing(m_minus, m_plus, guide: complex, q0: float, qa: float, qb: float) -> tuple[float, complex]:
     """Refine the crossing ``|mu(q)| = 1`` of the eigenvalue path near ``guide`` by bisection."""
 
@@ -340,13 +356,39 @@ class SpecialPointDetector:
         SaltationError
             If the one-sided monodromies needed to classify a non-smooth point are missing.
         """
-        if canonical_events(a.summary.event_ids) != canonical_events(b.summary.event_ids):
-            lo, hi = self._bisect_event_change(a, b)
-            corner = self._symmetry_breaking_corner(self.nonsmooth_point(lo, hi, index, far=(a, b)), a, b)
-            before = self._smooth_points(a, lo, index) if lo is not a else []
-            after = self._smooth_points(hi, b, index) if hi is not b else []
-            return [*before, corner, *after]
-        return self._smooth_points(a, b, index)
+        if canonical_events(a.summary.event_ids) == canonical_events(b.summary.event_ids):
+            return self._smooth_points(a, b, index)
+        lo, hi = self._bisect_event_change(a, b)
+        hi = self._past_unresolved_sequences(hi, b)
+        corner = self._symmetry_breaking_corner(self.nonsmooth_point(lo, hi, index, far=(a, b)), a, b)
+        before = self._smooth_points(a, lo, index) if lo is not a else []
+        # a step may hold more than one change: the rest of it is checked as a step of its own
+        after = self.check(hi, b, index) if hi is not b else []
+        return [*before, corner, *after]
+
+    def _past_unresolved_sequences(self, hi: Solution, b: Solution) -> Solution:
+        """``hi``, or the far side of the changes beyond it that lie within the resolution of the first.
+
+        Between ``hi`` (just past a change) and ``b`` the sequence may change again.  Where the orbits of
+        ``hi``'s sequence span no more than the location tolerance or the integration's error estimate
+        (:meth:`~saltation.engine.flow.Flow.integration_error`), the two changes are one point: a
+        simultaneous change (two corners collided at once, as the symmetric orbit's two contacts of Fig. 3,
+        which DOP853's error splits by some 1e-10 in the parameter), classified from its outer sides.
+        """
+        seq_b = canonical_events(b.summary.event_ids)
+        while canonical_events(hi.summary.event_ids) != seq_b:
+            lo2, hi2 = self._bisect_event_change(hi, b)
+            width = float(np.linalg.norm(lo2.z - hi.z))
+            if width > max(self.tol, self._state_resolution(hi)):
+                break
+            hi = hi2
+        return hi
+
+    def _state_resolution(self, sol: Solution) -> float:
+        """The flow's estimate of the error of a solution's end state (0 for an equilibrium)."""
+        if self.equilibrium:
+            return 0.0
+        return self.problem.flow.integration_error(sol.evaluation.trajectory, self.problem.tolerances)
 
     def _smooth_points(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
         """Smooth special points between two solutions with the same event sequence (test functions)."""
@@ -895,6 +937,14 @@ class SpecialPointDetector:
             m_lo, m_hi, backward=self.branch.backward, autonomous=self.autonomous, mu_minus=mu_lo, mu_plus=mu_hi,
         )
         half = self._half_limits(lo, hi, exact=limits is not None)
+        if half is not None and not _squares_agree(half, mu_lo, mu_hi, backward=self.branch.backward):
+            # the half-period maps' limits must square to the full ones' (M = G^2): where they do not even
+            # agree on how many multipliers lie outside the unit circle, they missed the jump (an event of a
+            # half period not resolved at loose tolerances), and the full multipliers classify the point
+            note = (note + "; " if note else "") + (
+                "symmetric orbit, but its half-period limits do not square to the full ones: classified from "
+                "the full multipliers")
+            half = None
         if half is not None:
             crossing = symmetric_crossing(classify_nonsmooth(
                 half[0], half[1], backward=self.branch.backward, autonomous=self.autonomous,
