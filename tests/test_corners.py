@@ -130,3 +130,104 @@ def test_the_symmetric_orbit_meets_both_corners_at_once_at_any_tolerance(exact, 
     expected = np.sort_complex(np.linalg.eigvals(monodromy))
     scale = 1.0 + np.linalg.norm(monodromy, 2)
     assert np.abs(np.sort_complex(mu_free) - expected).max() <= sp.multipliers_accuracy + (1e-12 + relative) * scale
+
+
+def asymmetric_supports(lower_gap: float):
+    """The trilinear system with the lower support at ``-lower_gap`` instead of ``-x_c`` (a user's model)."""
+    from saltation.model import Crossing, Mode, PiecewiseSystem, Transition
+
+    rising, falling = Crossing.RISING, Crossing.FALLING
+    forcing = "f0*sin(omega*t)"
+    return PiecewiseSystem(
+        name="trilinear_asymmetric",
+        states=["x", "v"],
+        parameters=dict(TRI) | {"x_d": lower_gap},
+        modes=[
+            Mode("contact_1", ["v", f"(-c*v - k*x - c_f*v - k_f*(x - x_c) + {forcing})/m"],
+                 domain=["x - x_c > 0", "k_f*(x - x_c) + c_f*v >= 0"]),
+            Mode("contact_2", ["v", f"(-c*v - k*x - c_f*v - k_f*(x + x_d) + {forcing})/m"],
+                 domain=["x + x_d < 0", "k_f*(x + x_d) + c_f*v <= 0"]),
+            Mode("free", ["v", f"(-c*v - k*x + {forcing})/m"]),
+        ],
+        surfaces={"h1a": "x - x_c", "h1b": "k_f*(x - x_c) + c_f*v", "h2a": "x + x_d", "h2b": "k_f*(x + x_d) + c_f*v"},
+        transitions=[
+            Transition("free", "h1a", rising, "contact_1", guard=["k_f*(x - x_c) + c_f*v >= 0"]),
+            Transition("free", "h1b", rising, "contact_1", guard=["x - x_c > 0"]),
+            Transition("contact_1", "h1b", falling, "free"),
+            Transition("contact_1", "h1a", falling, "free"),
+            Transition("free", "h2a", falling, "contact_2", guard=["k_f*(x + x_d) + c_f*v <= 0"]),
+            Transition("free", "h2b", falling, "contact_2", guard=["x + x_d < 0"]),
+            Transition("contact_2", "h2b", rising, "free"),
+            Transition("contact_2", "h2a", rising, "free"),
+        ],
+        period="2*pi/omega",
+    )
+
+
+@pytest.mark.parametrize("exact", [True, False], ids=["exact", "dop853"])
+def test_two_separate_corners_in_one_continuation_step(monkeypatch, exact):
+    """With the lower support 1e-3 farther than the upper one, the free orbit reaches the upper corner at
+    w_A (closed form) and the one-contact orbit the lower corner some 2e-4 later: both changes fall in one
+    continuation step (no branch point has one contact), farther apart than the integration's
+    resolution, so they are two points, each located once.
+
+    References: the first point is at w_A with the free side's multipliers eig(expm(A T)), as in the test
+    above.  The second has no closed form: fixed-parameter shooting 1e-7 beyond its bracket on either side
+    gives one contact and two; its one-contact side's multipliers are the limit of that orbit's, extrapolated
+    linearly from w* - e and w* - 2e (error about the second difference d2, taken twice), within the stated
+    accuracy of the multipliers plus their slope times the point's accuracy."""
+    from saltation import Flow
+    from saltation.branches.continuation import ContinuationSettings
+    from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
+    from saltation.special_points import detection
+    from saltation.special_points.continuation import continue_branch
+
+    located = []
+    bisect = detection.SpecialPointDetector._bisect_event_change
+
+    def counting_bisect(self, a, b):
+        located.append((a, b))
+        return bisect(self, a, b)
+
+    monkeypatch.setattr(detection.SpecialPointDetector, "_bisect_event_change", counting_bisect)
+    rtol = 1e-10
+    flow = Flow(asymmetric_supports(XC + 1e-3), Tolerances(rtol=rtol, atol=1e-2 * rtol, exact_affine=exact))
+    start = 0.85
+    problem = ShootingProblem(flow, {"omega": start}, continuation_parameter="omega")
+    branch = continue_branch(problem, linear_response_state(dict(TRI) | {"omega": start}), start, directions=(1,),
+                             settings=ContinuationSettings(ds=0.015, ds_max=0.015, bounds=(start, 0.95)))
+    contacts = [len(p.event_labels) for p in branch.points]
+    assert 2 not in contacts and (0, 4) in set(zip(contacts, contacts[1:])), contacts
+    points = [sp for sp in branch.special_points if sp.kind.value != "endpoint"]
+    assert [sp.kind.value for sp in points] == ["nonsmooth_no_crossing"] * 2, points
+    first, second = points
+    assert [len(first.event_labels_minus), len(first.event_labels_plus)] == [0, 2]
+    assert [len(second.event_labels_minus), len(second.event_labels_plus)] == [2, 4]
+    assert len(located) == 2  # one bisection each: the second change's bracket is not located again
+
+    relative = 0.0 if exact else rtol * (1 + 4)
+    resolution = relative * (1 + XC)
+    assert abs(first.parameter - W_A) <= first.accuracy + 1e-13 + resolution / free_amplitude_slope(W_A)
+    monodromy = free_monodromy(W_A)
+    scale = 1.0 + np.linalg.norm(monodromy, 2)
+    error = np.abs(np.sort_complex(first.multipliers_minus) - np.sort_complex(np.linalg.eigvals(monodromy))).max()
+    assert error <= first.multipliers_accuracy + (1e-12 + relative) * scale
+
+    w2 = second.parameter
+    margin = 1e-7
+    for w, n_events in ((min(second.bracket) - margin, 2), (max(second.bracket) + margin, 4)):
+        orbit = find_periodic_orbit(flow, second.state, parameters={"omega": w})
+        assert len(orbit.trajectory.events) == n_events, (w, orbit.trajectory.events)
+    e = 1e-7
+    mus = []
+    for j in (1, 2, 3):
+        orbit = find_periodic_orbit(flow, second.state, parameters={"omega": w2 - j * e})
+        assert len(orbit.trajectory.events) == 2
+        mus.append(np.sort_complex(orbit.multipliers))
+    limit = 2 * mus[0] - mus[1]
+    d2 = np.abs(mus[0] - 2 * mus[1] + mus[2]).max()
+    slope = np.abs(mus[0] - mus[1]).max() / e
+    error = np.abs(np.sort_complex(second.multipliers_minus) - limit).max()
+    assert error <= second.multipliers_accuracy + 2 * d2 + slope * second.accuracy + (1e-12 + relative) * scale
+    # the reference tells the sides apart: the two-contact side's multipliers are elsewhere
+    assert np.abs(np.sort_complex(second.multipliers_plus) - limit).max() > 1e3 * error

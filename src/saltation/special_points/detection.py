@@ -356,33 +356,44 @@ class SpecialPointDetector:
         SaltationError
             If the one-sided monodromies needed to classify a non-smooth point are missing.
         """
+        return self._check(a, b, index, None)
+
+    def _check(self, a: Solution, b: Solution, index: int,
+               bracket: tuple[Solution, Solution] | None) -> list[SpecialPoint]:
+        """:meth:`check`, with the bracket of the step's first change when it is already located."""
         if canonical_events(a.summary.event_ids) == canonical_events(b.summary.event_ids):
             return self._smooth_points(a, b, index)
-        lo, hi = self._bisect_event_change(a, b)
-        hi = self._past_unresolved_sequences(hi, b)
+        lo, hi = bracket if bracket is not None else self._bisect_event_change(a, b)
+        hi, following = self._past_unresolved_sequences(hi, b)
         corner = self._symmetry_breaking_corner(self.nonsmooth_point(lo, hi, index, far=(a, b)), a, b)
         before = self._smooth_points(a, lo, index) if lo is not a else []
-        # a step may hold more than one change: the rest of it is checked as a step of its own
-        after = self.check(hi, b, index) if hi is not b else []
+        # a step may hold more than one change: the rest of it is checked as a step of its own, from the
+        # next change's bracket where that was located already
+        after = self._check(hi, b, index, following) if hi is not b else []
         return [*before, corner, *after]
 
-    def _past_unresolved_sequences(self, hi: Solution, b: Solution) -> Solution:
-        """``hi``, or the far side of the changes beyond it that lie within the resolution of the first.
+    def _past_unresolved_sequences(
+        self, hi: Solution, b: Solution,
+    ) -> tuple[Solution, tuple[Solution, Solution] | None]:
+        """``hi``, or the far side of the changes beyond it that lie within the resolution of the first;
+        and the bracket of the next change, where one was located and is not merged.
 
         Between ``hi`` (just past a change) and ``b`` the sequence may change again.  Where the orbits of
         ``hi``'s sequence span no more than the location tolerance or the integration's error estimate
         (:meth:`~saltation.engine.flow.Flow.integration_error`), the two changes are one point: a
         simultaneous change (two corners collided at once, as the symmetric orbit's two contacts of Fig. 3,
         which DOP853's error splits by some 1e-10 in the parameter), classified from its outer sides.
+        A change farther away is a point of its own: its bracket is returned, so that it is not located a
+        second time.
         """
         seq_b = canonical_events(b.summary.event_ids)
         while canonical_events(hi.summary.event_ids) != seq_b:
             lo2, hi2 = self._bisect_event_change(hi, b)
             width = float(np.linalg.norm(lo2.z - hi.z))
             if width > max(self.tol, self._state_resolution(hi)):
-                break
+                return hi, (lo2, hi2)
             hi = hi2
-        return hi
+        return hi, None
 
     def _state_resolution(self, sol: Solution) -> float:
         """The flow's estimate of the error of a solution's end state (0 for an equilibrium)."""
