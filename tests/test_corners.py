@@ -8,6 +8,8 @@ once (a zero-length segment), never a contact that is never left.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -197,7 +199,7 @@ def test_two_separate_corners_in_one_continuation_step(monkeypatch, exact):
     branch = continue_branch(problem, linear_response_state(dict(TRI) | {"omega": start}), start, directions=(1,),
                              settings=ContinuationSettings(ds=0.015, ds_max=0.015, bounds=(start, 0.95)))
     contacts = [len(p.event_labels) for p in branch.points]
-    assert 2 not in contacts and (0, 4) in set(zip(contacts, contacts[1:])), contacts
+    assert 2 not in contacts and (0, 4) in set(itertools.pairwise(contacts)), contacts
     points = [sp for sp in branch.special_points if sp.kind.value != "endpoint"]
     assert [sp.kind.value for sp in points] == ["nonsmooth_no_crossing"] * 2, points
     first, second = points
