@@ -282,3 +282,50 @@ def test_exact_steps_of_any_norm_against_the_closed_form(relaxation_flow, a, c, 
     bound = 4.0 * (r.n_steps + 1) * np.exp(4.0) * np.finfo(float).eps
     assert abs(r.x1[0] - x_ref) <= bound * scale
     assert abs(r.monodromy[0, 0] - phi_ref) <= bound * max(1.0, phi_ref)
+
+
+# ---------------------------------------------------------------------------- independence of the tolerances
+# the shipped models whose every mode is affine and whose orbits do not slide (a sliding motion is DOP853's)
+_AFFINE_SHIPPED = ("buck_converter", "impact_oscillator", "relay_feedback", "symmetric_impact_oscillator",
+                   "trilinear", "two_mass_stops")
+
+
+@pytest.fixture(scope="module")
+def shipped_orbits():
+    """Each model's orbit at its default parameters (a transient, then shooting at tight tolerances)."""
+    from saltation import Flow
+    from saltation.models import SHIPPED
+    from saltation.orbits.shooting import find_periodic_orbit
+
+    orbits = {}
+    for name in _AFFINE_SHIPPED:
+        flow = Flow(SHIPPED[name].factory(), TIGHT)
+        orbits[name] = (flow, find_periodic_orbit(flow))
+    return orbits
+
+
+@given(name=st.sampled_from(_AFFINE_SHIPPED), log_rtol=st.floats(-12.0, np.log10(0.5)),
+       log_atol=st.floats(-4.0, 0.0), offset=st.floats(-0.05, 0.05))
+@example(name="two_mass_stops", log_rtol=np.log10(0.5), log_atol=0.0, offset=0.0)
+def test_the_exact_flow_does_not_depend_on_the_tolerances(shipped_orbits, name, log_rtol, log_atol, offset):
+    """The exact flow's series are summed to rounding, so the tolerances govern only its dense output
+    (README, *Integration settings*): a period from near the orbit, with its monodromy, is the tight
+    tolerances' to rounding at any ``rtol`` up to 0.5, with the same events (DOP853 in its place fails this
+    by 0.2 at ``rtol`` 0.5).  Bound: a rounding unit per product of an n x n matrix, n terms each, over
+    every step and event of the longer shot, twice (both shots carry it), relative to ``1 + |x|`` and
+    ``1 + |Phi|``."""
+    from saltation import Flow
+
+    flow, orbit = shipped_orbits[name]
+    rtol = 10.0**log_rtol
+    loose = Flow(flow.system, Tolerances(rtol=rtol, atol=rtol * 10.0**log_atol))
+    p = flow.parameters({})
+    x0 = orbit.state0 + offset
+    t1 = orbit.t0 + orbit.period
+    ref = flow.run(x0, orbit.t0, t1, p, variational=True)
+    got = loose.run(x0, orbit.t0, t1, p, variational=True)
+    assert [(e.surface, e.mode_to) for e in got.events] == [(e.surface, e.mode_to) for e in ref.events]
+    n = flow.system.n
+    rounding = 2 * n * (max(ref.n_steps, got.n_steps) + len(ref.events) + 1) * np.finfo(float).eps
+    assert np.abs(got.x1 - ref.x1).max() <= rounding * (1 + np.abs(ref.x1).max())
+    assert np.abs(got.monodromy - ref.monodromy).max() <= rounding * (1 + np.abs(ref.monodromy).max())
