@@ -185,7 +185,10 @@ def test_figure_draws_what_period_map_and_sweep_return(monkeypatch):
     assert alone.periods[0, 0] == pmap.periods[1, 1]
     assert alone.largest_exponents[0, 0] == pmap.largest_exponents[1, 1]
 
-    # period 1 -> 2 -> 4 on the first two branches, then the period-2 orbit below the grazing doubles in turn
-    assert [p["kind"] for p in points] == ["period_doubling"] * 3
+    # period 1 -> 2 -> 4 on the first two branches, then the period-2 orbit below the grazing doubles in turn; the
+    # period-2 branch may end at the grazing where its fourth impact appears (an impact: never a discontinuous flip)
+    doublings = [p for p in points if p["kind"] == "period_doubling"]
+    assert len(doublings) == 3
+    assert {p["kind"] for p in points} <= {"period_doubling", "grazing"}
     assert all(p["parameter"] == "omega" and min(G.BRANCH) < p["value"] < max(G.BRANCH) for p in points)
-    assert points[0]["value"] > points[1]["value"] > points[2]["value"]
+    assert doublings[0]["value"] > doublings[1]["value"] > doublings[2]["value"]

@@ -145,7 +145,9 @@ def test_a_filippov_orbit_has_the_exponents_of_its_floquet_multipliers():
     orbit = find_periodic_orbit(flow)
     assert any(e.kind.name == "SLIDING_START" for e in orbit.events)
     mu = np.sort(np.abs(orbit.multipliers))[::-1]
-    assert mu[1] == 0.0
+    # M = Phi S Phi with S of rank one: its second eigenvalue is 0, computed to the rounding of the products and of
+    # the eigenvalue solver, some eps |M| per operation (5.55e-17 with one BLAS kernel, 0.0 with another)
+    assert mu[1] <= 1e3 * np.finfo(float).eps * max(1.0, np.linalg.norm(orbit.monodromy))
     result = lyapunov_exponents(flow, orbit.state0, time=100 * orbit.period)
     assert _within(result.exponents[0], math.log(mu[0]) / orbit.period, result.accuracy[0])
     assert result.exponents[1] == -math.inf

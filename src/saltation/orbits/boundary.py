@@ -144,6 +144,54 @@ def saltation_at_corner(
     return P
 
 
+@lru_cache(maxsize=256)
+def _tangency_terms(system: PiecewiseSystem, transition: int):
+    """``(h_x f- + h_t, |h_x|, |f-|)`` of a transition, as a numeric function of (t, x, p)."""
+    tr = system.transitions[transition]
+    d = system.surface_derivatives(tr.surface)
+    f_minus = system.fields[system.mode_index(tr.source)]
+    speed = (d.h_x * f_minus)[0, 0] + d.h_t
+    return sp.lambdify((system.t, list(system.x), list(system.p)),
+                       [speed, sp.sqrt(sum(e**2 for e in d.h_x)), sp.sqrt(sum(e**2 for e in f_minus))],
+                       modules="numpy")
+
+
+def corner_saltation_is_bounded(system, transition: int, t: float, x: np.ndarray, p: np.ndarray,
+                                P: np.ndarray | None) -> bool:
+    """Whether the product ``P`` of saltation matrices of an excursion that grazes ``transition`` at ``(t, x)``
+    stays bounded as the excursion shrinks to the tangency.
+
+    The denominator ``d = h_x f- + h_t`` of eq. (9) vanishes at the tangency and is located only to some
+    accuracy, so ``P`` is evaluated at a small ``d`` rather than at 0.  A product that is unbounded grows like
+    ``1/d`` (``|P| |d|`` is of the order of the jump ``|h_x| |f|``); a bounded one stays of order one.  The two are
+    told apart at the geometric mean of the two predictions, ``|P| = sqrt(|h_x| |f| / |d|)``, which lies orders
+    of magnitude from both for any ``d`` the location reaches (``|d| / (|h_x| |f|)`` of 1e-17 to 1e-7 gives a
+    split at 3e8 to 3e3), so the answer does not depend on how closely, or with which rounding, the tangency was
+    located.
+
+    Parameters
+    ----------
+    system : PiecewiseSystem
+    transition : int
+        The grazed transition (its source mode's field is tangent to its surface at ``(t, x)``).
+    t, x, p
+        The tangency and the parameters.
+    P : ndarray or None
+        The product from :func:`saltation_at_corner` (None: not finite there, hence unbounded).
+
+    Returns
+    -------
+    bool
+    """
+    if P is None or not np.all(np.isfinite(P)):
+        return False
+    speed, hx, f = (float(v) for v in _tangency_terms(system, int(transition))(t, list(np.asarray(x, float)), list(p)))
+    scale = hx * f
+    if not scale > 0.0:
+        return False  # a rest point on the surface (or a degenerate surface): eq. (9) has no limit there
+    return bool(np.linalg.norm(P) <= np.sqrt(scale / max(abs(speed), np.finfo(float).tiny)))
+
+
 def one_sided_limits(
     flow,
     without: Trajectory,

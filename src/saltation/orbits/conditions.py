@@ -1000,8 +1000,8 @@ class ConditionedProblem:
     Raises
     ------
     ModelError
-        If the equations and unknowns do not balance, a name is not a parameter, the problem closes
-        after several forcing periods, a condition that fixes the phase is put on a forced orbit, or
+        If the equations and unknowns do not balance, a name is not a parameter, a condition that fixes
+        the phase is put on a forced orbit, or
         the conditions ask the orbit to start in different modes.
 
     References
@@ -1012,8 +1012,8 @@ class ConditionedProblem:
 
     def __init__(self, problem, conditions: Sequence[Condition], free: Sequence[str], *,
                  continuation: str | None = None, parameters: np.ndarray | None = None):
-        if getattr(problem, "periods", 1) != 1:
-            raise ModelError("a special point's defining system is written over one forcing period")
+        #: forced models: the number of forcing periods the orbit closes after (its period is that many)
+        self.periods = int(getattr(problem, "periods", 1))
         #: with multiple shooting (a MultipleShootingProblem): the number of segments, and the single problem
         self.segments = int(getattr(problem, "segments", 1))
         self.single = problem.problem if self.segments > 1 else problem
@@ -1089,7 +1089,7 @@ class ConditionedProblem:
         """
         state0 = np.asarray(state0, dtype=float).ravel()
         if self.segments > 1 and state0.size == self.system.n:  # the nodes along the (virtual) orbit from it
-            T = float(period) if self.autonomous else self.system.forcing_period(self.p)
+            T = float(period) if self.autonomous else self._forcing_period(self.p)
             times = self.t0 + self.sign * T * np.arange(self.segments) / self.segments
             nodes, mode = [state0], None
             for a, b in zip(times[:-1], times[1:]):
@@ -1160,7 +1160,11 @@ class ConditionedProblem:
         """
         if self.autonomous:
             return shot_or_u.period if isinstance(shot_or_u, Shot) else float(shot_or_u[self.n_nodes])
-        return self.system.forcing_period(p)
+        return self._forcing_period(p)
+
+    def _forcing_period(self, p: np.ndarray) -> float:
+        """A forced orbit's period at the parameters ``p``: ``periods`` forcing periods."""
+        return self.periods * self.system.forcing_period(p)
 
     def _extras(self, u: np.ndarray) -> list[np.ndarray]:
         out, k = [], self.n_base + len(self.free)
@@ -1176,7 +1180,7 @@ class ConditionedProblem:
             if t is not None:
                 return t
             if isinstance(c, ArrivalTangency):
-                T = self.system.forcing_period(self.p) if not self.autonomous else 1.0
+                T = self._forcing_period(self.p) if not self.autonomous else 1.0
                 return c._t_last_eval - self.sign * c.LEAD * max(T, 1.0)
         return None
 
@@ -1279,7 +1283,7 @@ class ConditionedProblem:
         """What the equations at ``(u, lam)`` are evaluated with: the parameters, the period, the
         parameters of the derivative columns (the freed ones, then ``lam``'s) and the conditions' unknowns."""
         p = self.parameters_at(u, lam)
-        T = float(u[self.n_nodes]) if self.autonomous else self.system.forcing_period(p)
+        T = float(u[self.n_nodes]) if self.autonomous else self._forcing_period(p)
         if not (T > 0 and math.isfinite(T)):
             raise ConvergenceError(f"the period must be positive and finite, got {T}")
         params = list(self.free) + ([self.lam_index] if (need_lam and lam is not None and self.lam_index >= 0) else [])
@@ -1468,7 +1472,7 @@ class ConditionedProblem:
                     J[rows, nodes_n] = b.d_period + moves
                 else:
                     for cc, j in enumerate(params):
-                        dp[:, cc] += moves * self.system.period_derivative(p, j)
+                        dp[:, cc] += moves * self.periods * self.system.period_derivative(p, j)
             J[rows, nb:nb + k] = dp[:, :k]
             J[rows, col:col + c.extras] = b.d_extra
             if jl is not None:
@@ -1528,9 +1532,9 @@ class ConditionedProblem:
             d = c.h * max(1.0, abs(p[j]))
             q = p.copy()
             q[j] += d
-            up = c.g(whole(T if self.autonomous else self.system.forcing_period(q), q))
+            up = c.g(whole(T if self.autonomous else self._forcing_period(q), q))
             q[j] -= 2 * d
-            down = c.g(whole(T if self.autonomous else self.system.forcing_period(q), q))
+            down = c.g(whole(T if self.autonomous else self._forcing_period(q), q))
             out.d_parameters[0, cc] = (up - down) / (2 * d)
         c.keep_derivatives(point, params, out)
         return out
@@ -1596,7 +1600,7 @@ class ConditionedProblem:
             mu = multipliers_from_monodromy(traj.monodromy, backward=self.backward)
         return BranchPoint(
             parameter=math.nan if lam is None else float(lam),
-            state=np.array(u[:n]), period=float(u[self.n_nodes]) if self.autonomous else self.system.forcing_period(
+            state=np.array(u[:n]), period=float(u[self.n_nodes]) if self.autonomous else self._forcing_period(
                 self.parameters_at(u, lam)),
             multipliers=mu, stable=is_stable(mu, autonomous=self.autonomous), event_labels=event_labels(traj),
             monodromy=traj.monodromy, event_ids=event_ids(traj), **amplitude_measures(traj),

@@ -33,7 +33,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from saltation.orbits.boundary import one_sided_limits, saltation_at_corner, zero_length_segments
+from saltation.orbits.boundary import (
+    corner_saltation_is_bounded,
+    one_sided_limits,
+    saltation_at_corner,
+    zero_length_segments,
+)
 from saltation.branches.branch import Branch, BranchKind, Limits, SpecialPoint, SpecialPointKind, SpecialPointStatus
 from saltation.branches.corrector import Corrector, Solution, canonical_events
 from saltation.errors import SaltationError
@@ -50,6 +55,7 @@ from saltation.orbits.symmetry import (
 )
 from saltation.errors import IntegrationError, ModelError
 from saltation.model.symmetry import check_symmetry
+from saltation.model.system import PiecewiseSystem
 from saltation.special_points.sliding import locate_adding_sliding, locate_tangent_arrival, sliding_change
 
 
@@ -937,6 +943,9 @@ class SpecialPointDetector:
                 found = locate(self.problem, lo, hi, index)
                 if found is not None:
                     return found
+            found = unlocated_grazing(self.problem, lo, hi, index, bracket=bracket, accuracy=accuracy, note=note)
+            if found is not None:
+                return found
             m_lo, m_hi = lo.summary.monodromy, hi.summary.monodromy
             mu_lo, mu_hi = lo.summary.multipliers, hi.summary.multipliers
             how, mu_accuracy, at = Limits.NEAREST_ORBITS, _sqrt_extrapolated_error(lo, hi, far), None
@@ -1247,9 +1256,8 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     Returns
     -------
     SpecialPoint or None
-        The ``grazing`` (or ``grazing_sliding``) record; None when the change is not a grazing, the
-        problem closes after several forcing periods, or the location fails or lands outside the
-        bracket.
+        The ``grazing`` (or ``grazing_sliding``) record; None when the change is not a grazing, or the
+        location fails or lands outside the bracket.
 
     Raises
     ------
@@ -1264,8 +1272,8 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     """
     flow = getattr(problem, "flow", None)
     sides = _sides(lo, hi)
-    if flow is None or sides is None or getattr(problem, "periods", 1) != 1:
-        return None  # (the defining systems close orbits after one forcing period)
+    if flow is None or sides is None:
+        return None
     lo_fewer, without, with_, traj_wo, traj_w = sides
     span = abs(traj_wo.t1 - traj_wo.t0)
     groups = zero_length_segments(traj_wo.events, traj_w.events, time_tol=1e-3 * span)
@@ -1277,7 +1285,7 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
             flow, without.u[: problem.system.n], without.lam, problem.lam_name, first.transition, first.t,
             parameters=problem.parameters_at(without.lam), t0=problem.t0, tolerances=problem.tolerances,
             period=problem.period_of(without.u, without.lam) if problem.system.is_autonomous else None,
-            backward=problem.backward,
+            backward=problem.backward, periods=getattr(problem, "periods", 1),
         )
     except SaltationError:
         return None
@@ -1291,8 +1299,11 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     # the excursion's transitions in forward time (a backward shot meets them in reverse order)
     excursion = [e.transition for e in (reversed(group) if backward else group)]
     P = None if sliding else saltation_at_corner(problem.system, excursion, orbit.t_graze, orbit.x_graze, p)
-    if P is not None and backward:  # run backward, the excursion's map is the inverse of the forward one
-        P = np.linalg.inv(P) if np.linalg.cond(P) < 1e12 else None
+    bounded_corner = not sliding and corner_saltation_is_bounded(problem.system, excursion[0], orbit.t_graze,
+                                                                 orbit.x_graze, p, P)
+    if bounded_corner and backward:  # run backward, the excursion's map is the inverse of the forward one
+        bounded_corner = np.linalg.cond(P) < 1e12
+        P = np.linalg.inv(P) if bounded_corner else None
     m_without = orbit.monodromy
     mu_without = multipliers_from_monodromy(m_without, backward=backward)
     limit_error = None
@@ -1307,7 +1318,7 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
         mu_with = multipliers_from_monodromy(m_with, backward=backward)
         bounded = ("a sliding segment: the limit uses the saltation matrices of the nearest orbit that slides "
                    f"(multipliers known to about {np.linalg.norm(with_.summary.monodromy - m_with):.1e})")
-    elif P is not None and np.linalg.norm(P) < 1e8:
+    elif bounded_corner:
         phi = orbit.fundamental_to_graze
         m_with = m_without @ np.linalg.solve(phi, P @ phi)
         mu_with = multipliers_from_monodromy(m_with, backward=backward)
@@ -1362,6 +1373,72 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
         touch_mode=problem.system.transitions[orbit.transition].source,
         touch_time=orbit.t_graze,
     )
+
+
+def unlocated_grazing(problem, lo: Solution, hi: Solution, index: int, *, bracket: tuple[float, float],
+                      accuracy: float, note: str = "") -> SpecialPoint | None:
+    """The record of a grazing with an unbounded side that its defining system could not locate.
+
+    Where the two sides differ by a zero-length excursion of transitions whose saltation matrices are
+    unbounded at the tangency (an impact: ``S = O(1/v)``), the one-sided limit on the crossing side is
+    infinite, whatever the finite multipliers of the nearest crossing orbit are (they grow like
+    ``d^(-1/2)`` towards the point).  Whether the excursion is unbounded is decided from the nearest
+    crossing orbit's own excursion by :func:`~saltation.orbits.boundary.corner_saltation_is_bounded` (its
+    normal speed there is small, not zero, and the test's margin is ``sqrt`` of the ratio of the two).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        The branch's problem.
+    lo, hi : Solution
+        The bracketing solutions (``lo`` on the side of point ``index``).
+    index : int
+        The index of the branch point before the grazing.
+    bracket, accuracy, note
+        As for :func:`special_point_between`.
+
+    Returns
+    -------
+    SpecialPoint or None
+        A ``grazing`` record, ``bracketed`` (not located), the crossing side's largest multiplier ``inf`` and
+        the others those of the nearest orbit; None when the sides do not differ by such an excursion, or
+        its saltation matrices stay bounded (then the set-valued multipliers classify it).
+    """
+    sides = _sides(lo, hi)
+    if sides is None or not isinstance(problem.system, PiecewiseSystem):
+        return None
+    lo_fewer, without, with_, traj_wo, traj_w = sides
+    groups = zero_length_segments(traj_wo.events, traj_w.events, time_tol=1e-3 * abs(traj_wo.t1 - traj_wo.t0))
+    if not groups:
+        return None
+    group = [traj_w.events[i] for i in groups[0]]
+    if any(e.kind != EventKind.TRANSITION for e in group):
+        return None
+    if problem.backward:
+        group = group[::-1]  # the excursion in forward time
+    first = group[0]
+    p = problem.parameters_at(with_.lam)
+    P = np.eye(problem.system.n)
+    for e in group:
+        P = (np.linalg.inv(e.saltation) if problem.backward else e.saltation) @ P
+    if corner_saltation_is_bounded(problem.system, first.transition, first.t,
+                                   first.x_plus if problem.backward else first.x_minus, p, P):
+        return None
+    nearest = np.asarray(with_.summary.multipliers, dtype=complex)
+    mu_with = np.concatenate([[complex(np.inf, 0.0)], nearest[np.argsort(np.abs(nearest))[:-1]]])
+    mu_without = np.asarray(without.summary.multipliers, dtype=complex)
+    mu_lo, mu_hi = (mu_without, mu_with) if lo_fewer else (mu_with, mu_without)
+    side = "plus" if lo_fewer else "minus"
+    why = (f"grazing of surface {first.surface!r} near t = {first.t:.10g}, bracketed (its defining system did not "
+           f"converge); the side with the crossing is '{side}', unbounded: the crossing's saltation matrix grows "
+           "like 1/sqrt(distance), so the largest multiplier on that side is infinite in the limit, the others "
+           "are those of the nearest orbit")
+    crossing = SetValuedCrossing(SpecialPointKind.GRAZING, None, None)
+    sp = special_point_between(lo, hi, crossing, index=index, bracket=bracket, accuracy=accuracy,
+                               monodromy_plus=None, note=(note + "; " if note else "") + why)
+    return replace(sp, multipliers_minus=mu_lo, multipliers_plus=mu_hi, monodromy_minus=None,
+                   multipliers_accuracy=float("nan"), limits=Limits.NEAREST_ORBITS,
+                   touch_surface=first.surface, touch_mode=first.mode_from, touch_time=float(first.t))
 
 
 def _autonomous_crossing_limit(problem, orbit, with_: Solution) -> tuple[np.ndarray, float] | None:

@@ -209,6 +209,7 @@ def locate_grazing(
     period: float | None = None,
     backward: bool = False,
     also_disabled: Sequence[int] = (),
+    periods: int = 1,
 ) -> GrazingOrbit:
     """Locate a grazing periodic orbit.
 
@@ -247,6 +248,9 @@ def locate_grazing(
         The orbit is one of backward time (the grazing of an orbit that is unstable in forward time).
     also_disabled : sequence of int
         Further transitions the virtual orbit passes (touched at the same time, by symmetry).
+    periods : int
+        Forced models: the number of forcing periods the orbit closes after (a period-``k`` orbit grazes
+        once in ``k`` forcing periods; its monodromy is that of ``k`` periods).
 
     Returns
     -------
@@ -278,9 +282,9 @@ def locate_grazing(
     p = flow.parameters(parameters).copy()
     p[system.parameter_index(lam_name)] = float(lam)
     x0 = np.asarray(x0, dtype=float)
-    base = ShootingProblem(flow, p, backward=backward, t0=t0, tolerances=tolerances)
+    base = ShootingProblem(flow, p, backward=backward, t0=t0, tolerances=tolerances, periods=periods)
     sign = base.sign
-    T = float(period) if autonomous else system.forcing_period(p)
+    T = float(period) if autonomous else periods * system.forcing_period(p)
     surface = system.surface_index(system.transitions[transition].surface)
     disabled = (int(transition), *map(int, also_disabled))
     mode0 = flow.initial_mode(x0, p, base.t0)

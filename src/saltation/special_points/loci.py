@@ -54,7 +54,7 @@ from saltation.branches.branch import (
 )
 from saltation.engine.flow import EventKind, Flow
 from saltation.errors import IntegrationError, ModelError, SaltationError
-from saltation.orbits.boundary import saltation_at_corner
+from saltation.orbits.boundary import corner_saltation_is_bounded, saltation_at_corner
 from saltation.orbits.conditions import (
     ArrivalTangency,
     ConditionedProblem,
@@ -305,7 +305,7 @@ class GrazingCurve(_Curve):
                     raise SaltationError(f"the second touch of transition {k} was lost along the curve")
             to_k = self.flow.run(u[:n], self.t0, t_k, p, variational=True, disabled=disabled, tolerances=self.tolerances)
             P = saltation_at_corner(self.system, self._excursion(k, t_k, to_k.x1, p), t_k, to_k.x1, p)
-            if P is None or not np.linalg.norm(P) < 1e8:
+            if not corner_saltation_is_bounded(self.system, k, t_k, to_k.x1, p, P):
                 return SpecialPointKind.GRAZING.value
             phi = to_k.monodromy
             product = np.linalg.solve(phi, P @ phi) @ product
