@@ -300,6 +300,7 @@ def test_continue_rejects_unknown_parameter(tmp_path, capsys):
     assert len(err) == 1 and "nope" in err[0]
 
 
+@pytest.mark.slow  # runs saltation paper
 def test_paper_end_to_end(tmp_path, capsys):
     status = cli.main(["paper", "--out", str(tmp_path), "--ds-max", "0.05", "--no-progress"])
     assert status == 0

@@ -58,6 +58,7 @@ def test_dimensions_share_engines_as_documented():
     assert "def integrate_kernel" not in model_source(trilinear())
 
 
+@pytest.mark.slow  # compiles the engine for models above the specialised sizes
 def test_a_model_of_more_states_than_specialized_runs_on_the_shared_engine():
     """Five states (the chain's engine with N_STATE = 0, the dimension read from the arrays): the
     monodromy of a linear mode against expm(A T), which the exact flow does not use here (DOP853)."""

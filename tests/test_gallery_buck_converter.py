@@ -36,6 +36,8 @@ from saltation.special_points.continuation import ContinuationSettings, continue
 from saltation.models.buck_converter import DEFAULTS, buck_converter
 from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
 
+pytestmark = pytest.mark.slow  # computes a gallery diagram
+
 R, L, C, V_REF, GAIN, V_L, V_U, T = (DEFAULTS[k] for k in ("R", "L", "C", "V_ref", "a", "V_L", "V_U", "T"))
 A = np.array([[0.0, -T / L], [T / C, -T / (R * C)]])
 H_X = np.array([0.0, GAIN])  # the ramp surface's gradient in (i, v)

@@ -44,6 +44,8 @@ from saltation import Flow, ShootingProblem, find_periodic_orbit, lyapunov_expon
 from saltation.apps.sweeps import PeriodMap, SweepResult
 from saltation.models.impact_oscillator import DEFAULTS
 
+pytestmark = pytest.mark.slow  # computes a gallery diagram
+
 HOOK = Path(__file__).parents[1] / "docs" / "hooks" / "gallery_chaos.py"
 
 

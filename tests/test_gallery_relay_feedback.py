@@ -33,6 +33,8 @@ from saltation.special_points.continuation import ContinuationSettings, continue
 from saltation.models.relay_feedback import DEFAULTS, relay_feedback
 from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
 
+pytestmark = pytest.mark.slow  # computes a gallery diagram (and the three-state engine)
+
 ZETA, W, LAM, SIGMA = (DEFAULTS[k] for k in ("zeta", "w", "lam", "sigma"))
 C = np.array([1.0, 0.0, 0.0])
 I3 = np.eye(3)

@@ -37,6 +37,8 @@ from saltation.special_points.boundary_equilibria import (
     sliding_weight,
 )
 
+pytestmark = pytest.mark.slow  # computes a gallery diagram
+
 #: (k, c, U, lam): the gallery's stable and unstable plant, and two other settings.
 SETTINGS = [
     pytest.param((3.0, 0.5, 1.0, 2.0), id="stable-plant"),

@@ -60,6 +60,8 @@ from saltation.special_points.continuation import ContinuationSettings, continue
 from saltation.models.two_mass_stops import DEFAULTS, two_mass_stops
 from saltation.orbits.shooting import ShootingProblem, find_periodic_orbit
 
+pytestmark = pytest.mark.slow  # computes a gallery diagram (and the four-state engine)
+
 M1, M2, K1, K2, C1, C2, F_DEF, W, D1, D2, KS1, CS1, KS2, CS2 = (
     DEFAULTS[k] for k in ("m1", "m2", "k1", "k2", "c1", "c2", "F", "omega", "d1", "d2", "k_s1", "c_s1", "k_s2", "c_s2"))
 T = 2 * np.pi / W

@@ -26,6 +26,8 @@ from saltation.engine import codegen
 from saltation.engine.codegen import KernelCacheError
 from saltation.orbits.shooting import find_periodic_orbit
 
+pytestmark = pytest.mark.slow  # builds kernel caches of its own (a compile per test)
+
 ZETA, OMEGA = 0.05, 1.3
 
 

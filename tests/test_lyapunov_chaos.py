@@ -76,6 +76,8 @@ from scipy.optimize import brentq
 from saltation import Flow, lyapunov_exponents
 from saltation.models import impact_oscillator
 
+pytestmark = pytest.mark.slow  # long runs on a chaotic attractor
+
 ZETA, OMEGA, R, S = 0.05, 0.6, 0.8, 1.35
 VALUES = {"zeta": ZETA, "omega": OMEGA, "r": R, "s": S}
 PERIOD = 2.0 * math.pi / OMEGA

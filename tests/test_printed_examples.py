@@ -37,6 +37,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.slow  # runs every example of the README and the docs, saltation paper included
+
 ROOT = Path(__file__).parents[1]
 FILES = ["README.md", "docs/index.md", "docs/theory.md",
          *sorted(str(p.relative_to(ROOT)) for p in (ROOT / "docs" / "user-guide").glob("*.md"))]

@@ -11,6 +11,8 @@ import pytest
 import scipy.linalg
 import scipy.optimize
 
+pytestmark = pytest.mark.slow  # executes the tutorial notebook in a kernel of its own
+
 NOTEBOOK = Path(__file__).parents[1] / "examples" / "tutorial.ipynb"
 
 
