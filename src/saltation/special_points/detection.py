@@ -1403,6 +1403,12 @@ def unlocated_grazing(problem, lo: Solution, hi: Solution, index: int, *, bracke
         A ``grazing`` record, ``bracketed`` (not located), the crossing side's largest multiplier ``inf`` and
         the others those of the nearest orbit; None when the sides do not differ by such an excursion, or
         its saltation matrices stay bounded (then the set-valued multipliers classify it).
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        On a backward-time branch, if an event's saltation matrix is singular (a reset that cannot be
+        run backwards).
     """
     sides = _sides(lo, hi)
     if sides is None or not isinstance(problem.system, PiecewiseSystem):
