@@ -244,8 +244,11 @@ def test_the_sum_of_the_exponents_is_the_closed_form(runs):
     counts = np.round(implied)
     for b in range(BLOCKS):
         assert counts[b] > 0
-        assert abs(ours.block_exponents[b].sum() - closed_form_sum(counts[b], block_time)) <= SUM_TOL * BLOCKS
-    assert abs(ours.exponents.sum() - closed_form_sum(counts.sum(), time)) <= SUM_TOL
+        # (plus the rounding the run itself bounds: past an impact that nearly grazes, its saltation matrix's
+        # 1/v puts the contracted direction's digits at eps |R_11| / |R_nn|, whose size depends on the CPU)
+        assert (abs(ours.block_exponents[b].sum() - closed_form_sum(counts[b], block_time))
+                <= SUM_TOL * BLOCKS + ours.block_sum_rounding[b])
+    assert abs(ours.exponents.sum() - closed_form_sum(counts.sum(), time)) <= SUM_TOL + ours.block_sum_rounding.mean()
     # and the two impact rates agree within their statistics
     rates = [counts / block_time, ref.block_impacts / block_time]
     errors = [np.std(r, ddof=1) / math.sqrt(BLOCKS) for r in rates]

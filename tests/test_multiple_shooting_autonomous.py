@@ -50,7 +50,7 @@ from saltation import (
     Transition,
     find_periodic_orbit,
 )
-from saltation.errors import ConvergenceError
+from saltation.errors import ConvergenceError, InconsistentResultError
 from saltation.special_points.continuation import continue_orbit
 
 ZETA, W, SIGMA = 0.2, 1.0, -1.5
@@ -186,12 +186,18 @@ def test_single_shooting_fails_from_the_exact_state(phase):
     """What is true: single shooting FAILS from the exact state (it is not merely less accurate).  One
     rounding unit of the state (~1e-15) grows by 1.2e9 over the period, so the closing residual stalls
     at 3..200 times Newton's tolerance 1e-10 (1 + |u|) ~ 1e-9 (seen over 17 phases of the orbit), and no
-    damped step reduces it further."""
+    damped step reduces it further.  Where the rounding of a CPU lets the residual slip under the tolerance, the
+    monodromy it comes with maps the flow direction 1e-2 off itself (the same 1.2e9 gain), and the orbit is
+    refused for that: a failure either way, never an orbit."""
     h, _ = half_orbit(A_STRONG)
     x = state_at(A_STRONG, phase * h)
-    with pytest.raises(ConvergenceError, match="no step reduces the residual") as info:
+    with pytest.raises((ConvergenceError, InconsistentResultError)) as info:
         find_periodic_orbit(unstable_relay(), x, period=2 * h)
-    assert min(info.value.residuals) > 1e-10 * (1 + np.linalg.norm(np.append(x, 2 * h)))
+    if isinstance(info.value, ConvergenceError):
+        assert "no step reduces the residual" in str(info.value)
+        assert min(info.value.residuals) > 1e-10 * (1 + np.linalg.norm(np.append(x, 2 * h)))
+    else:
+        assert "trivial multiplier is not 1" in str(info.value)
 
 
 @pytest.mark.parametrize("segments", [8, 16])

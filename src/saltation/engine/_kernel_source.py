@@ -994,8 +994,9 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
     n_tr = tr_table.shape[0]
     # sign memory of every surface watched in this mode, in the direction of travel
     for s in range(n_surfaces):
+        # bit 4 of fires: the surface was watched by the motion just left, so its side (surf_sign) is current
+        fires[s] = 4 if watched[s] else 0
         watched[s] = False
-        fires[s] = 0
     for k in range(n_tr):
         src = tr_table[k, 0]
         if (src == mode) if slide[0] == 0 else ((src == slide[1] or src == slide[2]) and tr_table[k, 1] != slide[3]):
@@ -1018,7 +1019,14 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
                 continue
             if abs(v) > surf_res[s]:
                 surf_sign[s] = 1.0 if v > 0 else -1.0
+            elif fires[s] & 4:
+                # reached at the instant of the event just processed, by the motion that watched it: it keeps
+                # the side it came from, and its own crossing is due at once (_exit_at_once: coinciding events)
+                pass
             elif sl != 0.0:
+                # on it, from a side no motion watched: the side is the one the motion goes to (bit 8: a guess,
+                # so that a transition out of this mode that the motion crosses it by fires at once)
+                fires[s] |= 8
                 surf_sign[s] = 1.0 if sl > 0 else -1.0
             else:
                 surf_sign[s] = 1.0 if v >= 0 else -1.0
@@ -1026,7 +1034,7 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
 
 @njit(cache=True, _nrt=False)  # once per mode entered; not inlined, no reference counting
 def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surface, drift, last_kind, jumped, n_ev,
-                  tr_table, surf_old, surf_res, slope_old, surf_sign, fixed_sign, xtmp):
+                  tr_table, surf_old, surf_res, slope_old, surf_sign, fixed_sign, fires, xtmp):
     """A transition out of the mode just entered that fires at once, without a step: at the start, on a
     surface the field crosses in the transition's direction; after a transition at a corner of
     switching surfaces, an exit that already holds (on a surface the state lies on, to the domain's
@@ -1036,20 +1044,29 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surfac
 
     After a transition that has ended a sliding motion (``at_start`` then too), the state lies on the
     sliding surface ``on_surface`` (-1: none) up to the integration's ``drift`` off it (a distance):
-    the new field may cross it, and the drift counts as rounding in the domain's test."""
+    the new field may cross it, and the drift counts as rounding in the domain's test.
+
+    Coinciding events: after any transition, a surface the state lies on (to its resolution) that the new
+    field crosses in the direction of one of the mode's transitions fires at once, where the state reached it
+    from the side that transition fires from (``fires`` bit 4: its side is the one the motion just left kept)
+    or from a side no motion watched (bit 8).  Events due at one instant are so processed one after the
+    other, each from the mode the previous one entered, the transitions of a mode in their listed order."""
     n = N_STATE or xtmp.shape[0]  # (see the engine's header)
     n_tr = tr_table.shape[0]
     pending = NONE
     dt_nudge = direction * (1e-10 + 16.0 * EPS * abs(t))  # a hair: not a fraction of |t| (1e2 at t = 1e12)
     for i in range(n):
         xtmp[i] = y[i] + dt_nudge * K[0, i]
-    if at_start and slide[0] == 0:
+    if (at_start or n_ev > 0) and slide[0] == 0:
         # A start on a surface (|h| within its rounding) with this mode's field crossing it in the direction
         # of one of its transitions: the transition fires at once, as if the motion had just
         # arrived (it may start a sliding motion), instead of moving on in this mode beyond its
         # surface. Its guard is taken a hair along the motion. The same where a transition has
         # ended a sliding motion: the state lies on the sliding surface, and the new mode's field
         # may cross it (into a new sliding motion, say).
+        #   After an event (coinciding events): a surface that the motion reached at the event's instant, from
+        # the side its transition fires from (its side kept by _watch_surfaces), fires at once in the order
+        # the transitions are listed, each from the mode the previous one entered (a zero-length visit).
         for k in range(n_tr):
             if tr_table[k, 0] != mode or tr_table[k, 2] == 0:
                 continue
@@ -1058,6 +1075,9 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surfac
                 continue
             if fixed_sign[s] and surf_sign[s] == tr_table[k, 2]:
                 continue  # the side an event has just put the state on (the surface just crossed)
+            if not at_start and (fixed_sign[s] or ((fires[s] & 8) == 0 and surf_sign[s] != -tr_table[k, 2])):
+                continue  # after an event: a surface reached from the side its transition fires from, or one whose
+                #           side no motion has watched (as at the start)
             if model[GUARD](k, t + dt_nudge, xtmp, p):
                 pending = k
                 break
@@ -1181,6 +1201,22 @@ def _chatter_width(t, h_scale):
     return 16.0 * EPS * abs(t) + 1e-9 * h_scale
 
 
+@njit(cache=True, _nrt=False)  # not inlined: called only where a new field turns back at its surface
+def _goes_on_without_sliding(model, mode_to, s, t_e, xplus, fb, p, tr_table, direction, xn):
+    """Whether the mode ``mode_to``, entered across surface ``s`` with a field that turns back across it, simply
+    goes on: it has no transition of its own on ``s`` (it does not watch it: a latch's state, a relay's output,
+    which hold whatever side of ``s`` the motion is on) and its domain holds a hair along its motion.  Then
+    the motion continues in it, and no sliding motion is called for."""
+    n = N_STATE or xplus.shape[0]  # (see the engine's header)
+    for k in range(tr_table.shape[0]):
+        if tr_table[k, 0] == mode_to and tr_table[k, 1] == s:
+            return False
+    tau = direction * (1e-10 + 16.0 * EPS * abs(t_e))  # a hair (as _exit_at_once's nudge)
+    for i in range(n):
+        xn[i] = xplus[i] + tau * fb[i]
+    return model[IN_DOMAIN](mode_to, t_e + tau, xn, p)
+
+
 @njit(cache=True, _nrt=False)  # not inlined: called only for transitions with a reset, it keeps the integrator's loop lean
 def _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cross, den, sig_b, ht, hx, fb, n_ev,
                    chatter_ring, slide, h_scale, xn, fn, wn, wp):
@@ -1292,14 +1328,18 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, known
         if crowd >= 8:
             return STATUS_CHATTERING, mode_to, EVENT_TRANSITION, den
     back = 0.0  # after a reset that leaves the state on the surface: the side it must go back to
-    if tr_table[k, 4] != 0 and not from_sliding:
+    if tr_table[k, 5] != 0 and not from_sliding:  # an impact (a reset of logic states only is a mode switch)
         code, back = _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cross, den, sig_b, ht,
                                     hx, fb, n_ev, chatter_ring, slide, h_scale, xn, fn, wn, wp)
         if code != STATUS_OK:
             return code, mode_to, EVENT_TRANSITION, den
-    if tr_table[k, 4] == 0 and direction * sig_b * cross < 0.0:
-        # no jump, and the new field pushes back: Filippov sliding along the surface
-        if den == sig_b or from_sliding:
+    goes_on = False
+    if tr_table[k, 5] == 0 and direction * sig_b * cross < 0.0 and not from_sliding:
+        goes_on = _goes_on_without_sliding(model, mode_to, s, t_e, xplus, fb, p, tr_table, direction, xn)
+    if tr_table[k, 5] == 0 and direction * sig_b * cross < 0.0 and not goes_on:
+        # no jump, and the new field pushes back: Filippov sliding along the surface (not defined where the
+        # switch also resets logic states: the sliding motion would need both modes' memory at once)
+        if den == sig_b or from_sliding or tr_table[k, 4] != 0:
             return STATUS_SLIDING_UNDEFINED, mode_to, EVENT_TRANSITION, den
         alpha = den / (den - sig_b)
         for i in range(n):
@@ -1315,7 +1355,9 @@ def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, known
             fplus[i] = fb[i]
     # the side of the surface the motion continues on (after a reset it may be the old one)
     h_after = model[INDICATOR](s, t_e, xplus, p)
-    if slide[0] == 1 or tr_table[k, 4] == 0:
+    if goes_on:
+        surf_sign[s] = -cross  # the new mode's motion turns back across the surface it does not watch
+    elif slide[0] == 1 or tr_table[k, 5] == 0:
         surf_sign[s] = cross
     elif back != 0.0:
         surf_sign[s] = back
@@ -1857,7 +1899,7 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
                             surf_res, slope_old, surf_sign, fixed_sign, hx, hp, gtmp, gptmp)
             pending, status = _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start or after_sliding >= 0,
                                             after_sliding, drift, last_kind, last_jump, n_ev, tr_table, surf_old, surf_res,
-                                            slope_old, surf_sign, fixed_sign, xtmp)
+                                            slope_old, surf_sign, fixed_sign, fires, xtmp)
             at_start = False
             after_sliding = NONE
             drift = 0.0
@@ -2096,7 +2138,7 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
                     mode = tr_table[best_tr, 0]
                     mode_from = mode
                     slide[0] = 0
-                    if tr_table[best_tr, 4] == 0:
+                    if tr_table[best_tr, 5] == 0:
                         # the state stays on the sliding surface, on the side of the mode whose
                         # transition fired: a new field that crosses the surface fires at once
                         # (_exit_at_once), or at the first step's sign change

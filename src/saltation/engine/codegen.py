@@ -420,7 +420,12 @@ def _margin_cases(em: _Emitter, condition_lists, ind: str) -> list[tuple[int, li
 
 
 def transition_table(system: PiecewiseSystem) -> np.ndarray:
-    """Integer table of transitions: source, surface, direction, target, has_reset."""
+    """Integer table of transitions: source, surface, direction, target, has_reset, is_impact.
+
+    ``is_impact``: the reset moves a state that the modes move (:attr:`PiecewiseSystem.impacts`); a reset of
+    logic states only is a mode switch for the geometry of the crossing.  Models without expressions (compiled
+    callables) count every reset as an impact."""
+    impacts = getattr(system, "impacts", None)
     rows = [
         (
             system.mode_index(tr.source),
@@ -428,10 +433,11 @@ def transition_table(system: PiecewiseSystem) -> np.ndarray:
             int(tr.direction),
             system.mode_index(tr.target),
             int(system.resets[k] is not None),
+            int(system.resets[k] is not None if impacts is None else impacts[k]),
         )
         for k, tr in enumerate(system.transitions)
     ]
-    return np.array(rows, dtype=np.int64).reshape(len(rows), 5)
+    return np.array(rows, dtype=np.int64).reshape(len(rows), 6)
 
 
 SPECIALIZED_DIMENSIONS = range(1, 5)

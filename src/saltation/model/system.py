@@ -708,6 +708,23 @@ class PiecewiseSystem(NamedParts):
         d = self.surface_derivatives(surface)
         return sp.expand((d.h_x * self.fields[self.mode_index(mode)])[0, 0] + d.h_t)
 
+    @cached_property
+    def logic_states(self) -> tuple[int, ...]:
+        """The states that no mode moves (their field is 0 in every mode): memory such as a latch's ``q`` or a
+        relay's output, changed only by resets."""
+        return tuple(i for i in range(self.n) if all(sp.simplify(f[i]) == 0 for f in self.fields))
+
+    @cached_property
+    def impacts(self) -> tuple[bool, ...]:
+        """For each transition, whether its reset moves a state that the modes move (an impact: the state may
+        land on the surface and be sent back), rather than only logic states (:attr:`logic_states`; a mode
+        switch: whether the motion crosses is decided by the fields alone, as without a reset)."""
+        logic = set(self.logic_states)
+        return tuple(
+            g is not None and any(sp.simplify(g[i] - self.x[i]) != 0 for i in range(self.n) if i not in logic)
+            for g in self.resets
+        )
+
     def reset_map(self, transition: int) -> sp.Matrix:
         """The reset map of a transition (the identity when it has none)."""
         g = self.resets[transition]
