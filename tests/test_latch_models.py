@@ -90,3 +90,23 @@ def test_the_converter_orbit_against_its_stroboscopic_map(flow, i_ref, guess):
     expected = np.sort(np.concatenate([reference_multipliers(i_ref, (1.2, 17.0)), [0.0, 1.0]]))
     np.testing.assert_allclose(mu, expected, rtol=0, atol=1e-8)  # the reference's differences: ~1e-10
     assert orbit.period == pytest.approx(1.0, abs=1e-10)  # the clock's period
+
+
+def test_a_relay_output_that_the_field_reads_is_no_logic_state():
+    """A relay with hysteresis written as one mode, its output ``u`` a state: ``x' = -x + u``, ``u`` set to -1 at
+    ``x = d`` (rising) and to +1 at ``x = -d`` (falling).  ``u`` enters the field, so its resets are impacts (the
+    state stays on the surface and the new field takes it back): closed form, the switches ``ln((1 + d) / (1 - d))``
+    apart (``x = u - (u + d) exp(-t)`` from ``x = -d`` with ``u = 1``)."""
+    d = 0.5
+    relay = PiecewiseSystem(
+        "test_hysteresis_relay", states=["x", "u"], parameters={"d": d},
+        modes=[Mode("m", ["-x + u", "0"])], surfaces={"up": "x - d", "down": "x + d"},
+        transitions=[Transition("m", "up", RISING, "m", reset=["x", "-1"]),
+                     Transition("m", "down", FALLING, "m", reset=["x", "1"])],
+    )
+    assert relay.logic_states == () and relay.impacts == (True, True)
+    traj = Flow(relay).run([-d, 1.0], 0.0, 10.0, relay.parameter_vector())
+    times = np.array([e.t for e in traj.events])
+    half = math.log((1 + d) / (1 - d))
+    assert len(times) == int(10.0 // half)
+    np.testing.assert_allclose(times, half * np.arange(1, len(times) + 1), rtol=0, atol=1e-9)

@@ -710,20 +710,30 @@ class PiecewiseSystem(NamedParts):
 
     @cached_property
     def logic_states(self) -> tuple[int, ...]:
-        """The states that no mode moves (their field is 0 in every mode): memory such as a latch's ``q`` or a
-        relay's output, changed only by resets."""
-        return tuple(i for i in range(self.n) if all(sp.simplify(f[i]) == 0 for f in self.fields))
+        """The states that no mode moves and no field reads (their field is 0 in every mode, and no mode's field
+        depends on them): memory such as a latch's ``q``, changed only by resets and read only by domains and
+        guards.  (A relay's output that enters the field, ``x' = -x + u``, or a velocity that no force changes,
+        ``x' = vx, vx' = 0``, is no logic state: resetting it changes the motion.)"""
+        read = set().union(*(f.free_symbols for f in self.fields))
+        return tuple(i for i in range(self.n)
+                     if self.x[i] not in read and all(sp.simplify(f[i]) == 0 for f in self.fields))
 
     @cached_property
     def impacts(self) -> tuple[bool, ...]:
-        """For each transition, whether its reset moves a state that the modes move (an impact: the state may
-        land on the surface and be sent back), rather than only logic states (:attr:`logic_states`; a mode
-        switch: whether the motion crosses is decided by the fields alone, as without a reset)."""
+        """For each transition, whether its reset is an impact: it moves a state that is not a logic state
+        (:attr:`logic_states`), or one that its surface's indicator reads (the state may land on the surface
+        and be sent back).  A reset of other logic states only is a mode switch: whether the motion crosses is
+        decided by the fields alone, as without a reset."""
         logic = set(self.logic_states)
-        return tuple(
-            g is not None and any(sp.simplify(g[i] - self.x[i]) != 0 for i in range(self.n) if i not in logic)
-            for g in self.resets
-        )
+        out = []
+        for k, g in enumerate(self.resets):
+            if g is None:
+                out.append(False)
+                continue
+            indicator = self.indicators[self.surface_index(self.transitions[k].surface)]
+            moved = [i for i in range(self.n) if sp.simplify(g[i] - self.x[i]) != 0]
+            out.append(any(i not in logic or self.x[i] in indicator.free_symbols for i in moved))
+        return tuple(out)
 
     def reset_map(self, transition: int) -> sp.Matrix:
         """The reset map of a transition (the identity when it has none)."""
