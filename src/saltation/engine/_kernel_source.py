@@ -784,13 +784,19 @@ def _surface_resolution(model, s, t, x, p, hx, hp):
     """How near zero the indicator of surface ``s`` is rounding, at ``(t, x)``: 16 rounding units of
     the terms it is made of, ``|h_x_i| max(1, |x_i|)``, ``|h_t| max(1, |t|)`` and ``|h_p_j p_j|`` (a state
     that close is on the surface).  Not a fixed distance: a band 1e-13 wide (a stick band) is
-    resolved, and an indicator of a large state is not taken as exact."""
+    resolved, and an indicator of a large state is not taken as exact.  A term that is not finite (the
+    gradient of ``sqrt(x^2 + y^2) - delta`` at the circle's centre, where the indicator has none) is left
+    out: the state is as far from the surface as its indicator says."""
     ht = model[INDICATOR_GRAD](s, t, x, p, hx, hp)
-    scale = abs(ht) * max(1.0, abs(t))
+    scale = abs(ht) * max(1.0, abs(t)) if math.isfinite(ht) else 0.0
     for i in range(x.shape[0]):
-        scale += abs(hx[i]) * max(1.0, abs(x[i]))
+        term = abs(hx[i]) * max(1.0, abs(x[i]))
+        if math.isfinite(term):
+            scale += term
     for j in range(p.shape[0]):
-        scale += abs(hp[j] * p[j])
+        term = abs(hp[j] * p[j])
+        if math.isfinite(term):
+            scale += term
     return 16.0 * EPS * scale
 
 

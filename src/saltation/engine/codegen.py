@@ -151,8 +151,11 @@ class _Emitter:
 
 def _decorator(name: str) -> str:
     """A model function is compiled with its signature from the contract (eagerly), so the engine can
-    take it as a first-class function."""
-    return f"@njit(MODEL_SIGNATURES[{name!r}], cache=True)"
+    take it as a first-class function.  A division by zero in a model's expression (``delta / r`` or the
+    gradient ``x / r`` of a circle at its centre) gives an infinity or NaN, as in numpy, that the engine
+    reports by mode and surface (or that does not matter where it arises), not a ``ZeroDivisionError``
+    from inside the compiled engine that names nothing."""
+    return f"@njit(MODEL_SIGNATURES[{name!r}], cache=True, error_model='numpy')"
 
 
 #: A generated function longer than this (lines) is compiled without LLVM's optimization passes
