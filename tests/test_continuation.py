@@ -442,3 +442,20 @@ def test_everyday_names_are_exported():
                  "continue_branch", "ContinuationSettings", "Branch", "SpecialPoint", "SpecialPointKind", "sweep",
                  "period_map"):
         assert name in saltation.__all__ and hasattr(saltation, name)
+
+
+def test_the_package_continuation_locates_what_continue_branch_does(tri_flow, tri_branch):
+    """``saltation.Continuation`` (the user guide's step-by-step form) has the special-point detector: run to the end,
+    its branch holds the same special points as ``continue_branch``'s (the closed-form corners w_A, w_B and the fold),
+    at the same parameters to their stated accuracy."""
+    import saltation
+
+    branch, problem = tri_branch
+    cont = saltation.Continuation(problem, ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(0.6, 1.6)))
+    points = list(cont.run(linear_response_state(dict(TRI) | {"omega": 0.6}), 0.6, direction=1))
+    assert points and cont.branch.special_points
+    ours = [(sp.kind, sp.parameter, sp.accuracy) for sp in cont.branch.special_points]
+    theirs = [(sp.kind, sp.parameter, sp.accuracy) for sp in branch.special_points]
+    assert [k for k, _, _ in ours] == [k for k, _, _ in theirs]
+    for (_, a, da), (_, b, db) in zip(ours, theirs):
+        assert abs(a - b) <= da + db + 1e-12

@@ -20,7 +20,7 @@ from saltation import _moved
 _moved.install()
 
 from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind
-from saltation.special_points.continuation import ContinuationSettings, continue_branch, continue_orbit
+from saltation.special_points.continuation import Continuation, ContinuationSettings, continue_branch, continue_orbit
 from saltation.errors import (
     ChatteringError,
     ConvergenceError,
@@ -47,7 +47,7 @@ from saltation.apps.sweeps import SweepStart, period_map, sweep
 __version__ = "0.1.0"
 
 __all__ = [
-    "Branch", "ChatteringError", "ContinuationSettings", "ConvergenceError", "Crossing", "InconsistentResultError", "EventKind", "Flow",
+    "Branch", "ChatteringError", "Continuation", "ContinuationSettings", "ConvergenceError", "Crossing", "InconsistentResultError", "EventKind", "Flow",
     "InitialModeError", "IntegrationError", "LyapunovExponents", "Mode", "ModelError", "NoOrbitNearGuessError", "NonFiniteError", "PeriodicOrbit",
     "PiecewiseSystem", "PseudoEquilibrium", "SaltationError", "ShootingProblem", "SlidingError", "SpecialPoint", "StartGuessError", "StationaryStateError", "SpecialPointKind",
     "Symmetry",
