@@ -186,7 +186,7 @@ def _skip_optimization_of_long_functions(src: list[str]) -> list[str]:
     starts = [i for i, line in enumerate(src) if line.startswith("@njit(MODEL_SIGNATURES[")] + [len(src)]
     out = list(src)
     for a, b in zip(starts[:-1], starts[1:]):
-        if (b - a > UNOPTIMIZED_FUNCTION_LINES and out[a].endswith("cache=True)")
+        if (b - a > UNOPTIMIZED_FUNCTION_LINES and out[a].endswith(")")
                 and "['initial_mode']" not in out[a]):
             out[a] = out[a][: -len(")")] + ", _dbg_optnone=True)"
     return out
