@@ -137,9 +137,13 @@ def test_one_sided_multipliers_at_corners(tri_branch):
         assert ref.kind is sp.kind
         full = classify_nonsmooth(*((m_free, m_contact) if not sp.event_labels_minus else (m_contact, m_free)))
         assert full.kind is sp.kind
-        if ref.q is not None:
-            assert sp.crossing_q == pytest.approx(ref.q, abs=1e-9)
-            assert sp.crossing_point == pytest.approx(ref.gamma**2, abs=1e-9)
+        # where the set crosses: on the convex hull (1 - q) M- + q M+ of the full monodromies (Leine, Van Campen
+        # and Van de Vrande 2000), not on that of the half-period maps, whose squares are not in it (w_B: q =
+        # 0.441652, the complement of 0.558348 as the sides are ordered here)
+        if full.q is not None:
+            assert sp.crossing_q == pytest.approx(full.q, abs=1e-9)
+            assert sp.crossing_point == pytest.approx(full.point, abs=1e-9)
+            assert abs(abs(sp.crossing_point) - 1.0) <= 1e-9
         # the stated accuracy covers the distance to the exact corner (closed-form frequency)
         w_exact = min(corner_frequencies(), key=lambda w: abs(w - sp.parameter))
         m_free_exact, m_contact_exact = one_sided_monodromies(w_exact)

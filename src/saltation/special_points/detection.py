@@ -966,13 +966,19 @@ class SpecialPointDetector:
                 "the full multipliers")
             half = None
         if half is not None:
+            # the kind from the half-period maps (a symmetric orbit's multipliers are their squares); where the
+            # set crosses, from the full ones: the set-valued monodromy is the convex hull (1 - q) M- + q M+ of
+            # the full one-sided monodromies, and ((1 - q) G- + q G+)^2 is not in it
+            full = crossing
             crossing = symmetric_crossing(classify_nonsmooth(
                 half[0], half[1], backward=self.branch.backward, autonomous=self.autonomous,
             ))
             if crossing.point is not None:
                 note = (note + "; " if note else "") + (
                     f"symmetric orbit: the half-period multiplier crosses the unit circle at "
-                    f"{_complex_text(crossing.gamma)}")
+                    f"{_complex_text(crossing.gamma)} (at q = {crossing.q:.6g} between the half-period maps)")
+            if full.q is not None:
+                crossing = replace(crossing, q=full.q, point=full.point)
         sp = special_point_between(
             lo, hi, crossing, index=index, bracket=bracket, accuracy=accuracy, monodromy_plus=m_hi, note=note,
         )
