@@ -1015,8 +1015,13 @@ class ShootingProblem:
         Returns
         -------
         str or None
-            The explanation (which of the three, and where), or None for a state that moves.
+            The explanation (which of the three, and where), or None for a state that moves, and for every
+            orbit of a forced model: there a constant solution (an equilibrium that the moving surfaces never
+            reach, a state that sticks all period) is a genuine T-periodic orbit, with multipliers
+            ``expm(J T)``; only an autonomous orbit's period is free to shrink onto a state that does not move.
         """
+        if not self.autonomous:
+            return None
         tol = self.tolerances or self.flow.tolerances
         n = self.system.n
         # plain floats: this runs for every orbit and branch point, on a few numbers
