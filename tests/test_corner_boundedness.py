@@ -68,7 +68,7 @@ def test_an_impact_at_a_tangency_is_unbounded_however_closely_it_is_located(d, t
         f_minus = -2 * ZETA * d - S + math.cos(OMEGA * t)
         f_plus = -2 * ZETA * (-R * d) - S + math.cos(OMEGA * t)
         expected = np.array([[-R, 0.0], [(f_plus + R * f_minus) / d, -R]])
-        np.testing.assert_allclose(P, expected, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(P, expected, rtol=1e-12, atol=1e-12)  # the same formula: rounding units apart
     assert not corner_saltation_is_bounded(system, 0, t, x, p, P)
 
 

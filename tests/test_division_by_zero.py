@@ -42,6 +42,7 @@ def test_a_start_where_the_indicator_has_no_gradient():
     orbit = find_periodic_orbit(Flow(rotor()), [0.0, 0.0, 0.0, 0.0])
     amplitude = RHO * OMEGA**2 / math.hypot(1 - OMEGA**2, 2 * ZETA * OMEGA)
     assert amplitude < DELTA and not orbit.events  # the free whirl, inside the clearance
+    # Newton to 1e-10 on integration at rtol 1e-10 over one period (the closed form is exact)
     assert orbit.amplitude == pytest.approx(amplitude, abs=1e-9)
     T = 2 * math.pi / OMEGA
     single = np.linalg.eigvals(expm(np.array([[0.0, 1.0], [-1.0, -2 * ZETA]]) * T))

@@ -28,6 +28,7 @@ def test_the_rest_state_below_a_moving_wall_is_a_forced_orbit():
         period="2*pi/omega",
     )
     orbit = find_periodic_orbit(Flow(system), [0.0, 0.0])
+    # the rest state is an exact solution: Newton starts there and the exact flow of the affine mode keeps it
     np.testing.assert_allclose(orbit.state0, [0.0, 0.0], rtol=0, atol=1e-12)
     assert abs(orbit.period - 2 * math.pi / OMEGA) <= 4 * np.finfo(float).eps * orbit.period and not orbit.events
     expected = np.linalg.eigvals(expm(np.array([[0.0, 1.0], [-1.0, -2 * ZETA]]) * orbit.period))

@@ -89,7 +89,7 @@ def test_the_converter_orbit_against_its_stroboscopic_map(flow, i_ref, guess):
     assert np.max(np.abs(orbit.multipliers.imag)) == 0.0
     expected = np.sort(np.concatenate([reference_multipliers(i_ref, (1.2, 17.0)), [0.0, 1.0]]))
     np.testing.assert_allclose(mu, expected, rtol=0, atol=1e-8)  # the reference's differences: ~1e-10
-    assert orbit.period == pytest.approx(1.0, abs=1e-10)  # the clock's period
+    assert orbit.period == pytest.approx(1.0, abs=1e-10)  # the clock's period, to Newton's tolerance 1e-10
 
 
 def test_a_relay_output_that_the_field_reads_is_no_logic_state():
@@ -109,4 +109,5 @@ def test_a_relay_output_that_the_field_reads_is_no_logic_state():
     times = np.array([e.t for e in traj.events])
     half = math.log((1 + d) / (1 - d))
     assert len(times) == int(10.0 // half)
+    # event location to ~1e-12 per switch, accumulated over a few switches at rtol 1e-10
     np.testing.assert_allclose(times, half * np.arange(1, len(times) + 1), rtol=0, atol=1e-9)
