@@ -8,6 +8,7 @@ recompile.
 
 from __future__ import annotations
 
+import functools
 import os
 from pathlib import Path
 
@@ -100,6 +101,42 @@ def _models_compiled_in_parallel() -> None:
         [trilinear(), block_on_belt(), oscillator_system(), filippov_system(), chain(1), chain(2), impact_oscillator(),
          bouncing_ball(), smoothed_block_on_belt(), friction_oscillator()]
     )
+
+
+@pytest.fixture(autouse=True)
+def _every_branch_holds_its_invariants(request, monkeypatch):
+    """Every branch a test computes (every :class:`~saltation.branches.continuation.Continuation`) is checked
+    after the test against the invariants of :func:`saltation.branches.check.check_branch`: the trivial
+    multiplier at 1, every change of stability covered by a special point of the right kind, honest
+    brackets, no silent stop.  A test that builds a branch to see it break one marks itself
+    ``unchecked_branches``.  With ``SALTATION_BRANCH_CHECK_REPORT=FILE`` the violations are appended to
+    FILE instead of failing the test."""
+    from saltation.branches import continuation as cont
+
+    made = []
+    original = cont.Continuation.__init__
+
+    @functools.wraps(original)
+    def recording(self, *args, **kwargs):
+        original(self, *args, **kwargs)
+        made.append(self.branch)
+
+    recording.__kwdefaults__ = original.__kwdefaults__  # functools.wraps does not copy them
+    monkeypatch.setattr(cont.Continuation, "__init__", recording)
+    yield
+    if request.node.get_closest_marker("unchecked_branches") is not None:
+        return
+    broken = [(b, b.check()) for b in made if b.points]
+    broken = [(b, c) for b, c in broken if not c.ok]
+    if not broken:
+        return
+    text = "\n".join(f"{b.model} in {b.parameter_name} ({len(b.points)} points):\n{c}" for b, c in broken)
+    report = os.environ.get("SALTATION_BRANCH_CHECK_REPORT")
+    if report:
+        with open(report, "a") as fh:
+            fh.write(f"## {request.node.nodeid}\n{text}\n")
+        return
+    pytest.fail(f"a computed branch breaks its invariants:\n{text}", pytrace=False)
 
 
 @pytest.fixture(scope="session")

@@ -363,6 +363,7 @@ def test_a_symmetry_that_holds_at_some_parameter_values_only():
         assert (detector.symmetry is not None) == symmetric
 
 
+@pytest.mark.unchecked_branches  # the location is made to fail: the change it leaves uncovered is the point
 def test_a_symmetry_breaking_that_cannot_be_located_is_reported_as_failed(tri_flow, monkeypatch):
     """Where the half-period multiplier changes sign of ``gamma + 1`` between two branch points but Newton on
     the half-period map fails, the point is kept, with status failed and the two points' bracket."""

@@ -130,6 +130,8 @@ def branch_summary(branch) -> str:
         ("shooting", "backward time" if branch.backward else "forward time"),
         ("stopped", stop_text(branch) or "-"),
     ]
+    if getattr(branch, "stop_detail", ""):
+        rows.append(("failure", branch.stop_detail))
     text = f"**{branch.label or branch.kind.value} branch** of {branch.model}\n\n" + _table(rows)
     if branch.special_points:
         text += "\n\n| special point | " + branch.parameter_name + " | located to |\n|---|---|---|\n"

@@ -856,7 +856,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
     from saltation.output import io
     from saltation.output import plotting
     from saltation.special_points.continuation import Continuation, ContinuationSettings
-    from saltation.apps.diagram import follow_through_discontinuous_fold
+    from saltation.apps.diagram import distinct_special_points, follow_through_discontinuous_fold
     from saltation.orbits.shooting import EquilibriumProblem
 
     system = build_model(args.model)
@@ -925,12 +925,11 @@ def cmd_continue(args: argparse.Namespace) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = f"{system.name}_{args.param}"
-    records = []
     for k, br in enumerate(branches):
         suffix = "" if k == 0 else f"_{k}"
         io.save_branch_json(br, out / f"{stem}_branch{suffix}.json")
         io.save_branch_csv(br, out / f"{stem}_branch{suffix}.csv")
-        records += [io.special_point_record(sp, system.name, args.param) for sp in br.special_points]
+    records = [io.special_point_record(sp, system.name, args.param) for sp in distinct_special_points(branches)]
     io.save_special_points_json(records, out / f"{stem}_special_points.json")
     plotting.save_figure(plotting.plot_response(branches), out / f"{stem}_diagram")
     total = sum(len(b) for b in branches)

@@ -36,8 +36,22 @@ class BifurcationDiagram:
 
     @property
     def special_points(self) -> list[SpecialPoint]:
-        """Every special point of every branch."""
-        return [sp for b in self.branches for sp in b.special_points]
+        """Every special point of every branch; a point where two branches join (a discontinuous fold that
+        ends one and starts the other) is listed once."""
+        return distinct_special_points(self.branches)
+
+
+def distinct_special_points(branches) -> list[SpecialPoint]:
+    """Every special point of the branches, in order; a point where two branches join (the same kind at the
+    same parameter, recorded at the end of one and the start of the other) listed once."""
+    seen: set[tuple[str, float]] = set()
+    out = []
+    for sp in (sp for b in branches for sp in b.special_points):
+        key = (sp.kind.value, float(sp.parameter))
+        if key not in seen:
+            seen.add(key)
+            out.append(sp)
+    return out
 
 
 def locate_branch_end(corrector: Corrector, last: Solution, lam_fail: float, *, tol: float = 1e-9) -> tuple[Solution, float]:
@@ -211,7 +225,15 @@ def follow_through_discontinuous_fold(
     )
     fold = _fold_by_tangential_return(prob_f, end, fold, forward.corrector)
     branch.special_points.insert(0, fold)
+    # the two runs that stopped there (the corrector failed) say what they found: this fold, at their ends
+    for run in (forward, near):
+        if not any(sp is fold or _same_point(sp, fold) for sp in run.branch.special_points):
+            run.branch.special_points.append(replace(fold, index=len(run.branch.points) - 1))
     return branch, fold
+
+
+def _same_point(a: SpecialPoint, b: SpecialPoint) -> bool:
+    return a.kind is b.kind and a.parameter == b.parameter
 
 
 def _fold_by_tangential_return(

@@ -16,6 +16,9 @@ class SpecialPointKind(enum.Enum):
     """Kinds of special points; the value is the name used in files and on the command line."""
 
     FOLD = "fold"
+    #: a real multiplier passes +1 without a turning point of the parameter: branches cross (a transcritical
+    #: or pitchfork point, whether or not the model declares the symmetry behind it)
+    BRANCH_POINT = "branch_point"
     PERIOD_DOUBLING = "period_doubling"
     NEIMARK_SACKER = "neimark_sacker"
     HOPF = "hopf"
@@ -256,6 +259,9 @@ class Branch:
         Why the (first) run stopped.
     stop_reasons : list
         Why each further run (other directions) stopped.
+    stop_detail : str
+        What a run that stopped because its corrector failed met there: the corrector's last error, where
+        no special point explains the end (empty otherwise).
     fixed_parameters : dict
         Values of every parameter (the continuation parameter at the start point).
     label : str
@@ -283,6 +289,7 @@ class Branch:
     special_points: list[SpecialPoint] = field(default_factory=list)
     stop_reason: StopReason | None = None
     stop_reasons: list[StopReason | None] = field(default_factory=list)
+    stop_detail: str = ""
     fixed_parameters: dict[str, float] = field(default_factory=dict)
     label: str = ""
     autonomous: bool = False
@@ -367,6 +374,20 @@ class Branch:
             return all(p.stable == bool(np.all(np.real(p.multipliers) < 0)) for p in self.points)
         return all(p.stable == is_stable(p.multipliers, autonomous=self.autonomous) for p in self.points)
 
+    def check(self):
+        """The invariants every computed branch must hold (:func:`saltation.branches.check.check_branch`):
+        the trivial multiplier at 1, every change of stability covered by a special point of the right
+        kind, honest brackets, no silent stop.
+
+        Returns
+        -------
+        BranchCheck
+            Its ``violations`` (``.ok`` when there are none; ``.raise_if_broken()`` raises).
+        """
+        from saltation.branches.check import check_branch
+
+        return check_branch(self)
+
     def extend(self, other: Branch) -> None:
         """Prepend a run of the same branch in the other direction from the same start point.
 
@@ -379,6 +400,7 @@ class Branch:
             The run in the other direction, from the same start point.
         """
         m = len(other.points)
+        self.stop_detail = "; ".join(d for d in (other.stop_detail, self.stop_detail) if d)
         self.points = list(reversed(other.points[1:])) + self.points
         moved = [_reindex(sp, m - 2 - sp.index) for sp in other.special_points]
         self.special_points = moved + [_reindex(sp, sp.index + m - 1) for sp in self.special_points]

@@ -34,7 +34,7 @@ import numpy as np
 from saltation.branches.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind, StopReason
 from saltation.branches.corrector import Corrector, Solution, canonical_events
 from saltation.errors import SaltationError
-from saltation.orbits.shooting import EquilibriumProblem, ShootingProblem
+from saltation.orbits.shooting import ShootingProblem
 
 
 
@@ -184,7 +184,7 @@ class Continuation:
         self.branch = Branch(
             model=problem.system.name,
             parameter_name=problem.lam_name,
-            kind=BranchKind.EQUILIBRIUM if isinstance(problem, EquilibriumProblem) else BranchKind.PERIODIC,
+            kind=BranchKind(getattr(problem, "branch_kind", BranchKind.PERIODIC.value)),
             backward=bool(getattr(problem, "backward", False)),
             fixed_parameters=dict(zip(problem.system.parameter_names, map(float, problem.p))),
             autonomous=bool(problem.system.is_autonomous),
@@ -193,6 +193,7 @@ class Continuation:
         )
         self.solutions: list[Solution] = []
         self.last_failure: np.ndarray | None = None
+        self.last_error: SaltationError | None = None
         self.detector_factory = detector
 
     # ---------------------------------------------------------------------------------
@@ -266,8 +267,9 @@ class Continuation:
                     break
                 try:
                     cand = self.corrector.solve_bordered(z_pred, prev.tangent)
-                except SaltationError:
+                except SaltationError as exc:
                     self.last_failure = z_pred
+                    self.last_error = exc
                     ds *= 0.5
                     continue
                 cand.tangent = self.corrector.tangent(cand, prev.tangent)
@@ -294,6 +296,9 @@ class Continuation:
                     self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
                     return
                 self.branch.stop_reason = StopReason.MIN_STEP
+                if self.last_error is not None:
+                    self.branch.stop_detail = (f"at {self.problem.lam_name} = {prev.lam:.10g}: "
+                                               f"{type(self.last_error).__name__}: {self.last_error}")
                 return
             self._accept(new)
             closed = self._passes_start(prev, new)
@@ -331,8 +336,9 @@ class Continuation:
         :class:`~saltation.orbits.records.BranchPoint`) tends to zero.  With the last three points
         shrinking, ``e`` is extrapolated linearly in the parameter from the last two; if it reaches
         zero within 1.5 steps ahead (4 when the corrector has failed: ``strict`` False), the branch
-        ends there.  The accuracy is the distance between that extrapolation and the one from the
-        two points before, which tend to the limit together.
+        ends there.  The bracket reaches the distance ``d`` between that extrapolation and the one from the
+        two points before (which tend to the limit together) on either side, and the accuracy is its width
+        ``2 d``.
         """
         prob = self.problem
         if not isinstance(prob, ShootingProblem) or not prob.autonomous or len(self.solutions) < 3:
@@ -351,13 +357,14 @@ class Continuation:
         ahead = (limit - lam[2]) / step
         if not 0.0 <= ahead <= (1.5 if strict else 4.0):
             return None
-        accuracy = abs(limit - before)
+        spread = abs(limit - before)
+        accuracy = 2.0 * spread  # the bracket's width: ``accuracy`` is never less than its bracket
         last = sols[-1]
         traj = last.evaluation.trajectory
         return SpecialPoint(
             kind=SpecialPointKind.CYCLE_COLLAPSE,
             parameter=float(limit),
-            bracket=(float(limit - accuracy), float(limit + accuracy)),
+            bracket=(float(limit - spread), float(limit + spread)),
             accuracy=float(accuracy),
             index=len(self.branch.points) - 1,
             state=0.5 * (traj.x_max + traj.x_min),

@@ -147,14 +147,23 @@ def orbit_events(traj: Trajectory) -> list:
     return events
 
 
+#: the event kind of :func:`event_ids`' one entry for an orbit without events: it stays in one mode
+STAYS_IN_MODE = -1
+
+
 def event_ids(traj: Trajectory) -> tuple[tuple[int, int, int], ...]:
     """The orbit's events by identity: ``(kind, transition index, mode entered)`` each.
 
     Two transitions that differ only in their guard (or reset) have the same
     label but not the same index; a sliding motion's end is told by the mode
-    it leaves into.  Detectors of non-smooth points compare these.
+    it leaves into.  Detectors of non-smooth points compare these.  An orbit without events is
+    ``((STAYS_IN_MODE, -1, mode),)``: two such orbits in different modes (a whirl inside its clearance
+    and one in contact all round) differ, so that the change between them is located like any other.
     """
-    return tuple((kind, transition, mode_to) for kind, transition, _, _, mode_to in _orbit_event_rows(traj))
+    ids = tuple((kind, transition, mode_to) for kind, transition, _, _, mode_to in _orbit_event_rows(traj))
+    if ids:
+        return ids
+    return ((STAYS_IN_MODE, -1, list(traj.system.mode_names).index(traj.mode0)),)
 
 
 def event_labels(traj: Trajectory) -> tuple[str, ...]:

@@ -2011,6 +2011,9 @@ class EquilibriumProblem:
         If the model is forced, or a mode, parameter name or value is invalid.
     """
 
+    #: what a branch of this problem is (:class:`saltation.branches.branch.BranchKind` by value)
+    branch_kind = "equilibrium"
+
     def __init__(
         self,
         flow: Flow,

@@ -54,6 +54,7 @@ JUMP_STYLE = ":"
 #: Marker and legend text per kind of special point.
 SPECIAL_POINT_MARKERS: dict[SpecialPointKind, tuple[str, str]] = {
     SpecialPointKind.FOLD: ("o", "fold"),
+    SpecialPointKind.BRANCH_POINT: ("x", "branch point"),
     SpecialPointKind.PERIOD_DOUBLING: ("s", "period doubling"),
     SpecialPointKind.NEIMARK_SACKER: ("D", "Neimark-Sacker"),
     SpecialPointKind.HOPF: ("^", "Hopf"),

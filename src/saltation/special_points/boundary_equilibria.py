@@ -413,6 +413,9 @@ class BoundaryEquilibriumCurve:
         For an unknown mode, surface or parameter, two equal parameters, or a forced model.
     """
 
+    #: what a branch of this problem is (:class:`saltation.branches.branch.BranchKind` by value)
+    branch_kind = "equilibrium"
+
     autonomous = True
     backward = False
 

@@ -14,6 +14,8 @@ pseudo-arclength continuation of the two-period shooting problem.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind
@@ -166,7 +168,11 @@ def _leave_along(problem: ShootingProblem, point: SpecialPoint, v: np.ndarray, r
         if not lo <= first.lam <= hi:
             continue
         direction = 1 if first.lam >= point.parameter else -1
-        return continue_branch(problem, first.u, first.lam, settings=settings, directions=(direction,), label=label)
+        branch = continue_branch(problem, first.u, first.lam, settings=settings, directions=(direction,), label=label)
+        # the new branch is born at the point: its first special point, where its first orbit's multiplier
+        # (at +1 on the circle, within the step from it) begins
+        branch.special_points.insert(0, replace(point, index=0))
+        return branch
     raise ConvergenceError(
         f"no {what} found near the {at} at {problem.lam_name} = {point.parameter:.10g}"
         + (f" (last failure: {last})" if last else ""),

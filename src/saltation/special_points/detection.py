@@ -5,7 +5,8 @@ Illinois method along the secant between two branch points:
 
 * fold (turning point): the parameter component of the tangent changes sign;
 * period doubling: a real multiplier passes -1 (``prod(mu + 1)`` changes sign);
-* Neimark-Sacker: a complex pair leaves the unit circle;
+* Neimark-Sacker: a complex pair leaves the unit circle (a product of two multipliers passes 1);
+* branch point: a real multiplier passes +1 without a turning point (``prod(mu - 1)`` changes sign);
 * Hopf (equilibria): a complex pair of eigenvalues crosses the imaginary axis.
 
 *Discontinuous* (non-smooth) points are where the orbit's event sequence
@@ -408,9 +409,37 @@ class SpecialPointDetector:
         return self.problem.flow.integration_error(sol.evaluation.trajectory, self.problem.tolerances)
 
     def _smooth_points(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
-        """Smooth special points between two solutions with the same event sequence (test functions)."""
-        found = []
+        """Smooth special points between two solutions with the same event sequence (test functions).
+
+        Where a multiplier moves so far from ``a`` to ``b`` that it may have left the unit circle and come
+        back (two changes of stability in one step, which no test function's sign shows), the step is
+        split on the secant first (:meth:`_pieces`) and each piece is tested."""
         secant = _unit(b.z - a.z)
+        pieces = self._pieces(a, b)
+        found = []
+        for s0, s1 in zip(pieces, pieces[1:]):
+            found += self._smooth_points_of_piece(s0, s1, index, secant)
+        return found
+
+    def _pieces(self, a: Solution, b: Solution, depth: int = 0) -> list[Solution]:
+        """``[a, ..., b]``: the step cut at the middle of its secant, again and again, until no multiplier
+        moves across a piece by more than it lies from the unit circle at the piece's ends
+        (:func:`_may_hide_a_pair`), the piece is within the location tolerance, or 12 cuts deep.  A middle
+        whose event sequence differs (a corner inside the step) or that cannot be solved is not cut."""
+        if (self.equilibrium or depth >= 12 or float(np.linalg.norm(b.z - a.z)) <= 10.0 * self.tol
+                or not _may_hide_a_pair(_nontrivial(a, self.autonomous), _nontrivial(b, self.autonomous))):
+            return [a, b]
+        try:
+            mid = self.on_secant(a, b, 0.5)
+        except SaltationError:
+            return [a, b]
+        if canonical_events(mid.summary.event_ids) != canonical_events(a.summary.event_ids):
+            return [a, b]
+        return self._pieces(a, mid, depth + 1)[:-1] + self._pieces(mid, b, depth + 1)
+
+    def _smooth_points_of_piece(self, a: Solution, b: Solution, index: int, secant: np.ndarray) -> list[SpecialPoint]:
+        """:meth:`_smooth_points` on one piece of a step (``secant``: the whole step's direction)."""
+        found = []
         # a point's test values are kept for the next pair: both secants point along the branch,
         # so the tangent (fold test) is oriented alike
         fold = _remembered("fold", lambda s: self._oriented_tangent(s, secant)[-1])
@@ -425,13 +454,15 @@ class SpecialPointDetector:
             g = _remembered(kind.value, lambda s, test=test: test(_nontrivial(s, self.autonomous)))
             if _crosses(g(a), g(b)):
                 found.append(self.locate_smooth(a, b, index, kind, g))
-        if self.symmetry is not None:
-            # a half-period multiplier through -1 takes a full one through +1: the half-period shots are taken
-            # only where a full multiplier passes +1 (prod(mu - 1) changes sign)
-            plus = _remembered("plus_one", lambda s: _plus_one_test(_nontrivial(s, self.autonomous)))
-            g = _remembered("symmetry_breaking", self._symmetry_breaking_test)
-            if _crosses(plus(a), plus(b)) and _crosses(g(a), g(b)):
+        # a real multiplier through +1 without a turning point: a branch point (a pitchfork or transcritical
+        # point), or, for a declared symmetry, a symmetry breaking where a half-period multiplier passes -1
+        plus = _remembered("plus_one", lambda s: _plus_one_test(_nontrivial(s, self.autonomous)))
+        if _crosses(plus(a), plus(b)) and not _crosses(fold(a), fold(b)):
+            g = _remembered("symmetry_breaking", self._symmetry_breaking_test) if self.symmetry is not None else None
+            if g is not None and _crosses(g(a), g(b)):
                 found.append(self.locate_symmetry_breaking(a, b, index))
+            else:
+                found.append(self.locate_smooth(a, b, index, SpecialPointKind.BRANCH_POINT, plus))
         return [sp for sp in found if sp is not None]
 
     # -- symmetric orbits -----------------------------------------------------------------------
@@ -722,10 +753,21 @@ class SpecialPointDetector:
         bracket = (min(lo.lam, hi.lam), max(lo.lam, hi.lam))
         multipliers_accuracy = float("nan")
         target = _CRITICAL_MULTIPLIER.get((kind, self.equilibrium))
-        if target is not None:
-            near = [_nearest(_nontrivial(s, self.autonomous), target) for s in (lo, hi, best)]
-            multipliers_accuracy = abs(near[0] - near[1]) + max(self._matrix_error(lo), self._matrix_error(hi))
-            if not abs(near[2] - target) <= multipliers_accuracy:
+        if target is not None or kind is SpecialPointKind.NEIMARK_SACKER:
+            def off(s: Solution) -> float:  # how far the orbit's multipliers are from the kind's condition
+                mu = _nontrivial(s, self.autonomous)
+                return abs(_nearest(mu, target) - target) if target is not None else _off_circle_pair(mu)
+            mu_lo, mu_hi = _nontrivial(lo, self.autonomous), _nontrivial(hi, self.autonomous)
+            # how much the multipliers change across the final bracket: the critical one's, or any (NS)
+            change = (abs(_nearest(mu_lo, target) - _nearest(mu_hi, target)) if target is not None
+                      else _multiplier_change(mu_lo, mu_hi))
+            multipliers_accuracy = change + max(self._matrix_error(lo), self._matrix_error(hi))
+            if not off(best) <= multipliers_accuracy:
+                # the test changed sign without the multipliers meeting the condition: where they jump
+                # across the final bracket, a non-smooth point that the event sequence does not show; else
+                # no bifurcation (a corner of the branch the integration cannot resolve, a neutral saddle)
+                if _jumps(lo, hi, self.autonomous, float(np.linalg.norm(hi.z - lo.z))):
+                    return self._hidden_corner(lo, hi, index)
                 return None
         if kind is SpecialPointKind.FOLD and self.symmetry is not None:
             meets = self._meets_symmetric_orbits(best, index)
@@ -743,6 +785,24 @@ class SpecialPointDetector:
             multipliers=best.summary.multipliers,
             multipliers_accuracy=multipliers_accuracy,
         )
+
+    def _hidden_corner(self, lo: Solution, hi: Solution, index: int) -> SpecialPoint:
+        """A non-smooth point where the multipliers jump but the event sequence is the same on both sides
+        (an orbit that touches a surface whose saltation matrix is the identity while the field's Jacobian
+        jumps, or a change of a mode that no event records), classified from the two nearest orbits'
+        monodromies (``Limits.NEAREST_ORBITS``)."""
+        crossing = classify_nonsmooth(
+            lo.summary.monodromy, hi.summary.monodromy, backward=self.branch.backward, autonomous=self.autonomous,
+            mu_minus=lo.summary.multipliers, mu_plus=hi.summary.multipliers,
+        )
+        sp = special_point_between(
+            lo, hi, crossing, index=index, bracket=(min(lo.lam, hi.lam), max(lo.lam, hi.lam)),
+            accuracy=float(np.linalg.norm(hi.z - lo.z)), monodromy_plus=hi.summary.monodromy,
+            note=("the multipliers jump across the bracket while the event sequence stays the same: a non-smooth "
+                  "point, classified from the monodromies of the two nearest orbits"),
+        )
+        return replace(sp, limits=Limits.NEAREST_ORBITS,
+                       multipliers_accuracy=max(self._matrix_error(lo), self._matrix_error(hi)))
 
     def _matrix_error(self, sol: Solution) -> float:
         """An error estimate of the multipliers' matrix at a solution: for autonomous orbits
@@ -1548,6 +1608,7 @@ def _remembered(name: str, test: Callable[[Solution], float]) -> Callable[[Solut
 #: whether the branch is of equilibria.
 _CRITICAL_MULTIPLIER = {
     (SpecialPointKind.FOLD, False): 1.0,
+    (SpecialPointKind.BRANCH_POINT, False): 1.0,
     (SpecialPointKind.PERIOD_DOUBLING, False): -1.0,
     (SpecialPointKind.SYMMETRY_BREAKING, False): 1.0,
     (SpecialPointKind.FOLD, True): 0.0,
@@ -1607,9 +1668,70 @@ def _plus_one_test(mu: np.ndarray) -> float:
 
 
 def _ns_test(mu: np.ndarray) -> float:
-    """``|mu| - 1`` of the largest complex multiplier (nan when there is none: never a crossing)."""
-    sizes = [abs(m) for m in _finite(mu) if abs(m.imag) > 1e-8]
-    return max(sizes) - 1.0 if sizes else float("nan")
+    """``prod_{i<j} (mu_i mu_j - 1)`` over the finite multipliers (the bialternate product's determinant,
+    nan when there are fewer than two: never a crossing).
+
+    It is continuous in the multipliers and changes sign where a product ``mu_i mu_j`` passes 1: a complex
+    pair through the unit circle (Neimark-Sacker) or a real pair with product 1 (a neutral saddle, no
+    bifurcation, which the location's check of the multipliers rejects).  Unlike ``|mu| - 1`` of the largest
+    complex multiplier, it does not jump where a complex pair turns real.
+
+    References
+    ----------
+    Govaerts (2000), *Numerical Methods for Bifurcations of Dynamical Equilibria*, SIAM, section 4.4.
+    """
+    fin = _finite(mu)
+    if len(fin) < 2:
+        return float("nan")
+    prod = 1.0 + 0.0j
+    for i in range(len(fin)):
+        for j in range(i + 1, len(fin)):
+            prod *= fin[i] * fin[j] - 1.0
+    return prod.real
+
+
+def _off_circle_pair(mu: np.ndarray) -> float:
+    """How far the complex pair nearest the unit circle lies from it (inf when there is no complex pair)."""
+    fin = np.array(_finite(mu), dtype=complex)
+    cplx = fin[np.abs(fin.imag) > 1e-10 * (1.0 + np.abs(fin))]
+    return float(np.min(np.abs(np.abs(cplx) - 1.0))) if cplx.size else math.inf
+
+
+def _matched(ma: np.ndarray, mb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The finite multipliers of two nearby orbits, paired so that the total distance is least."""
+    from scipy.optimize import linear_sum_assignment
+
+    a = np.array(_finite(ma), dtype=complex)
+    b = np.array(_finite(mb), dtype=complex)
+    if not a.size or not b.size:
+        return a[:0], b[:0]
+    rows, cols = linear_sum_assignment(np.abs(a[:, None] - b[None, :]))
+    return a[rows], b[cols]
+
+
+def _multiplier_change(ma: np.ndarray, mb: np.ndarray) -> float:
+    """The largest distance between paired multipliers of two nearby orbits."""
+    a, b = _matched(ma, mb)
+    return float(np.max(np.abs(a - b))) if a.size else 0.0
+
+
+def _may_hide_a_pair(ma: np.ndarray, mb: np.ndarray) -> bool:
+    """Whether some multiplier moves between two orbits by more than 0.05 and by more than half the sum of
+    its two distances from the unit circle: far enough to have left the circle and come back (or passed
+    it twice) between them, though it lies on the same side at both."""
+    a, b = _matched(ma, mb)
+    if not a.size:
+        return False
+    move = np.abs(a - b)
+    room = np.abs(np.abs(a) - 1.0) + np.abs(np.abs(b) - 1.0)
+    return bool(np.any((move > 0.05) & (move > 0.5 * room)))
+
+
+def _jumps(lo: Solution, hi: Solution, autonomous: bool, width: float) -> bool:
+    """Whether the multipliers of two orbits a location tolerance apart differ by more than a smooth (even a
+    square-root) dependence on the branch allows: ``1e-3`` and ``100 sqrt(width)``."""
+    change = _multiplier_change(_nontrivial(lo, autonomous), _nontrivial(hi, autonomous))
+    return change > max(1e-3, 100.0 * math.sqrt(width))
 
 
 def _hopf_test(sol: Solution) -> float:
