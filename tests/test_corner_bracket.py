@@ -29,16 +29,20 @@ SETTINGS = ContinuationSettings(ds=0.05, ds_max=0.1, bounds=(F0, 0.75))
 
 def onset(monkeypatch, *, grazing_fails: bool):
     """The branch over the onset of contact, and the corrections spent bracketing its corner."""
-    spent = []
+    spent, inside = [], []
     bisect = detection.SpecialPointDetector._bisect_event_change
     on_secant = detection.SpecialPointDetector.on_secant
 
     def counting_bisect(self, a, b):
         spent.append(0)
-        return bisect(self, a, b)
+        inside.append(True)
+        try:
+            return bisect(self, a, b)
+        finally:
+            inside.pop()
 
     def counting_on_secant(self, a, b, sigma):
-        if spent:
+        if inside:  # the corrections of the bracketing (not those of the smooth pieces' tests)
             spent[-1] += 1
         return on_secant(self, a, b, sigma)
 

@@ -164,7 +164,7 @@ def _kind_problem(sp, autonomous: bool, equilibrium: bool) -> str | None:
     crossing_kinds = {"discontinuous_fold": "+1", "discontinuous_flip": "-1", "discontinuous_neimark_sacker": "complex"}
     if kind in crossing_kinds:
         z = sp.crossing_point
-        if z is None or not cmath_isfinite(z):
+        if z is None or not _isfinite(z):
             return f"{sp.kind.value} at {sp.parameter:.10g} has no set-valued crossing point"
         z = complex(z)
         want = crossing_kinds[kind]
@@ -185,7 +185,7 @@ def _kind_problem(sp, autonomous: bool, equilibrium: bool) -> str | None:
     return None
 
 
-def cmath_isfinite(z) -> bool:
+def _isfinite(z) -> bool:
     z = complex(z)
     return math.isfinite(z.real) and math.isfinite(z.imag)
 
@@ -313,3 +313,6 @@ def check_branch(branch, *, trivial_tol: float = 1e-6) -> BranchCheck:
                                      f"the branch stopped at point {end} ({branch.parameter_name} = "
                                      f"{pts[end].parameter:.10g}) because the corrector failed, without a special point there"))
     return BranchCheck(tuple(out))
+
+
+__all__ = ["COUNT_TOL", "BranchCheck", "Violation", "check_branch", "count_range", "kind_tolerance", "unstable_count"]

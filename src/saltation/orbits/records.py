@@ -194,4 +194,5 @@ def _orbit_event_rows(traj: Trajectory) -> list[list[int]]:
     return rows
 
 
-__all__ = ["BranchPoint", "Evaluation", "SolutionSummary", "amplitude_measures", "event_ids", "event_labels", "orbit_events"]
+__all__ = ["STAYS_IN_MODE", "BranchPoint", "Evaluation", "SolutionSummary", "amplitude_measures", "event_ids", "event_labels",
+           "orbit_events"]

@@ -1,0 +1,972 @@
+"""Independent reference for the Jeffcott rotor with a snubber ring.
+
+Nothing here imports saltation: only numpy and scipy.  The model is the one of
+``/work/shared/trial-models/jeffcott_snubber.py`` (states ``(x, y, vx, vy)``, in that order)::
+
+    x'' + 2 zeta x' + x + beta H(r - delta) (1 - delta/r) (x - mu y) = rho omega^2 cos(omega t)
+    y'' + 2 zeta y' + y + beta H(r - delta) (1 - delta/r) (mu x + y) = rho omega^2 sin(omega t) - g
+
+with ``r = sqrt(x^2 + y^2)`` and forcing period ``T = 2 pi / omega``.  In the complex coordinate
+``z = x + i y`` it reads ``z'' + 2 zeta z' + z + beta H(r - delta) (1 - delta/r) (1 + i mu) z =
+rho omega^2 exp(i omega t) - i g``.  The contact force vanishes on the clearance circle, so the
+field is continuous there (its Jacobian jumps): every saltation matrix is the identity and the
+monodromy matrix is the plain solution of the variational equation along the orbit.
+
+How.
+
+* :func:`period_map` integrates the state and the variational equation with ``solve_ivp``
+  (DOP853, ``rtol = 1e-12``, ``atol = 1e-13``), one mode at a time: the integration stops at
+  every crossing of ``r = delta`` (a terminal event on ``r^2 - delta^2``, rising in free flight,
+  falling in contact) and restarts in the other mode, so that the kink of the field is never
+  inside a step.  A contact arc (or a lift-off) short enough to fit inside one step would not
+  change the sign of the event function at the step ends; the extrema of ``r`` are therefore
+  recorded too (non-terminal events on ``x vx + y vy``), and an extremum on the wrong side of
+  the circle has its first crossing located on the dense output and the integration restarted
+  there.  :func:`monodromy_fd` is the central finite-difference derivative of the same map.
+* :func:`periodic_orbit`: Newton's method on ``P(x) - x`` with the variational monodromy.
+* Closed forms: the free whirl ``z = A exp(i (omega t - phi))`` (offset by ``-i g``), its first
+  contact with the ring (``A(omega) + g = delta``), and, for ``g = 0``, the contact whirl
+  ``z = R exp(i (omega t - phi))`` with ``R > delta``.  In the frame rotating with the forcing,
+  ``z = w exp(i omega t)``, the contact whirl is an equilibrium ``w* = R exp(-i phi)`` of::
+
+      w'' + 2 (zeta + i omega) w' + (1 - omega^2 + 2 i zeta omega) w
+          + beta (1 - delta/|w|) (1 + i mu) w = rho omega^2
+
+  so that ``R`` solves ``|a R - b| = rho omega^2`` with ``a = 1 - omega^2 + beta + i (2 zeta
+  omega + beta mu)`` and ``b = beta delta (1 + i mu)``, a quadratic in ``R`` (:func:`contact_whirl`).
+  The change of frame is ``(q, q') -> (Rot(omega t) q, Rot(omega t) (q' + omega J q))``, which
+  is the same matrix at ``t = 0`` and ``t = T``; the monodromy matrix is therefore similar to
+  ``expm(J_rot T)``, ``J_rot`` the Jacobian of the rotating-frame equation at ``w*``
+  (:func:`contact_whirl_multipliers`).  ``D[(1 - delta/r) w] = (1 - delta/r) I + delta w w^T /
+  r^3``, which tends to the radial projector ``w w^T / delta^2``, not to 0, as ``R -> delta+``.
+* Period doublings of :func:`jeffcott_gravity`'s branch of T-periodic orbits: brentq in omega on
+  ``det(M + I)``, the orbit being re-solved by Newton at each omega from the nearest one computed
+  before (natural-parameter continuation from the free whirl just past first contact).
+
+Accuracy.  The variational and finite-difference monodromies agree to about 1e-8 (relative to
+``|M|``); the closed-form whirl multipliers agree with the numerical monodromy to about 1e-10;
+the period-doubling frequencies are stable to below 1e-9 between ``rtol = 1e-12`` and
+``rtol = 1e-10`` integrations (run this file: it prints every value, its check and its time).
+
+Run ``python tests/rotor_reference.py`` to print the reference values.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.linalg import expm
+from scipy.optimize import brentq
+
+#: Parameters of ``jeffcott_snubber.PARAMETERS`` other than the forcing frequency ``omega``.
+DEFAULTS = {"zeta": 0.05, "beta": 20.0, "delta": 1.0, "rho": 0.5, "mu": 0.0, "g": 0.0}
+#: ``jeffcott_gravity``: the defaults with ``g = 0.2``.
+GRAVITY = dict(DEFAULTS, g=0.2)
+#: ``jeffcott_friction``: the defaults with ``mu = 0.1``.
+FRICTION = dict(DEFAULTS, mu=0.1)
+#: Integration tolerances of :func:`period_map`.
+RTOL, ATOL = 1e-12, 1e-13
+#: Most mode switches (and restarts) in one period.
+MAX_SWITCHES = 200
+
+FREE, CONTACT = 0, 1
+_J2 = np.array([[0.0, -1.0], [1.0, 0.0]])  # multiplication by i
+
+
+def _params(params: dict) -> dict:
+    """The defaults overridden by ``params``; raises ``TypeError`` on an unknown name."""
+    unknown = set(params) - set(DEFAULTS)
+    if unknown:
+        raise TypeError(f"unknown parameter(s): {sorted(unknown)}")
+    return dict(DEFAULTS, **params)
+
+
+def _field(mode: int, omega: float, p: dict):
+    """Right-hand side of state plus variational equation (20 components) in one mode."""
+    zeta, beta, delta, rho, mu, g = (p[k] for k in ("zeta", "beta", "delta", "rho", "mu", "g"))
+    amp = rho * omega**2
+
+    if mode == FREE:
+        A = np.zeros((4, 4))
+        A[0, 2] = A[1, 3] = 1.0
+        A[2, 0] = A[3, 1] = -1.0
+        A[2, 2] = A[3, 3] = -2.0 * zeta
+
+        def rhs(t, s):
+            x, y, vx, vy = s[:4]
+            out = np.empty(20)
+            out[0], out[1] = vx, vy
+            out[2] = -2.0 * zeta * vx - x + amp * np.cos(omega * t)
+            out[3] = -2.0 * zeta * vy - y + amp * np.sin(omega * t) - g
+            out[4:] = (A @ s[4:].reshape(4, 4)).ravel()
+            return out
+
+        return rhs
+
+    def rhs(t, s):
+        x, y, vx, vy = s[:4]
+        r = np.sqrt(x * x + y * y)
+        k = beta * (1.0 - delta / r)
+        out = np.empty(20)
+        out[0], out[1] = vx, vy
+        out[2] = -2.0 * zeta * vx - x - k * (x - mu * y) + amp * np.cos(omega * t)
+        out[3] = -2.0 * zeta * vy - y - k * (mu * x + y) + amp * np.sin(omega * t) - g
+        # D[(1 - delta/r) q] = (1 - delta/r) I + delta q q^T / r^3, then times [[1, -mu], [mu, 1]]
+        c = beta * delta / r**3
+        dxx, dxy, dyy = k + c * x * x, c * x * y, k + c * y * y
+        Phi = s[4:].reshape(4, 4)
+        dPhi = np.empty((4, 4))
+        dPhi[0], dPhi[1] = Phi[2], Phi[3]
+        dPhi[2] = -(1.0 + dxx - mu * dxy) * Phi[0] - (dxy - mu * dyy) * Phi[1] - 2.0 * zeta * Phi[2]
+        dPhi[3] = -(mu * dxx + dxy) * Phi[0] - (1.0 + mu * dxy + dyy) * Phi[1] - 2.0 * zeta * Phi[3]
+        out[4:] = dPhi.ravel()
+        return out
+
+    return rhs
+
+
+def _gap(t, s, delta):
+    """``r^2 - delta^2``: positive in contact."""
+    return s[0] * s[0] + s[1] * s[1] - delta * delta
+
+
+def _radial(t, s, delta):
+    """``(x vx + y vy)``: zero at the extrema of ``r``."""
+    return s[0] * s[2] + s[1] * s[3]
+
+
+def _initial_mode(s: np.ndarray, delta: float) -> int:
+    """Contact if ``r > delta``, free if ``r < delta``; on the circle, by the sign of ``r'``."""
+    h = _gap(0.0, s, delta)
+    if h != 0.0:
+        return CONTACT if h > 0 else FREE
+    return CONTACT if _radial(0.0, s, delta) > 0 else FREE
+
+
+def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, atol: float = ATOL,
+         record: bool = False, **params):
+    """State and state-transition matrix from ``t = 0`` to ``t_end``, mode by mode.
+
+    Parameters
+    ----------
+    state : array_like, shape (4,)
+        Initial state ``(x, y, vx, vy)`` at ``t = 0``.
+    omega : float
+        Forcing frequency.
+    t_end : float, optional
+        Final time; the forcing period ``2 pi / omega`` by default.
+    rtol, atol : float
+        Tolerances of ``solve_ivp`` (DOP853) on state and variational equation.
+    record : bool
+        Also return the list of crossings ``(t, kind)`` of ``r = delta``, kind ``"enter"`` or
+        ``"leave"``.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    y : ndarray, shape (4,)
+        State at ``t_end``.
+    Phi : ndarray, shape (4, 4)
+        Its derivative with respect to ``state`` (every saltation matrix is the identity).
+    crossings : list of (float, str)
+        Only when ``record``.
+
+    Raises
+    ------
+    RuntimeError
+        An integration failed, or more than :data:`MAX_SWITCHES` mode switches.
+    """
+    p = _params(params)
+    delta = p["delta"]
+    T = 2.0 * np.pi / omega
+    t_end = T if t_end is None else float(t_end)
+    s = np.concatenate([np.asarray(state, dtype=float), np.eye(4).ravel()])
+    mode = _initial_mode(s, delta)
+    t = 0.0
+    crossings = []
+    fields = {FREE: _field(FREE, omega, p), CONTACT: _field(CONTACT, omega, p)}
+    for _ in range(MAX_SWITCHES):
+        sign = 1.0 if mode == FREE else -1.0  # direction of the crossing that leaves the mode
+
+        def gap(t, s, _d=delta):
+            return _gap(t, s, _d)
+
+        gap.terminal, gap.direction = True, sign
+
+        def extremum(t, s, _d=delta):
+            return _radial(t, s, _d)
+
+        # free: maxima of r (r' falls through 0); contact: minima
+        extremum.terminal, extremum.direction = False, -sign
+
+        sol = solve_ivp(fields[mode], (t, t_end), s, method="DOP853", rtol=rtol, atol=atol,
+                        events=(gap, extremum), dense_output=True)
+        if sol.status < 0:
+            raise RuntimeError(f"solve_ivp failed at t = {sol.t[-1]}: {sol.message}")
+        t_stop = sol.t[-1]
+        # a double crossing inside one step: an extremum of r on the far side of the circle
+        missed = [te for te, ye in zip(sol.t_events[1], sol.y_events[1])
+                  if sign * _gap(te, ye, delta) > 0 and te < t_stop]
+        if missed:
+            te = missed[0]
+            ts = sol.sol.ts
+            i = max(int(np.searchsorted(ts, te)) - 1, 0)
+            ta = ts[i]
+            if sign * _gap(ta, sol.sol(ta), delta) > 0:  # pragma: no cover - would have been seen
+                raise RuntimeError("missed crossing not bracketed")
+            tc = brentq(lambda u: _gap(u, sol.sol(u), delta), ta, te, xtol=1e-15, rtol=8.9e-16)
+            t, s = tc, sol.sol(tc)
+        elif sol.status == 1:
+            t, s = sol.t_events[0][0], sol.y_events[0][0]
+        else:
+            y = sol.y[:, -1]
+            out = (y[:4].copy(), y[4:].reshape(4, 4).copy())
+            return (*out, crossings) if record else out
+        crossings.append((t, "enter" if mode == FREE else "leave"))
+        mode = CONTACT if mode == FREE else FREE
+    raise RuntimeError(f"more than {MAX_SWITCHES} mode switches in one period")
+
+
+def period_map(state, omega: float, rtol: float = RTOL, atol: float = ATOL, **params):
+    """The period map ``P`` (stroboscopic map at ``t = 0 -> T``) and its monodromy matrix.
+
+    Parameters
+    ----------
+    state : array_like, shape (4,)
+        State ``(x, y, vx, vy)`` at ``t = 0``.
+    omega : float
+        Forcing frequency; ``T = 2 pi / omega``.
+    rtol, atol : float
+        Integration tolerances.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    P : ndarray, shape (4,)
+        State at ``t = T``.
+    M : ndarray, shape (4, 4)
+        ``dP / dstate`` from the variational equation.
+
+    Raises
+    ------
+    RuntimeError
+        From :func:`flow`.
+    """
+    return flow(state, omega, rtol=rtol, atol=atol, **params)
+
+
+def monodromy_fd(state, omega: float, h: float = 1e-5, **params) -> np.ndarray:
+    """Central finite-difference derivative of :func:`period_map`.
+
+    Parameters
+    ----------
+    state : array_like, shape (4,)
+        State at ``t = 0``.
+    omega : float
+        Forcing frequency.
+    h : float
+        Step (absolute, the same for every component).
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        ``(P(state + h e_j) - P(state - h e_j)) / (2 h)`` in column ``j``.
+
+    Raises
+    ------
+    RuntimeError
+        From :func:`flow`.
+    """
+    state = np.asarray(state, dtype=float)
+    M = np.empty((4, 4))
+    for j in range(4):
+        e = np.zeros(4)
+        e[j] = h
+        M[:, j] = (period_map(state + e, omega, **params)[0] - period_map(state - e, omega, **params)[0]) / (2 * h)
+    return M
+
+
+def periodic_orbit(omega: float, guess, tol: float = 1e-11, maxit: int = 30, rtol: float = RTOL,
+                   atol: float = ATOL, **params):
+    """The T-periodic orbit through ``guess``, by damped Newton on ``P(x) - x``.
+
+    Parameters
+    ----------
+    omega : float
+        Forcing frequency.
+    guess : array_like, shape (4,)
+        Initial guess of the state at ``t = 0``.
+    tol : float
+        Stop when ``|P(x) - x| <= tol`` (max norm).
+    maxit : int
+        Most Newton steps.
+    rtol, atol : float
+        Integration tolerances.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    state : ndarray, shape (4,)
+        Periodic state at ``t = 0``.
+    multipliers : ndarray, shape (4,), complex
+        Eigenvalues of the monodromy matrix at ``state``, sorted by decreasing modulus.
+    M : ndarray, shape (4, 4)
+        The monodromy matrix.
+
+    Raises
+    ------
+    RuntimeError
+        Newton's method did not converge.
+    """
+    x = np.asarray(guess, dtype=float).copy()
+    P, M = period_map(x, omega, rtol=rtol, atol=atol, **params)
+    F = P - x
+    for _ in range(maxit):
+        if np.max(np.abs(F)) <= tol:
+            mult = np.linalg.eigvals(M)
+            return x, mult[np.argsort(-np.abs(mult), kind="stable")], M
+        dx = np.linalg.solve(M - np.eye(4), -F)
+        # backtracking: P is only C^1 (the field's Jacobian jumps), full steps can overshoot
+        lam = 1.0
+        while True:
+            xn = x + lam * dx
+            Pn, Mn = period_map(xn, omega, rtol=rtol, atol=atol, **params)
+            Fn = Pn - xn
+            if np.linalg.norm(Fn) < (1 - 1e-4 * lam) * np.linalg.norm(F) or lam < 1e-3:
+                break
+            lam *= 0.5
+        x, P, M, F = xn, Pn, Mn, Fn
+    raise RuntimeError(f"Newton did not converge at omega = {omega} (|F| = {np.max(np.abs(F)):.2e})")
+
+
+# ----------------------------------------------------------------------------------------------
+# closed forms
+
+
+def free_amplitude(omega: float, **params) -> float:
+    """Radius ``A = rho omega^2 / |1 - omega^2 + 2 i zeta omega|`` of the free whirl.
+
+    Parameters
+    ----------
+    omega : float
+        Forcing frequency.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    float
+        ``A(omega)``.
+    """
+    p = _params(params)
+    return p["rho"] * omega**2 / abs(1 - omega**2 + 2j * p["zeta"] * omega)
+
+
+def free_whirl(omega: float, **params) -> np.ndarray:
+    """State at ``t = 0`` of the free whirl ``z = A exp(i (omega t - phi)) - i g``.
+
+    Parameters
+    ----------
+    omega : float
+        Forcing frequency.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    ndarray, shape (4,)
+        ``(x, y, vx, vy)`` at ``t = 0`` (a periodic orbit as long as it stays inside the circle).
+    """
+    p = _params(params)
+    W = p["rho"] * omega**2 / (1 - omega**2 + 2j * p["zeta"] * omega)  # A exp(-i phi)
+    z, dz = W - 1j * p["g"], 1j * omega * W
+    return np.array([z.real, z.imag, dz.real, dz.imag])
+
+
+def free_multipliers(omega: float, **params) -> np.ndarray:
+    """Floquet multipliers of the free (linear) flow, ``eig(expm(A T))``.
+
+    Parameters
+    ----------
+    omega : float
+        Forcing frequency.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    ndarray, shape (4,), complex
+        Two complex-conjugate pairs ``exp((-zeta +- i sqrt(1 - zeta^2)) T)``, each double.
+    """
+    p = _params(params)
+    A = np.zeros((4, 4))
+    A[0, 2] = A[1, 3] = 1.0
+    A[2, 0] = A[3, 1] = -1.0
+    A[2, 2] = A[3, 3] = -2.0 * p["zeta"]
+    return np.sort_complex(np.linalg.eigvals(expm(A * 2 * np.pi / omega)))
+
+
+def contact_onsets(**params) -> np.ndarray:
+    """Frequencies at which the free whirl first touches the ring, ``A(omega) + g = delta``.
+
+    Parameters
+    ----------
+    **params
+        Model parameters overriding :data:`DEFAULTS` (``g >= 0``, ``g < delta``).
+
+    Returns
+    -------
+    ndarray
+        The positive roots, ascending (with ``s = omega^2``: ``rho^2 s^2 = (delta - g)^2 ((1 -
+        s)^2 + 4 zeta^2 s)``, a quadratic in ``s``), each polished by brentq on
+        ``A(omega) + g - delta``.
+
+    Raises
+    ------
+    ValueError
+        ``g >= delta``.
+    """
+    p = _params(params)
+    d = p["delta"] - abs(p["g"])
+    if d <= 0:
+        raise ValueError("g >= delta: the ring is touched at rest")
+    # (d^2 - rho^2) s^2 + d^2 (4 zeta^2 - 2) s + d^2 = 0
+    roots = np.roots([d * d - p["rho"] ** 2, d * d * (4 * p["zeta"] ** 2 - 2), d * d])
+    out = []
+    for s in sorted(roots[np.isreal(roots)].real):
+        if s <= 0:
+            continue
+        w = np.sqrt(s)
+        f = lambda om: free_amplitude(om, **params) - d  # noqa: E731
+        lo, hi = w * (1 - 1e-6), w * (1 + 1e-6)
+        out.append(brentq(f, lo, hi, xtol=1e-16, rtol=8.9e-16) if f(lo) * f(hi) < 0 else w)
+    return np.array(out)
+
+
+def contact_whirl(omega: float, **params) -> list[tuple[float, float]]:
+    """Whirls in contact all round (``g = 0``): ``z = R exp(i (omega t - phi))``, ``R > delta``.
+
+    ``(1 - omega^2 + 2 i zeta omega + beta (1 - delta/R) (1 + i mu)) R exp(-i phi) = rho omega^2``,
+    i.e. ``|a R - b| = rho omega^2`` with ``a = 1 - omega^2 + beta + i (2 zeta omega + beta mu)``,
+    ``b = beta delta (1 + i mu)``: ``|a|^2 R^2 - 2 Re(a conj(b)) R + |b|^2 - rho^2 omega^4 = 0``.
+
+    Parameters
+    ----------
+    omega : float
+        Forcing frequency.
+    **params
+        Model parameters overriding :data:`DEFAULTS`; ``g`` must be 0.
+
+    Returns
+    -------
+    list of (float, float)
+        ``(R, phi)`` of each root with ``R > delta`` (0, 1 or 2 of them), ascending in ``R``.
+
+    Raises
+    ------
+    ValueError
+        ``g != 0`` (the whirl is then not a circle).
+    """
+    p = _params(params)
+    if p["g"] != 0:
+        raise ValueError("the contact whirl is a circle only for g = 0")
+    zeta, beta, delta, rho, mu = (p[k] for k in ("zeta", "beta", "delta", "rho", "mu"))
+    a = 1 - omega**2 + beta + 1j * (2 * zeta * omega + beta * mu)
+    b = beta * delta * (1 + 1j * mu)
+    c2, c1, c0 = abs(a) ** 2, -2 * (a * np.conj(b)).real, abs(b) ** 2 - rho**2 * omega**4
+    disc = c1 * c1 - 4 * c2 * c0
+    if disc < 0:
+        return []
+    sq = np.sqrt(disc)
+    out = []
+    for R in sorted({(-c1 - sq) / (2 * c2), (-c1 + sq) / (2 * c2)}):
+        if R > delta:
+            W = rho * omega**2 / (a - b / R)  # R exp(-i phi)
+            out.append((float(abs(W)), float(-np.angle(W))))
+    return out
+
+
+def contact_whirl_state(omega: float, R: float, phi: float) -> np.ndarray:
+    """State at ``t = 0`` of the whirl ``z = R exp(i (omega t - phi))``.
+
+    Parameters
+    ----------
+    omega : float
+        Forcing frequency.
+    R, phi : float
+        Radius and phase lag.
+
+    Returns
+    -------
+    ndarray, shape (4,)
+        ``(x, y, vx, vy)``.
+    """
+    W = R * np.exp(-1j * phi)
+    return np.array([W.real, W.imag, (1j * omega * W).real, (1j * omega * W).imag])
+
+
+def rotating_jacobian(omega: float, R: float, phi: float, **params) -> np.ndarray:
+    """Jacobian at the whirl ``w* = R exp(-i phi)`` of the rotating-frame equation (contact side).
+
+    Parameters
+    ----------
+    omega : float
+        Forcing frequency.
+    R, phi : float
+        Radius and phase lag of the whirl; ``R = delta`` gives the one-sided limit ``R -> delta+``.
+    **params
+        Model parameters overriding :data:`DEFAULTS` (``g = 0``).
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        For the state ``(u, v, u', v')``, ``w = u + i v``: ``[[0, I], [-(1 - omega^2) I - 2 zeta
+        omega J - beta K D, -2 zeta I - 2 omega J]]`` with ``J`` the rotation by 90 degrees,
+        ``K = [[1, -mu], [mu, 1]]`` and ``D = (1 - delta/R) I + delta w w^T / R^3``.
+    """
+    p = _params(params)
+    zeta, beta, delta, mu = (p[k] for k in ("zeta", "beta", "delta", "mu"))
+    w = np.array([R * np.cos(phi), -R * np.sin(phi)])
+    D = (1 - delta / R) * np.eye(2) + delta * np.outer(w, w) / R**3
+    K = np.array([[1.0, -mu], [mu, 1.0]])
+    I2 = np.eye(2)
+    Jr = np.zeros((4, 4))
+    Jr[:2, 2:] = I2
+    Jr[2:, :2] = -(1 - omega**2) * I2 - 2 * zeta * omega * _J2 - beta * K @ D
+    Jr[2:, 2:] = -2 * zeta * I2 - 2 * omega * _J2
+    return Jr
+
+
+def contact_whirl_multipliers(omega: float, R: float, phi: float, **params) -> np.ndarray:
+    """Floquet multipliers of the contact whirl: ``eig(expm(J_rot T))``.
+
+    The monodromy matrix in the fixed frame is ``C expm(J_rot T) C^-1`` with ``C = [[I, 0],
+    [omega J, I]]`` (the rotation is the identity after one period), so the eigenvalues agree.
+
+    Parameters
+    ----------
+    omega : float
+        Forcing frequency.
+    R, phi : float
+        Radius and phase lag of the whirl (``R = delta``: the one-sided limit at contact onset).
+    **params
+        Model parameters overriding :data:`DEFAULTS` (``g = 0``).
+
+    Returns
+    -------
+    ndarray, shape (4,), complex
+        Sorted by decreasing modulus.
+    """
+    mult = np.linalg.eigvals(expm(rotating_jacobian(omega, R, phi, **params) * 2 * np.pi / omega))
+    return mult[np.argsort(-np.abs(mult), kind="stable")]
+
+
+def contact_onset_limit(omega0: float, **params) -> np.ndarray:
+    """One-sided (contact side) multipliers of the whirl at a contact onset ``A(omega0) = delta``.
+
+    Parameters
+    ----------
+    omega0 : float
+        An onset frequency from :func:`contact_onsets` (``g = 0``).
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    ndarray, shape (4,), complex
+        :func:`contact_whirl_multipliers` at ``R = delta`` and the phase of the free whirl.
+    """
+    p = _params(params)
+    W = p["rho"] * omega0**2 / (1 - omega0**2 + 2j * p["zeta"] * omega0)
+    return contact_whirl_multipliers(omega0, p["delta"], -np.angle(W), **params)
+
+
+def _sorted(m):
+    m = np.asarray(m)
+    return m[np.lexsort((m.imag, np.round(np.abs(m), 12)))]
+
+
+def _mult_distance(m1, m2) -> float:
+    """Largest distance between two multiplier sets, matched greedily."""
+    m2 = list(np.asarray(m2))
+    worst = 0.0
+    for a in np.asarray(m1):
+        j = int(np.argmin([abs(a - b) for b in m2]))
+        worst = max(worst, abs(a - m2.pop(j)))
+    return worst
+
+
+# ----------------------------------------------------------------------------------------------
+# self checks
+
+
+def check_monodromy(omega: float = 0.79, state=None, h: float = 1e-5, **params) -> float:
+    """Variational against finite-difference monodromy; asserts agreement to 1e-6.
+
+    Parameters
+    ----------
+    omega : float
+        Forcing frequency.
+    state : array_like, optional
+        Initial state; by default the free whirl of the same parameters, pushed outwards by 2 %
+        (an orbit that crosses the circle).
+    h : float
+        Finite-difference step.
+    **params
+        Model parameters; :data:`GRAVITY` when none are given.
+
+    Returns
+    -------
+    float
+        ``max |M_var - M_fd| / max |M_var|``.
+
+    Raises
+    ------
+    AssertionError
+        Disagreement above 1e-6, or no crossing of the circle.
+    """
+    params = params or GRAVITY
+    if state is None:
+        state = free_whirl(omega, **params) * 1.02
+    _, _, crossings = flow(state, omega, record=True, **params)
+    assert len(crossings) >= 2, "the test orbit does not cross the circle"
+    M = period_map(state, omega, **params)[1]
+    Mfd = monodromy_fd(state, omega, h=h, **params)
+    err = float(np.max(np.abs(M - Mfd)) / np.max(np.abs(M)))
+    assert err < 1e-6, err
+    return err
+
+
+def check_contact_whirl(omega: float = 1.2, **params) -> float:
+    """The closed-form contact whirl is a periodic orbit with the closed-form multipliers.
+
+    Parameters
+    ----------
+    omega : float
+        Forcing frequency with a contact whirl (the smallest root ``R > delta`` is used).
+    **params
+        Model parameters (``g = 0``).
+
+    Returns
+    -------
+    float
+        Largest of ``|P(x) - x|`` at the closed-form state and the multiplier mismatch.
+
+    Raises
+    ------
+    AssertionError
+        Either above 1e-8.
+    """
+    R, phi = contact_whirl(omega, **params)[0]
+    x = contact_whirl_state(omega, R, phi)
+    P, M = period_map(x, omega, **params)
+    e1 = float(np.max(np.abs(P - x)))
+    e2 = _mult_distance(np.linalg.eigvals(M), contact_whirl_multipliers(omega, R, phi, **params))
+    assert e1 < 1e-8 and e2 < 1e-8, (e1, e2)
+    return max(e1, e2)
+
+
+# ----------------------------------------------------------------------------------------------
+# period doublings of the gravity branch
+
+
+def branch(omegas, guess, **params):
+    """Natural-parameter continuation of a T-periodic orbit over ``omegas``.
+
+    Parameters
+    ----------
+    omegas : array_like
+        Frequencies, in order of continuation.
+    guess : array_like, shape (4,)
+        Initial guess at ``omegas[0]``.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    states : ndarray, shape (n, 4)
+        Periodic states.
+    dets : ndarray, shape (n,)
+        ``det(M + I)`` (sign change: period doubling).
+    mults : ndarray, shape (n, 4), complex
+        Multipliers, by decreasing modulus.
+
+    Raises
+    ------
+    RuntimeError
+        Newton failed (a fold, or too large a step).
+    """
+    states, dets, mults = [], [], []
+    x = np.asarray(guess, dtype=float)
+    prev = None
+    for om in omegas:
+        g0 = x if prev is None or len(states) < 2 else x + (x - states[-2]) * (om - prev) / (prev - prev_prev)
+        x, m, M = periodic_orbit(om, g0, **params)
+        states.append(x)
+        dets.append(np.linalg.det(M + np.eye(4)))
+        mults.append(m)
+        prev_prev, prev = prev, om
+    return np.array(states), np.array(dets), np.array(mults)
+
+
+def arclength_branch(omega0: float, x0, omega_stop: float, ds: float = 0.004, ds_min: float = 1e-7,
+                     ds_max: float = 0.01, max_points: int = 2000, tol: float = 1e-11, **params):
+    """Pseudo-arclength continuation of a T-periodic orbit in ``(x, omega)``, through folds.
+
+    Parameters
+    ----------
+    omega0 : float
+        Starting frequency.
+    x0 : array_like, shape (4,)
+        Periodic state (or a close guess) at ``omega0``.
+    omega_stop : float
+        Stop once omega passes it (either way).
+    ds, ds_min, ds_max : float
+        Initial, smallest and largest step (Euclidean norm in ``(x, omega)``).
+    max_points : int
+        Most points.
+    tol : float
+        Corrector tolerance on ``|P(x) - x|``.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    list of dict
+        For each point: ``omega``, ``x``, ``mult`` (by decreasing modulus), ``det_plus``
+        (``det(M + I)``), ``det_minus`` (``det(M - I)``, changes sign at a fold).
+
+    Raises
+    ------
+    RuntimeError
+        The step fell below ``ds_min``.
+    """
+    def residual(u):
+        x, om = u[:4], u[4]
+        P, M = period_map(x, om, **params)
+        h = 1e-6 * max(1.0, abs(om))
+        Pw = (period_map(x, om + h, **params)[0] - period_map(x, om - h, **params)[0]) / (2 * h)
+        return P - x, np.hstack([M - np.eye(4), Pw[:, None]]), M
+
+    def record(u, M):
+        mult = np.linalg.eigvals(M)
+        return {"omega": float(u[4]), "x": u[:4].copy(), "mult": mult[np.argsort(-np.abs(mult), kind="stable")],
+                "det_plus": float(np.linalg.det(M + np.eye(4))), "det_minus": float(np.linalg.det(M - np.eye(4)))}
+
+    x, _, _ = periodic_orbit(omega0, x0, tol=tol, **params)
+    u = np.append(x, omega0)
+    F, DF, M = residual(u)
+    tangent = np.linalg.svd(DF)[2][-1]
+    direction = np.sign(omega_stop - omega0)
+    if tangent[4] * direction < 0:
+        tangent = -tangent
+    points = [record(u, M)]
+    while len(points) < max_points and (u[4] - omega_stop) * direction < 0:
+        v = u + ds * tangent
+        ok = False
+        for it in range(8):
+            F, DF, M = residual(v)
+            if np.max(np.abs(F)) <= tol:
+                ok = True
+                break
+            A = np.vstack([DF, tangent])
+            dv = np.linalg.solve(A, -np.append(F, tangent @ (v - u) - ds))
+            v = v + dv
+            if np.linalg.norm(dv) > 0.5 * max(ds, 1e-3):
+                break
+        if not ok:
+            ds *= 0.5
+            if ds < ds_min:
+                raise RuntimeError(f"arclength step below {ds_min} at omega = {u[4]}")
+            continue
+        new_tangent = np.linalg.svd(DF)[2][-1]
+        if new_tangent @ tangent < 0:
+            new_tangent = -new_tangent
+        u, tangent = v, new_tangent
+        points.append(record(u, M))
+        if it <= 3:
+            ds = min(ds * 1.3, ds_max)
+    return points
+
+
+def period_doubling(lo: float, hi: float, guess, xtol: float = 1e-12, rtol: float = RTOL,
+                    atol: float = ATOL, **params):
+    """Period doubling between ``lo`` and ``hi``: brentq in omega on ``det(M + I)``.
+
+    Parameters
+    ----------
+    lo, hi : float
+        Bracket (``det(M + I)`` changes sign).
+    guess : array_like, shape (4,)
+        Periodic state near the bracket (updated with every orbit found).
+    xtol : float
+        brentq's tolerance in omega.
+    rtol, atol : float
+        Integration tolerances.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    omega : float
+        The period-doubling frequency.
+    state : ndarray, shape (4,)
+        The periodic state there.
+    multipliers : ndarray, shape (4,), complex
+        Its multipliers (one of them -1).
+
+    Raises
+    ------
+    ValueError
+        No sign change over the bracket.
+    RuntimeError
+        Newton failed.
+    """
+    memo = {"x": np.asarray(guess, dtype=float)}
+
+    def f(om):
+        x, m, M = periodic_orbit(om, memo["x"], rtol=rtol, atol=atol, **params)
+        memo.update(x=x, m=m)
+        return np.linalg.det(M + np.eye(4))
+
+    om = brentq(f, lo, hi, xtol=xtol, rtol=8.9e-16)
+    f(om)
+    return om, memo["x"], memo["m"]
+
+
+def gravity_period_doublings(which=(0, 1), rtol: float = RTOL, atol: float = ATOL):
+    """The period doublings of ``jeffcott_gravity``'s branch of T-periodic orbits.
+
+    The branch is started from the free whirl just past first contact and continued in omega;
+    the brackets (from a scan of ``det(M + I)``) are ``[0.78763, 0.78775]``,
+    ``[0.795, 0.797]``, ``[1.0, 1.005]`` and ``[1.013, 1.018]``.
+
+    Parameters
+    ----------
+    which : sequence of int
+        Which of the four to compute (0 and 1: near first contact; 2 and 3: near omega = 1).
+    rtol, atol : float
+        Integration tolerances.
+
+    Returns
+    -------
+    list of (float, ndarray, ndarray)
+        ``(omega, state, multipliers)`` of each.
+
+    Raises
+    ------
+    RuntimeError
+        Newton failed along the continuation.
+    """
+    p = GRAVITY
+    om0 = contact_onsets(**p)[0]
+    out = []
+    kw = dict(rtol=rtol, atol=atol)
+    # first two: from the free whirl just past first contact
+    lo1 = om0 + 2e-6
+    x1 = periodic_orbit(lo1, free_whirl(lo1, **p), **kw, **p)[0]
+    brackets = [(lo1, 0.78775), (0.795, 0.797), (1.0, 1.005), (1.013, 1.018)]
+    x = x1
+    om_at = lo1
+    for k, (lo, hi) in enumerate(brackets):
+        if k > max(which):
+            break
+        # continue the orbit to the bracket's lower end
+        if lo > om_at:
+            steps = np.linspace(om_at, lo, max(2, int(np.ceil((lo - om_at) / 0.004)) + 1))
+            x = branch(steps, x, **p)[0][-1]
+            om_at = lo
+        if k in which:
+            om, xs, m = period_doubling(lo, hi, x, **kw, **p)
+            out.append((om, xs, m))
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+
+
+def main():
+    """Print every reference value, its check and the time it takes.
+
+    Returns
+    -------
+    None
+    """
+    np.set_printoptions(precision=12, linewidth=120)
+
+    def timed(fn, *a, **k):
+        t0 = time.perf_counter()
+        out = fn(*a, **k)
+        return out, time.perf_counter() - t0
+
+    print("== 1. variational vs finite-difference monodromy")
+    err, dt = timed(check_monodromy)
+    print(f"gravity, omega = 0.79, orbit crossing the circle: rel. difference {err:.2e}  ({dt:.2f} s)")
+    x = free_whirl(0.79, **GRAVITY)
+    (P, M), dt = timed(period_map, x * 1.02, 0.79, **GRAVITY)
+    print(f"period_map with monodromy: {dt:.2f} s")
+
+    print("\n== 3a. free whirl touches the ring (g = 0): A(omega) = delta")
+    onsets, dt = timed(contact_onsets)
+    for om in onsets:
+        print(f"omega = {om!r}  A - delta = {free_amplitude(om) - 1:.1e}")
+    print(f"quoted 0.820631087712087, 1.407088466022592: differences "
+          f"{onsets[0] - 0.820631087712087:.1e}, {onsets[1] - 1.407088466022592:.1e}  ({dt * 1e3:.1f} ms)")
+
+    print("\n== 3a. contact whirl (g = 0, mu = 0), closed form vs numerical")
+    for om in (0.9, 1.2, 1.4):
+        for R, phi in contact_whirl(om):
+            xs = contact_whirl_state(om, R, phi)
+            (xn, mn, _), dt = timed(periodic_orbit, om, xs)
+            mc = contact_whirl_multipliers(om, R, phi)
+            print(f"omega = {om}: R = {R!r}, phi = {phi!r}, |x_newton - x_closed| = "
+                  f"{np.max(np.abs(xn - xs)):.1e}, multipliers {mc}, |mult diff| = "
+                  f"{_mult_distance(mn, mc):.1e}  ({dt:.2f} s)")
+    e, dt = timed(check_contact_whirl)
+    print(f"check_contact_whirl: {e:.1e} ({dt:.2f} s)")
+
+    print("\n== 3b. gravity g = 0.2: A(omega) + g = delta")
+    og, dt = timed(contact_onsets, **GRAVITY)
+    print(f"omega = {og!r}; quoted 0.7876290735450562: difference {og[0] - 0.7876290735450562:.1e}")
+    xw = free_whirl(og[0] * (1 - 1e-4), **GRAVITY)
+    _, _, cr = flow(xw, og[0] * (1 - 1e-4), record=True, **GRAVITY)
+    print(f"free whirl at omega_c (1 - 1e-4) stays free: crossings {cr}")
+
+    print("\n== 5. friction mu = 0.1, contact onset")
+    om0 = contact_onsets(**FRICTION)[0]
+    print(f"onset omega = {om0!r} (the same as mu = 0: the free whirl does not see mu)")
+    mf = free_multipliers(om0, **FRICTION)
+    print(f"free whirl multipliers: {mf}, moduli {np.abs(mf)} (= exp(-zeta T) = {np.exp(-0.05 * 2 * np.pi / om0)!r})")
+    ml = contact_onset_limit(om0, **FRICTION)
+    print(f"contact-side limit R -> delta+: {ml}, moduli {np.abs(ml)}")
+    for eps in (1e-3, 1e-4, 1e-5):
+        om = om0 + eps
+        roots = contact_whirl(om, **FRICTION)
+        for R, phi in roots:
+            xs = contact_whirl_state(om, R, phi)
+            (xn, mn, _), dt = timed(periodic_orbit, om, xs, **FRICTION)
+            mc = contact_whirl_multipliers(om, R, phi, **FRICTION)
+            print(f"omega = onset + {eps:g}: R - delta = {R - 1:.3e}, closed form {mc[:2]}, numerical {_sorted(mn)[-2:]}"
+                  f", diff {_mult_distance(mn, mc):.1e}, |to limit| {_mult_distance(mc, ml):.1e}  ({dt:.2f} s)")
+    for eps in (1e-3, 1e-4):
+        print(f"omega = onset - {eps:g}: contact whirls {contact_whirl(om0 - eps, **FRICTION)}")
+
+    print("\n== 4. period doublings of jeffcott_gravity's T-periodic branch")
+    res, dt = timed(gravity_period_doublings, (0, 1, 2, 3))
+    res2, dt2 = timed(gravity_period_doublings, (0, 1, 2, 3), rtol=1e-10, atol=1e-11)
+    quoted = (0.78766808, 0.79620991, 1.0026194, 1.0156318)
+    for (om, xs, m), (om2, _, _), q in zip(res, res2, quoted):
+        print(f"omega_PD = {om!r}  state {xs}  multipliers {m}; rtol 1e-10 gives {om2!r} (diff {om - om2:.1e}); "
+              f"quoted {q} (diff {om - q:.1e})")
+    print(f"time: {dt:.1f} s (rtol 1e-12), {dt2:.1f} s (rtol 1e-10)")
+
+
+if __name__ == "__main__":
+    main()
