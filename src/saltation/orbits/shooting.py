@@ -1583,6 +1583,12 @@ class MultipleShootingProblem:
         return f"MultipleShootingProblem({self.problem!r}, {self.segments} segments)"
 
     @property
+    def mode0(self) -> str | None:
+        """The mode the first segment starts in (the single-shooting problem's
+        :attr:`~ShootingProblem.mode0`; None: the model's domains give it)."""
+        return self.problem.mode0
+
+    @property
     def dimension(self) -> int:
         return self.segments * self.n + (1 if self.problem.autonomous else 0)
 
