@@ -60,6 +60,10 @@ PAPER_MIN_DS_MAX = 2e-3
 #: Help of ``--period`` of ``continue`` and ``locus``.
 PERIOD_HELP = (f"period guess for autonomous models, at least {MIN_PERIOD:g} (forced models take the forcing period: "
                "a --period must equal it)")
+#: Help of ``--mode0`` of ``orbit``, ``continue``, ``locus`` and ``sweep``.
+MODE0_HELP = ("the mode the start state (--x0, or the start of a transient) is in: for a mode that is memory (a latch, "
+              "a relay with hysteresis, a thermostat), which the state alone does not tell from another mode with the "
+              "same domain; the state must lie in its domain (default: the mode the model's domains give the state)")
 
 
 class UsageError(SaltationError, ValueError):
@@ -217,6 +221,21 @@ def check_parameter(system: PiecewiseSystem, name: str, flag: str) -> str:
             f"unknown parameter {name!r} in {flag} for model {system.name!r}; "
             f"parameters are {', '.join(system.parameter_names)}"
         )
+    return name
+
+
+def check_mode0(args: argparse.Namespace, system: PiecewiseSystem) -> str | None:
+    """``--mode0 NAME``: a mode of the model (or None when not given).
+
+    Raises
+    ------
+    UsageError
+        For an unknown name (bad usage: exit status 2), listing the model's modes.
+    """
+    name = getattr(args, "mode0", None)
+    if name is not None and name not in system.mode_names:
+        raise UsageError(f"unknown mode {name!r} in --mode0 for model {system.name!r}; modes are "
+                         f"{', '.join(system.mode_names)}")
     return name
 
 
@@ -534,11 +553,13 @@ def multipliers_json(mu: Sequence[complex]) -> list:
 # transients: a starting guess when the user gives none
 # --------------------------------------------------------------------------------------------
 
-def transient(flow, name: str, p: np.ndarray, state: np.ndarray | None, *, t0: float, backward: bool):
+def transient(flow, name: str, p: np.ndarray, state: np.ndarray | None, *, t0: float, backward: bool,
+              mode0: str | None = None):
     """A transient in the direction of integration (:func:`saltation.orbits.start.transient`) from the
-    shipped model's start state and with its length; returns (trajectory, start state).  An autonomous
-    model without a start state starts where its transient oscillates
-    (:func:`saltation.orbits.start.oscillating_transient`: the origin, then unit states)."""
+    shipped model's start state and with its length, in the mode ``mode0`` (``--mode0``; by default the
+    model's domains give it); returns (trajectory, start state).  An autonomous model without a start state
+    starts where its transient oscillates (:func:`saltation.orbits.start.oscillating_transient`: the origin,
+    then unit states)."""
     system = flow.system
     values = dict(zip(system.parameter_names, map(float, p)))
     length_fn = SHIPPED[name].transient_length if name in SHIPPED else None
@@ -546,14 +567,15 @@ def transient(flow, name: str, p: np.ndarray, state: np.ndarray | None, *, t0: f
     start = SHIPPED[name].start if name in SHIPPED else None
     if state is None and start is None and system.is_autonomous:
         try:
-            traj, _ = start_guesses.oscillating_transient(flow, p, t0=t0, backward=backward, length=length)
+            traj, _ = start_guesses.oscillating_transient(flow, p, t0=t0, backward=backward, length=length,
+                                                          mode0=mode0)
         except StartGuessError as exc:
             raise CommandError(f"{exc}; give a starting guess with --x0 and --period") from None
         return traj, traj.x0
     if state is None:
         state = np.array(start(values, backward) if start else np.zeros(system.n), dtype=float)
     try:
-        traj = start_guesses.transient(flow, p, state, t0=t0, backward=backward, length=length)
+        traj = start_guesses.transient(flow, p, state, t0=t0, backward=backward, length=length, mode0=mode0)
     except StartGuessError as exc:
         raise CommandError(f"{exc}; give a starting guess with --x0") from None
     return traj, state
@@ -600,6 +622,7 @@ def orbit_to_dict(orbit, system: PiecewiseSystem) -> dict:
         "iterations": int(orbit.iterations),
         "residual_norm": float(orbit.residual_norm),
         "segments": int(orbit.segments),
+        "mode0": orbit.mode0,
     }
 
 
@@ -613,7 +636,7 @@ def format_orbit(orbit, system: PiecewiseSystem) -> str:
     rows.append(("parameters", ", ".join(f"{k} = {_fmt(v)}" for k, v in zip(system.parameter_names, orbit.parameters))))
     rows.append(("time", "backward (shooting in backward time)" if orbit.backward else "forward"))
     rows.append(("state0", ", ".join(f"{k} = {_fmt(v)}" for k, v in zip(system.state_names, orbit.state0))
-                 + f"   at t0 = {_fmt(orbit.t0)}"))
+                 + f"   at t0 = {_fmt(orbit.t0)}" + (f", in mode {orbit.mode0}" if orbit.mode0 is not None else "")))
     rows.append(("period", _fmt(orbit.period)))
     rows.append(("amplitude", f"{_fmt(orbit.amplitude)}   (max |{system.state_names[0]}| over the period)"))
     mu = np.asarray(orbit.multipliers, dtype=complex)
@@ -649,6 +672,7 @@ def cmd_orbit(args: argparse.Namespace) -> int:
     system = build_model(args.model)
     overrides = parse_sets(args.set, system)
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
+    mode0 = check_mode0(args, system)
     period = args.period
     if system.is_autonomous:
         t0 = 0.0  # an autonomous field does not depend on time: the orbit is the same from any t0
@@ -662,13 +686,14 @@ def cmd_orbit(args: argparse.Namespace) -> int:
     flow = make_flow(system)
     p = flow.parameters(overrides)
     if x0 is None or (system.is_autonomous and period is None):
-        traj, _ = transient(flow, args.model, p, x0, t0=t0, backward=args.backward)
-        if x0 is None:
-            x0 = traj.x1.copy()
+        traj, _ = transient(flow, args.model, p, x0, t0=t0, backward=args.backward, mode0=mode0)
+        if x0 is None:  # the guess is the transient's end, in the mode it ends in
+            x0, mode0 = traj.x1.copy(), None if mode0 is None else traj.mode1
         if system.is_autonomous and period is None:
             period = estimate_period(traj)
     orbit = find_periodic_orbit(
-        flow, x0, parameters=overrides, period=period, backward=args.backward, t0=t0, segments=args.segments
+        flow, x0, parameters=overrides, period=period, backward=args.backward, t0=t0, segments=args.segments,
+        mode0=mode0,
     )
     if args.json:
         print(json.dumps(orbit_to_dict(orbit, system)))
@@ -709,7 +734,8 @@ def _orbit_epilog() -> str:
             one period. --json prints one JSON object with the keys model, parameters,
             state_names, state0, t0, period, autonomous, backward, amplitude, half_peak_to_peak,
             multipliers ([re, im] pairs, or "inf"), multiplier_magnitudes, stable, events
-            ([surface, time] pairs), event_modes, converged, iterations, residual_norm, segments."""
+            ([surface, time] pairs), event_modes, converged, iterations, residual_norm, segments, mode0
+            (the mode at state0)."""
         ),
         "",
         _paragraph(
@@ -767,6 +793,7 @@ def _add_orbit_parser(sub) -> None:
         help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
         "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models",
     )
+    p.add_argument("--mode0", metavar="NAME", default=None, help=MODE0_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(handler=cmd_orbit)
 
@@ -815,20 +842,25 @@ def _special_points_text(records: list[dict]) -> str:
 
 def periodic_start(args: argparse.Namespace, flow, overrides: dict[str, float], p: np.ndarray, x0: np.ndarray | None):
     """The shooting problem over ``--param`` and its first unknowns: a periodic orbit from ``--x0`` (or
-    the end of a transient) and ``--period`` (or an estimate), forward or ``--backward``."""
+    the end of a transient) and ``--period`` (or an estimate), forward or ``--backward``, starting in
+    ``--mode0`` where it is given (and then every point of the branch)."""
     from saltation.orbits.shooting import MultipleShootingProblem, ShootingProblem, find_periodic_orbit
 
     system = flow.system
     period = args.period if system.is_autonomous else None  # checked by the caller (check_start_period)
+    mode0 = check_mode0(args, system)
     if x0 is None or (system.is_autonomous and period is None):
-        traj, _ = transient(flow, args.model, p, x0, t0=0.0, backward=args.backward)
-        x0 = traj.x1.copy() if x0 is None else x0
+        traj, _ = transient(flow, args.model, p, x0, t0=0.0, backward=args.backward, mode0=mode0)
+        if x0 is None:  # the guess is the transient's end, in the mode it ends in
+            x0, mode0 = traj.x1.copy(), None if mode0 is None else traj.mode1
         if system.is_autonomous and period is None:
             period = estimate_period(traj)
     segments = getattr(args, "segments", 1)
     orbit = find_periodic_orbit(flow, x0, parameters=overrides, period=period, backward=args.backward,
-                                segments=segments)
-    problem = ShootingProblem(flow, overrides, continuation_parameter=args.param, backward=args.backward)
+                                segments=segments, mode0=mode0)
+    # a named start mode is kept along the branch: the orbit's own (its state may have moved off a surface)
+    problem = ShootingProblem(flow, overrides, continuation_parameter=args.param, backward=args.backward,
+                              mode0=None if mode0 is None else orbit.mode0)
     if segments > 1:  # multiple shooting: the unknowns are the orbit's nodes (and its period)
         nodes = np.asarray(orbit.nodes, dtype=float).ravel()
         return MultipleShootingProblem(problem, segments), (np.append(nodes, orbit.period) if system.is_autonomous
@@ -872,6 +904,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
     ds = min(0.01, args.ds_max) if args.ds is None else args.ds
     if args.equilibrium is not None:
         check_equilibrium_option(args, system)
+    check_mode0(args, system)
     overrides[args.param] = start
     for flag, value in (("--to", stop), ("--from", start)):
         p0 = usable_parameters(system, overrides | {args.param: value}, f"{flag} {_fmt(value)}")
@@ -968,7 +1001,7 @@ def check_equilibrium_option(args: argparse.Namespace, system) -> None:
         raise UsageError(f"unknown mode {args.equilibrium!r} in --equilibrium for model {system.name!r}; modes "
                          f"are {', '.join(system.mode_names)} (or sliding:SURFACE for pseudo-equilibria)") from None
     for flag, given in (("--period", args.period is not None), ("--backward", args.backward),
-                        ("--segments", args.segments != 1)):
+                        ("--segments", args.segments != 1), ("--mode0", getattr(args, "mode0", None) is not None)):
         if given:
             raise UsageError(f"{flag} does not apply to --equilibrium (an equilibrium has no period and no "
                              "direction of time)")
@@ -1076,6 +1109,7 @@ def _add_continue_parser(sub) -> None:
     p.add_argument("--x0", metavar="V1,V2,...", help="guess of the start state (default: the end of a transient)")
     p.add_argument("--period", metavar="T", type=_positive("--period"), help=PERIOD_HELP)
     p.add_argument("--backward", action="store_true", help="shoot in backward time (infinitely unstable branches)")
+    p.add_argument("--mode0", metavar="NAME", default=None, help=MODE0_HELP + "; every point of the branch starts in it")
     p.add_argument("--equilibrium", metavar="MODE", help="continue an equilibrium of this mode instead of periodic orbits "
                    "(autonomous models); sliding:SURFACE continues the pseudo-equilibria of the sliding motion on "
                    "that surface")
@@ -1132,6 +1166,7 @@ def cmd_locus(args: argparse.Namespace) -> int:
                          "(the branch of equilibria it lies on), and --equilibrium applies to it only")
     if args.equilibrium is not None:
         check_equilibrium_option(args, system)
+    check_mode0(args, system)
     if args.param == args.param2:
         raise UsageError("--param and --param2 must differ")
     (start, stop), (lo2, hi2) = args.range, args.range2
@@ -1235,6 +1270,7 @@ def _add_locus_parser(sub) -> None:
     p.add_argument("--x0", metavar="V1,V2,...", help="guess of the start state (default: the end of a transient)")
     p.add_argument("--period", metavar="T", type=_positive("--period"), help=PERIOD_HELP)
     p.add_argument("--backward", action="store_true", help="shoot in backward time")
+    p.add_argument("--mode0", metavar="NAME", default=None, help=MODE0_HELP)
     p.add_argument("--out", metavar="DIR", help="write the curves (JSON) and their plot here")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument(
@@ -1372,6 +1408,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                     where += f", --param2 {args.param2} = {_fmt(v2)}"
                 forcing_period_at(system, p, where)
     x0, rule = sweep_start(args, system)
+    mode0 = check_mode0(args, system)
     check_out_dir(args.out)
     make_flow(system)  # compile (or load) here, with the notice, before the workers load it from the cache
     client = _dask_client(args.scheduler)
@@ -1381,7 +1418,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         result = sweep(
             system, args.param, values, periods=200 if args.periods is None else args.periods,
             transient=args.transient, x0=x0, start=rule, parameters=overrides, workers=args.workers, client=client,
-            lyapunov=args.lyapunov,
+            lyapunov=args.lyapunov, mode0=mode0,
         )
     finally:
         if client is not None:
@@ -1425,7 +1462,7 @@ def _period_map_command(args, system, values, values2, x0, rule, overrides, clie
     grid = period_map(
         system, args.param, values, args.param2, values2, max_period=max_period, periods=args.periods,
         transient=args.transient, x0=x0, start=rule, parameters=overrides, workers=args.workers, client=client,
-        lyapunov=args.lyapunov,
+        lyapunov=args.lyapunov, mode0=check_mode0(args, system),
     )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -1470,6 +1507,8 @@ def _add_sweep_parser(sub) -> None:
     p.add_argument("--x0", metavar="V1,V2,...",
                    help="start state (default: the shipped model's start at each value's own parameters, if it has "
                         "one, else zeros)")
+    p.add_argument("--mode0", metavar="NAME", default=None,
+                   help=MODE0_HELP + "; a value that starts from the previous one's final state goes on in its final mode")
     p.add_argument("--start", dest="start_rule", choices=("own", "previous"), default=None,
                    help="where each value starts: 'own' from the start (--x0, or the model's start at that value's "
                         "parameters), 'previous' from the previous value's final state, following an attractor while "

@@ -21,7 +21,9 @@ value in the calling process before any simulation:
   classically do): each value starts from the final state (and mode) of the
   value before it, so a branch is followed as long as it stays attracting,
   and a jump shows where it stops; the first value of each chunk, and the
-  value after a failed one, start from ``x0`` (evaluated at that value).
+  value after a failed one, start from ``x0`` (evaluated at that value),
+  in the mode ``mode0`` names (a memory mode; by default the mode the
+  model's domains give ``x0``).
   Near a fold the previous final state can lie in the basin of another
   attractor of the next value (for the block on a belt, inside the unstable
   stick-slip cycle, so the sweep falls onto the equilibrium while the stable
@@ -195,7 +197,8 @@ class SweepResult:
         Parameter values whose simulation failed, with the error message.
     settings : dict
         ``periods``, ``transient``, ``t0``, the time of one period for autonomous systems,
-        and ``x0``: the start state, ``"zeros"``, or ``"function NAME"`` for a function of the parameters.
+        ``x0``: the start state, ``"zeros"``, or ``"function NAME"`` for a function of the parameters,
+        and ``mode0``, the mode the starts are in, where it was named (:func:`sweep`).
     start : SweepStart
         Where each value started: from the previous value's final state, or its own start
         (:class:`SweepStart`).  Files written before it was recorded were all ``PREVIOUS``.
@@ -491,6 +494,8 @@ class _Job:
     t0: float
     tolerances: Tolerances | None
     lyapunov: bool = False
+    #: the mode each start state is in (None: the model's initial-mode rule)
+    mode0: str | None = None
 
 
 _WORKER_FLOW: Flow | None = None
@@ -530,6 +535,7 @@ def sweep(
     t0: float = 0.0,
     client=None,
     lyapunov: bool = False,
+    mode0: str | None = None,
 ) -> SweepResult:
     """Brute-force diagram: simulate at each parameter value and sample the attractor.
 
@@ -578,6 +584,13 @@ def sweep(
         Also compute, at each value, the largest Lyapunov exponent over the sampled periods
         (:func:`saltation.orbits.lyapunov.lyapunov_exponents`), as
         :attr:`SweepResult.largest_exponents` (``nan`` where the value failed).
+    mode0 : str, optional
+        The mode every start from ``x0`` is in: a memory mode (a latch, a relay with hysteresis, a
+        thermostat), which the state alone does not tell from another mode with the same domain.  A
+        value that starts from the previous one's final state continues in that one's final mode.  A
+        start outside the mode's domain fails its value (:attr:`SweepResult.failures` says why).  It
+        is recorded in :attr:`SweepResult.settings`.  None (the default): the model's domains give
+        the mode.
 
     Returns
     -------
@@ -587,8 +600,8 @@ def sweep(
     Raises
     ------
     ModelError
-        For an unknown parameter, or a start state (given or returned by
-        ``x0``) with the wrong number of components or not finite.
+        For an unknown parameter or mode (the message lists the model's), or a start state (given or
+        returned by ``x0``) with the wrong number of components or not finite.
     ValueError
         For no values, values or ``t0`` not finite, ``periods`` not a
         positive integer, ``transient`` not a non-negative one, ``period``
@@ -604,6 +617,7 @@ def sweep(
     maxima).
     """
     p_index = system.parameter_index(parameter)
+    mode0 = None if mode0 is None else system.mode_names[system.mode_index(mode0)]
     rule = _start_rule(start)
     values = np.asarray(values, dtype=float).reshape(-1)
     if values.size == 0:
@@ -632,7 +646,7 @@ def sweep(
     pieces = np.array_split(np.arange(values.size), n_workers)
     jobs = [
         _Job(values[k], starts[k], rule is SweepStart.OWN, p_index, base, int(periods), int(transient), use_poincare,
-             period, float(t0), tolerances, bool(lyapunov))
+             period, float(t0), tolerances, bool(lyapunov), mode0)
         for k in pieces
     ]
     results = _run_jobs(system, jobs, client)
@@ -648,6 +662,8 @@ def sweep(
     settings = {"periods": int(periods), "transient": int(transient), "t0": float(t0), "x0": _describe_x0(x0)}
     if period is not None:
         settings["period"] = period
+    if mode0 is not None:
+        settings["mode0"] = mode0
     return SweepResult(
         model=system.name,
         parameter_name=parameter,
@@ -684,7 +700,8 @@ class PeriodMap:
     failures : tuple of (float, float, str)
         ``(value, value2, message)`` of each failed cell.
     settings : dict
-        ``periods``, ``transient``, ``tolerance``, ``t0`` and ``x0`` (as in :class:`SweepResult`).
+        ``periods``, ``transient``, ``tolerance``, ``t0``, ``x0`` and ``mode0`` where named (as in
+        :class:`SweepResult`).
     start : SweepStart
         Where each cell started (:class:`SweepStart`); ``PREVIOUS`` for files written before it was
         recorded.
@@ -937,6 +954,7 @@ def period_map(
     tolerances: Tolerances | None = None,
     t0: float = 0.0,
     lyapunov: bool = False,
+    mode0: str | None = None,
 ) -> PeriodMap:
     """Two-parameter brute-force map of a forced system: the attractor's period in each grid cell.
 
@@ -984,6 +1002,9 @@ def period_map(
     lyapunov : bool
         Also compute each cell's largest Lyapunov exponent over the sampled periods, as
         :attr:`PeriodMap.largest_exponents` (``nan`` where the cell failed).
+    mode0 : str, optional
+        The mode every start from ``x0`` is in (a memory mode; see :func:`sweep`), recorded in
+        :attr:`PeriodMap.settings`.  None (the default): the model's domains give the mode.
 
     Returns
     -------
@@ -994,7 +1015,7 @@ def period_map(
     ------
     ModelError
         For an autonomous model (its period is not a number of forcing periods), unknown or equal
-        parameters, or a start state (given or returned by ``x0``) with the wrong number of
+        parameters, an unknown mode, or a start state (given or returned by ``x0``) with the wrong number of
         components or not finite.
     ValueError
         For no values or values not finite, ``max_period`` not a positive integer, ``periods`` not
@@ -1022,6 +1043,7 @@ def period_map(
     if not math.isfinite(t0):
         raise ValueError(f"t0 must be finite, got {t0}")
     rule = _start_rule(start)
+    mode0 = None if mode0 is None else system.mode_names[system.mode_index(mode0)]
     base = system.parameter_vector(parameters)
     jobs = []
     for v2 in values2:
@@ -1033,7 +1055,7 @@ def period_map(
             system, x0, cells, lambda p: f"{parameter}={p[p1]:.10g}, {parameter2}={p[p2]:.10g}"
         )
         jobs.append(_Job(values, starts, rule is SweepStart.OWN, p1, row, periods, int(transient), True, None,
-                         float(t0), tolerances, bool(lyapunov)))
+                         float(t0), tolerances, bool(lyapunov), mode0))
     n_workers = min(_workers(workers, client), len(jobs))
     grouped = [_RowsJob(jobs[k::n_workers]) for k in range(n_workers)]  # rows dealt round-robin to the workers
     results: list = [None] * len(jobs)
@@ -1057,7 +1079,7 @@ def period_map(
         model=system.name, parameter_name=parameter, parameter2_name=parameter2, values=values, values2=values2, periods=grid,
         max_period=int(max_period), failures=tuple(failures),
         settings={"periods": periods, "transient": int(transient), "tolerance": float(tolerance), "t0": float(t0),
-                  "x0": _describe_x0(x0)},
+                  "x0": _describe_x0(x0), **({} if mode0 is None else {"mode0": mode0})},
         start=rule,
         largest_exponents=exponent_grid if lyapunov else None,
     )
@@ -1133,9 +1155,12 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
     largest: list[float] = []
     for i, value in enumerate(job.values):
         p[job.parameter_index] = value
-        if job.own or x is None:
-            x, mode = job.starts[i].copy(), None
+        fresh = job.own or x is None
+        if fresh:
+            x, mode = job.starts[i].copy(), job.mode0
         try:
+            if fresh and mode is not None:
+                flow.start_mode(x, p, job.t0, mode)  # a start outside the mode's domain fails this value, saying why
             T = job.period if job.period is not None else system.forcing_period(p)
             t_sample = job.t0 + job.transient * T
             t_end = t_sample + job.periods * T
@@ -1145,7 +1170,8 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
             exponent = math.nan
             if job.lyapunov:  # over the sampled periods, from the same state (a variational run beside the samples)
                 exponent = lyapunov_exponents(flow, x, parameters=p, time=job.periods * T, t0=t_sample, interval=T,
-                                              blocks=max(2, min(10, job.periods)), tolerances=job.tolerances).largest
+                                              blocks=max(2, min(10, job.periods)), tolerances=job.tolerances,
+                                              mode0=None if mode is None or "|" in mode else mode).largest
             traj = flow.run(x, t_sample, t_end, p, mode0=mode, dense=True, tolerances=job.tolerances)
             if job.poincare:
                 times = t_sample + T * np.arange(1, job.periods + 1)

@@ -357,6 +357,12 @@ class Branch:
         return np.array([p.state for p in self.points])
 
     @property
+    def mode0(self) -> list[str | None]:
+        """The mode each point's orbit starts in (:attr:`BranchPoint.mode0`; None for equilibria, and for points
+        read from files written before it was recorded)."""
+        return [p.mode0 for p in self.points]
+
+    @property
     def multipliers(self) -> np.ndarray:
         """Multipliers per point, shape (m, n), complex."""
         return np.array([p.multipliers for p in self.points])

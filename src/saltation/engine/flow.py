@@ -26,6 +26,7 @@ from saltation.engine.codegen import (
 )
 from saltation.errors import (
     ChatteringError,
+    InitialModeError,
     IntegrationError,
     ModelError,
     NonFiniteError,
@@ -51,6 +52,10 @@ class Status(enum.IntEnum):
 
 # Status.OK as a plain int (an enum member costs a class attribute lookup per integration)
 _STATUS_OK = kc.STATUS_OK
+
+#: A state outside a named start mode's domain by at most this much (relative to ``1 + max |x_i|``) lies on
+#: its boundary, within rounding (the engine's tolerance for a state that leaves its mode's domain).
+DOMAIN_ROUNDING = 1e-8
 
 
 @dataclass(frozen=True)
@@ -520,6 +525,61 @@ class Flow:
         if m < 0:
             return self.system.initial_mode(x0, p, t0)  # raises with the full explanation
         return m
+
+    def start_mode(self, x0: Sequence[float], p: np.ndarray, t0: float = 0.0, mode0: int | str | None = None) -> int:
+        """The mode a run from ``(t0, x0)`` starts in: ``mode0``, checked against its domain, or the model's rule.
+
+        A mode may be memory (a latch, a relay with hysteresis, a thermostat): its domain overlaps
+        another's, or it has none, and only ``mode0`` tells which of them a state is in.  A named mode
+        must hold the state: every condition of its domain holds, or fails by rounding only (the state
+        lies on the domain's boundary).
+
+        Parameters
+        ----------
+        x0 : array_like, shape (n,)
+            State.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+        t0 : float
+            Time.
+        mode0 : int or str, optional
+            The mode (name or index); None: the model's initial-mode rule (:meth:`initial_mode`).
+
+        Returns
+        -------
+        int
+            Index of the mode.
+
+        Raises
+        ------
+        ModelError
+            For an unknown mode (the message lists the model's modes), or a state or parameter vector of
+            the wrong size.
+        InitialModeError
+            If the state lies outside the named mode's domain (naming the mode and the conditions that
+            do not hold), or, without ``mode0``, in no mode's domain.
+        """
+        if mode0 is None:
+            return self.initial_mode(x0, p, t0)
+        sys_ = self.system
+        m = sys_.mode_index(mode0)
+        x, pc = _c_array(np.asarray(x0, dtype=float).reshape(-1)), _c_array(p)
+        if x.shape != (sys_.n,) or pc.shape != (sys_.n_params,):
+            raise ModelError(f"{sys_.name!r}: a state has {sys_.n} components {list(sys_.state_names)} and the "
+                             f"parameters {sys_.n_params}, got {x.size} and {pc.size}")
+        if bool(self._model[kc.IN_DOMAIN](m, float(t0), x, pc)):
+            return m
+        margin = float(self._model[kc.DOMAIN_MARGIN](m, float(t0), x, pc))
+        if margin >= -DOMAIN_ROUNDING * (1.0 + float(np.max(np.abs(x)))):
+            return m  # on the boundary of its domain
+        explain = getattr(sys_, "domain_violations", None)
+        why = (f"its domain condition(s) {', '.join(explain(m, x, pc, t0))} do not hold there" if explain is not None
+               else "its in_domain function is false there")
+        raise InitialModeError(
+            f"the state {x.tolist()} at t = {float(t0):.12g} lies outside the domain of mode {sys_.mode_names[m]!r} "
+            f"of {sys_.name!r}: {why}; a mode can be named as the start only where its domain holds (a memory mode "
+            "has no domain, or shares it with another mode)"
+        )
 
     def indicator(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> float:
         """The indicator ``h(t, x, p)`` of a switching surface (by index or name).

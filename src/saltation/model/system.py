@@ -688,6 +688,42 @@ class PiecewiseSystem(NamedParts):
             f"domains: { {m: [str(c.expr) for c in d] for m, d in zip(self.mode_names, self.domains)} }"
         )
 
+    def domain_violations(self, mode: int | str, x0: Sequence[float], p: np.ndarray, t0: float = 0.0) -> list[str]:
+        """The conditions of a mode's domain that do not hold at ``(t0, x0)``, as text.
+
+        A mode without conditions (memory, such as a relay's or a thermostat's state, which only the
+        transitions change) holds everywhere: the list is empty.
+
+        Parameters
+        ----------
+        mode : int or str
+            The mode.
+        x0 : sequence of float
+            The state.
+        p : ndarray
+            Parameter values.
+        t0 : float
+            Time.
+
+        Returns
+        -------
+        list of str
+            Each violated condition as ``"<expr> > 0 (it is <value>)"`` (``>=`` for a non-strict one).
+
+        Raises
+        ------
+        ModelError
+            For an unknown mode (naming the model's modes).
+        """
+        k = self.mode_index(mode)
+        subs = dict(zip(self.x, map(float, x0))) | dict(zip(self.p, map(float, p))) | {TIME: float(t0)}
+        failed = []
+        for c in self.domains[k]:
+            value = float(c.expr.subs(subs))
+            if not c.holds(value):
+                failed.append(f"{c.expr} {'>' if c.strict else '>='} 0 (it is {value:.6g})")
+        return failed
+
     # -- exact derivatives ------------------------------------------------------------------
     def jacobian(self, mode: int | str) -> sp.Matrix:
         """``f_x`` of a mode."""

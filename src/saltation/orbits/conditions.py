@@ -1044,7 +1044,8 @@ class ConditionedProblem:
         modes = {c.start_mode for c in self.conditions if c.start_mode is not None}
         if len(modes) > 1:
             raise ModelError(f"the conditions ask the orbit to start in different modes: {sorted(modes)}")
-        self.mode0 = modes.pop() if modes else None
+        # the mode the orbit starts in: the conditions' (a virtual orbit's), else the problem's own (a memory mode)
+        self.mode0 = modes.pop() if modes else getattr(self.single, "mode0", None)
         rows = self.n_orbit_rows + sum(c.size for c in self.conditions)
         if rows != self.dimension:
             raise ModelError(f"{sum(c.size for c in self.conditions)} condition equations need as many unknowns"

@@ -99,6 +99,7 @@ def lyapunov_exponents(
     interval: float | None = None,
     blocks: int = 10,
     tolerances: Tolerances | None = None,
+    mode0: str | None = None,
 ) -> LyapunovExponents:
     """Lyapunov exponents from ``state0``, forward in time, through the saltation matrices of every event.
 
@@ -124,6 +125,9 @@ def lyapunov_exponents(
         The run is cut into this many equal blocks; the spread of their estimates gives ``accuracy``.
     tolerances : Tolerances, optional
         Integration tolerances (the flow's by default).
+    mode0 : str, optional
+        The mode the run starts in (a memory mode, see :meth:`Flow.start_mode`); by default the
+        model's initial-mode rule.
 
     Returns
     -------
@@ -136,6 +140,8 @@ def lyapunov_exponents(
         less than 2, or the state is not of the model's size.
     IntegrationError
         If an integration fails (a state in no mode, chattering, an undefined sliding motion, ...).
+    InitialModeError
+        If the state lies outside the domain of ``mode0`` (or, without it, in no mode's domain).
 
     References
     ----------
@@ -166,9 +172,9 @@ def lyapunov_exponents(
     if not (math.isfinite(interval) and interval > 0.0):
         raise ModelError(f"interval must be positive and finite, got {interval}")
     t = float(t0)
-    mode = None
+    mode = None if mode0 is None else system.mode_names[flow.start_mode(x, p, t, mode0)]
     if transient > 0.0:
-        run = flow.run(x, t, t + transient, p, tolerances=tolerances)
+        run = flow.run(x, t, t + transient, p, mode0=mode, tolerances=tolerances)
         x, t, mode = run.x1, run.t1, _next_mode(run.mode1)
     per_block = max(1, int(math.ceil(time / blocks / interval * (1.0 - 1e-12))))  # (a whole number of intervals
     #                                                                     is not rounded up by a last ulp)

@@ -68,6 +68,9 @@ class BranchPoint:
     second_parameter : float
         On a two-parameter curve of special points: the value of the second parameter (``nan`` on a
         one-parameter branch).
+    mode0 : str or None
+        The mode the orbit is in at ``state`` (where its shooting starts); None for an equilibrium, and
+        in files written before it was recorded.
     """
 
     parameter: float
@@ -85,6 +88,7 @@ class BranchPoint:
     trivial_error: float = float("nan")
     excursion: float = float("nan")
     second_parameter: float = float("nan")
+    mode0: str | None = None
 
     def recorded(self, parameter: float, step: float, iterations: int) -> BranchPoint:
         """This point as a branch records it: with its parameter, the step that led to it and the corrector's

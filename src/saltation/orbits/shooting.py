@@ -64,7 +64,7 @@ from saltation.orbits.floquet import (
     reciprocal,
     sort_multipliers,
 )
-from saltation.orbits.start import starting_guess
+from saltation.orbits.start import starting_guess_and_mode
 from saltation.orbits.records import (
     Evaluation,
     BranchPoint,
@@ -142,6 +142,9 @@ class PeriodicOrbit:
         The number of shooting segments (1: single shooting).
     nodes : ndarray, shape (segments, n), or None
         The segments' initial states (multiple shooting); the first is ``state0``.
+    mode0 : str or None
+        The mode the orbit is in at ``state0``: the one its shooting started in (named by ``mode0`` of
+        :func:`find_periodic_orbit`, or the model's initial-mode rule).  None in records made without it.
     """
 
     system_name: str
@@ -165,6 +168,8 @@ class PeriodicOrbit:
     #: the number of shooting segments (1: single shooting), and their initial states (multiple shooting)
     segments: int = 1
     nodes: np.ndarray | None = field(default=None, repr=False)
+    #: the mode at ``state0`` (where the shooting starts)
+    mode0: str | None = None
 
     @property
     def amplitude(self) -> float:
@@ -210,7 +215,8 @@ class PeriodicOrbit:
         state = ", ".join(f"{v:.6g}" for v in np.asarray(self.state0)[:6]) + (", ..." if len(self.state0) > 6 else "")
         mu = f"{np.max(np.abs(self.multipliers)):.6g}" if len(self.multipliers) else "-"
         how = ("backward" if self.backward else "forward") + (", autonomous" if self.autonomous else ", forced")
-        return (f"PeriodicOrbit({self.system_name!r}, T={self.period:.10g}, x0=[{state}], max |mu|={mu}, "
+        mode = f" in {self.mode0!r}" if self.mode0 is not None else ""
+        return (f"PeriodicOrbit({self.system_name!r}, T={self.period:.10g}, x0=[{state}]{mode}, max |mu|={mu}, "
                 f"{'stable' if self.stable else 'unstable'}, {len(self.events)} events, {how}"
                 + ("" if self.converged else ", NOT converged") + ")")
 
@@ -339,12 +345,25 @@ class ShootingProblem:
         Forced systems: the number of forcing periods the orbit takes to
         close (2 for the branch born at a period doubling).  Such problems
         iterate Newton in Python rather than in the compiled kernel.
+    mode0 : str or int, optional
+        The mode every shot starts in (:attr:`mode0`), for a mode that is memory (a latch, a relay with
+        hysteresis, a thermostat: modes whose domains overlap, which the state alone does not tell
+        apart).  The shooting state must lie in its domain (or on its boundary).  None (the default):
+        each shot starts in the mode the model's domains give its state.
+
+    Attributes
+    ----------
+    mode0 : str or None
+        The mode the shots start in (None: the model's initial-mode rule).  Moving a guess's state off
+        the switching surfaces (:meth:`start_off_surfaces`) keeps it, unless the orbit spends too short
+        a stretch in it; then it becomes the mode of the stretch the state moves to.
 
     Raises
     ------
     ModelError
         If ``periods`` is not a positive integer (or not 1 for an autonomous model), ``t0`` is not
-        finite, a parameter name or value is invalid, or the forcing period is not positive and finite.
+        finite, a parameter name or value is invalid, the forcing period is not positive and finite, or
+        ``mode0`` is not a mode of the model (the message lists them).
 
     References
     ----------
@@ -363,6 +382,7 @@ class ShootingProblem:
         t0: float = 0.0,
         tolerances: Tolerances | None = None,
         periods: int = 1,
+        mode0: str | int | None = None,
     ):
         if int(periods) != periods or periods < 1:
             raise ModelError(f"periods must be a positive integer, got {periods!r}")
@@ -386,12 +406,36 @@ class ShootingProblem:
         self.t0 = 0.0 if self.autonomous or t0 == 0.0 else math.fmod(t0, self.system.forcing_period(self.p))
         self.x_ref: np.ndarray | None = None
         self.f_ref: np.ndarray | None = None
+        self.mode0: str | None = None if mode0 is None else self.system.mode_names[self.system.mode_index(mode0)]
 
     def __repr__(self) -> str:
         how = ("backward" if self.backward else "forward") + (", autonomous" if self.autonomous else ", forced")
         lam = f", continuation in {self.lam_name}" if self.lam_name else ""
         periods = f", {self.periods} periods" if self.periods != 1 else ""
-        return f"ShootingProblem({self.system.name!r}, {how}{periods}{lam})"
+        mode = f", from mode {self.mode0!r}" if self.mode0 is not None else ""
+        return f"ShootingProblem({self.system.name!r}, {how}{periods}{lam}{mode})"
+
+    def start_mode(self, x: np.ndarray, p: np.ndarray) -> int:
+        """The mode a shot from ``x`` starts in: :attr:`mode0`, checked against its domain, or the model's rule.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n,)
+            The shooting state.
+        p : ndarray, shape (n_params,)
+            Parameter values.
+
+        Returns
+        -------
+        int
+            Index of the mode.
+
+        Raises
+        ------
+        InitialModeError
+            If ``x`` lies outside the domain of :attr:`mode0` (or, without it, in no mode's domain).
+        """
+        return self.flow.start_mode(x, p, self.t0, self.mode0)
 
     # -- the protocol used by continuation ----------------------------------------------
     @property
@@ -504,9 +548,9 @@ class ShootingProblem:
         StationaryStateError
             If the vector field vanishes at ``x`` (an equilibrium).
         InitialModeError
-            If ``x`` lies in no mode's domain.
+            If ``x`` lies in no mode's domain (outside that of :attr:`mode0`).
         """
-        mode = self.flow.initial_mode(x, p, self.t0)
+        mode = self.start_mode(x, p)
         f = self.flow.vector_field(mode, self.t0, x, p)
         norm = np.linalg.norm(f)
         if not norm > 0:
@@ -525,6 +569,10 @@ class ShootingProblem:
         motion.  The phase condition anchored there is transverse to the flow and away from the
         surfaces, so Newton does not put the shooting state on a surface.  Otherwise, or when the
         guess cannot be integrated (Newton then reports why), ``u`` is returned as it is.
+
+        With a start mode (:attr:`mode0`), the stretch is the longest one in that mode; if the orbit
+        spends too short a stretch in it, the longest of any mode, and :attr:`mode0` becomes that
+        stretch's mode (the shooting state and its mode move together).
 
         Parameters
         ----------
@@ -551,31 +599,37 @@ class ShootingProblem:
             return u
         p = self.parameters_at(lam)
         try:
-            traj = self.flow.run(x0, self.t0, self.t0 + self.sign * T, p, tolerances=self.tolerances)
+            traj = self.flow.run(x0, self.t0, self.t0 + self.sign * T, p, mode0=self.mode0, tolerances=self.tolerances)
         except SaltationError:
             return u
         times = [abs(e.t - self.t0) for e in traj.events]
         margin = SEAM_MARGIN * T
         if not times or (min(times[0], T - times[-1]) >= margin and self._time_to_surfaces(x0, p) >= margin):
             return u
-        best, t_mid, sliding = 0.0, None, False
+        stretches = []  # (length, middle, mode) of each stretch between events that is not a sliding motion
+        sliding, mode = False, traj.mode0
         for k, (a, b) in enumerate(zip([0.0, *times], [*times, T])):
             if k > 0:
                 sliding = traj.events[k - 1].kind == EventKind.SLIDING_START
-            if not sliding and b - a > best:
-                best, t_mid = b - a, 0.5 * (a + b)
+                mode = traj.events[k - 1].mode_to
+            if not sliding:
+                stretches.append((b - a, 0.5 * (a + b), mode))
+        own = [s for s in stretches if s[2] == self.mode0 and s[0] >= 2.0 * margin]
+        best, t_mid, mode = max(own or stretches, key=lambda s: s[0], default=(0.0, None, None))
         if t_mid is None or best < 2.0 * margin:
             return u
         try:
-            x_mid = self.flow.run(x0, self.t0, self.t0 + self.sign * t_mid, p, tolerances=self.tolerances).x1
+            mid = self.flow.run(x0, self.t0, self.t0 + self.sign * t_mid, p, mode0=self.mode0, tolerances=self.tolerances)
         except SaltationError:
             return u
-        return np.append(x_mid, T)
+        if self.mode0 is not None:
+            self.mode0 = mid.mode1  # (the stretch's mode)
+        return np.append(mid.x1, T)
 
     def _time_to_surfaces(self, x: np.ndarray, p: np.ndarray) -> float:
         """The least time ``|h| / |dh/dt|`` in which the flow at ``x`` reaches a switching surface (linearised)."""
         flow, t = self.flow, self.t0
-        f = flow.vector_field(flow.initial_mode(x, p, t), t, x, p)
+        f = flow.vector_field(self.start_mode(x, p), t, x, p)
         least = math.inf
         for k in range(len(self.system.surface_names)):
             h = abs(flow.indicator(k, t, x, p))
@@ -631,7 +685,7 @@ class ShootingProblem:
         IntegrationError
             If the period is not positive, or the shot fails (see :meth:`Flow.run`).
         InitialModeError, ModelError
-            A state in no mode's domain, an invalid parameter.
+            A state in no mode's domain (outside that of :attr:`mode0`), an invalid parameter.
         InconsistentResultError
             A reset exactly at the seam (see :meth:`close_period`).
         StationaryStateError
@@ -644,8 +698,10 @@ class ShootingProblem:
         if not T > 0:
             raise IntegrationError(f"shooting period must be positive, got {T}")
         pidx = self.lam_index if (need_lam and lam is not None) else -1
+        mode0 = None if self.mode0 is None else self.start_mode(x0, p)  # (the named mode, in its domain)
         traj = self.flow.run(
-            x0, self.t0, self.t0 + self.sign * T, p, variational=True, sensitivity=pidx, tolerances=self.tolerances
+            x0, self.t0, self.t0 + self.sign * T, p, mode0=mode0, variational=True, sensitivity=pidx,
+            tolerances=self.tolerances,
         )
         traj = self.close_period(traj, p, pidx)
         sens = {pidx: traj.parameter_sensitivity} if pidx >= 0 else {}
@@ -910,7 +966,8 @@ class ShootingProblem:
         tuple of (ndarray, Evaluation, int) or None
             The solution ``z``, its evaluation and the number of iterations; or None when the kernel
             cannot run it (no continuation parameter, several forcing periods, a forcing period given as a
-            callable, a singular matrix, or an event at the end of the period): then iterate in Python.
+            callable, a singular matrix, an event at the end of the period, or a shot that does not start in
+            :attr:`mode0`): then iterate in Python.
 
         Raises
         ------
@@ -925,6 +982,8 @@ class ShootingProblem:
         """
         if self.lam_index < 0 or self.periods != 1:
             return None  # the kernel's corrector closes orbits after one forcing period
+        if not self._compiled_start(z_pred[: self.system.n], self.parameters_at(float(z_pred[-1]))):
+            return None  # the kernel's shots start in the mode of the model's rule, not in mode0
         phase = None
         if self.autonomous:
             if self.x_ref is None:
@@ -940,6 +999,8 @@ class ShootingProblem:
         p_end = self.p.copy()
         p_end[self.lam_index] = z[-1]
         traj = self.flow.shot_trajectory(found, z[:n].copy(), self.t0, p_end, self.lam_index)  # a failed shot raises
+        if self.mode0 is not None and traj.mode0 != self.mode0:
+            return None  # its last shot started in another mode than mode0
         if self.close_period(traj, p_end) is not traj:
             return None  # an event at the end of the period, which the kernel's iteration does not apply
         if not found.converged:
@@ -976,11 +1037,13 @@ class ShootingProblem:
             If the state does not move over the period (see :meth:`stationary_reason`).
         InconsistentResultError
             If an autonomous orbit's monodromy does not map the flow direction to itself within
-            :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
+            :data:`TRIVIAL_MULTIPLIER_ACCURACY`, or (with :attr:`mode0`) its shot ends in another mode
+            (:meth:`check_mode_closes`).
         """
         reason = self.stationary_reason(u, lam, traj)
         if reason is not None:
             raise StationaryStateError(reason, u[: self.system.n], self.period_of(u, lam))
+        self.check_mode_closes(traj)
         if not self.autonomous:
             return multipliers_from_monodromy(traj.monodromy, backward=self.backward), float("nan")
         found = autonomous_multipliers(traj.monodromy, traj.velocity_end, backward=self.backward)
@@ -993,6 +1056,41 @@ class ShootingProblem:
                 "(an event missing from it, or too loose integration tolerances)"
             )
         return found.multipliers, found.trivial_error
+
+    def check_mode_closes(self, traj: Trajectory) -> None:
+        """With a start mode (:attr:`mode0`): the solved shot ends in the mode it starts in.
+
+        The state alone does not tell a memory mode from the mode it shares its domain with: a shot that
+        returns to its state in the other one (the thermostat's temperature back at its start, but
+        cooling where it started heating) solves the periodicity equations without being periodic.
+        (Without :attr:`mode0` the domains give each state its mode, as they always have.)
+
+        Parameters
+        ----------
+        traj : Trajectory
+            The shot over the period (:meth:`close_period` applied).
+
+        Raises
+        ------
+        InconsistentResultError
+            Naming both modes, if the shot ends in another mode than it starts in.
+        """
+        if self.mode0 is not None and traj.mode1 != traj.mode0:
+            raise InconsistentResultError(
+                f"the shot of {self.system.name!r} from x0 = {np.array2string(traj.x0, precision=8)} returns to its "
+                f"state in mode {traj.mode1!r}, not in the mode {traj.mode0!r} it starts in: the state closes but "
+                "the mode does not, so it is not a periodic orbit (give a better period guess)"
+            )
+
+    def _compiled_start(self, x: np.ndarray, p: np.ndarray) -> bool:
+        """Whether the kernel's Newton loop, whose shots start in the mode of the model's rule, may solve from
+        ``x``: always without :attr:`mode0`, else where that rule gives :attr:`mode0` (its result is checked)."""
+        if self.mode0 is None:
+            return True
+        try:
+            return self.system.mode_names[self.flow.initial_mode(x, p, self.t0)] == self.mode0
+        except SaltationError:
+            return False
 
     def stationary_reason(self, u: np.ndarray, lam: float | None, traj: Trajectory) -> str | None:
         """Why a solved point is not a periodic orbit, or None: its state does not move over the period.
@@ -1084,6 +1182,7 @@ class ShootingProblem:
             monodromy=traj.monodromy,
             event_ids=event_ids(traj),
             trivial_error=trivial_error,
+            mode0=traj.mode0,
             **amplitude_measures(traj),
         )
 
@@ -1152,11 +1251,12 @@ class ShootingProblem:
             found = self.flow.compiled_newton(
                 u0, None, p, t0=self.t0, sign=self.sign, lam_index=-1, span=T, phase=None, tol=tol, max_iter=max_iter,
                 max_correction=0.0, damped=True, tolerances=self.tolerances,
-            ) if T > 0 else None
+            ) if T > 0 and self._compiled_start(u0, p) else None
             if found is not None and found.converged:  # otherwise the Python iteration explains the failure
                 x = found.z.copy()
                 traj = self.flow.shot_trajectory(found, x, self.t0, p, -1)
-                if self.close_period(traj, p) is traj:  # else an event at the end: iterate in Python
+                # else an event at the end, or a last shot that does not start in mode0: iterate in Python
+                if self.close_period(traj, p) is traj and (self.mode0 is None or traj.mode0 == self.mode0):
                     return self.orbit(x, lam, traj, found.history, period=T, parameters=p)
 
         longest = PERIOD_GROWTH * float(u0[-1]) if self.autonomous else math.inf
@@ -1211,7 +1311,8 @@ class ShootingProblem:
             return None
         p = self.parameters_at(lam)
         try:
-            traj = self.flow.run(x0, self.t0, self.t0 + self.sign * periods * T, p, tolerances=self.tolerances)
+            traj = self.flow.run(x0, self.t0, self.t0 + self.sign * periods * T, p, mode0=self.mode0,
+                                 tolerances=self.tolerances)
         except SaltationError:
             return None
         tol = self.tolerances or self.flow.tolerances
@@ -1272,6 +1373,7 @@ class ShootingProblem:
             residuals=list(history),
             trivial_error=trivial_error,
             problem=self,
+            mode0=trajectory.mode0,
         )
 
 
@@ -1299,6 +1401,7 @@ def find_periodic_orbit(
     tolerances: Tolerances | None = None,
     segments: int = 1,
     transient_length: float | None = None,
+    mode0: str | None = None,
 ) -> PeriodicOrbit:
     """Find one periodic orbit by shooting from a guess.
 
@@ -1335,6 +1438,15 @@ def find_periodic_orbit(
     transient_length : float, optional
         Length of the transient of an autonomous model, when one is needed
         (:data:`saltation.orbits.start.TRANSIENT_TIME` by default).
+    mode0 : str, optional
+        The mode the orbit starts in at ``state0``: for a mode that is memory (a latch, a relay with
+        hysteresis, a thermostat), which the state alone does not tell from another mode with the same
+        domain.  ``state0`` must lie in its domain (or on its boundary).  Every shot starts in it (with
+        multiple shooting the first segment; each further one in the mode the one before it ends in),
+        and the orbit must close in it.  Without ``state0`` the transient starts in ``mode0`` and the
+        orbit in the mode the transient ends in.  An autonomous guess moved off the switching surfaces
+        stays in ``mode0`` where the orbit spends a long enough stretch in it.  The orbit records its
+        mode as :attr:`PeriodicOrbit.mode0`.  None (the default): the model's domains give the mode.
 
     Returns
     -------
@@ -1346,7 +1458,8 @@ def find_periodic_orbit(
     ------
     ModelError
         A ``period`` that contradicts the forcing period, a state of the wrong size, a guess of every
-        node without a period, an invalid parameter or number of segments.
+        node without a period, an invalid parameter or number of segments, a ``mode0`` that is not a
+        mode of the model (the message lists its modes).
     ConvergenceError
         Newton did not converge (with its residual history); a :class:`NoOrbitNearGuessError` when,
         in addition, the flow from an autonomous guess comes to rest.
@@ -1359,7 +1472,8 @@ def find_periodic_orbit(
     StartGuessError
         Without a guess: the transient failed, diverged or shows no oscillation.
     IntegrationError, InitialModeError
-        The shot from the guess itself fails (Newton's later trial steps that fail are shortened).
+        The shot from the guess itself fails (Newton's later trial steps that fail are shortened); a
+        guess state outside the domain of ``mode0`` (the message names the mode and its conditions).
     KernelCacheError
         A model given as such cannot be compiled into the kernel cache.
 
@@ -1373,10 +1487,13 @@ def find_periodic_orbit(
         flow = Flow(flow, tolerances=tolerances)
     if state0 is not None and np.ndim(state0) == 2 and period is None and flow.system.is_autonomous:
         raise ModelError(f"a guess of every node of the autonomous model {flow.system.name!r} needs a period guess")
+    prob = ShootingProblem(flow, parameters, backward=backward, t0=t0, tolerances=tolerances, mode0=mode0)
     if state0 is None or (flow.system.is_autonomous and period is None):
-        state0, period = starting_guess(flow, flow.parameters(parameters), state0, period, t0=t0,
-                                        backward=backward, length=transient_length)
-    prob = ShootingProblem(flow, parameters, backward=backward, t0=t0, tolerances=tolerances)
+        state0, period, prob.mode0 = starting_guess_and_mode(
+            flow, prob.p, state0, period, t0=t0, backward=backward, length=transient_length, mode0=prob.mode0)
+    if prob.mode0 is not None:  # the guess (its first node) lies in the mode's domain, or an error says why
+        first = np.asarray(state0, dtype=float)
+        prob.start_mode(first[0] if first.ndim == 2 else first, prob.p)
     if not prob.autonomous and period is not None:
         forced = prob.period_of(prob.pack(state0))
         if not abs(float(period) - forced) <= 1e-12 * forced:
@@ -1466,6 +1583,12 @@ class MultipleShootingProblem:
         return f"MultipleShootingProblem({self.problem!r}, {self.segments} segments)"
 
     @property
+    def mode0(self) -> str | None:
+        """The mode the first segment starts in (the single-shooting problem's
+        :attr:`~ShootingProblem.mode0`; None: the model's domains give it)."""
+        return self.problem.mode0
+
+    @property
     def dimension(self) -> int:
         return self.segments * self.n + (1 if self.problem.autonomous else 0)
 
@@ -1520,7 +1643,7 @@ class MultipleShootingProblem:
         p = prob.parameters_at(lam)
         times = self._times(T)
         nodes = [np.asarray(u[: self.n], dtype=float)]
-        mode = None
+        mode = prob.mode0
         for i in range(self.segments - 1):
             traj = prob.flow.run(nodes[-1], times[i], times[i + 1], p, mode0=mode, tolerances=prob.tolerances)
             nodes.append(traj.x1)
@@ -1531,7 +1654,8 @@ class MultipleShootingProblem:
     def shoot(self, U: np.ndarray, lam: float | None = None, sensitivity: int = -1) -> list[Trajectory]:
         """The segments from the nodes of ``U``, each with its transfer matrix.
 
-        Each segment starts in the mode its predecessor ends in (the first in the mode of its state).
+        Each segment starts in the mode its predecessor ends in (the first in the problem's
+        :attr:`~ShootingProblem.mode0`, or the mode of its state), so that nodes inside a memory mode keep it.
 
         Parameters
         ----------
@@ -1561,7 +1685,7 @@ class MultipleShootingProblem:
         p = prob.parameters_at(lam)
         times = self._times(T)
         segs: list[Trajectory] = []
-        mode = None
+        mode = None if prob.mode0 is None else prob.start_mode(U[:n], p)
         for i in range(self.segments):
             x = np.ascontiguousarray(U[i * n:(i + 1) * n])
             traj = prob.flow.run(x, times[i], times[i + 1], p, mode0=mode, variational=True, sensitivity=sensitivity,
@@ -1796,7 +1920,7 @@ class MultipleShootingProblem:
             parameter=math.nan if lam is None else float(lam), state=np.array(U[: self.n]), period=orbit.period,
             multipliers=orbit.multipliers, stable=is_stable(orbit.multipliers, autonomous=self.autonomous),
             event_labels=event_labels(traj), monodromy=traj.monodromy, event_ids=event_ids(traj),
-            trivial_error=orbit.trivial_error, **amplitude_measures(traj),
+            trivial_error=orbit.trivial_error, mode0=orbit.mode0, **amplitude_measures(traj),
         )
 
     def accept(self, U: np.ndarray, lam: float | None) -> None:
@@ -1938,7 +2062,8 @@ class MultipleShootingProblem:
             If the state does not move over the period, or a node is an equilibrium.
         InconsistentResultError
             If an autonomous orbit's segments do not map the flow direction from node to node within
-            :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
+            :data:`TRIVIAL_MULTIPLIER_ACCURACY`, or (with a start mode) the last segment ends in another
+            mode than the first starts in.
         """
         prob, n = self.problem, self.n
         trajectory = join(segs)
@@ -1947,6 +2072,7 @@ class MultipleShootingProblem:
         reason = prob.stationary_reason(u_single, lam, trajectory)
         if reason is not None:
             raise StationaryStateError(reason, U[:n], T)
+        prob.check_mode_closes(trajectory)
         mu, trivial_error = self.multipliers(U, lam, segs)
         if prob.autonomous and not trivial_error <= TRIVIAL_MULTIPLIER_ACCURACY:
             raise InconsistentResultError(
@@ -1959,6 +2085,7 @@ class MultipleShootingProblem:
             multipliers=mu, trajectory=trajectory, converged=True, iterations=max(len(history) - 1, 0),
             residual_norm=float(history[-1]), residuals=list(history), trivial_error=trivial_error, problem=prob,
             segments=self.segments, nodes=np.array(U[: self.segments * n]).reshape(self.segments, n),
+            mode0=trajectory.mode0,
         )
 
 

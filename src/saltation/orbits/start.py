@@ -35,6 +35,7 @@ def transient(
     t0: float = 0.0,
     backward: bool = False,
     length: float | None = None,
+    mode0: str | None = None,
 ) -> Trajectory:
     """Simulate a transient in the direction of integration.
 
@@ -55,6 +56,9 @@ def transient(
         Its length for an autonomous model (:data:`TRANSIENT_TIME` by default); a forced model runs
         :data:`TRANSIENT_PERIODS` forcing periods.  A run that would end on a sliding motion is
         extended (by one forcing period, or 1 % of the length) until it does not.
+    mode0 : str, optional
+        The mode it starts in (a memory mode, see :meth:`Flow.start_mode`); by default the model's
+        initial-mode rule.  The mode it ends in is the trajectory's ``mode1``.
 
     Returns
     -------
@@ -64,8 +68,9 @@ def transient(
     Raises
     ------
     StartGuessError
-        If the run fails (any :class:`SaltationError` of the integration, chained) or diverges, or
-        ``length`` is not positive; the message says where it started and ended.
+        If the run fails (any :class:`SaltationError` of the integration, chained: a state outside the
+        domain of ``mode0`` too) or diverges, or ``length`` is not positive; the message says where it
+        started and ended.
     ModelError
         If the forcing period of a forced model is not positive and finite at these parameters.
     """
@@ -84,7 +89,8 @@ def transient(
     direction = "backward" if backward else "forward"
     for attempt in range(20):
         try:
-            traj = flow.run(x, t0, t0 + sign * (span + attempt * extra), p, dense=system.is_autonomous)
+            m0 = None if mode0 is None else flow.start_mode(x, p, t0, mode0)
+            traj = flow.run(x, t0, t0 + sign * (span + attempt * extra), p, mode0=m0, dense=system.is_autonomous)
         except SaltationError as exc:
             raise StartGuessError(f"the {direction} transient of {system.name!r} from {x.tolist()} failed ({exc})") from exc
         if not traj.sliding_at_end:
@@ -211,6 +217,7 @@ def candidate_starts(n: int) -> list[np.ndarray]:
 
 def oscillating_transient(
     flow: Flow, parameters: np.ndarray, *, t0: float = 0.0, backward: bool = False, length: float | None = None,
+    mode0: str | None = None,
 ) -> tuple[Trajectory, float]:
     """The first transient of an autonomous model that ends in an oscillation, and its period.
 
@@ -229,6 +236,8 @@ def oscillating_transient(
         Run backward in time.
     length : float, optional
         Length of each transient (:data:`TRANSIENT_TIME` by default).
+    mode0 : str, optional
+        The mode each transient starts in (by default the model's initial-mode rule).
 
     Returns
     -------
@@ -245,7 +254,7 @@ def oscillating_transient(
     tried = []
     for x in candidate_starts(flow.system.n):
         try:
-            traj = transient(flow, parameters, x, t0=t0, backward=backward, length=length)
+            traj = transient(flow, parameters, x, t0=t0, backward=backward, length=length, mode0=mode0)
             return traj, estimate_period(traj)
         except StartGuessError as exc:
             tried.append(f"from {x.tolist()}: {exc}")
@@ -266,7 +275,7 @@ def starting_guess(
 
     A given state is kept, and a given period; the transient (:func:`transient`, from ``state``) runs
     only when the state is None or, for an autonomous model, the period is.  A forced model's period is
-    its forcing period (returned as None).
+    its forcing period (returned as None).  :func:`starting_guess_and_mode` also gives the guess's mode.
 
     Parameters
     ----------
@@ -299,14 +308,73 @@ def starting_guess(
     ModelError
         If the forcing period of a forced model is not positive and finite at these parameters.
     """
+    x0, period, _ = starting_guess_and_mode(flow, parameters, state, period, t0=t0, backward=backward, length=length)
+    return x0, period
+
+
+def starting_guess_and_mode(
+    flow: Flow,
+    parameters: np.ndarray,
+    state: Sequence[float] | None = None,
+    period: float | None = None,
+    *,
+    t0: float = 0.0,
+    backward: bool = False,
+    length: float | None = None,
+    mode0: str | None = None,
+) -> tuple[np.ndarray, float | None, str | None]:
+    """A guess ``(state, period, mode)`` of a periodic orbit: :func:`starting_guess`, with the guess's mode.
+
+    The transient starts in ``mode0``; a guess state read from its end is in the mode the transient
+    ends in, a given state in ``mode0``.
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    parameters : ndarray
+        Parameter vector.
+    state : array_like, optional
+        Guess of the state (the end of a transient by default).
+    period : float, optional
+        Guess of the period of an autonomous model (read from a transient by default).
+    t0 : float
+        Start time of the transient.
+    backward : bool
+        Run the transient backward in time.
+    length : float, optional
+        Length of an autonomous model's transient (:data:`TRANSIENT_TIME` by default).
+    mode0 : str, optional
+        The mode of ``state``, where the transient starts (a memory mode, see :meth:`Flow.start_mode`);
+        None: the model's initial-mode rule.
+
+    Returns
+    -------
+    state : ndarray, shape (n,)
+        The state guess.
+    period : float or None
+        The period guess (None for a forced model whose period was not given).
+    mode : str or None
+        The guess state's mode: the transient's final mode where the state is its end, else ``mode0``
+        (None without ``mode0``: the domains give the mode).
+
+    Raises
+    ------
+    StartGuessError
+        If the transient fails (a state outside the domain of ``mode0`` too), diverges, or shows no
+        oscillation to read a period from.
+    ModelError
+        If the forcing period of a forced model is not positive and finite at these parameters.
+    """
     autonomous = flow.system.is_autonomous
     if state is not None and (period is not None or not autonomous):
-        return np.asarray(state, dtype=float), period
+        return np.asarray(state, dtype=float), period, mode0
     if state is None and autonomous:
-        traj, found = oscillating_transient(flow, parameters, t0=t0, backward=backward, length=length)
-        return traj.x1.copy(), found if period is None else period
-    traj = transient(flow, parameters, state, t0=t0, backward=backward, length=length)
-    x0 = traj.x1.copy() if state is None else np.asarray(state, dtype=float)
+        traj, found = oscillating_transient(flow, parameters, t0=t0, backward=backward, length=length, mode0=mode0)
+        return traj.x1.copy(), found if period is None else period, None if mode0 is None else traj.mode1
+    traj = transient(flow, parameters, state, t0=t0, backward=backward, length=length, mode0=mode0)
     if autonomous and period is None:
         period = estimate_period(traj)
-    return x0, period
+    if state is not None:
+        return np.asarray(state, dtype=float), period, mode0
+    return traj.x1.copy(), period, None if mode0 is None else traj.mode1

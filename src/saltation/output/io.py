@@ -598,6 +598,7 @@ _BY_TYPE: dict[str, tuple[Encoder, Decoder]] = {
     "tuple[str, ...]": (list, _dec("strings")),
     "tuple[float, ...]": (lambda a: [_enc_float(x) for x in a], _as_tuple(_dec("reals"))),
     "float | None": (lambda x: None if x is None else _enc_float(x), _nullable(_dec("real"))),
+    "str | None": (lambda s: None if s is None else str(s), _nullable(_dec("string"))),
     "complex | None": (lambda z: None if z is None else _enc_complex(z), _nullable(_dec("complex"))),
 }
 _REAL_ARRAY = (_enc_real_array, _nullable(_dec("reals")))

@@ -66,7 +66,7 @@ def period_doubled_problem(problem: ShootingProblem) -> ShootingProblem:
     -------
     ShootingProblem
         With ``periods`` doubled, and the same flow, parameters, continuation parameter, time
-        direction, ``t0`` and tolerances.
+        direction, ``t0``, tolerances and start mode.
 
     Raises
     ------
@@ -75,7 +75,7 @@ def period_doubled_problem(problem: ShootingProblem) -> ShootingProblem:
     """
     return ShootingProblem(
         problem.flow, problem.p, continuation_parameter=problem.lam_name, backward=problem.backward, t0=problem.t0,
-        tolerances=problem.tolerances, periods=2 * problem.periods,
+        tolerances=problem.tolerances, periods=2 * problem.periods, mode0=problem.mode0,
     )
 
 

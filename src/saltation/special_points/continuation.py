@@ -119,7 +119,9 @@ def continue_orbit(
 
     The direct path from :func:`saltation.orbits.shooting.find_periodic_orbit` to a
     branch: the orbit's own flow, parameter values, time direction, section
-    and tolerances are kept.
+    and tolerances are kept, and so is its start mode where it was found from one (``mode0``, a
+    memory mode): every point's shooting starts in the orbit's :attr:`~PeriodicOrbit.mode0`, and
+    each branch point records it.
 
     Parameters
     ----------
@@ -170,8 +172,10 @@ def continue_orbit(
     system = base.system
     system.parameter_index(parameter)  # names the parameter in its error
     values = dict(zip(system.parameter_names, map(float, orbit.parameters)))
+    # a start mode the orbit was found from (a memory mode) is kept along the branch: the orbit's own
     problem = ShootingProblem(base.flow, values, continuation_parameter=parameter, backward=orbit.backward,
-                              t0=orbit.t0, tolerances=base.tolerances, periods=base.periods)
+                              t0=orbit.t0, tolerances=base.tolerances, periods=base.periods,
+                              mode0=None if base.mode0 is None else orbit.mode0)
     settings = replace(settings or ContinuationSettings(), bounds=tuple(bounds))
     u0 = problem.pack(orbit.state0, orbit.period if orbit.autonomous else None)
     m = orbit.segments if segments is None else segments

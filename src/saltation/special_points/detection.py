@@ -298,7 +298,8 @@ class SpecialPointDetector:
         n = prob.system.n
         T = prob.period_of(prev.u, prev.lam)
         try:
-            traj = flow.run(prev.u[:n], prob.t0, prob.t0 + prob.sign * T, p, dense=True, tolerances=prob.tolerances)
+            traj = flow.run(prev.u[:n], prob.t0, prob.t0 + prob.sign * T, p, mode0=prob.mode0, dense=True,
+                            tolerances=prob.tolerances)
         except SaltationError:
             return None
         direction = 1.0 if prev.tangent[-1] >= 0 else -1.0
@@ -308,6 +309,7 @@ class SpecialPointDetector:
                 orbit = locate_grazing(
                     flow, prev.u[:n], prev.lam, prob.lam_name, transition, t_guess, parameters=p, t0=prob.t0,
                     tolerances=prob.tolerances, period=T if prob.autonomous else None, backward=prob.backward,
+                    mode0=prob.mode0,
                 )
             except SaltationError:
                 continue
@@ -920,6 +922,7 @@ class SpecialPointDetector:
                 prob.flow, without.u[:n], without.lam, prob.lam_name, first.transition, 0.5 * (first.t + last.t),
                 parameters=prob.parameters_at(without.lam), t0=prob.t0, tolerances=prob.tolerances,
                 period=prob.period_of(without.u, without.lam) if prob.autonomous else None, backward=prob.backward,
+                mode0=getattr(prob, "mode0", None),
             )
         except SaltationError:
             return []
@@ -1351,7 +1354,7 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
             flow, without.u[: problem.system.n], without.lam, problem.lam_name, first.transition, first.t,
             parameters=problem.parameters_at(without.lam), t0=problem.t0, tolerances=problem.tolerances,
             period=problem.period_of(without.u, without.lam) if problem.system.is_autonomous else None,
-            backward=problem.backward, periods=getattr(problem, "periods", 1),
+            backward=problem.backward, periods=getattr(problem, "periods", 1), mode0=getattr(problem, "mode0", None),
         )
     except SaltationError:
         return None

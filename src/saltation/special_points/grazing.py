@@ -210,6 +210,7 @@ def locate_grazing(
     backward: bool = False,
     also_disabled: Sequence[int] = (),
     periods: int = 1,
+    mode0: str | None = None,
 ) -> GrazingOrbit:
     """Locate a grazing periodic orbit.
 
@@ -251,6 +252,9 @@ def locate_grazing(
     periods : int
         Forced models: the number of forcing periods the orbit closes after (a period-``k`` orbit grazes
         once in ``k`` forcing periods; its monodromy is that of ``k`` periods).
+    mode0 : str, optional
+        The mode the orbit starts in at ``x0`` (a memory mode: the start mode of the branch it lies
+        on, :attr:`~saltation.orbits.shooting.ShootingProblem.mode0`); by default the model's domains give it.
 
     Returns
     -------
@@ -282,12 +286,12 @@ def locate_grazing(
     p = flow.parameters(parameters).copy()
     p[system.parameter_index(lam_name)] = float(lam)
     x0 = np.asarray(x0, dtype=float)
-    base = ShootingProblem(flow, p, backward=backward, t0=t0, tolerances=tolerances, periods=periods)
+    base = ShootingProblem(flow, p, backward=backward, t0=t0, tolerances=tolerances, periods=periods, mode0=mode0)
     sign = base.sign
     T = float(period) if autonomous else periods * system.forcing_period(p)
     surface = system.surface_index(system.transitions[transition].surface)
     disabled = (int(transition), *map(int, also_disabled))
-    mode0 = flow.initial_mode(x0, p, base.t0)
+    mode0 = base.start_mode(x0, p)
     t_g = tangency_time(flow, x0, base.t0, p, surface, t_guess, T, mode0=mode0, disabled=disabled,
                         tolerances=tolerances, sign=sign)
     if t_g is None:
