@@ -188,6 +188,7 @@ def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, at
     t = 0.0
     crossings = []
     fields = {FREE: _field(FREE, omega, p), CONTACT: _field(CONTACT, omega, p)}
+    first_step = None  # after a restart on the circle: a small first step (see below)
     for _ in range(MAX_SWITCHES):
         sign = 1.0 if mode == FREE else -1.0  # direction of the crossing that leaves the mode
 
@@ -202,10 +203,21 @@ def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, at
         # free: maxima of r (r' falls through 0); contact: minima
         extremum.terminal, extremum.direction = False, -sign
 
-        sol = solve_ivp(fields[mode], (t, t_end), s, method="DOP853", rtol=rtol, atol=atol,
-                        events=(gap, extremum), dense_output=True)
-        if sol.status < 0:
-            raise RuntimeError(f"solve_ivp failed at t = {sol.t[-1]}: {sol.message}")
+        # Restarting on the circle, the gap function is ~0; a first step spanning a whole short arc
+        # would end on the far side and report the crossing at the start.  A first step of 1e-5
+        # leaves the circle in the crossing direction; a crossing reported at the start anyway is
+        # retried with smaller first steps.
+        for fs in (first_step, None if first_step is None else first_step * 1e-3, 1e-11):
+            if fs is not None:
+                fs = min(fs, 0.5 * (t_end - t))
+            sol = solve_ivp(fields[mode], (t, t_end), s, method="DOP853", rtol=rtol, atol=atol,
+                            events=(gap, extremum), dense_output=True, first_step=fs)
+            if sol.status < 0:
+                raise RuntimeError(f"solve_ivp failed at t = {sol.t[-1]}: {sol.message}")
+            if not (sol.status == 1 and sol.t[-1] - t <= 1e-13 * max(1.0, t)) or first_step is None:
+                break
+        else:
+            raise RuntimeError(f"crossing at the restart itself (t = {t}): a tangency?")
         t_stop = sol.t[-1]
         # a double crossing inside one step: an extremum of r on the far side of the circle
         missed = [te for te, ye in zip(sol.t_events[1], sol.y_events[1])
@@ -214,10 +226,11 @@ def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, at
             te = missed[0]
             ts = sol.sol.ts
             i = max(int(np.searchsorted(ts, te)) - 1, 0)
-            ta = ts[i]
-            if sign * _gap(ta, sol.sol(ta), delta) > 0:  # pragma: no cover - would have been seen
-                raise RuntimeError("missed crossing not bracketed")
-            tc = brentq(lambda u: _gap(u, sol.sol(u), delta), ta, te, xtol=1e-15, rtol=8.9e-16)
+            grid = np.linspace(ts[i], te, 65)
+            inside = [u for u in grid[:-1] if sign * _gap(u, sol.sol(u), delta) < 0]
+            if not inside:
+                raise RuntimeError(f"missed crossing near t = {te} not bracketed")
+            tc = brentq(lambda u: _gap(u, sol.sol(u), delta), inside[-1], te, xtol=1e-15, rtol=8.9e-16)
             t, s = tc, sol.sol(tc)
         elif sol.status == 1:
             t, s = sol.t_events[0][0], sol.y_events[0][0]
@@ -227,6 +240,7 @@ def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, at
             return (*out, crossings) if record else out
         crossings.append((t, "enter" if mode == FREE else "leave"))
         mode = CONTACT if mode == FREE else FREE
+        first_step = 1e-5
     raise RuntimeError(f"more than {MAX_SWITCHES} mode switches in one period")
 
 
@@ -839,6 +853,130 @@ def period_doubling(lo: float, hi: float, guess, xtol: float = 1e-12, rtol: floa
     om = brentq(f, lo, hi, xtol=xtol, rtol=8.9e-16)
     f(om)
     return om, memo["x"], memo["m"]
+
+
+def _pair_modulus(M: np.ndarray) -> float:
+    """Modulus minus 1 of the largest non-real multiplier (NaN when all are real)."""
+    m = np.linalg.eigvals(M)
+    c = m[np.abs(m.imag) > 1e-9 * np.maximum(1.0, np.abs(m))]
+    return float(np.max(np.abs(c)) - 1.0) if c.size else float("nan")
+
+
+def neimark_sacker(lo: float, hi: float, guess, xtol: float = 1e-12, rtol: float = RTOL,
+                   atol: float = ATOL, **params):
+    """Neimark-Sacker (torus) point between ``lo`` and ``hi``: brentq on ``|mu| - 1``.
+
+    ``mu`` is the non-real multiplier of largest modulus; it must stay non-real over the bracket.
+
+    Parameters
+    ----------
+    lo, hi : float
+        Bracket.
+    guess : array_like, shape (4,)
+        Periodic state near the bracket.
+    xtol : float
+        brentq's tolerance in omega.
+    rtol, atol : float
+        Integration tolerances.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    omega : float
+        The frequency.
+    state : ndarray, shape (4,)
+        The periodic state there.
+    multipliers : ndarray, shape (4,), complex
+        Its multipliers (a pair on the unit circle).
+
+    Raises
+    ------
+    ValueError
+        No sign change, or a real pair, over the bracket.
+    RuntimeError
+        Newton failed.
+    """
+    memo = {"x": np.asarray(guess, dtype=float)}
+
+    def f(om):
+        x, m, M = periodic_orbit(om, memo["x"], rtol=rtol, atol=atol, **params)
+        memo.update(x=x, m=m)
+        v = _pair_modulus(M)
+        if np.isnan(v):
+            raise ValueError(f"no complex pair at omega = {om}")
+        return v
+
+    om = brentq(f, lo, hi, xtol=xtol, rtol=8.9e-16)
+    f(om)
+    return om, memo["x"], memo["m"]
+
+
+def fold_point(c_lo: float, c_hi: float, guess, omega_guess: float, rtol: float = RTOL,
+               atol: float = ATOL, **params):
+    """Fold (saddle-node) of T-periodic orbits: the extremum of omega along the branch.
+
+    The branch is parametrised by ``c = vx(0)`` (monotone through the fold): for fixed ``c``,
+    Newton's method solves ``P(x, omega) = x`` for ``(x, y, vy, omega)``; the extremum of
+    ``omega(c)`` is located by bounded Brent minimisation (of ``-omega`` or ``omega``).
+
+    Parameters
+    ----------
+    c_lo, c_hi : float
+        Bracket of ``vx(0)`` around the fold.
+    guess : array_like, shape (4,)
+        Periodic state near the fold.
+    omega_guess : float
+        Its frequency.
+    rtol, atol : float
+        Integration tolerances.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    omega : float
+        Frequency of the fold.
+    state : ndarray, shape (4,)
+        Periodic state there.
+    multipliers : ndarray, shape (4,), complex
+        Its multipliers (one of them 1).
+
+    Raises
+    ------
+    RuntimeError
+        Newton failed.
+    """
+    from scipy.optimize import minimize_scalar
+
+    memo = {"u": np.append(np.asarray(guess, dtype=float), omega_guess)}
+
+    def solve(c):
+        u = memo["u"].copy()
+        u[2] = c
+        for _ in range(30):
+            x, om = u[:4], u[4]
+            P, M = period_map(x, om, rtol=rtol, atol=atol, **params)
+            F = P - x
+            if np.max(np.abs(F)) <= 1e-11:
+                memo.update(u=u, M=M)
+                return om
+            h = 1e-6
+            Pw = (period_map(x, om + h, rtol=rtol, atol=atol, **params)[0]
+                  - period_map(x, om - h, rtol=rtol, atol=atol, **params)[0]) / (2 * h)
+            J = M - np.eye(4)
+            J[:, 2] = Pw  # unknowns (x, y, omega, vy): vx is fixed
+            d = np.linalg.solve(J, -F)
+            u[[0, 1, 4, 3]] += d[[0, 1, 2, 3]]
+        raise RuntimeError(f"fold corrector failed at vx = {c}")
+
+    o1, o2, o3 = solve(c_lo), solve(0.5 * (c_lo + c_hi)), solve(c_hi)
+    sign = -1.0 if o2 > max(o1, o3) else 1.0  # maximum: minimise -omega
+    res = minimize_scalar(lambda c: sign * solve(c), bounds=(min(c_lo, c_hi), max(c_lo, c_hi)),
+                          method="bounded", options={"xatol": 1e-9})
+    om = solve(res.x)
+    mult = np.linalg.eigvals(memo["M"])
+    return om, memo["u"][:4].copy(), mult[np.argsort(-np.abs(mult), kind="stable")]
 
 
 def gravity_period_doublings(which=(0, 1), rtol: float = RTOL, atol: float = ATOL):

@@ -417,27 +417,29 @@ class SpecialPointDetector:
         back (two changes of stability in one step, which no test function's sign shows), the step is
         split on the secant first (:meth:`_pieces`) and each piece is tested."""
         secant = _unit(b.z - a.z)
-        pieces = self._pieces(a, b)
+        pieces = self._pieces(a, b, budget=[32])
         found = []
         for s0, s1 in zip(pieces, pieces[1:]):
             found += self._smooth_points_of_piece(s0, s1, index, secant)
         return found
 
-    def _pieces(self, a: Solution, b: Solution, depth: int = 0) -> list[Solution]:
+    def _pieces(self, a: Solution, b: Solution, depth: int = 0, *, budget: list[int]) -> list[Solution]:
         """``[a, ..., b]``: the step cut at the middle of its secant, again and again, until no multiplier
         moves across a piece by more than it lies from the unit circle at the piece's ends
-        (:func:`_may_hide_a_pair`), the piece is within the location tolerance, or 12 cuts deep.  A middle
-        whose event sequence differs (a corner inside the step) or that cannot be solved is not cut."""
-        if (self.equilibrium or depth >= 12 or float(np.linalg.norm(b.z - a.z)) <= 10.0 * self.tol
+        (:func:`_may_hide_a_pair`), the piece is within the location tolerance, 12 cuts deep, or the step's
+        ``budget`` of corrections is spent.  A middle whose event sequence differs (a corner inside the
+        step) or that cannot be solved is not cut."""
+        if (self.equilibrium or depth >= 12 or budget[0] <= 0 or float(np.linalg.norm(b.z - a.z)) <= 10.0 * self.tol
                 or not _may_hide_a_pair(_nontrivial(a, self.autonomous), _nontrivial(b, self.autonomous))):
             return [a, b]
+        budget[0] -= 1
         try:
             mid = self.on_secant(a, b, 0.5)
         except SaltationError:
             return [a, b]
         if canonical_events(mid.summary.event_ids) != canonical_events(a.summary.event_ids):
             return [a, b]
-        return self._pieces(a, mid, depth + 1)[:-1] + self._pieces(mid, b, depth + 1)
+        return self._pieces(a, mid, depth + 1, budget=budget)[:-1] + self._pieces(mid, b, depth + 1, budget=budget)
 
     def _smooth_points_of_piece(self, a: Solution, b: Solution, index: int, secant: np.ndarray) -> list[SpecialPoint]:
         """:meth:`_smooth_points` on one piece of a step (``secant``: the whole step's direction)."""
