@@ -137,6 +137,12 @@ def _radial(t, s, delta):
     return s[0] * s[2] + s[1] * s[3]
 
 
+def _kind(field, t, s) -> str:
+    """``"max"`` or ``"min"``: the sign of ``d/dt (x vx + y vy)`` at an extremum of ``r``."""
+    a = field(t, s)
+    return "max" if s[2] ** 2 + s[3] ** 2 + s[0] * a[2] + s[1] * a[3] < 0 else "min"
+
+
 def _initial_mode(s: np.ndarray, delta: float) -> int:
     """Contact if ``r > delta``, free if ``r < delta``; on the circle, by the sign of ``r'``."""
     h = _gap(0.0, s, delta)
@@ -160,8 +166,7 @@ def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, at
     rtol, atol : float
         Tolerances of ``solve_ivp`` (DOP853) on state and variational equation.
     record : bool
-        Also return the list of crossings ``(t, kind)`` of ``r = delta``, kind ``"enter"`` or
-        ``"leave"``.
+        Also return the crossings of ``r = delta`` and the extrema of ``r``.
     **params
         Model parameters overriding :data:`DEFAULTS`.
 
@@ -172,7 +177,10 @@ def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, at
     Phi : ndarray, shape (4, 4)
         Its derivative with respect to ``state`` (every saltation matrix is the identity).
     crossings : list of (float, str)
-        Only when ``record``.
+        Only when ``record``: ``(t, kind)``, kind ``"enter"`` or ``"leave"``.
+    extrema : list of (float, float, str)
+        Only when ``record``: ``(t, r, kind)`` of every extremum of ``r``, kind ``"max"`` or
+        ``"min"`` (meaningless on a circular whirl, where ``r' = 0`` up to round-off).
 
     Raises
     ------
@@ -186,7 +194,7 @@ def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, at
     s = np.concatenate([np.asarray(state, dtype=float), np.eye(4).ravel()])
     mode = _initial_mode(s, delta)
     t = 0.0
-    crossings = []
+    crossings, extrema = [], []
     fields = {FREE: _field(FREE, omega, p), CONTACT: _field(CONTACT, omega, p)}
     first_step = None  # after a restart on the circle: a small first step (see below)
     for _ in range(MAX_SWITCHES):
@@ -200,8 +208,8 @@ def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, at
         def extremum(t, s, _d=delta):
             return _radial(t, s, _d)
 
-        # free: maxima of r (r' falls through 0); contact: minima
-        extremum.terminal, extremum.direction = False, -sign
+        # free: maxima of r (r' falls through 0); contact: minima; both when recording
+        extremum.terminal, extremum.direction = False, (0.0 if record else -sign)
 
         # Restarting on the circle, the gap function is ~0; a first step spanning a whole short arc
         # would end on the far side and report the crossing at the start.  A first step of 1e-5
@@ -220,8 +228,9 @@ def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, at
             raise RuntimeError(f"crossing at the restart itself (t = {t}): a tangency?")
         t_stop = sol.t[-1]
         # a double crossing inside one step: an extremum of r on the far side of the circle
-        missed = [te for te, ye in zip(sol.t_events[1], sol.y_events[1])
-                  if sign * _gap(te, ye, delta) > 0 and te < t_stop]
+        found = [(te, ye, _kind(fields[mode], te, ye)) for te, ye in zip(sol.t_events[1], sol.y_events[1])]
+        missed = [te for te, ye, kind in found
+                  if sign * _gap(te, ye, delta) > 0 and te < t_stop and kind == ("max" if mode == FREE else "min")]
         if missed:
             te = missed[0]
             ts = sol.sol.ts
@@ -231,13 +240,18 @@ def flow(state, omega: float, t_end: float | None = None, rtol: float = RTOL, at
             if not inside:
                 raise RuntimeError(f"missed crossing near t = {te} not bracketed")
             tc = brentq(lambda u: _gap(u, sol.sol(u), delta), inside[-1], te, xtol=1e-15, rtol=8.9e-16)
-            t, s = tc, sol.sol(tc)
+            t_next, s_next = tc, sol.sol(tc)
         elif sol.status == 1:
-            t, s = sol.t_events[0][0], sol.y_events[0][0]
+            t_next, s_next = sol.t_events[0][0], sol.y_events[0][0]
         else:
+            t_next = None
+        extrema += [(te, float(np.hypot(ye[0], ye[1])), kind) for te, ye, kind in found
+                    if t_next is None or te < t_next]
+        if t_next is None:
             y = sol.y[:, -1]
             out = (y[:4].copy(), y[4:].reshape(4, 4).copy())
-            return (*out, crossings) if record else out
+            return (*out, crossings, extrema) if record else out
+        t, s = t_next, s_next
         crossings.append((t, "enter" if mode == FREE else "leave"))
         mode = CONTACT if mode == FREE else FREE
         first_step = 1e-5
@@ -306,7 +320,7 @@ def monodromy_fd(state, omega: float, h: float = 1e-5, **params) -> np.ndarray:
     return M
 
 
-def periodic_orbit(omega: float, guess, tol: float = 1e-11, maxit: int = 30, rtol: float = RTOL,
+def periodic_orbit(omega: float, guess, tol: float | None = None, maxit: int = 30, rtol: float = RTOL,
                    atol: float = ATOL, **params):
     """The T-periodic orbit through ``guess``, by damped Newton on ``P(x) - x``.
 
@@ -316,8 +330,8 @@ def periodic_orbit(omega: float, guess, tol: float = 1e-11, maxit: int = 30, rto
         Forcing frequency.
     guess : array_like, shape (4,)
         Initial guess of the state at ``t = 0``.
-    tol : float
-        Stop when ``|P(x) - x| <= tol`` (max norm).
+    tol : float, optional
+        Stop when ``|P(x) - x| <= tol`` (max norm); ``max(1e-11, 20 rtol)`` by default.
     maxit : int
         Most Newton steps.
     rtol, atol : float
@@ -339,6 +353,7 @@ def periodic_orbit(omega: float, guess, tol: float = 1e-11, maxit: int = 30, rto
     RuntimeError
         Newton's method did not converge.
     """
+    tol = max(1e-11, 20 * rtol) if tol is None else tol
     x = np.asarray(guess, dtype=float).copy()
     P, M = period_map(x, omega, rtol=rtol, atol=atol, **params)
     F = P - x
@@ -649,7 +664,7 @@ def check_monodromy(omega: float = 0.79, state=None, h: float = 1e-5, **params) 
     params = params or GRAVITY
     if state is None:
         state = free_whirl(omega, **params) * 1.02
-    _, _, crossings = flow(state, omega, record=True, **params)
+    crossings = flow(state, omega, record=True, **params)[2]
     assert len(crossings) >= 2, "the test orbit does not cross the circle"
     M = period_map(state, omega, **params)[1]
     Mfd = monodromy_fd(state, omega, h=h, **params)
@@ -979,17 +994,74 @@ def fold_point(c_lo: float, c_hi: float, guess, omega_guess: float, rtol: float 
     return om, memo["u"][:4].copy(), mult[np.argsort(-np.abs(mult), kind="stable")]
 
 
-def gravity_period_doublings(which=(0, 1), rtol: float = RTOL, atol: float = ATOL):
-    """The period doublings of ``jeffcott_gravity``'s branch of T-periodic orbits.
+def grazing_point(lo: float, hi: float, guess, t_guess: float, kind: str, xtol: float = 1e-12,
+                  rtol: float = RTOL, atol: float = ATOL, **params):
+    """Grazing of the T-periodic orbit with the circle: brentq on ``r_ext - delta``.
 
-    The branch is started from the free whirl just past first contact and continued in omega;
-    the brackets (from a scan of ``det(M + I)``) are ``[0.78763, 0.78775]``,
-    ``[0.795, 0.797]``, ``[1.0, 1.005]`` and ``[1.013, 1.018]``.
+    ``r_ext`` is the extremum of ``r`` of the given kind nearest to ``t_guess``: a maximum that
+    reaches the circle from inside (a new contact arc), or a minimum that reaches it from outside
+    (a new lift-off).
+
+    Parameters
+    ----------
+    lo, hi : float
+        Bracket in omega.
+    guess : array_like, shape (4,)
+        Periodic state near the bracket.
+    t_guess : float
+        Time of the grazing extremum (within the period), roughly.
+    kind : {"max", "min"}
+        Kind of the extremum.
+    xtol : float
+        brentq's tolerance in omega.
+    rtol, atol : float
+        Integration tolerances.
+    **params
+        Model parameters overriding :data:`DEFAULTS`.
+
+    Returns
+    -------
+    omega : float
+        The grazing frequency.
+    t : float
+        Time of the grazing.
+    multipliers : ndarray, shape (4,), complex
+        Multipliers of the grazing orbit.
+
+    Raises
+    ------
+    ValueError
+        No sign change over the bracket.
+    RuntimeError
+        Newton failed.
+    """
+    p = _params(params)
+    memo = {"x": np.asarray(guess, dtype=float), "t": t_guess}
+
+    def f(om):
+        x, m, M = periodic_orbit(om, memo["x"], rtol=rtol, atol=atol, **params)
+        ext = [e for e in flow(x, om, rtol=rtol, atol=atol, record=True, **params)[3] if e[2] == kind]
+        te, r, _ = min(ext, key=lambda e: abs(e[0] - memo["t"]))
+        memo.update(x=x, m=m, t=te)
+        return r - p["delta"]
+
+    om = brentq(f, lo, hi, xtol=xtol, rtol=8.9e-16)
+    f(om)
+    return om, memo["t"], memo["m"]
+
+
+def gravity_period_doublings(which=(0, 1), rtol: float = RTOL, atol: float = ATOL):
+    """The first two period doublings of ``jeffcott_gravity``, by natural-parameter stepping.
+
+    The branch of T-periodic orbits is started from the free whirl just past first contact
+    (``omega_c + 2e-6``) and continued in omega (steps of at most 0.004) to each bracket,
+    ``[omega_c + 2e-6, 0.78775]`` and ``[0.795, 0.797]``, where brentq finds the zero of
+    ``det(M + I)``.
 
     Parameters
     ----------
     which : sequence of int
-        Which of the four to compute (0 and 1: near first contact; 2 and 3: near omega = 1).
+        Which of the two to compute (0, 1).
     rtol, atol : float
         Integration tolerances.
 
@@ -1004,106 +1076,272 @@ def gravity_period_doublings(which=(0, 1), rtol: float = RTOL, atol: float = ATO
         Newton failed along the continuation.
     """
     p = GRAVITY
-    om0 = contact_onsets(**p)[0]
-    out = []
     kw = dict(rtol=rtol, atol=atol)
-    # first two: from the free whirl just past first contact
-    lo1 = om0 + 2e-6
-    x1 = periodic_orbit(lo1, free_whirl(lo1, **p), **kw, **p)[0]
-    brackets = [(lo1, 0.78775), (0.795, 0.797), (1.0, 1.005), (1.013, 1.018)]
-    x = x1
-    om_at = lo1
-    for k, (lo, hi) in enumerate(brackets):
+    lo1 = contact_onsets(**p)[0] + 2e-6
+    x = periodic_orbit(lo1, free_whirl(lo1, **p), **kw, **p)[0]
+    om_at, out = lo1, []
+    for k, (lo, hi) in enumerate([(lo1, 0.78775), (0.795, 0.797)]):
         if k > max(which):
             break
-        # continue the orbit to the bracket's lower end
         if lo > om_at:
             steps = np.linspace(om_at, lo, max(2, int(np.ceil((lo - om_at) / 0.004)) + 1))
-            x = branch(steps, x, **p)[0][-1]
+            for om in steps[1:]:
+                x = periodic_orbit(om, x, **kw, **p)[0]
             om_at = lo
         if k in which:
-            om, xs, m = period_doubling(lo, hi, x, **kw, **p)
-            out.append((om, xs, m))
+            out.append(period_doubling(lo, hi, x, **kw, **p))
     return out
+
+
+#: Special points along ``jeffcott_gravity``'s branch of T-periodic orbits, in the order of the
+#: branch (pseudo-arclength continuation from first contact, :func:`gravity_branch`): kind,
+#: bracket (in omega; for a fold, in ``vx(0)``), a periodic state at one end of the bracket and
+#: extra arguments.  The branch folds twice (``omega`` turns back at the first fold and forward
+#: again at the second), so natural-parameter stepping from first contact only reaches the
+#: points before the first fold.
+GRAVITY_POINTS = [
+    ("period doubling", (0.7876310735, 0.7877262719), (0.7833293232, -0.3625150721, 0.1280033101, 0.6169728934), {}),
+    ("period doubling", (0.7954799133, 0.7970998379), (0.8246273785, -0.3445677464, 0.1391978821, 0.6176602885), {}),
+    ("torus", (0.7987041063, 0.8002915564), (0.8433162173, -0.3393478527, 0.1426779701, 0.6166730525), {}),
+    ("grazing", (0.8119823512, 0.8120015158), (0.9289249439, -0.3353365281, 0.1483768496, 0.6100900279),
+     {"t_guess": 7.334063, "kind": "max"}),  # 2 -> 4 crossings
+    ("torus", (0.8120015158, 0.8120126775), (0.9290054463, -0.3353717773, 0.1483106438, 0.6101112747), {}),
+    ("period doubling", (0.8120747388, 0.8120976881), (0.9289787992, -0.3356322609, 0.1476470608, 0.6103953616), {}),
+    ("period doubling", (0.8242372844, 0.8264972615), (0.8784793957, -0.3149023359, 0.0990107760, 0.6811178724), {}),
+    ("grazing", (0.9457044551, 0.9487150181), (0.8311105001, -0.0651512966, -0.0149923361, 0.9759597714),
+     {"t_guess": 1.423094, "kind": "max"}),  # 4 -> 6 crossings
+    ("period doubling", (0.9487150181, 0.9502606877), (0.8314722646, -0.0587808785, -0.0151222813, 0.9830542111), {}),
+    ("fold", (0.0820336463, 0.1277556369), (0.8295816219, -0.0508322476, 0.1006974751, 0.9627388128),
+     {"omega_guess": 0.9601371959}),
+    ("period doubling", (0.9369672289, 0.9388036922), (0.9150158148, -0.0667127971, 0.2664474679, 0.8262764501), {}),
+    ("period doubling", (0.9244008402, 0.9266730492), (0.9448342639, -0.0879977721, 0.2823565688, 0.7833974969), {}),
+    ("fold", (0.1382633368, 0.1854906682), (1.0089275848, -0.2017432294, 0.1664592216, 0.7068286556),
+     {"omega_guess": 0.8824806803}),
+    ("period doubling", (0.9017258814, 0.9039284210), (1.0145993615, -0.1884286335, 0.0402113674, 0.7782786442), {}),
+    ("torus", (0.9061807123, 0.9084778824), (1.0158319305, -0.1825748309, 0.0260233532, 0.7902398129), {}),
+    ("grazing", (0.9558970682, 0.9590654373), (1.0290411152, -0.1057388459, -0.0861431704, 0.9112113460),
+     {"t_guess": 5.750400, "kind": "min"}),  # 6 -> 4 crossings
+    ("torus", (0.9590654373, 0.9623769540), (1.0302024822, -0.1001835245, -0.0898217972, 0.9178816930), {}),
+    ("grazing", (0.9590654373, 0.9623769540), (1.0302024822, -0.1001835245, -0.0898217972, 0.9178816930),
+     {"t_guess": 4.419502, "kind": "min"}),  # 4 -> 2 crossings
+    ("torus", (0.9623769540, 0.9657876560), (1.0315734353, -0.0942884968, -0.0926993618, 0.9245309825), {}),
+    ("grazing", (1.0020706833, 1.0032597761), (1.0431458382, -0.0228684876, -0.1129400203, 1.0089912815),
+     {"t_guess": 1.621818, "kind": "max"}),  # 2 -> 4 crossings
+    ("period doubling", (1.0020706833, 1.0032597761), (1.0431458382, -0.0228684876, -0.1129400203, 1.0089912815), {}),
+    ("period doubling", (1.0149778313, 1.0191301591), (1.0465207100, -0.0328892851, -0.1259452866, 1.0205628394), {}),
+]
+
+#: The frequencies :func:`gravity_point` finds for :data:`GRAVITY_POINTS` (``rtol = 1e-12``),
+#: with a bound on their error (see :func:`main`: at least 3 times the change from ``rtol =
+#: 1e-10``, and at least 1e-10; 1e-9 for grazings, located on the dense output).
+GRAVITY_REFERENCE = [
+    ("period doubling", 0.7876680818817, 1e-10),
+    ("period doubling", 0.7962099127969, 1e-10),
+    ("torus", 0.7995728148677, 1e-10),
+    ("grazing", 0.8119846105183, 1e-9),
+    ("torus", 0.8120034917726, 1e-10),
+    ("period doubling", 0.8120795429814, 1e-10),
+    ("period doubling", 0.8258021380159, 1e-10),
+    ("grazing", 0.9484917118153, 1e-9),
+    ("period doubling", 0.9487460468454, 1e-10),
+    ("fold", 0.9601710913538, 1e-10),
+    ("period doubling", 0.9384726268687, 1e-10),
+    ("period doubling", 0.9264931496837, 1e-10),
+    ("fold", 0.8824483808637, 1e-10),
+    ("period doubling", 0.9028298009201, 1e-10),
+    ("torus", 0.9068621174733, 1e-10),
+    ("grazing", 0.9583156907280, 1e-9),
+    ("torus", 0.9623578687472, 1e-10),
+    ("grazing", 0.9623622474425, 1e-9),
+    ("torus", 0.9632101515725, 1e-10),
+    ("grazing", 1.0025931168897, 1e-9),
+    ("period doubling", 1.0026193587241, 1e-10),
+    ("period doubling", 1.0156318093106, 1e-10),
+]
+
+
+def gravity_point(k: int, rtol: float = RTOL, atol: float = ATOL):
+    """Locate the special point ``GRAVITY_POINTS[k]`` of ``jeffcott_gravity``'s branch.
+
+    Parameters
+    ----------
+    k : int
+        Index in :data:`GRAVITY_POINTS`.
+    rtol, atol : float
+        Integration tolerances.
+
+    Returns
+    -------
+    kind : str
+        ``"period doubling"``, ``"torus"``, ``"fold"`` or ``"grazing"``.
+    omega : float
+        Its frequency.
+    multipliers : ndarray, shape (4,), complex
+        Multipliers of the orbit there.
+
+    Raises
+    ------
+    RuntimeError
+        Newton failed.
+    """
+    kind, (lo, hi), x, extra = GRAVITY_POINTS[k]
+    kw = dict(rtol=rtol, atol=atol, **GRAVITY)
+    if kind == "period doubling":
+        om, _, m = period_doubling(lo, hi, x, **kw)
+    elif kind == "torus":
+        om, _, m = neimark_sacker(lo, hi, x, **kw)
+    elif kind == "fold":
+        om, _, m = fold_point(lo, hi, x, extra["omega_guess"], **kw)
+    else:
+        om, _, m = grazing_point(lo, hi, x, extra["t_guess"], extra["kind"], **kw)
+    return kind, float(om), m
+
+
+def gravity_branch(omega_stop: float = 1.03, ds: float = 0.002):
+    """The branch of ``jeffcott_gravity`` from first contact, by pseudo-arclength continuation.
+
+    Slow (about two minutes): the source of the brackets of :data:`GRAVITY_POINTS`.
+
+    Parameters
+    ----------
+    omega_stop : float
+        Stop once omega passes it.
+    ds : float
+        Initial step.
+
+    Returns
+    -------
+    points : list of dict
+        As :func:`arclength_branch`, each with ``ncross``, the number of crossings of the circle
+        in one period, added.
+    brackets : list of (str, float, float)
+        ``(kind, omega_a, omega_b)`` of consecutive points between which ``det(M + I)`` (period
+        doubling), ``det(M - I)`` (fold), the modulus of a complex pair minus 1 (torus) or the
+        number of crossings (grazing) changes.
+
+    Raises
+    ------
+    RuntimeError
+        From :func:`arclength_branch`.
+    """
+    p = GRAVITY
+    om0 = contact_onsets(**p)[0] + 2e-6
+    pts = arclength_branch(om0, free_whirl(om0, **p), omega_stop, ds=ds, **p)
+    for q in pts:
+        q["ncross"] = len(flow(q["x"], q["omega"], record=True, **p)[2])
+    brackets = []
+    for a, b in zip(pts[:-1], pts[1:]):
+        if a["ncross"] != b["ncross"]:
+            brackets.append(("grazing", a["omega"], b["omega"]))
+        if a["det_plus"] * b["det_plus"] < 0:
+            brackets.append(("period doubling", a["omega"], b["omega"]))
+        if a["det_minus"] * b["det_minus"] < 0:
+            brackets.append(("fold", a["omega"], b["omega"]))
+        ma, mb = (M["mult"][np.abs(M["mult"].imag) > 1e-9] for M in (a, b))
+        if ma.size and mb.size and (np.max(np.abs(ma)) - 1) * (np.max(np.abs(mb)) - 1) < 0:
+            # the same pair on both sides (not one turned real and another taken instead)
+            if abs(np.max(np.abs(ma)) - np.max(np.abs(mb))) < 0.2:
+                brackets.append(("torus", a["omega"], b["omega"]))
+    return pts, brackets
 
 
 # ----------------------------------------------------------------------------------------------
 
 
-def main():
+def main(argv=None):
     """Print every reference value, its check and the time it takes.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        ``["--branch"]`` also re-runs the pseudo-arclength continuation (about two minutes) and
+        prints the brackets it finds.
 
     Returns
     -------
     None
     """
-    np.set_printoptions(precision=12, linewidth=120)
+    import sys
+
+    argv = sys.argv[1:] if argv is None else argv
+    np.set_printoptions(precision=10, linewidth=140)
 
     def timed(fn, *a, **k):
         t0 = time.perf_counter()
         out = fn(*a, **k)
         return out, time.perf_counter() - t0
 
-    print("== 1. variational vs finite-difference monodromy")
+    print("== 1. period map: variational vs central finite-difference monodromy")
     err, dt = timed(check_monodromy)
-    print(f"gravity, omega = 0.79, orbit crossing the circle: rel. difference {err:.2e}  ({dt:.2f} s)")
-    x = free_whirl(0.79, **GRAVITY)
-    (P, M), dt = timed(period_map, x * 1.02, 0.79, **GRAVITY)
-    print(f"period_map with monodromy: {dt:.2f} s")
+    print(f"gravity, omega = 0.79, free whirl * 1.02 (crosses the circle twice): max|M - M_fd| / max|M| = "
+          f"{err:.1e}  (check_monodromy: {dt:.2f} s)")
+    _, dt = timed(period_map, free_whirl(0.79, **GRAVITY) * 1.02, 0.79, **GRAVITY)
+    print(f"one period_map call with monodromy: {dt:.3f} s")
 
-    print("\n== 3a. free whirl touches the ring (g = 0): A(omega) = delta")
+    print("\n== 3a. g = 0: the free whirl touches the ring, A(omega) = delta")
     onsets, dt = timed(contact_onsets)
-    for om in onsets:
-        print(f"omega = {om!r}  A - delta = {free_amplitude(om) - 1:.1e}")
-    print(f"quoted 0.820631087712087, 1.407088466022592: differences "
-          f"{onsets[0] - 0.820631087712087:.1e}, {onsets[1] - 1.407088466022592:.1e}  ({dt * 1e3:.1f} ms)")
+    for om, q in zip(onsets, (0.820631087712087, 1.407088466022592)):
+        print(f"omega = {om!r}  (A - delta = {free_amplitude(om) - 1:.1e}; quoted {q}, difference {om - q:.1e})")
+    print(f"({dt * 1e3:.1f} ms)")
 
-    print("\n== 3a. contact whirl (g = 0, mu = 0), closed form vs numerical")
-    for om in (0.9, 1.2, 1.4):
+    print("\n== 3a. g = 0, mu = 0: contact whirl z = R exp(i (omega t - phi)), closed form vs Newton + variational")
+    for om in (0.9, 1.2, 1.5):
         for R, phi in contact_whirl(om):
             xs = contact_whirl_state(om, R, phi)
             (xn, mn, _), dt = timed(periodic_orbit, om, xs)
             mc = contact_whirl_multipliers(om, R, phi)
-            print(f"omega = {om}: R = {R!r}, phi = {phi!r}, |x_newton - x_closed| = "
-                  f"{np.max(np.abs(xn - xs)):.1e}, multipliers {mc}, |mult diff| = "
-                  f"{_mult_distance(mn, mc):.1e}  ({dt:.2f} s)")
+            print(f"omega = {om}: R = {R!r}, phi = {phi!r}\n    multipliers {mc}\n    |x_Newton - x_closed| = "
+                  f"{np.max(np.abs(xn - xs)):.1e}, |multipliers - numerical| = {_mult_distance(mn, mc):.1e}  ({dt:.2f} s)")
     e, dt = timed(check_contact_whirl)
-    print(f"check_contact_whirl: {e:.1e} ({dt:.2f} s)")
+    print(f"check_contact_whirl (omega = 1.2): {e:.1e}  ({dt:.2f} s)")
 
-    print("\n== 3b. gravity g = 0.2: A(omega) + g = delta")
+    print("\n== 3b. g = 0.2: first contact, A(omega) + g = delta")
     og, dt = timed(contact_onsets, **GRAVITY)
-    print(f"omega = {og!r}; quoted 0.7876290735450562: difference {og[0] - 0.7876290735450562:.1e}")
-    xw = free_whirl(og[0] * (1 - 1e-4), **GRAVITY)
-    _, _, cr = flow(xw, og[0] * (1 - 1e-4), record=True, **GRAVITY)
-    print(f"free whirl at omega_c (1 - 1e-4) stays free: crossings {cr}")
+    print(f"omega_c = {og[0]!r} (quoted 0.7876290735450562, difference {og[0] - 0.7876290735450562:.1e}); "
+          f"second root {og[1]!r}")
+    for f in (1 - 1e-6, 1 + 1e-6):
+        cr = flow(free_whirl(og[0] * f, **GRAVITY), og[0] * f, record=True, **GRAVITY)[2]
+        print(f"free whirl at omega_c * {f}: {len(cr)} crossings of the circle")
 
-    print("\n== 5. friction mu = 0.1, contact onset")
+    print("\n== 5. mu = 0.1, g = 0: one-sided multipliers at the contact onset")
     om0 = contact_onsets(**FRICTION)[0]
-    print(f"onset omega = {om0!r} (the same as mu = 0: the free whirl does not see mu)")
+    print(f"onset omega = {om0!r} (mu does not enter the free whirl)")
     mf = free_multipliers(om0, **FRICTION)
-    print(f"free whirl multipliers: {mf}, moduli {np.abs(mf)} (= exp(-zeta T) = {np.exp(-0.05 * 2 * np.pi / om0)!r})")
+    print(f"free side: eig(expm(A T)) = {mf} (each double), modulus exp(-zeta T) = {np.exp(-0.05 * 2 * np.pi / om0)!r}")
     ml = contact_onset_limit(om0, **FRICTION)
-    print(f"contact-side limit R -> delta+: {ml}, moduli {np.abs(ml)}")
-    for eps in (1e-3, 1e-4, 1e-5):
+    print(f"contact side, R -> delta+: {ml}\n    moduli {np.abs(ml)}")
+    for eps in (1e-3, 1e-4, 1e-5, 1e-6):
         om = om0 + eps
-        roots = contact_whirl(om, **FRICTION)
-        for R, phi in roots:
-            xs = contact_whirl_state(om, R, phi)
-            (xn, mn, _), dt = timed(periodic_orbit, om, xs, **FRICTION)
-            mc = contact_whirl_multipliers(om, R, phi, **FRICTION)
-            print(f"omega = onset + {eps:g}: R - delta = {R - 1:.3e}, closed form {mc[:2]}, numerical {_sorted(mn)[-2:]}"
-                  f", diff {_mult_distance(mn, mc):.1e}, |to limit| {_mult_distance(mc, ml):.1e}  ({dt:.2f} s)")
-    for eps in (1e-3, 1e-4):
-        print(f"omega = onset - {eps:g}: contact whirls {contact_whirl(om0 - eps, **FRICTION)}")
+        R, phi = contact_whirl(om, **FRICTION)[0]
+        xs = contact_whirl_state(om, R, phi)
+        (xn, mn, _), dt = timed(periodic_orbit, om, xs, **FRICTION)
+        mc = contact_whirl_multipliers(om, R, phi, **FRICTION)
+        print(f"omega = onset + {eps:g}: R - delta = {R - 1:.3e}, largest {mc[0]:.8f}; closed form vs numerical "
+              f"{_mult_distance(mn, mc):.1e}; distance to the limit {_mult_distance(mc, ml):.1e}  ({dt:.2f} s)")
+    print(f"omega = onset - 1e-4: contact whirls {contact_whirl(om0 - 1e-4, **FRICTION)} (none: R > delta only above onset)")
 
-    print("\n== 4. period doublings of jeffcott_gravity's T-periodic branch")
-    res, dt = timed(gravity_period_doublings, (0, 1, 2, 3))
-    res2, dt2 = timed(gravity_period_doublings, (0, 1, 2, 3), rtol=1e-10, atol=1e-11)
-    quoted = (0.78766808, 0.79620991, 1.0026194, 1.0156318)
-    for (om, xs, m), (om2, _, _), q in zip(res, res2, quoted):
-        print(f"omega_PD = {om!r}  state {xs}  multipliers {m}; rtol 1e-10 gives {om2!r} (diff {om - om2:.1e}); "
-              f"quoted {q} (diff {om - q:.1e})")
-    print(f"time: {dt:.1f} s (rtol 1e-12), {dt2:.1f} s (rtol 1e-10)")
+    print("\n== 4. jeffcott_gravity: first two period doublings by natural-parameter stepping from first contact")
+    res, dt = timed(gravity_period_doublings, (0, 1))
+    res2, dt2 = timed(gravity_period_doublings, (0, 1), rtol=1e-10, atol=1e-11)
+    for (om, _, m), (om2, _, _), q in zip(res, res2, (0.78766808, 0.79620991)):
+        print(f"omega_PD = {om!r}  (rtol 1e-10: change {om - om2:.1e}; quoted {q}: difference {om - q:.1e})"
+              f"\n    multipliers {m}")
+    print(f"gravity_period_doublings: {dt:.1f} s (rtol 1e-12), {dt2:.1f} s (rtol 1e-10)")
+
+    print("\n== 4'. all special points along the branch (GRAVITY_POINTS, in branch order)")
+    for k, (kind, ref, tol) in enumerate(GRAVITY_REFERENCE):
+        (kd, om, m), dt = timed(gravity_point, k)
+        (_, om2, _), _ = timed(gravity_point, k, rtol=1e-10, atol=1e-11)
+        flag = "" if abs(om - ref) <= tol else "  <-- differs from GRAVITY_REFERENCE"
+        print(f"{k:2d} {kd:16s} omega = {om:.13f}  (rtol 1e-10 change {om - om2:+.1e}, bound {tol:.0e}; "
+              f"{dt:.1f} s){flag}\n    multipliers {np.round(m, 6)}")
+
+    if "--branch" in argv:
+        print("\n== pseudo-arclength continuation from first contact (gravity_branch)")
+        (pts, brackets), dt = timed(gravity_branch)
+        print(f"{len(pts)} points, {dt:.0f} s")
+        for kind, a, b in brackets:
+            print(f"  {kind:16s} between omega = {a:.10f} and {b:.10f}")
 
 
 if __name__ == "__main__":

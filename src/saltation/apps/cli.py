@@ -945,7 +945,12 @@ def cmd_continue(args: argparse.Namespace) -> int:
         else:
             branches += _asymmetric_branches(problem, cont.branch, settings)
         note = ""
-        if cont.branch.stop_reason is not None and cont.branch.stop_reason.name == "MIN_STEP" and not args.backward \
+        ended = [sp for sp in cont.branch.special_points
+                 if sp.index >= len(cont.branch.points) - 1 and sp.limits.value == "on_surface"]
+        if ended and cont.branch.stop_reason is not None and cont.branch.stop_reason.name == "MIN_STEP":
+            note = (f"the branch ended at a {ended[0].kind.value} at {args.param} = {ended[0].parameter:.10g}, where its "
+                    f"orbit lies on {ended[0].touch_surface} all round")
+        elif cont.branch.stop_reason is not None and cont.branch.stop_reason.name == "MIN_STEP" and not args.backward \
                 and args.equilibrium is None and args.segments == 1:
             try:
                 unstable, _fold = follow_through_discontinuous_fold(cont, settings=settings, progress=counter)

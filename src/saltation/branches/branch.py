@@ -94,6 +94,9 @@ class Limits(str, enum.Enum):
     EXTRAPOLATED = "extrapolated"
     #: a grazing: the grazing orbit's monodromy on the side that misses the surface
     GRAZING = "grazing"
+    #: an orbit that lies on a switching surface all round: the variational equation along it with its own
+    #: mode's Jacobian and with the Jacobian of the mode across the surface (:mod:`saltation.orbits.on_surface`)
+    ON_SURFACE = "on_surface"
 
     @classmethod
     def parse(cls, text: str) -> tuple[Limits, tuple[float, ...]]:

@@ -83,6 +83,24 @@ class Detector(Protocol):
         """
 
 
+    def at_failure(self, prev: Solution, failed: float) -> SpecialPoint | None:
+        """What stopped the corrector between ``prev`` and the parameter ``failed``, where nothing was passed.
+
+        Parameters
+        ----------
+        prev : Solution
+            The last point the corrector reached.
+        failed : float
+            A parameter value at which it failed.
+
+        Returns
+        -------
+        SpecialPoint or None
+            The special point that ends the branch there (an orbit that lies on a switching surface all
+            round, located between the last orbit and the first failure), or None.
+        """
+
+
 #: ``detector(problem, corrector, branch) -> Detector``: how the engine makes its detector.
 DetectorFactory = Callable[..., Detector]
 
@@ -296,6 +314,10 @@ class Continuation:
                     self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
                     return
                 self.branch.stop_reason = StopReason.MIN_STEP
+                ending = (detector.at_failure(prev, float(self.last_failure[-1]))
+                          if detector is not None and self.last_failure is not None else None)
+                if ending is not None:
+                    self.branch.special_points.append(replace(ending, index=len(self.branch.points) - 1))
                 if self.last_error is not None:
                     self.branch.stop_detail = (f"at {self.problem.lam_name} = {prev.lam:.10g}: "
                                                f"{type(self.last_error).__name__}: {self.last_error}")

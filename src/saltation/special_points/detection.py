@@ -97,8 +97,11 @@ def classify_nonsmooth(
     """Classify a non-smooth point from its one-sided monodromies.
 
     The eigenvalue paths of ``(1 - q) M- + q M+`` are followed for ``q`` in
-    ``[0, 1]``; the first non-trivial path whose magnitude passes 1 decides
-    the kind.  Monodromies computed in backward time are combined in backward
+    ``[0, 1]``.  Where the two sides have as many multipliers outside the unit circle, the first
+    non-trivial path whose magnitude passes 1 decides the kind; where they differ, the crossing that takes
+    a path out (or in) for good does: the last crossing of a path that ends outside, the first of one that
+    starts outside (a path that leaves through +1 and returns before a complex pair leaves does not make
+    the jump a fold).  Monodromies computed in backward time are combined in backward
     time (their eigenvalues are reciprocals of the forward multipliers, and
     the unit circle, +1 and -1 are the same).  When one side is infinitely
     unstable (a forward multiplier is infinite; ``M`` is then not available
@@ -160,16 +163,25 @@ def classify_nonsmooth(
     if autonomous:
         dev = np.max(np.abs(paths - 1.0), axis=0)
         trivial = int(np.argmin(dev)) if np.min(dev) < 1e-5 else -1
+    # where the number of multipliers outside the unit circle differs between the two sides, the kind is that
+    # of the crossing that takes a path out for good: the last crossing of a path outside at q = 1, the
+    # first of one outside at q = 0 (a path may leave through +1 and come back before a complex pair leaves
+    # for good: the jump is then a discontinuous Neimark-Sacker).  Otherwise the set's first crossing.
+    g_all = np.where(np.isfinite(mags), mags - 1.0, 1e300)
+    keep = [i for i in range(n) if i != trivial]
+    net = bool(keep) and int(np.sum(g_all[0, keep] > 0)) != int(np.sum(g_all[-1, keep] > 0))
     best = None
-    for i in range(n):
-        if i == trivial:
-            continue
-        g = mags[:, i] - 1.0
-        g = np.where(np.isfinite(g), g, 1e300)
+    for i in keep:
+        g = g_all[:, i]
         sign_change = np.nonzero(np.sign(g[:-1]) * np.sign(g[1:]) <= 0)[0]
         if sign_change.size == 0:
             continue
-        k = int(sign_change[0])
+        if net:
+            if (g[0] > 0) == (g[-1] > 0):
+                continue  # out and back (or in and out again): not what changes the count
+            k = int(sign_change[-1] if g[-1] > 0 else sign_change[0])
+        else:
+            k = int(sign_change[0])
         if g[k] == g[k + 1]:
             qc = float(sv.q[k])
         else:
@@ -328,7 +340,7 @@ class SpecialPointDetector:
                                                       lam)
                 except SaltationError:
                     continue
-                if len(cand.summary.event_labels) == len(prev.summary.event_labels):
+                if canonical_events(cand.summary.event_ids) == canonical_events(prev.summary.event_ids):
                     continue  # the same side again: not across the grazing
                 away = cand.z - z_graze
                 cand.tangent = self.corrector.tangent(cand, away / np.linalg.norm(away))
@@ -340,6 +352,78 @@ class SpecialPointDetector:
         return None
 
     # -- detection ------------------------------------------------------------------------
+    def at_failure(self, prev: Solution, failed: float) -> SpecialPoint | None:
+        """The end of a branch whose last orbit comes to lie on a switching surface all round.
+
+        The end is first bracketed in the parameter, between the last orbit the corrector reaches (from
+        ``prev``) and ``failed``, to the location tolerance.  If that orbit has no events and lies on a
+        surface over its whole period (:func:`~saltation.orbits.on_surface.orbit_on_surface`), the point is
+        classified by its one-sided limits there (``Limits.ON_SURFACE``): the variational equation along
+        it with its own mode's Jacobian (``M-``) and the Jacobian of the mode across the surface (``M+``).
+
+        Parameters
+        ----------
+        prev : Solution
+            The last point the corrector reached.
+        failed : float
+            A parameter value beyond it at which the corrector failed.
+
+        Returns
+        -------
+        SpecialPoint or None
+            A ``bracketed`` point between the last orbit and the first failure, or None for anything else
+            (a single-shooting problem over one period is needed).
+        """
+        from saltation.orbits.on_surface import monodromy_in_mode, orbit_on_surface
+
+        prob = self.problem
+        if self.equilibrium or not isinstance(prob, ShootingProblem) or prob.periods != 1 or prob.backward:
+            return None
+        good, bad = prev, float(failed)
+        sequence = canonical_events(prev.summary.event_ids)
+        for _ in range(60):
+            if abs(bad - good.lam) <= self.tol * (1.0 + abs(good.lam)):
+                break
+            mid = 0.5 * (good.lam + bad)
+            try:
+                cand = self.corrector.solve_fixed(good.u, mid)
+            except SaltationError:
+                bad = mid
+                continue
+            if canonical_events(cand.summary.event_ids) == sequence:
+                good = cand
+            else:  # another orbit (the corrector jumped across the end): not the branch's
+                bad = mid
+        n = prob.system.n
+        p = prob.parameters_at(good.lam)
+        T = prob.period_of(good.u, good.lam)
+        try:
+            traj = prob.flow.run(good.u[:n], prob.t0, prob.t0 + T, p, mode0=prob.mode0, variational=True,
+                                 dense=True, tolerances=prob.tolerances)
+        except SaltationError:
+            return None
+        on = orbit_on_surface(prob.flow, traj, p)
+        if on is None:
+            return None
+        m_minus = traj.monodromy
+        m_plus = monodromy_in_mode(prob.flow, traj, p, on.other_mode)
+        mu_minus = multipliers_from_monodromy(m_minus)
+        mu_plus = multipliers_from_monodromy(m_plus)
+        crossing = classify_nonsmooth(m_minus, m_plus, autonomous=self.autonomous, mu_minus=mu_minus, mu_plus=mu_plus)
+        lo_lam, hi_lam = sorted((good.lam, bad))
+        return SpecialPoint(
+            kind=crossing.kind, parameter=good.lam, bracket=(lo_lam, hi_lam), accuracy=hi_lam - lo_lam,
+            index=len(self.branch.points) - 1, state=good.summary.state, period=good.summary.period,
+            amplitude=good.summary.amplitude, multipliers_minus=mu_minus, multipliers_plus=mu_plus,
+            monodromy_minus=m_minus, monodromy_plus=m_plus, crossing_q=crossing.q, crossing_point=crossing.point,
+            event_labels_minus=good.summary.event_labels, limits=Limits.ON_SURFACE,
+            multipliers_accuracy=self._matrix_error(good), touch_surface=on.surface, touch_mode=on.mode,
+            note=(f"the orbit lies on {on.surface} all round (|h| <= {on.distance:.1e}) in mode {on.mode}; beyond it "
+                  f"the orbits lie in {on.other_mode}, where the corrector cannot follow them from this side: "
+                  f"one-sided limits from the variational equation along it with {on.mode}'s and {on.other_mode}'s "
+                  f"Jacobians"),
+        )
+
     def check(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
         """The special points between two consecutive branch points, in branch order.
 
