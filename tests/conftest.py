@@ -30,6 +30,23 @@ RISING, FALLING = Crossing.RISING, Crossing.FALLING
 TIGHT = Tolerances(rtol=1e-13, atol=1e-15)
 
 
+#: the models users wrote from the docs, beside the checkout (CI clones the repository with ../shared beside it)
+TRIAL_MODELS = Path(__file__).parents[2] / "shared" / "trial-models"
+
+
+def trial_model(name: str):
+    """The module ``../shared/trial-models/NAME.py`` (the test is skipped where it is not beside the checkout)."""
+    import importlib.util
+
+    path = TRIAL_MODELS / f"{name}.py"
+    if not path.exists():
+        pytest.skip(f"{path} is not beside the checkout")
+    spec = importlib.util.spec_from_file_location(f"trial_{name}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def oscillator_system() -> PiecewiseSystem:
     """``x'' = -w^2 x - g`` with a wall at ``x = a`` and a floor at ``x = 0``.
 

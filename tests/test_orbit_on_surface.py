@@ -24,9 +24,7 @@ closed form, classified from ``M-`` and ``M+``: without friction a jump without 
 
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -34,21 +32,17 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
+from conftest import trial_model
 from saltation import Flow
 from saltation.branches.branch import Limits, SpecialPointKind
 from saltation.branches.check import check_branch, unstable_count
 from saltation.orbits.shooting import ShootingProblem
 from saltation.special_points.continuation import ContinuationSettings, continue_branch
 
-TRIAL = Path(__file__).parents[2] / "shared" / "trial-models" / "jeffcott_snubber.py"
-pytestmark = pytest.mark.skipif(not TRIAL.exists(), reason="the trial models are beside the checkout (../shared)")
 
 
 def trial_module():
-    spec = importlib.util.spec_from_file_location("jeffcott_snubber_trial", TRIAL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return trial_model("jeffcott_snubber")
 
 
 def whirl_amplitude(q: dict, omega: float) -> complex:

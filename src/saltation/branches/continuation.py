@@ -259,12 +259,15 @@ class Continuation:
         detector = (self.detector_factory(self.problem, self.corrector, self.branch)
                     if s.detect and self.detector_factory is not None else None)
         ds = s.ds
+        tried_at, rephased = -1, False
         while True:
             if len(self.branch.points) >= s.max_points:
                 self.branch.stop_reason = StopReason.MAX_POINTS
                 return
             prev = self.solutions[-1]
             new = None
+            if len(self.solutions) != tried_at:  # a new point: it may be re-phased once
+                tried_at, rephased = len(self.solutions), False
             while ds >= s.ds_min:
                 z_pred = self._predict(ds)
                 if z_pred[-1] > hi or z_pred[-1] < lo:
@@ -302,6 +305,14 @@ class Continuation:
                     continue
                 new = cand
                 break
+            if new is None and ds < s.ds_min and not rephased:
+                # before giving up: the shooting state may have drifted onto an event (an autonomous orbit's
+                # phase moves from step to step); moved off every event along its orbit, the step is retried
+                moved = self._rephased(prev)
+                rephased = True
+                if moved is not None:
+                    ds = max(s.ds_min, min(s.ds, s.ds_max))
+                    continue
             jumped = None
             if new is None and detector is not None:
                 jumped = detector.past_failure(prev)
@@ -427,6 +438,41 @@ class Continuation:
             return False
         offset = prev.z + along * step - start.z
         return float(offset @ offset) <= 0.0025 * length2  # a gap of at most 5 % of the step
+
+    def _rephased(self, prev: Solution) -> Solution | None:
+        """``prev``'s orbit with its shooting state moved off the switching events (the middle of its longest
+        stretch between them, :meth:`~saltation.orbits.shooting.ShootingProblem.start_off_surfaces`),
+        corrected at the same parameter and put in ``prev``'s place; None where the problem cannot move its
+        state, the state is not near an event, or the moved state does not give the same orbit back."""
+        move = getattr(self.problem, "start_off_surfaces", None)
+        if move is None:
+            return None
+        try:
+            u = move(prev.u, prev.lam)
+        except SaltationError:
+            return None
+        if np.array_equal(u, prev.u):
+            return None
+        try:
+            self.problem.accept(u, prev.lam)
+            sol = self.corrector.solve_fixed(u, prev.lam)
+        except SaltationError:
+            self.problem.accept(prev.u, prev.lam)
+            return None
+        if canonical_events(sol.summary.event_ids) != canonical_events(prev.summary.event_ids):
+            self.problem.accept(prev.u, prev.lam)
+            return None
+        # the tangent oriented as before: along the same direction of the period and the parameter
+        n = self.problem.system.n
+        reference = np.zeros(len(sol.z))
+        reference[n:] = prev.tangent[n:]
+        if not np.any(reference):
+            reference[-1] = 1.0
+        sol.tangent = self.corrector.tangent(sol, reference)
+        sol.step = prev.step
+        self.problem.accept(sol.u, sol.lam)
+        self.solutions[-1] = sol
+        return sol
 
     def _accept(self, sol: Solution) -> None:
         self.problem.accept(sol.u, sol.lam)
