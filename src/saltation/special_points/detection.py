@@ -861,18 +861,48 @@ class SpecialPointDetector:
             meets = self._meets_symmetric_orbits(best, index)
             if meets is not None:
                 return meets
+        accuracy = float(np.linalg.norm(hi.z - lo.z))
+        note = ""
+        widen = self._parameter_error(a, b, lo, hi, kind, target)
+        if widen > 0.0:
+            # the integration's error moves the multipliers, and with them the point: the bracket holds it
+            bracket = (bracket[0] - widen, bracket[1] + widen)
+            note = (f"bracket widened by {widen:.1e} on each side for the multipliers' integration error "
+                    f"({max(self._matrix_error(lo), self._matrix_error(hi)):.1e}) over their rate of change")
         return SpecialPoint(
             kind=kind,
             parameter=best.lam,
             bracket=bracket,
-            accuracy=float(np.linalg.norm(hi.z - lo.z)),
+            accuracy=max(accuracy, bracket[1] - bracket[0]),
             index=index,
             state=best.summary.state,
             period=best.summary.period,
             amplitude=best.summary.amplitude,
             multipliers=best.summary.multipliers,
             multipliers_accuracy=multipliers_accuracy,
+            note=note,
         )
+
+    def _parameter_error(self, a: Solution, b: Solution, lo: Solution, hi: Solution, kind: SpecialPointKind,
+                         target: float | None) -> float:
+        """How far the integration's error can move a multiplier crossing in the parameter: the multipliers'
+        matrix error over the rate at which the critical multiplier's modulus crosses 1 across the step
+        (0 for a fold, whose test is the tangent, and for equilibria)."""
+        if self.equilibrium or kind is SpecialPointKind.FOLD or (target is None and kind is not SpecialPointKind.NEIMARK_SACKER):
+            return 0.0
+
+        def modulus(s: Solution) -> float:
+            mu = _nontrivial(s, self.autonomous)
+            if target is not None:
+                return abs(_nearest(mu, target))
+            fin = np.array(_finite(mu), dtype=complex)
+            cplx = fin[np.abs(fin.imag) > 1e-10 * (1.0 + np.abs(fin))]
+            return float(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))].__abs__()) if cplx.size else math.nan
+
+        span = abs(b.lam - a.lam)
+        slope = abs(modulus(b) - modulus(a)) / span if span > 0.0 else math.nan
+        error = max(self._matrix_error(lo), self._matrix_error(hi))
+        return float(error / slope) if slope > 0.0 and math.isfinite(slope) and math.isfinite(error) else 0.0
 
     def _hidden_corner(self, lo: Solution, hi: Solution, index: int) -> SpecialPoint:
         """A non-smooth point where the multipliers jump but the event sequence is the same on both sides
