@@ -76,3 +76,25 @@ def period_doubling(q: dict, lo: float = 1.6, hi: float = 1.8) -> float:
         return float(np.linalg.det(J + np.eye(2)))
 
     return brentq(test, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+
+
+def period_two_orbit(q: dict) -> np.ndarray:
+    """A point of the period-2 orbit born at the period doubling, where it attracts (just past a supercritical
+    doubling): the map iterated from the period-1 orbit moved along the eigenvector of its eigenvalue below -1,
+    then Newton on ``P(P(x)) = x``."""
+    x1, J = fixed_point(q)
+    w, V = np.linalg.eig(J)
+    k = int(np.argmin(w.real))
+    x = x1 + 1e-3 * np.real(V[:, k]) / np.linalg.norm(V[:, k])
+    for _ in range(2000):
+        x = strobe(q, x)[0]
+    for _ in range(60):
+        y1, J1 = strobe(q, x)
+        y2, J2 = strobe(q, y1)
+        dx = np.linalg.solve(J2 @ J1 - np.eye(2), -(y2 - x))
+        x = x + dx
+        if np.linalg.norm(dx) <= 1e-14 * (1.0 + np.linalg.norm(x)):
+            break
+    if np.linalg.norm(x - x1) < 1e-6:
+        raise ValueError("Newton went back to the period-1 orbit")
+    return x

@@ -61,3 +61,23 @@ def test_the_converter_branch_reaches_its_lower_bound():
     assert branch.stop_reason is StopReason.PARAMETER_BOUND
     assert branch.points[-1].parameter == pytest.approx(0.8, abs=1e-12)
     assert check_branch(branch).ok
+
+
+def test_the_period_two_branch_ends_at_the_period_doubling_it_was_born_at():
+    """Followed back to where it was born, the branch of period-2 orbits meets the period-1 orbits run twice: its
+    multiplier +1 is the square of their -1, and the turning point the fold test sees there is poorly located
+    (8.8e-8 off, the branch being a parabola).  It is the period doubling, located on the half-period orbits."""
+    flow = Flow(trial_model("boost_current_mode").boost())
+    q = dict(flow.system.defaults, I_ref=1.8)
+    x = reference.period_two_orbit(q)
+    problem = ShootingProblem(flow, {"I_ref": 1.8}, continuation_parameter="I_ref")
+    branch = continue_branch(problem, problem.pack(np.array([x[0], x[1], 0.0, 1.0]), 2.0), 1.8,
+                             settings=ContinuationSettings(bounds=(1.6, 1.8)), directions=(-1,))
+    assert branch.points[0].period == pytest.approx(2.0, abs=1e-9)
+    assert check_branch(branch).ok
+    kinds = [sp.kind for sp in branch.special_points]
+    assert kinds == [SpecialPointKind.PERIOD_DOUBLING]
+    (pd,) = branch.special_points
+    assert abs(pd.parameter - reference.period_doubling(dict(q, I_ref=1.7))) <= pd.accuracy + 1e-13
+    assert pd.period == pytest.approx(1.0, abs=1e-9)
+    assert min(abs(np.asarray(pd.multipliers) + 1.0)) <= 1e-8

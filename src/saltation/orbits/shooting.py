@@ -604,7 +604,10 @@ class ShootingProblem:
             return u
         times = [abs(e.t - self.t0) for e in traj.events]
         margin = SEAM_MARGIN * T
-        if not times or (min(times[0], T - times[-1]) >= margin and self._time_to_surfaces(x0, p) >= margin):
+        # the period's end counts as its start: a state whose flow reaches a surface right at the end of the
+        # period (the image of a reset there, as a clock's phase 0) sits on the seam too
+        if not times or (min(times[0], T - times[-1]) >= margin and self._time_to_surfaces(x0, p) >= margin
+                         and self._time_to_surfaces(traj.x1, p) >= margin):
             return u
         stretches = []  # (length, middle, mode) of each stretch between events that is not a sliding motion
         sliding, mode = False, traj.mode0

@@ -861,6 +861,10 @@ class SpecialPointDetector:
             meets = self._meets_symmetric_orbits(best, index)
             if meets is not None:
                 return meets
+        if kind in (SpecialPointKind.FOLD, SpecialPointKind.BRANCH_POINT):
+            doubling = self._period_doubling_of_half(best, index)
+            if doubling is not None:
+                return doubling
         accuracy = float(np.linalg.norm(hi.z - lo.z))
         note = ""
         widen = self._parameter_error(a, b, lo, hi, kind, target)
@@ -881,6 +885,83 @@ class SpecialPointDetector:
             multipliers=best.summary.multipliers,
             multipliers_accuracy=multipliers_accuracy,
             note=note,
+        )
+
+    def _period_doubling_of_half(self, best: Solution, index: int) -> SpecialPoint | None:
+        """The period doubling of the orbits of half the period, where a branch of orbits of twice their period
+        meets them (its orbit's multiplier +1 is the square of their -1): the end of a period-doubled branch,
+        which the fold and branch-point tests see as a turning point or a crossing, located poorly (the branch is
+        a parabola there).  None where ``best``'s orbit does not close after half its period (to 1e-3 of its
+        size: near the point the doubled orbits differ from the repeated ones like the square root of the
+        distance), or no period doubling of the half-period orbits lies within 1e-4 of it.
+
+        The point is located by brentq on ``prod(mu + 1)`` of the half-period orbits (Newton at each parameter).
+        """
+        prob = self.problem
+        if self.equilibrium or not isinstance(prob, ShootingProblem):
+            return None
+        n = prob.system.n
+        x0 = np.asarray(best.u[:n], dtype=float)
+        if prob.autonomous:
+            half = prob
+            T_half = 0.5 * float(best.u[n])
+        elif prob.periods % 2 == 0:
+            half = ShootingProblem(prob.flow, prob.p, continuation_parameter=prob.lam_name, backward=prob.backward,
+                                   t0=prob.t0, tolerances=prob.tolerances, periods=prob.periods // 2, mode0=prob.mode0)
+            T_half = half.period_of(half.pack(x0, None), best.lam)
+        else:
+            return None
+        p = prob.parameters_at(best.lam)
+        try:
+            run = prob.flow.run(x0, prob.t0, prob.t0 + prob.sign * T_half, p, mode0=prob.mode0, tolerances=prob.tolerances)
+        except SaltationError:
+            return None
+        scale = 1.0 + float(np.max(np.abs(x0)))
+        if not float(np.max(np.abs(run.x1 - x0))) <= 1e-3 * scale:
+            return None
+        cache: dict[float, object] = {}
+
+        def half_orbit(lam: float):
+            if lam not in cache:
+                guess = half.pack(x0, T_half if half.autonomous else None)
+                cache[lam] = half.solve(guess, lam)
+            return cache[lam]
+
+        def flip(lam: float) -> float:
+            orbit = half_orbit(lam)
+            mu = np.asarray(orbit.multipliers, dtype=complex)
+            if half.autonomous and mu.size:
+                mu = np.delete(mu, int(np.argmin(np.where(np.isfinite(mu), np.abs(mu - 1.0), np.inf))))
+            return _flip_test(mu)
+
+        lam0 = best.lam
+        try:
+            for width in (1e-7, 1e-6, 1e-5, 1e-4):
+                w = width * (1.0 + abs(lam0))
+                lo_lam, hi_lam = lam0 - w, lam0 + w
+                if _crosses(flip(lo_lam), flip(hi_lam)):
+                    break
+            else:
+                return None
+            from scipy.optimize import brentq
+
+            lam_pd = brentq(flip, lo_lam, hi_lam, xtol=self.tol * 1e-3, rtol=4 * np.finfo(float).eps)
+            orbit = half_orbit(lam_pd)
+        except (SaltationError, ValueError):
+            return None
+        mu = np.asarray(orbit.multipliers, dtype=complex)
+        step = abs(hi_lam - lo_lam)
+        half_width = max(self.tol * 1e-3, 4 * np.finfo(float).eps * abs(lam_pd))
+        bracket = (float(lam_pd - half_width), float(lam_pd + half_width))
+        return SpecialPoint(
+            kind=SpecialPointKind.PERIOD_DOUBLING, parameter=float(lam_pd),
+            bracket=bracket, accuracy=bracket[1] - bracket[0], index=index,
+            state=np.asarray(orbit.state0, dtype=float), period=float(orbit.period),
+            amplitude=float(getattr(orbit, "amplitude", best.summary.amplitude)), multipliers=mu,
+            multipliers_accuracy=self._matrix_error(best),
+            note=(f"the branch's orbits of period {2 * T_half:.10g} meet the repeated orbits of period {T_half:.10g} "
+                  f"here, whose multiplier passes -1 (its square is this branch's +1): located by brentq on the "
+                  f"half-period orbits within {step:.1e} of the turning point seen at {lam0:.10g}"),
         )
 
     def _parameter_error(self, a: Solution, b: Solution, lo: Solution, hi: Solution, kind: SpecialPointKind,
