@@ -55,3 +55,39 @@ def test_every_special_point_of_the_rotor_with_gravity(ds_max):
     for sp, (kind, omega, bound) in zip(rest, reference.GRAVITY_REFERENCE):
         assert sp.kind in KINDS[kind], (sp, kind, omega)
         assert abs(sp.parameter - omega) <= sp.accuracy + bound, (sp, kind, omega)
+
+
+def test_the_first_contact_continued_in_gravity_against_its_closed_form(capsys):
+    """``saltation locus --kind grazing`` from the first contact: the touched transition is the free mode's (the
+    one the orbit does not cross), whatever rounding leaves at the touch (it used to pick contact -> free on the
+    last digit of omega, and the curve could not start).  On the curve, ``|Z(omega)| + g = delta``."""
+    import json
+
+    from saltation.apps import cli
+
+    model = f"{trial_model('jeffcott_snubber').__file__}:jeffcott_gravity"
+    status = cli.main(["locus", model, "--kind", "grazing", "--param", "omega", "--range", "0.7,0.8", "--param2", "g",
+                       "--range2", "0.1,0.3", "--json", "--no-progress", "--ds-max", "0.05"])
+    assert status == 0
+    record = json.loads(capsys.readouterr().out)
+    (curve,) = record["curves"]
+    points = np.array(curve["points"])
+    assert len(points) > 5 and np.ptp(points[:, 1]) > 0.1
+    q = dict(reference.GRAVITY)
+    for omega, g in points:
+        z = q["rho"] * omega**2 / (1.0 - omega**2 + 2j * q["zeta"] * omega)
+        # the defining system is solved to the corrector's tolerance (1e-10) on a state of size 1
+        assert abs(z) + g - q["delta"] == pytest.approx(0.0, abs=1e-8)
+
+
+def test_a_locus_whose_branch_stops_short_says_so(capsys):
+    """No fold reached because the branch stopped at --max-points: an error that says where and why, not an
+    empty list of curves with exit status 0."""
+    from saltation.apps import cli
+
+    model = f"{trial_model('jeffcott_snubber').__file__}:jeffcott_gravity"
+    status = cli.main(["locus", model, "--kind", "fold", "--param", "omega", "--range", "0.7,1.0", "--param2", "g",
+                       "--range2", "0.1,0.3", "--json", "--no-progress", "--max-points", "20"])
+    assert status == 1
+    err = capsys.readouterr().err
+    assert "no fold point" in err and "maximum number of points" in err and "--max-points" in err

@@ -887,7 +887,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
     """``saltation continue``: follow one branch of a shipped model and write its data and plot."""
     from saltation.output import io
     from saltation.output import plotting
-    from saltation.special_points.continuation import Continuation, ContinuationSettings
+    from saltation.special_points.continuation import Continuation
     from saltation.apps.diagram import distinct_special_points, follow_through_discontinuous_fold
     from saltation.orbits.shooting import EquilibriumProblem
 
@@ -898,10 +898,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
     start, stop = float(args.start), float(args.stop)
     if start == stop:
         raise UsageError(f"--from and --to must differ, got {_fmt(start)} twice")
-    if args.ds is not None and args.ds > args.ds_max:
-        raise UsageError(f"--ds {_fmt(args.ds)} exceeds --ds-max {_fmt(args.ds_max)}: the first step cannot be "
-                         "longer than the largest")
-    ds = min(0.01, args.ds_max) if args.ds is None else args.ds
+    settings = _step_settings(args, (start, stop))
     if args.equilibrium is not None:
         check_equilibrium_option(args, system)
     check_mode0(args, system)
@@ -915,10 +912,6 @@ def cmd_continue(args: argparse.Namespace) -> int:
     flow = make_flow(system)
     p = flow.parameters(overrides)
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
-    settings = ContinuationSettings(
-        ds=ds, ds_max=args.ds_max, bounds=(min(start, stop), max(start, stop)), max_points=args.max_points,
-        ds_min=MIN_STEP,
-    )
     direction = 1 if stop > start else -1
     update, close = _progress_bar(not args.no_progress)
     counter = (lambda point: update(f"{args.model}: {args.param}", 0)) if update else None
@@ -1119,12 +1112,7 @@ def _add_continue_parser(sub) -> None:
                    "(autonomous models); sliding:SURFACE continues the pseudo-equilibria of the sliding motion on "
                    "that surface")
     p.add_argument("--out", metavar="DIR", default=".", help="output directory (default: the current one)")
-    p.add_argument("--ds", metavar="S", type=_positive("--ds", MIN_STEP, " (the smallest step of a continuation)"),
-                   default=None, help="initial arclength step, at most --ds-max (default 0.01, or --ds-max if smaller)")
-    p.add_argument("--ds-max", metavar="S", type=_positive("--ds-max", MIN_STEP, " (the smallest step of a continuation)"),
-                   default=0.02, help="largest step (default 0.02)")
-    p.add_argument("--max-points", metavar="N", type=_integer("--max-points", 1), default=2000,
-                   help="largest number of points, a positive integer (default 2000)")
+    _add_step_options(p)
     p.add_argument(
         "--segments", metavar="M", type=_integer("--segments", 1), default=1,
         help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
@@ -1155,7 +1143,7 @@ def cmd_locus(args: argparse.Namespace) -> int:
     """``saltation locus``: continue the special points of one kind of a branch in a second parameter."""
     from saltation.output import plotting
     from saltation.branches.branch import SpecialPointKind
-    from saltation.special_points.continuation import Continuation, ContinuationSettings
+    from saltation.special_points.continuation import Continuation
     from saltation.output.io import write_json
     from saltation.special_points.loci import follow_locus
 
@@ -1190,7 +1178,7 @@ def cmd_locus(args: argparse.Namespace) -> int:
     if not lo2 <= p[system.parameter_index(args.param2)] <= hi2 and not hi2 <= p[system.parameter_index(args.param2)] <= lo2:
         raise UsageError(f"the value of {args.param2} ({p[system.parameter_index(args.param2)]:g}) lies outside --range2")
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
-    settings = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(min(start, stop), max(start, stop)))
+    settings = _step_settings(args, (start, stop))
     update, close = _progress_bar(not args.no_progress)
     counter = (lambda point: update(f"{args.model}: {args.param}", 0)) if update else None
     try:
@@ -1202,7 +1190,7 @@ def cmd_locus(args: argparse.Namespace) -> int:
         for point in cont.run(u0, start, direction=1 if stop > start else -1):
             if counter:
                 counter(point)
-        curve_settings = ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(min(lo2, hi2), max(lo2, hi2)))
+        curve_settings = _step_settings(args, (lo2, hi2))
         counter2 = (lambda point: update(f"{args.model}: {kind.value} over {args.param2}", 0)) if update else None
         if args.equilibrium is not None:
             from saltation.special_points.boundary_equilibria import (
@@ -1217,6 +1205,14 @@ def cmd_locus(args: argparse.Namespace) -> int:
                     for sp in find(problem, cont.branch)]
         else:
             points = [sp for sp in cont.branch.special_points if sp.kind is kind]
+            reason = cont.branch.stop_reason
+            if not points and reason is not None and reason.name != "PARAMETER_BOUND":
+                found = ", ".join(f"{sp.kind.value} at {sp.parameter:.8g}" for sp in cont.branch.special_points) or "none"
+                detail = f" ({cont.branch.stop_detail})" if cont.branch.stop_detail else ""
+                raise SaltationError(
+                    f"no {kind.value} point on the branch of {system.name}: it stopped at {args.param} = "
+                    f"{cont.branch.points[-1].parameter:.10g} before the end of --range ({reason.value}{detail}); "
+                    f"special points found: {found}. Try a larger --max-points, another --ds-max or --range")
             # with --segments the curves' defining systems shoot by segments too
             loci = [follow_locus(problem, sp, args.param2, curve_settings.bounds, settings=curve_settings,
                                  progress=counter2)
@@ -1245,6 +1241,28 @@ def cmd_locus(args: argparse.Namespace) -> int:
         if args.out is not None:
             print(f"written to {stem}.json (.png, .pdf)")
     return 0
+
+
+def _add_step_options(p, what: str = "") -> None:
+    """``--ds``, ``--ds-max`` and ``--max-points`` (of the branch, and of each curve where ``what`` says so)."""
+    p.add_argument("--ds", metavar="S", type=_positive("--ds", MIN_STEP, " (the smallest step of a continuation)"),
+                   default=None, help=f"initial arclength step{what}, at most --ds-max (default 0.01, or --ds-max if smaller)")
+    p.add_argument("--ds-max", metavar="S", type=_positive("--ds-max", MIN_STEP, " (the smallest step of a continuation)"),
+                   default=0.02, help=f"largest step{what} (default 0.02)")
+    p.add_argument("--max-points", metavar="N", type=_integer("--max-points", 1), default=2000,
+                   help=f"largest number of points{what}, a positive integer (default 2000)")
+
+
+def _step_settings(args, bounds: tuple[float, float]):
+    """The continuation settings of ``--ds``, ``--ds-max`` and ``--max-points`` over ``bounds``."""
+    from saltation.special_points.continuation import ContinuationSettings
+
+    if args.ds is not None and args.ds > args.ds_max:
+        raise UsageError(f"--ds {_fmt(args.ds)} exceeds --ds-max {_fmt(args.ds_max)}: the first step cannot be "
+                         "longer than the largest")
+    ds = min(0.01, args.ds_max) if args.ds is None else args.ds
+    return ContinuationSettings(ds=ds, ds_max=args.ds_max, bounds=(min(bounds), max(bounds)),
+                                max_points=args.max_points, ds_min=MIN_STEP)
 
 
 def _add_locus_parser(sub) -> None:
@@ -1287,6 +1305,7 @@ def _add_locus_parser(sub) -> None:
                    help="with --kind boundary_equilibrium: the branch is of this mode's equilibria (or, as "
                    "sliding:SURFACE, of the pseudo-equilibria on that surface), and its boundary equilibria are "
                    "continued by the mode's equilibrium plus h = 0")
+    _add_step_options(p, " of the branch and of each curve")
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(handler=cmd_locus)
 

@@ -461,7 +461,7 @@ def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_
     """
     system = flow.system
     t, x = traj.sample(16)
-    events = traj.events
+    events = _without_grazing_visits(traj)
     modes = np.full(t.shape, system.mode_index(traj.mode0))
     for e in events:
         after = (t > e.t) if traj.t1 >= traj.t0 else (t < e.t)
@@ -486,7 +486,8 @@ def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_
             if modes[i] != src:
                 continue
             extremum = (h[i] >= h[i - 1] and h[i] >= h[i + 1]) if sign >= 0 else (h[i] <= h[i - 1] and h[i] <= h[i + 1])
-            approaching_from_other_side = h[i] * sign < 0 if sign != 0 else True
+            # from the side it would cross from, or on the surface to rounding (a grazing orbit itself)
+            approaching_from_other_side = (h[i] * sign < 0 or abs(h[i]) <= 1e-9 * rng) if sign != 0 else True
             if not (extremum and approaching_from_other_side and abs(h[i]) <= relative_gap * rng):
                 continue
             gap = abs(h[i]) / rng
@@ -501,6 +502,24 @@ def grazing_candidates(flow: Flow, traj: Trajectory, p: np.ndarray, *, relative_
         if best is not None:
             found.append(best)
     return [(k, t_k) for _, k, t_k in sorted(found, key=lambda c: c[0])]
+
+
+def _without_grazing_visits(traj: Trajectory) -> list:
+    """The trajectory's events without the visits to another mode that last no more than ``1e-9`` of the
+    trajectory's span and return to the mode they left: at a grazing, rounding decides whether the integration
+    records such a visit across the surface touched, and the orbit is in the mode it does not leave."""
+    events = list(traj.events)
+    span = abs(traj.t1 - traj.t0)
+    out, k = [], 0
+    while k < len(events):
+        e = events[k]
+        if (k + 1 < len(events) and abs(events[k + 1].t - e.t) <= 1e-9 * span
+                and events[k + 1].mode_to == e.mode_from and e.surface == events[k + 1].surface):
+            k += 2
+            continue
+        out.append(e)
+        k += 1
+    return out
 
 
 def growth_exponent(distances: np.ndarray, magnitudes: np.ndarray) -> float:
