@@ -81,3 +81,21 @@ def test_the_period_two_branch_ends_at_the_period_doubling_it_was_born_at():
     assert abs(pd.parameter - reference.period_doubling(dict(q, I_ref=1.7))) <= pd.accuracy + 1e-13
     assert pd.period == pytest.approx(1.0, abs=1e-9)
     assert min(abs(np.asarray(pd.multipliers) + 1.0)) <= 1e-8
+
+
+def test_multiple_shooting_moves_its_nodes_off_the_clock():
+    """With four segments a node drifts onto the clock's reset (the corrector failed at 1.78838): the nodes are
+    moved together along the orbit, off every event, and the branch goes on through its period doubling."""
+    from saltation.orbits.shooting import MultipleShootingProblem
+
+    flow = Flow(trial_model("boost_current_mode").boost())
+    q = dict(flow.system.defaults)
+    x, _ = reference.fixed_point(dict(q, I_ref=1.5))
+    single = ShootingProblem(flow, {"I_ref": 1.5}, continuation_parameter="I_ref")
+    problem = MultipleShootingProblem(single, 4)
+    U0 = problem.pack(single.pack(np.array([x[0], x[1], 0.0, 1.0]), 1.0), 1.5)
+    branch = continue_branch(problem, U0, 1.5, settings=ContinuationSettings(bounds=(1.5, 2.0)), directions=(1,))
+    assert branch.stop_reason is StopReason.PARAMETER_BOUND
+    assert check_branch(branch).ok
+    (pd,) = [sp for sp in branch.special_points if sp.kind is SpecialPointKind.PERIOD_DOUBLING]
+    assert abs(pd.parameter - reference.period_doubling(q)) <= pd.accuracy + 1e-13

@@ -1654,6 +1654,60 @@ class MultipleShootingProblem:
         U = np.concatenate(nodes)
         return np.append(U, T) if prob.autonomous else U
 
+    def start_off_surfaces(self, U: np.ndarray, lam: float | None = None) -> np.ndarray:
+        """Nodes of an autonomous orbit moved together along it, so that none lies near a switching event.
+
+        The nodes sit at the fractions ``i / m`` of the period from the first: a node on an event (a clock's
+        reset) makes the matching condition jump.  All nodes are moved by the same time ``s`` along the orbit,
+        the ``s`` in ``[0, T / m)`` that keeps them farthest (in time, modulo the period) from every event of
+        the period, if the nodes lie within :data:`SEAM_MARGIN` of the period of one now.
+
+        Parameters
+        ----------
+        U : ndarray
+            The nodes ``(x_1, ..., x_m, T)``.
+        lam : float, optional
+            Value of the continuation parameter.
+
+        Returns
+        -------
+        ndarray
+            The nodes, moved or not (a forced model's, or an orbit that cannot be integrated, as they are).
+        """
+        prob = self.problem
+        if not prob.autonomous:
+            return U
+        T = float(U[-1])
+        if not (T > 0 and math.isfinite(T)):
+            return U
+        p = prob.parameters_at(lam)
+        x0 = np.asarray(U[: self.n], dtype=float)
+        try:
+            traj = prob.flow.run(x0, prob.t0, prob.t0 + prob.sign * T, p, mode0=prob.mode0, tolerances=prob.tolerances)
+        except SaltationError:
+            return U
+        events = np.array([abs(e.t - prob.t0) for e in traj.events] + [0.0])  # the period's seam is one too
+        offsets = T * np.arange(self.segments) / self.segments
+
+        def clearance(shift: float) -> float:
+            d = np.abs(((offsets[:, None] + shift - events[None, :]) + 0.5 * T) % T - 0.5 * T)
+            return float(d.min())
+
+        margin = SEAM_MARGIN * T
+        if clearance(0.0) >= margin:
+            return U
+        shifts = np.linspace(0.0, T / self.segments, 201)[:-1]
+        best = max(shifts, key=clearance)
+        if clearance(best) <= clearance(0.0):
+            return U
+        try:
+            moved = prob.flow.run(x0, prob.t0, prob.t0 + prob.sign * best, p, mode0=prob.mode0, tolerances=prob.tolerances)
+            if prob.mode0 is not None:
+                prob.mode0 = moved.mode1
+            return self.pack(np.append(moved.x1, T), lam)
+        except SaltationError:
+            return U
+
     def shoot(self, U: np.ndarray, lam: float | None = None, sensitivity: int = -1) -> list[Trajectory]:
         """The segments from the nodes of ``U``, each with its transfer matrix.
 
