@@ -61,11 +61,15 @@ def _two_panels(width: float = 10.0, height: float = 4.0):
     return fig, fig.subplots(1, 2)
 
 
-def _records(branch):
+def _records(*branches):
+    """The special points of the branches, each once (a period-2 branch starts with the period doubling it
+    was born at, which its parent branch holds too)."""
+    from saltation.apps.diagram import distinct_special_points
+
     return [
-        {"kind": sp.kind.value, "parameter": branch.parameter_name, "value": float(sp.parameter),
+        {"kind": sp.kind.value, "parameter": branches[0].parameter_name, "value": float(sp.parameter),
          "accuracy": float(sp.accuracy)}
-        for sp in branch.special_points
+        for sp in distinct_special_points(branches)
     ]
 
 
@@ -137,7 +141,7 @@ def figure_bouncing_ball():
     ax2.set_ylabel("A at the period doubling")
     ax2.set_title("period-doubling curve in (e, A)")
     ax2.legend(fontsize="small")
-    return fig, _records(branch) + _records(doubled)
+    return fig, _records(branch, doubled)
 
 
 def figure_friction_oscillator():
@@ -262,7 +266,7 @@ def figure_two_mass_stops():
     ax1.set_title("from free motion to contact with both stops")
     plot_response(zoom, ax2, state_name="x_1", xlabel="forcing amplitude F")
     ax2.set_title("near the onset of contact with stop 2 (small steps)")
-    return fig, _records(branch) + _records(zoom)
+    return fig, _records(branch, zoom)
 
 
 def figure_tilted_relay():

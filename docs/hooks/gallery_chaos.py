@@ -113,11 +113,15 @@ def doubling_branches():
     return branches
 
 
-def _records(branch):
+def _records(branches):
+    """The special points of the branches, each once (a period-2 branch starts with the period doubling it
+    was born at, which its parent branch holds too)."""
+    from saltation.apps.diagram import distinct_special_points
+
+    name = branches[0].parameter_name if branches else ""
     return [
-        {"kind": sp.kind.value, "parameter": branch.parameter_name, "value": float(sp.parameter),
-         "accuracy": float(sp.accuracy)}
-        for sp in branch.special_points
+        {"kind": sp.kind.value, "parameter": name, "value": float(sp.parameter), "accuracy": float(sp.accuracy)}
+        for sp in distinct_special_points(branches)
     ]
 
 
@@ -187,7 +191,7 @@ def figure_impact_chaos(omega=None, r=None, sweep_omega=None):
     pmap = chaos_map(omega, r)
     sweep = chaos_sweep(sweep_omega)
     branches = doubling_branches()
-    return draw(pmap, sweep, branches), [rec for b in branches for rec in _records(b)]
+    return draw(pmap, sweep, branches), _records(branches)
 
 
 if __name__ == "__main__":  # by hand: python docs/hooks/gallery_chaos.py OUT.png
