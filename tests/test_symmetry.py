@@ -383,3 +383,26 @@ def test_a_symmetry_breaking_that_cannot_be_located_is_reported_as_failed(tri_fl
     assert sp.kind is SpecialPointKind.SYMMETRY_BREAKING and sp.status == "failed"
     assert sp.bracket[0] < 0.8331698679 < sp.bracket[1]
     assert "no symmetric orbit (test)" in sp.note
+
+
+def test_a_symmetry_whose_guards_differ_is_refused():
+    """The impact oscillator between two stops, its right stop guarded by ``v > 10`` (it never acts at these
+    speeds): the mirror image of an orbit that bounces off the left stop passes the right one, so the model is
+    not symmetric, and declaring it so is refused, naming the transition (it used to be accepted, and its grazing
+    labelled a discontinuous symmetry breaking)."""
+    from saltation import Crossing, Transition
+    from saltation.models.symmetric_impact_oscillator import DEFAULTS
+
+    def model(guard):
+        return PiecewiseSystem(
+            name="guarded_stops", states=["x", "v"], parameters=dict(DEFAULTS),
+            modes=[Mode("free", ["v", "-2*zeta*v - x + f0*cos(omega*t)"])],
+            surfaces={"right": "x - d", "left": "x + d"},
+            transitions=[Transition("free", "right", Crossing.RISING, "free", reset=["x", "-r*v"], guard=guard),
+                         Transition("free", "left", Crossing.FALLING, "free", reset=["x", "-r*v"])],
+            period="2*pi/omega", symmetry=Symmetry.of_signs([-1, -1]),
+        )
+
+    with pytest.raises(ModelError, match=r"transition 0 \(free -\[right\+\]-> free\) has no mirror image.*guard"):
+        model(["v - 10 > 0"])
+    assert model([]).symmetry is not None  # the same model without the guard is symmetric

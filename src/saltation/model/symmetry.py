@@ -136,6 +136,31 @@ def _evaluator(system, key: str, exprs: Sequence[sp.Expr], values: np.ndarray):
     return evaluate
 
 
+def _guard(system, k: int, values: np.ndarray):
+    """``guard(x, t) -> (holds, decisive)`` of transition ``k`` over samples: whether every condition of its
+    guard holds, and where that is decided beyond rounding (no condition within ``1e-9`` of its boundary)."""
+    conditions = system.guards[k]
+    if not conditions:
+        return lambda X, t: (np.ones(len(t), dtype=bool), np.ones(len(t), dtype=bool))
+    evaluate = _evaluator(system, f"guard {k}", [c.expr for c in conditions], values)
+
+    def truth(X: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        v = evaluate(X, t)  # (samples, conditions)
+        holds = np.ones(len(t), dtype=bool)
+        for i, c in enumerate(conditions):
+            holds &= (v[:, i] > 0.0) if c.strict else (v[:, i] >= 0.0)
+        decisive = np.all(np.abs(v) > 1e-9 * (1.0 + np.abs(v)), axis=1) & np.all(np.isfinite(v), axis=1)
+        return holds, decisive
+
+    return truth
+
+
+def _same_guard(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray]) -> bool:
+    """Two guards hold at the same samples (where both are decided)."""
+    decisive = a[1] & b[1]
+    return bool(np.array_equal(a[0][decisive], b[0][decisive]))
+
+
 def _close(a: np.ndarray, b: np.ndarray) -> bool:
     ok = np.isfinite(a) & np.isfinite(b)
     if not ok.any():
@@ -151,7 +176,8 @@ def check_symmetry(system, symmetry: Symmetry, parameters: np.ndarray | None = N
     mode ``m'`` with ``f_m'(s, y) = S f_m(t, x)``; for every surface ``j`` a surface ``j'`` with
     ``h_j'(s, y) = +-h_j(t, x)``; and for every transition a transition between the image modes, on the
     image surface, in the same direction of crossing (reversed where the indicator changes sign), whose
-    reset satisfies ``g'(s, y) = S g(t, x)``.  Each is compared at random states and times and at the
+    reset satisfies ``g'(s, y) = S g(t, x)`` and whose guard holds at ``(s, y)`` where the transition's
+    holds at ``(t, x)``.  Each is compared at random states and times and at the
     model's default parameters.
 
     Parameters
@@ -224,6 +250,7 @@ def check_symmetry(system, symmetry: Symmetry, parameters: np.ndarray | None = N
     surface_index = {name: j for j, name in enumerate(system.surface_names)}
     resets = [None if g is None else _evaluator(system, f"reset {k}", list(g), values)
               for k, g in enumerate(system.resets)]
+    guards = [_guard(system, k, values) for k in range(len(system.transitions))]
     for k, tr in enumerate(system.transitions):
         j = surface_index[tr.surface]
         want = (modes[index[tr.source]], surfaces[j], int(tr.direction) * signs[j], modes[index[tr.target]])
@@ -236,14 +263,14 @@ def check_symmetry(system, symmetry: Symmetry, parameters: np.ndarray | None = N
                 resets[k] is not None and resets[k2] is not None
                 and _close(resets[k2](Y, s), resets[k](X, t) @ S.T)
             )
-            if same_reset:
+            if same_reset and _same_guard(guards[k](X, t), guards[k2](Y, s)):
                 mirror = k2
                 break
         if mirror is None:
             raise ModelError(f"model {system.name!r} does not have its declared symmetry: transition {k} "
                              f"({tr.label}) has no mirror image (a transition from mode "
                              f"{system.mode_names[want[0]]!r} on surface {system.surface_names[want[1]]!r} to mode "
-                             f"{system.mode_names[want[3]]!r} with the mirrored direction and reset)")
+                             f"{system.mode_names[want[3]]!r} with the mirrored direction, reset and guard)")
     return SymmetryMap(tuple(modes), tuple(surfaces), tuple(signs))
 
 
