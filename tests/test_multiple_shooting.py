@@ -201,3 +201,22 @@ def test_the_command_line_shoots_with_segments(capsys):
     assert (single["segments"], multiple["segments"]) == (1, 3)
     np.testing.assert_allclose(multiple["state0"], single["state0"], atol=1e-9)
     np.testing.assert_allclose(multiple["multipliers"], single["multipliers"], atol=1e-9)
+
+
+@pytest.mark.parametrize("segments", [3, 4, 6, 8])
+def test_stick_slip_orbits_by_multiple_shooting_match_single_shooting(belt_flow, segments):
+    """A node inside the stick phase moves with the stick phase's own field: the flow-direction check of an
+    autonomous orbit takes each node's velocity from the segment that arrives there (it took the start mode's
+    field, and refused the stick-slip cycles with 3, 6 and 8 segments, 8.3e-1, and the backward-time one with 4,
+    1e-4).  Reference: the same cycles by single shooting (a second method), and the trivial multiplier 1."""
+    from conftest import stick_slip_orbit, unstable_orbit
+
+    for single, backward, guess, period in ((stick_slip_orbit(belt_flow), False, None, 6.5),
+                                            (unstable_orbit(belt_flow), True, [1.0, -0.95], 6.3)):
+        start = single.state0 if guess is None else guess
+        multiple = find_periodic_orbit(belt_flow, start, period=period, backward=backward, segments=segments)
+        # both are converged to Newton's tolerance 1e-10 on states of size 1, with periods near 6.5
+        assert multiple.period == pytest.approx(single.period, abs=1e-8)
+        finite = lambda mu: np.sort_complex(np.asarray(mu)[np.isfinite(mu)])  # noqa: E731
+        np.testing.assert_allclose(finite(multiple.multipliers), finite(single.multipliers), atol=1e-8)
+        assert np.count_nonzero(~np.isfinite(multiple.multipliers)) == np.count_nonzero(~np.isfinite(single.multipliers))

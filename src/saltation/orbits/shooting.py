@@ -2072,8 +2072,9 @@ class MultipleShootingProblem:
         if not prob.autonomous:
             mu = product_eigenvalues(factors)
             return sort_multipliers(reciprocal(mu) if prob.backward else mu), float("nan")
-        p = prob.parameters_at(lam)
-        velocities = [prob.flow.vector_field(seg.mode0, seg.t0, seg.x0, p) for seg in segs]
+        # each node's velocity is the one the orbit arrives with, the end of the segment before it (where a
+        # node lies in a sliding motion or a stick phase, the motion's own field, not its start mode's)
+        velocities = [segs[i - 1].velocity_end for i in range(len(segs))]
         bases, normals = [], []
         for f in velocities:
             norm = float(np.linalg.norm(f))
