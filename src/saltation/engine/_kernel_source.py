@@ -722,10 +722,13 @@ def _bracket_root(model, kind, idx, slide, sgn, t, h, F, y, sa, sb, gb, p, xtmp,
 
 
 @njit(cache=True, _nrt=False)
-def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, lo, hi, exact, TC):
+def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, lo, hi, exact, TC, bottom):
     """Golden-section search for the minimum of ``sgn * event`` on ``[lo, hi]`` of the step; returns (s, value).
 
-    It stops at the first value <= 0 (the dip crosses), or where the minimum is certainly positive: once
+    With ``bottom`` it searches the minimum itself (to 1e-12 of the step): the bottom of a dip known to cross,
+    where the step's own solution is compared with the dense output's (a point just below zero near the dip's
+    edge, within the two's difference of the surface, would refute a contact 1e-8 deep).  Otherwise it
+    stops at the first value <= 0 (the dip crosses), or where the minimum is certainly positive: once
     the bracket is below 1 % of the range, the three last points give the curvature ``f''`` (a divided
     difference), and ``min(fc, fd) > 4 |f''| (b - a)^2`` bounds ``f(x*) >= f(x_best) - f''(xi) (x_best -
     x*)^2 / 2`` away from zero with a factor 8 to spare on the curvature; the value returned is then a
@@ -742,14 +745,15 @@ def _dip_search(model, kind, idx, slide, sgn, t, h, F, y, p, xtmp, gtmp, gptmp, 
     xo = 0.0  # the bracket's end the last move dropped an inner point to, and its value
     fo = 0.0
     have_old = False
-    for _ in range(60):
-        if fc <= 0.0:
-            return c, fc
-        if fd <= 0.0:
-            return d, fd
+    for _ in range(80):
+        if not bottom:
+            if fc <= 0.0:
+                return c, fc
+            if fd <= 0.0:
+                return d, fd
         if b - a < 1e-12:
             break
-        if have_old and b - a < 1e-2 * (hi - lo):
+        if not bottom and have_old and b - a < 1e-2 * (hi - lo):
             # the second divided difference of the three points c < d and xo (an end of the bracket)
             x0, x1, x2, f0, f1, f2 = (xo, c, d, fo, fc, fd) if xo < c else (c, d, xo, fc, fd, fo)
             curvature = abs(2.0 * ((f2 - f1) / (x2 - x1) - (f1 - f0) / (x1 - x0)) / (x2 - x0))
@@ -826,7 +830,7 @@ def _surface_crossings(model, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 
         known = False
         if abs(v_start) <= res and sg * slope_start >= 0.0:
             s_top, v_top = _dip_search(model, KIND_INDICATOR, idx, slide, -sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0,
-                                       exact, TC)
+                                       exact, TC, False)
             if v_top < 0.0:
                 s_lo = s_top
             if v_top >= -res:
@@ -841,9 +845,13 @@ def _surface_crossings(model, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 
         return s1, 2.0, s_lo, 1.0, known
     if not dip:
         return 2.0, 2.0, 0.0, 2.0, False
-    smin, vmin = _dip_search(model, KIND_INDICATOR, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0, exact, TC)
+    smin, vmin = _dip_search(model, KIND_INDICATOR, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0, exact, TC,
+                             False)
     if vmin > 0.0:
         return 2.0, 2.0, 0.0, 2.0, False
+    # it crosses: the dip's bottom itself, where the step's own solution is checked against it
+    smin, vmin = _dip_search(model, KIND_INDICATOR, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0, exact, TC,
+                             True)
     s1 = _bracket_root(model, KIND_INDICATOR, idx, slide, sg, t, h, F, y, 0.0, smin, min(vmin, -1e-300), p, xtmp, gtmp,
                        gptmp, exact, TC)
     s2 = _bracket_root(model, KIND_INDICATOR, idx, slide, -sg, t, h, F, y, smin, 1.0, min(-sg * v_end, -1e-300), p, xtmp,
@@ -1724,7 +1732,7 @@ def _sliding_exit_event(model, exact, mode, slide, t, h, y, ynew, t_new, K, F, x
                 break
             if j < SLIDING_EXIT_SAMPLES and samples[j] <= samples[j - 1] and samples[j] <= samples[j + 1]:
                 smin, vmin = _dip_search(model, kind, NONE, slide, 1.0, t, h, F, y, p, xtmp, gtmp, gptmp,
-                                         (j - 1) / SLIDING_EXIT_SAMPLES, (j + 1) / SLIDING_EXIT_SAMPLES, exact, TC)
+                                         (j - 1) / SLIDING_EXIT_SAMPLES, (j + 1) / SLIDING_EXIT_SAMPLES, exact, TC, False)
                 if vmin <= 0.0:
                     sb = smin
                     v1 = vmin
