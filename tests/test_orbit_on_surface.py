@@ -9,7 +9,7 @@ Closed forms (derived here, independently of the library):
 
 * the free synchronous whirl is ``x + i y = Z e^{i omega t}``, ``Z = rho omega^2 / (1 - omega^2 + 2 i zeta omega)``
   (gravity ``g = 0``), a circle of radius ``|Z|``; it lies on the clearance circle where ``|Z(omega)| = delta``
-  (brentq), at ``omega = 0.820631087712087`` for the defaults;
+  (brentq), at ``omega = 0.820631087712087`` and ``1.407088466022592`` for the defaults;
 * its multipliers are ``eig(expm(A T))`` of the free linear system;
 * on the far side the orbits lie in contact all round: the one-sided limit ``M+`` is the solution of the
   variational equation along the same circle with the contact field's Jacobian at ``r = delta+``:
@@ -19,7 +19,8 @@ Closed forms (derived here, independently of the library):
 No event marks the change (both orbits have no events); the branch's corrector fails where the free orbits
 come to touch the circle all round, and the branch ends there with a special point whose bracket holds the
 closed form, classified from ``M-`` and ``M+``: without friction a jump without crossing, with friction
-``mu = 0.1`` a discontinuous Neimark-Sacker (a complex pair leaves the unit circle, modulus 1.18356).
+``mu = 0.1`` a discontinuous Neimark-Sacker (a complex pair leaves the unit circle, modulus 1.18356); from
+above the resonance, at 1.40709, a discontinuous fold (a real multiplier jumps from 0.80 to 33.6).
 """
 
 from __future__ import annotations
@@ -49,9 +50,9 @@ def whirl_amplitude(q: dict, omega: float) -> complex:
     return q["rho"] * omega**2 / (1.0 - omega**2 + 2j * q["zeta"] * omega)
 
 
-def onset(q: dict) -> float:
-    """Where the free whirl's radius reaches the clearance (the first root above 0.5)."""
-    return brentq(lambda w: abs(whirl_amplitude(q, w)) - q["delta"], 0.5, 1.0, xtol=1e-15, rtol=1e-15)
+def onset(q: dict, lo: float = 0.5, hi: float = 1.0) -> float:
+    """Where the free whirl's radius reaches the clearance (the root in ``[lo, hi]``)."""
+    return brentq(lambda w: abs(whirl_amplitude(q, w)) - q["delta"], lo, hi, xtol=1e-15, rtol=1e-15)
 
 
 def whirl_state(q: dict, omega: float) -> np.ndarray:
@@ -85,27 +86,33 @@ def contact_side_monodromy(q: dict, omega: float) -> np.ndarray:
     return sol.y[:, -1].reshape(4, 4)
 
 
-def end_of_free_branch(mu: float):
+def end_of_free_branch(mu: float, start: float, bounds: tuple[float, float]):
     system = trial_module().rotor(mu=mu)
     q = dict(system.defaults)
     flow = Flow(system)
-    problem = ShootingProblem(flow, {"omega": 0.75}, continuation_parameter="omega")
-    branch = continue_branch(problem, whirl_state(q, 0.75), 0.75, settings=ContinuationSettings(bounds=(0.7, 0.9)),
-                             directions=(1,))
+    problem = ShootingProblem(flow, {"omega": start}, continuation_parameter="omega")
+    direction = 1 if bounds[1] > start else -1
+    branch = continue_branch(problem, whirl_state(q, start), start,
+                             settings=ContinuationSettings(bounds=(min(bounds), max(bounds))), directions=(direction,))
     return q, branch
 
 
-@pytest.mark.parametrize("mu, kind", [(0.0, SpecialPointKind.NONSMOOTH_NO_CROSSING),
-                                      (0.1, SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER)])
-def test_the_free_whirl_ends_where_it_lies_on_the_clearance_circle(mu, kind):
-    q, branch = end_of_free_branch(mu)
+@pytest.mark.parametrize("mu, start, bounds, roots, kind", [
+    (0.0, 0.75, (0.7, 0.9), (0.5, 1.0), SpecialPointKind.NONSMOOTH_NO_CROSSING),
+    (0.1, 0.75, (0.7, 0.9), (0.5, 1.0), SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER),
+    # from above the resonance, the free whirl grows onto the circle at 1.40709 from outside the contact branch's
+    # reach: one contact multiplier jumps to 33.6, a discontinuous fold
+    (0.0, 1.6, (1.6, 1.2), (1.0, 2.0), SpecialPointKind.DISCONTINUOUS_FOLD),
+])
+def test_the_free_whirl_ends_where_it_lies_on_the_clearance_circle(mu, start, bounds, roots, kind):
+    q, branch = end_of_free_branch(mu, start, bounds)
     assert check_branch(branch).ok
     (sp,) = branch.special_points
     assert sp.kind is kind
     assert sp.limits is Limits.ON_SURFACE and sp.touch_surface == "gap" and sp.touch_mode == "free"
     assert sp.index == len(branch.points) - 1
     # bracketed between the last orbit the corrector reaches and a failure, to the location tolerance
-    w = onset(q)
+    w = onset(q, *roots)
     lo, hi = sp.bracket
     assert lo <= w <= hi
     assert sp.accuracy >= hi - lo and hi - lo <= 1e-8
