@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from saltation.errors import SaltationError, StartGuessError
+from saltation.errors import ModelError, SaltationError, StartGuessError
 from saltation.model.system import PiecewiseSystem
 from saltation.models import SHIPPED
 from saltation.orbits import start as start_guesses
@@ -1567,12 +1567,16 @@ def _exponent_json(value: float) -> float | str:
 
 def cmd_lyapunov(args: argparse.Namespace) -> int:
     """``saltation lyapunov``: the Lyapunov exponents of a run, through the saltation matrices of its events."""
-    from saltation.orbits.lyapunov import lyapunov_exponents
+    from saltation.orbits.lyapunov import lyapunov_exponents, plan_run
 
     system = build_model(args.model)
     overrides = parse_sets(args.set, system)
     flow = make_flow(system)
     p = flow.parameters(overrides)
+    try:  # a run too short for an accuracy, or too long to finish, is refused before the start's transient
+        plan_run(system, p, time=args.time, transient=args.transient, names={"time": "--time", "transient": "--transient"})
+    except ModelError as exc:
+        raise UsageError(str(exc)) from None
     if args.x0 is not None:
         x0 = parse_vector(args.x0, system)
     else:  # the shipped model's start, or (autonomous) a start whose transient moves
@@ -1614,7 +1618,10 @@ def _add_lyapunov_parser(sub) -> None:
     p.add_argument("model", metavar="MODEL", help=MODEL_HELP.format(names=model_names()))
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="override a parameter (repeat for several)")
     p.add_argument("--x0", metavar="V1,V2,...", help="the state the run starts from (default: the model's start)")
-    p.add_argument("--time", metavar="T", type=_positive("--time"), required=True, help="the averaging time")
+    p.add_argument("--time", metavar="T", type=_positive("--time"), required=True,
+                   help="the averaging time: at least 5 forcing periods (an autonomous model: 5 time units), so that "
+                   "each of the ten blocks covers half a one and their spread measures the error, and at most "
+                   "a million of them (each one a variational integration and a QR factorisation)")
     p.add_argument("--transient", metavar="T", type=_non_negative("--transient"), default=0.0,
                    help="time integrated first, not averaged (default 0)")
     p.add_argument("--json", action="store_true",

@@ -1,0 +1,103 @@
+"""Bad input to the Lyapunov exponents, the pseudo-equilibria, multiple shooting and symmetries is refused up
+front with an error naming the argument and what it must be: no crash of an internal variable, no run that never
+returns, no accuracy of 0 from a run too short to estimate one."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from saltation.errors import ModelError, SaltationError
+from saltation.orbits.lyapunov import MAX_INTERVALS, MIN_BLOCK, lyapunov_exponents
+
+OMEGA = 0.7
+#: the trilinear model's forcing period at omega = 0.7
+PERIOD = 2.0 * math.pi / OMEGA
+
+
+# --------------------------------------------------------------------------------------------------------------
+# Lyapunov exponents
+# --------------------------------------------------------------------------------------------------------------
+
+def _lyapunov(flow, **kwargs):
+    return lyapunov_exponents(flow, [0.1, 0.0], parameters={"omega": OMEGA}, **kwargs)
+
+
+@pytest.mark.parametrize("t0", [math.nan, math.inf, -math.inf])
+def test_a_start_time_that_is_not_finite_is_named(trilinear_flow, t0):
+    with pytest.raises(ModelError, match=r"t0 \(the start time\) must be finite"):
+        _lyapunov(trilinear_flow, time=100.0, t0=t0)
+
+
+@pytest.mark.parametrize("blocks", [math.nan, None, 2.5, "ten", True, 1, 10**7])
+def test_blocks_must_be_an_integer_from_2_to_the_cap(trilinear_flow, blocks):
+    with pytest.raises(ModelError, match=rf"blocks must be an integer from 2 to {MAX_INTERVALS}") as info:
+        _lyapunov(trilinear_flow, time=100.0, blocks=blocks)
+    assert repr(blocks) in str(info.value)
+    assert MAX_INTERVALS == 10**6
+
+
+@pytest.mark.parametrize("time", [None, "long", True])
+def test_a_time_that_is_not_a_number_is_named(trilinear_flow, time):
+    with pytest.raises(ModelError, match="time must be a real number"):
+        _lyapunov(trilinear_flow, time=time)
+
+
+@pytest.mark.parametrize("time", [1e-300, 0.5, 10.0])
+def test_a_run_too_short_to_estimate_an_accuracy_is_refused(trilinear_flow, time):
+    """Ten blocks of a run of 0.5 see the same part of the forcing period: an accuracy of 0 (1e-300) or a twentieth
+    of the error (0.5) would be reported.  Each block must cover half the forcing period 2 pi / omega: the shortest
+    time is 10 pi / omega."""
+    with pytest.raises(ModelError, match="too short to estimate an accuracy") as info:
+        _lyapunov(trilinear_flow, time=time)
+    shortest = 10 * MIN_BLOCK * PERIOD
+    assert shortest == pytest.approx(10 * math.pi / OMEGA, rel=1e-15)
+    assert f"time must be at least {shortest:g}" in str(info.value)
+
+
+def test_the_shortest_accepted_run_has_an_honest_accuracy(trilinear_flow):
+    """At the shortest time (ten blocks of half a forcing period) the linear oscillator's exponents, both -c/(2m) =
+    -0.025, are within three times the stated accuracy, which is not 0."""
+    result = _lyapunov(trilinear_flow, time=10 * MIN_BLOCK * PERIOD)
+    assert np.all(result.accuracy > 0)
+    assert np.all(np.abs(result.exponents + 0.025) <= 3 * result.accuracy)
+
+
+def test_an_autonomous_model_needs_half_a_time_unit_a_block(belt_flow):
+    """An autonomous model's time scale is one time unit: four blocks need a time of at least 4 / 2 = 2."""
+    with pytest.raises(ModelError, match=r"at least 0.5 times a time unit .* so time must be at least 2$"):
+        lyapunov_exponents(belt_flow, [0.5, 0.0], time=1.9, blocks=4)
+
+
+@pytest.mark.parametrize(("kwargs", "culprit", "count"), [
+    ({"time": 1e300}, "time", 1e300 / PERIOD),
+    ({"time": 100.0, "interval": 1e-300}, "interval", 1e302),
+    ({"time": 1e300, "interval": 1e-300}, "interval", math.inf),  # (time / interval overflows)
+    ({"time": 100.0, "interval": 1e-5}, "interval", 1e7),
+])
+def test_a_run_of_more_intervals_than_the_cap_is_refused_up_front(trilinear_flow, kwargs, culprit, count):
+    """The number of intervals is time / interval (the forcing period by default), refused above a million."""
+    with pytest.raises(ModelError, match=rf"^{culprit}: .* takes (\S+) intervals, more than the 1000000") as info:
+        _lyapunov(trilinear_flow, **kwargs)
+    stated = float(str(info.value).split(" takes ")[1].split()[0])
+    assert stated == pytest.approx(count, rel=1e-2) if math.isfinite(count) else stated == math.inf
+
+
+def test_intervals_the_clock_cannot_resolve_are_refused(trilinear_flow):
+    """At t0 = 1e20 an interval of 5 (100 / 10 blocks, below the forcing period) does not move the clock."""
+    with pytest.raises(ModelError, match=r"intervals of 5 .* below 1e-09 of the run's largest time .* = 1e\+20"):
+        _lyapunov(trilinear_flow, time=100.0, t0=1e20)
+
+
+def test_the_command_refuses_a_run_that_would_not_end(capsys):
+    from saltation.apps import cli
+
+    assert cli.main(["lyapunov", "trilinear", "--time", "1e300", "--x0", "0.5,0.5"]) == 2
+    err = capsys.readouterr().err
+    assert "--time" in err and "intervals, more than the 1000000" in err
+    assert cli.main(["lyapunov", "trilinear", "--time", "0.5", "--x0", "0.5,0.5"]) == 2
+    err = capsys.readouterr().err
+    # omega = 1.2 by default: ten blocks of half the forcing period 2 pi / 1.2
+    assert "too short to estimate an accuracy" in err and f"--time must be at least {10 * math.pi / 1.2:g}" in err
