@@ -101,3 +101,88 @@ def test_the_command_refuses_a_run_that_would_not_end(capsys):
     err = capsys.readouterr().err
     # omega = 1.2 by default: ten blocks of half the forcing period 2 pi / 1.2
     assert "too short to estimate an accuracy" in err and f"--time must be at least {10 * math.pi / 1.2:g}" in err
+
+
+# --------------------------------------------------------------------------------------------------------------
+# Pseudo-equilibria
+# --------------------------------------------------------------------------------------------------------------
+
+def _relay():
+    """x' = 1 (x < 0) or -2 (x > 0), y' = -y + 1/2 or -y - 3/10: a pseudo-equilibrium at y = (2 (1/2) - 3/10) / 3."""
+    from saltation import Crossing, Mode, PiecewiseSystem, Transition
+
+    return PiecewiseSystem(
+        "test_bad_input_relay", states=["x", "y"], parameters={"a": 1.0, "b": 2.0, "c": 0.5, "d": 0.3},
+        modes=[Mode("left", ["a", "-y + c"], domain=["x < 0"]), Mode("right", ["-b", "-y - d"], domain=["x >= 0"])],
+        surfaces={"s": "x"},
+        transitions=[Transition("left", "s", Crossing.RISING, "right"),
+                     Transition("right", "s", Crossing.FALLING, "left")])
+
+
+def _vanishing():
+    """x' = x, y' = -y (x < 0) and x' = -x, y' = -y (x > 0): both fields vanish at the origin, on the surface x = 0,
+    where both components normal to it are 0 (the sliding weight 0/0)."""
+    from saltation import Crossing, Mode, PiecewiseSystem, Transition
+
+    return PiecewiseSystem(
+        "test_bad_input_vanishing", states=["x", "y"], parameters={"a": 1.0},
+        modes=[Mode("left", ["a*x", "-y"], domain=["x < 0"]), Mode("right", ["-a*x", "-y"], domain=["x >= 0"])],
+        surfaces={"s": "x"},
+        transitions=[Transition("left", "s", Crossing.RISING, "right"),
+                     Transition("right", "s", Crossing.FALLING, "left")])
+
+
+@pytest.fixture(scope="module")
+def relay_flow():
+    from saltation import Flow
+
+    return Flow(_relay())
+
+
+@pytest.mark.parametrize("guess", [[math.nan, 1.0], [0.0, math.nan], [math.inf, 0.0]])
+def test_a_guess_that_is_not_finite_is_named(relay_flow, guess):
+    from saltation.orbits.pseudo_equilibria import find_pseudo_equilibrium
+
+    with pytest.raises(ModelError, match="the guess is not finite"):
+        find_pseudo_equilibrium(relay_flow, "s", guess)
+
+
+@pytest.mark.parametrize("tol", [math.nan, -1.0, 0.0, math.inf, None, "small"])
+def test_tol_must_be_positive(relay_flow, tol):
+    from saltation.orbits.pseudo_equilibria import find_pseudo_equilibrium
+
+    with pytest.raises(ModelError, match="tol must be positive and finite") as info:
+        find_pseudo_equilibrium(relay_flow, "s", [0.1, 1.0], tol=tol)
+    assert repr(tol) in str(info.value)
+
+
+@pytest.mark.parametrize("max_iter", [-1, 2.5, math.nan, None])
+def test_max_iter_must_be_a_non_negative_integer(relay_flow, max_iter):
+    from saltation.orbits.pseudo_equilibria import find_pseudo_equilibrium
+
+    with pytest.raises(ModelError, match="max_iter must be a non-negative integer"):
+        find_pseudo_equilibrium(relay_flow, "s", [0.1, 1.0], max_iter=max_iter)
+
+
+def test_a_good_call_still_finds_the_closed_form(relay_flow):
+    from saltation.orbits.pseudo_equilibria import find_pseudo_equilibrium
+
+    point = find_pseudo_equilibrium(relay_flow, "s", [0.1, 1.0], tol=1e-12, max_iter=30)
+    np.testing.assert_allclose(point.state, [0.0, (2.0 * 0.5 - 1.0 * 0.3) / 3.0], rtol=0, atol=1e-12)
+    assert point.weights == pytest.approx((2 / 3, 1 / 3), abs=1e-12)
+
+
+def test_two_fields_that_vanish_on_the_surface_leave_the_weight_undefined():
+    """Newton lands on the origin, an equilibrium of both modes: every weight makes the combination vanish there,
+    and next to it on the surface both normal components are 0."""
+    from saltation import Flow
+    from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
+
+    flow = Flow(_vanishing())
+    with pytest.raises(ModelError, match="both fields vanish here: the sliding weight is undefined") as info:
+        find_pseudo_equilibrium(flow, "s", [0.1, 1.0])
+    assert "[0.0, 0.0]" in str(info.value) and "'left' and 'right'" in str(info.value)
+    problem = PseudoEquilibriumProblem(flow, "s", ("left", "right"))
+    u = np.array([0.0, 0.0, 0.5])
+    with pytest.raises(ModelError, match="both fields vanish here: the sliding weight is undefined"):
+        problem.describe(u, None, problem.evaluate(u, need_lam=False))
