@@ -186,3 +186,93 @@ def test_two_fields_that_vanish_on_the_surface_leave_the_weight_undefined():
     u = np.array([0.0, 0.0, 0.5])
     with pytest.raises(ModelError, match="both fields vanish here: the sliding weight is undefined"):
         problem.describe(u, None, problem.evaluate(u, need_lam=False))
+
+
+# --------------------------------------------------------------------------------------------------------------
+# Multiple shooting and symmetry
+# --------------------------------------------------------------------------------------------------------------
+
+BAD_SEGMENTS = [math.nan, math.inf, 2**63, 10**6, 1001, 0, -3, 2.5, None, "3", True]
+
+
+@pytest.mark.parametrize("segments", BAD_SEGMENTS)
+def test_segments_must_be_a_positive_integer_up_to_the_cap(trilinear_flow, segments):
+    from saltation.orbits.shooting import MAX_SEGMENTS, MultipleShootingProblem, ShootingProblem
+
+    assert MAX_SEGMENTS == 1000
+    problem = ShootingProblem(trilinear_flow)
+    with pytest.raises(ModelError, match=r"segments must be a positive integer of at most 1000 \(each segment holds "
+                                         r"an n x n transfer matrix") as info:
+        MultipleShootingProblem(problem, segments)
+    assert f"got {segments!r}" in str(info.value)
+
+
+@pytest.mark.parametrize("segments", BAD_SEGMENTS)
+def test_find_periodic_orbit_checks_segments_before_any_work(trilinear_flow, segments):
+    from saltation.orbits.shooting import find_periodic_orbit
+
+    with pytest.raises(ModelError, match="segments must be a positive integer of at most 1000"):
+        find_periodic_orbit(trilinear_flow, None, segments=segments)  # (a guess would need a transient)
+
+
+def test_the_cap_says_why_in_closed_form():
+    """1000 segments bring a multiplier of 1e300 down to 1e300 ** (1 / 1000) = 10 ** 0.3, about 2, per segment."""
+    from saltation.orbits.shooting import MAX_SEGMENTS
+
+    assert (1e300) ** (1 / MAX_SEGMENTS) == pytest.approx(10**0.3, rel=1e-12)
+    assert round(10**0.3) == 2
+
+
+def test_a_large_model_is_held_to_its_node_values():
+    """A chain of 5 masses has 10 states: 500 segments make 5000 node values, more than the 4000 of a dense Newton
+    matrix of 128 MB; at most 4000 // 10 = 400 segments."""
+    from saltation.orbits.shooting import MAX_NODE_VALUES, check_segments
+
+    assert MAX_NODE_VALUES == 4000 and (MAX_NODE_VALUES**2 * 8) / 1e6 == 128.0
+    with pytest.raises(ModelError, match=r"segments = 500 with 10 states makes 5000 node values, more than the 4000 "
+                                         r".* at most 400 segments for this model"):
+        check_segments(500, 10)
+    assert check_segments(400, 10) == 400 and check_segments(3.0) == 3
+
+
+def test_good_segments_still_find_the_orbit(trilinear_flow):
+    """Multiple shooting with 3 segments finds the orbit single shooting finds."""
+    from saltation.orbits.shooting import find_periodic_orbit
+
+    single = find_periodic_orbit(trilinear_flow, [0.5, 0.5])
+    multiple = find_periodic_orbit(trilinear_flow, [0.5, 0.5], segments=3)
+    assert multiple.segments == 3
+    np.testing.assert_allclose(multiple.state0, single.state0, rtol=0, atol=1e-8)
+
+
+@pytest.mark.parametrize("command", [
+    ["orbit", "trilinear", "--x0", "0.5,0.5"],
+    ["continue", "trilinear", "--param", "omega", "--from", "0.6", "--to", "0.7", "--no-progress"],
+    ["locus", "trilinear", "--kind", "fold", "--param", "omega", "--range", "0.6,1.6", "--param2", "f0",
+     "--range2", "0.1,0.3"],
+])
+@pytest.mark.parametrize("value", ["100000", "1001", "0", "nan", "2.5"])
+def test_the_command_line_refuses_segments_out_of_range(capsys, command, value):
+    from saltation.apps import cli
+
+    assert cli.main([*command, "--segments", value]) == 2
+    err = capsys.readouterr().err
+    assert "--segments" in err and "internal error" not in err and "MemoryError" not in err
+    if value in ("100000", "1001"):
+        assert "above the largest accepted value 1000" in err and "n x n transfer matrix" in err
+
+
+@pytest.mark.parametrize("signs", ["ab", None, -1, 1.0, [1, 2], [0, 1], [[1, -1]], [], [1, "a"], {1: -1}])
+def test_symmetry_signs_must_be_plus_and_minus_ones(signs):
+    from saltation.model.symmetry import Symmetry
+
+    with pytest.raises(ModelError, match=r"signs must be a list of \+1 and -1, one per state") as info:
+        Symmetry.of_signs(signs)
+    assert repr(signs) in str(info.value)
+
+
+def test_good_signs_make_the_diagonal_symmetry():
+    from saltation.model.symmetry import Symmetry
+
+    assert Symmetry.of_signs([-1, 1.0]).matrix == ((-1.0, 0.0), (0.0, 1.0))
+    assert Symmetry.of_signs((-1, -1)).matrix == ((-1.0, 0.0), (0.0, -1.0))

@@ -42,6 +42,7 @@ from saltation.errors import ModelError, SaltationError, StartGuessError
 from saltation.model.system import PiecewiseSystem
 from saltation.models import SHIPPED
 from saltation.orbits import start as start_guesses
+from saltation.orbits.shooting import MAX_SEGMENTS
 from saltation.orbits.start import TRANSIENT_PERIODS
 
 PROG = "saltation"
@@ -337,8 +338,9 @@ def _positive(option: str, minimum: float | None = None, why: str = "") -> Calla
     return convert
 
 
-def _integer(option: str, minimum: int) -> Callable[[str], int]:
-    """A converter of an integer of at least ``minimum`` (1: a positive count, 0: a non-negative one)."""
+def _integer(option: str, minimum: int, maximum: int | None = None, why: str = "") -> Callable[[str], int]:
+    """A converter of an integer of at least ``minimum`` (1: a positive count, 0: a non-negative one), and at most
+    ``maximum`` if given (``why`` saying why)."""
     what = "a positive integer" if minimum == 1 else f"an integer of at least {minimum}"
 
     def convert(text: str) -> int:
@@ -348,10 +350,19 @@ def _integer(option: str, minimum: int) -> Callable[[str], int]:
             raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"{text!r} must be {what}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(f"{text!r} is above the largest accepted value {maximum}{why}")
         return value
 
     convert.__name__ = option
     return convert
+
+
+#: The converter of ``--segments``: a positive integer of at most :data:`~saltation.orbits.shooting.MAX_SEGMENTS`.
+SEGMENTS_TYPE = _integer(
+    "--segments", 1, MAX_SEGMENTS,
+    " (each segment holds an n x n transfer matrix and costs an integration per Newton step, and the Newton system "
+    f"is dense in the m n node values; {MAX_SEGMENTS} segments bring a multiplier of 1e300 down to 2 per segment)")
 
 
 def _finite(text: str) -> float:
@@ -789,9 +800,9 @@ def _add_orbit_parser(sub) -> None:
         "infinitely unstable ones (a multiplier 'inf')",
     )
     p.add_argument(
-        "--segments", metavar="M", type=_integer("--segments", 1), default=1,
+        "--segments", metavar="M", type=SEGMENTS_TYPE, default=1,
         help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
-        "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models",
+        f"period, at most {MAX_SEGMENTS}, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models",
     )
     p.add_argument("--mode0", metavar="NAME", default=None, help=MODE0_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
@@ -1114,9 +1125,9 @@ def _add_continue_parser(sub) -> None:
     p.add_argument("--out", metavar="DIR", default=".", help="output directory (default: the current one)")
     _add_step_options(p)
     p.add_argument(
-        "--segments", metavar="M", type=_integer("--segments", 1), default=1,
+        "--segments", metavar="M", type=SEGMENTS_TYPE, default=1,
         help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
-        "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models; the branch's multipliers come from the segments' matrices (periodic Schur decomposition)",
+        f"period, at most {MAX_SEGMENTS}, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models; the branch's multipliers come from the segments' matrices (periodic Schur decomposition)",
     )
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(handler=cmd_continue)
@@ -1297,9 +1308,9 @@ def _add_locus_parser(sub) -> None:
     p.add_argument("--out", metavar="DIR", help="write the curves (JSON) and their plot here")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument(
-        "--segments", metavar="M", type=_integer("--segments", 1), default=1,
+        "--segments", metavar="M", type=SEGMENTS_TYPE, default=1,
         help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
-        "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models (for the branch; the curves' defining systems use single shooting)",
+        f"period, at most {MAX_SEGMENTS}, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models (for the branch; the curves' defining systems use single shooting)",
     )
     p.add_argument("--equilibrium", metavar="MODE",
                    help="with --kind boundary_equilibrium: the branch is of this mode's equilibria (or, as "
