@@ -38,10 +38,11 @@ from pathlib import Path
 
 import numpy as np
 
-from saltation.errors import SaltationError, StartGuessError
+from saltation.errors import ModelError, SaltationError, StartGuessError
 from saltation.model.system import PiecewiseSystem
 from saltation.models import SHIPPED
 from saltation.orbits import start as start_guesses
+from saltation.orbits.shooting import MAX_SEGMENTS
 from saltation.orbits.start import TRANSIENT_PERIODS
 
 PROG = "saltation"
@@ -337,8 +338,9 @@ def _positive(option: str, minimum: float | None = None, why: str = "") -> Calla
     return convert
 
 
-def _integer(option: str, minimum: int) -> Callable[[str], int]:
-    """A converter of an integer of at least ``minimum`` (1: a positive count, 0: a non-negative one)."""
+def _integer(option: str, minimum: int, maximum: int | None = None, why: str = "") -> Callable[[str], int]:
+    """A converter of an integer of at least ``minimum`` (1: a positive count, 0: a non-negative one), and at most
+    ``maximum`` if given (``why`` saying why)."""
     what = "a positive integer" if minimum == 1 else f"an integer of at least {minimum}"
 
     def convert(text: str) -> int:
@@ -348,10 +350,19 @@ def _integer(option: str, minimum: int) -> Callable[[str], int]:
             raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"{text!r} must be {what}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(f"{text!r} is above the largest accepted value {maximum}{why}")
         return value
 
     convert.__name__ = option
     return convert
+
+
+#: The converter of ``--segments``: a positive integer of at most :data:`~saltation.orbits.shooting.MAX_SEGMENTS`.
+SEGMENTS_TYPE = _integer(
+    "--segments", 1, MAX_SEGMENTS,
+    " (each segment holds an n x n transfer matrix and costs an integration per Newton step, and the Newton system "
+    f"is dense in the m n node values; {MAX_SEGMENTS} segments bring a multiplier of 1e300 down to 2 per segment)")
 
 
 def _finite(text: str) -> float:
@@ -789,9 +800,9 @@ def _add_orbit_parser(sub) -> None:
         "infinitely unstable ones (a multiplier 'inf')",
     )
     p.add_argument(
-        "--segments", metavar="M", type=_integer("--segments", 1), default=1,
+        "--segments", metavar="M", type=SEGMENTS_TYPE, default=1,
         help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
-        "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models",
+        f"period, at most {MAX_SEGMENTS}, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models",
     )
     p.add_argument("--mode0", metavar="NAME", default=None, help=MODE0_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
@@ -1114,9 +1125,9 @@ def _add_continue_parser(sub) -> None:
     p.add_argument("--out", metavar="DIR", default=".", help="output directory (default: the current one)")
     _add_step_options(p)
     p.add_argument(
-        "--segments", metavar="M", type=_integer("--segments", 1), default=1,
+        "--segments", metavar="M", type=SEGMENTS_TYPE, default=1,
         help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
-        "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models; the branch's multipliers come from the segments' matrices (periodic Schur decomposition)",
+        f"period, at most {MAX_SEGMENTS}, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models; the branch's multipliers come from the segments' matrices (periodic Schur decomposition)",
     )
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(handler=cmd_continue)
@@ -1297,9 +1308,9 @@ def _add_locus_parser(sub) -> None:
     p.add_argument("--out", metavar="DIR", help="write the curves (JSON) and their plot here")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument(
-        "--segments", metavar="M", type=_integer("--segments", 1), default=1,
+        "--segments", metavar="M", type=SEGMENTS_TYPE, default=1,
         help="shooting segments: 1 (default) is single shooting; M > 1 is multiple shooting with M nodes along the "
-        "period, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models (for the branch; the curves' defining systems use single shooting)",
+        f"period, at most {MAX_SEGMENTS}, for strongly unstable orbits (multipliers of 1e8 and more), long periods and large models (for the branch; the curves' defining systems use single shooting)",
     )
     p.add_argument("--equilibrium", metavar="MODE",
                    help="with --kind boundary_equilibrium: the branch is of this mode's equilibria (or, as "
@@ -1567,12 +1578,16 @@ def _exponent_json(value: float) -> float | str:
 
 def cmd_lyapunov(args: argparse.Namespace) -> int:
     """``saltation lyapunov``: the Lyapunov exponents of a run, through the saltation matrices of its events."""
-    from saltation.orbits.lyapunov import lyapunov_exponents
+    from saltation.orbits.lyapunov import lyapunov_exponents, plan_run
 
     system = build_model(args.model)
     overrides = parse_sets(args.set, system)
     flow = make_flow(system)
     p = flow.parameters(overrides)
+    try:  # a run too short for an accuracy, or too long to finish, is refused before the start's transient
+        plan_run(system, p, time=args.time, transient=args.transient, names={"time": "--time", "transient": "--transient"})
+    except ModelError as exc:
+        raise UsageError(str(exc)) from None
     if args.x0 is not None:
         x0 = parse_vector(args.x0, system)
     else:  # the shipped model's start, or (autonomous) a start whose transient moves
@@ -1614,7 +1629,10 @@ def _add_lyapunov_parser(sub) -> None:
     p.add_argument("model", metavar="MODEL", help=MODEL_HELP.format(names=model_names()))
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="override a parameter (repeat for several)")
     p.add_argument("--x0", metavar="V1,V2,...", help="the state the run starts from (default: the model's start)")
-    p.add_argument("--time", metavar="T", type=_positive("--time"), required=True, help="the averaging time")
+    p.add_argument("--time", metavar="T", type=_positive("--time"), required=True,
+                   help="the averaging time: at least 5 forcing periods (an autonomous model: 5 time units), so that "
+                   "each of the ten blocks covers half a one and their spread measures the error, and at most "
+                   "a million of them (each one a variational integration and a QR factorisation)")
     p.add_argument("--transient", metavar="T", type=_non_negative("--transient"), default=0.0,
                    help="time integrated first, not averaged (default 0)")
     p.add_argument("--json", action="store_true",

@@ -85,7 +85,7 @@ class Symmetry:
         Parameters
         ----------
         signs : sequence of float
-            The diagonal of ``S`` (each +1 or -1).
+            The diagonal of ``S``: a list of +1 and -1, one per state.
 
         Returns
         -------
@@ -94,9 +94,19 @@ class Symmetry:
         Raises
         ------
         ModelError
-            See :class:`Symmetry`.
+            If ``signs`` is not a non-empty list of numbers each +1 or -1 (a string, None, a single number, a
+            nested list, any other value).
         """
-        return cls(np.diag(np.asarray(signs, dtype=float)).tolist())
+        problem = f"signs must be a list of +1 and -1, one per state, got {signs!r}"
+        if isinstance(signs, (str, bytes)) or not isinstance(signs, (Sequence, np.ndarray)):
+            raise ModelError(problem)
+        try:
+            values = np.asarray(signs, dtype=float)
+        except (TypeError, ValueError):
+            raise ModelError(problem) from None
+        if values.ndim != 1 or values.size == 0 or not np.all(np.abs(values) == 1.0):
+            raise ModelError(problem)
+        return cls(np.diag(values).tolist())
 
 
 @dataclass(frozen=True)

@@ -111,18 +111,21 @@ def lyapunov_exponents(
     parameters : mapping or ndarray, optional
         Parameter values (the model's defaults otherwise).
     time : float
-        The averaging time, after the transient.
+        The averaging time, after the transient: at least ``blocks`` times half the motion's time scale (the
+        forcing period of a forced model, one time unit of an autonomous one; see :data:`MIN_BLOCK`), so that
+        the spread of the blocks measures the error, and at most :data:`MAX_INTERVALS` intervals.
     transient : float
         Time integrated first, not averaged (to reach the attractor).
     t0 : float
-        The start time (the forcing's phase).
+        The start time (the forcing's phase), finite.
     interval : float, optional
         Time between reorthonormalisations: by default the forcing period of a forced model, or 1
         time unit for an autonomous one, and never more than ``time / blocks``.  Where the fundamental
         matrix stays well conditioned over an interval, the next factorisation waits several (as many as
         keep its condition number under :data:`MAX_CONDITION`, at most 64), never past a block's end.
     blocks : int
-        The run is cut into this many equal blocks; the spread of their estimates gives ``accuracy``.
+        The run is cut into this many equal blocks; the spread of their estimates gives ``accuracy``.  From 2
+        to :data:`MAX_INTERVALS`.
     tolerances : Tolerances, optional
         Integration tolerances (the flow's by default).
     mode0 : str, optional
@@ -136,8 +139,12 @@ def lyapunov_exponents(
     Raises
     ------
     ModelError
-        If ``time`` or ``interval`` is not positive and finite, ``transient`` is negative, ``blocks`` is
-        less than 2, or the state is not of the model's size.
+        Before any integration, naming the argument: if ``time`` or ``interval`` is not positive and finite,
+        ``transient`` is negative, ``t0`` is not finite, ``blocks`` is not an integer from 2 to
+        :data:`MAX_INTERVALS`, or the state is not finite or not of the model's size; if ``time`` is too short
+        to estimate an accuracy (shorter than ``blocks`` times half the forcing period, or half a time unit);
+        if the run would take more than :data:`MAX_INTERVALS` intervals (the estimate given), or intervals
+        below :data:`MIN_RELATIVE_INTERVAL` of ``|t0| + transient + time`` (see :func:`plan_run`).
     IntegrationError
         If an integration fails (a state in no mode, chattering, an undefined sliding motion, ...).
     InitialModeError
@@ -156,28 +163,16 @@ def lyapunov_exponents(
     x = np.asarray(state0, dtype=float).reshape(-1)
     if x.shape != (n,):
         raise ModelError(f"the state must have {n} components (the states {list(system.state_names)}), got {x.shape[0]}")
-    time, transient = float(time), float(transient)
-    if not (math.isfinite(time) and time > 0.0):
-        raise ModelError(f"time must be positive and finite, got {time}")
-    if not (math.isfinite(transient) and transient >= 0.0):
-        raise ModelError(f"transient must be non-negative and finite, got {transient}")
-    if isinstance(blocks, bool) or int(blocks) != blocks or blocks < 2:
-        raise ModelError(f"blocks must be an integer of at least 2, got {blocks!r}")
-    blocks = int(blocks)
+    if not np.all(np.isfinite(x)):
+        raise ModelError(f"the state must be finite, got {x.tolist()}")
     p = flow.parameters(parameters)
-    if interval is None:
-        interval = 1.0 if system.is_autonomous else system.forcing_period(p)
-        interval = min(interval, time / blocks)
-    interval = float(interval)
-    if not (math.isfinite(interval) and interval > 0.0):
-        raise ModelError(f"interval must be positive and finite, got {interval}")
+    time, transient, t0, interval, blocks, per_block = plan_run(system, p, time=time, transient=transient, t0=t0,
+                                                                 interval=interval, blocks=blocks)
     t = float(t0)
     mode = None if mode0 is None else system.mode_names[flow.start_mode(x, p, t, mode0)]
     if transient > 0.0:
         run = flow.run(x, t, t + transient, p, mode0=mode, tolerances=tolerances)
         x, t, mode = run.x1, run.t1, _next_mode(run.mode1)
-    per_block = max(1, int(math.ceil(time / blocks / interval * (1.0 - 1e-12))))  # (a whole number of intervals
-    #                                                                     is not rounded up by a last ulp)
     step = time / (blocks * per_block)  # every block of the same length, whole intervals
     q = np.eye(n)
     block_logs = np.zeros((blocks, n))
@@ -221,6 +216,127 @@ def lyapunov_exponents(
         accuracy[finite] = np.nanstd(spread, axis=0, ddof=1) / math.sqrt(blocks)
     return LyapunovExponents(exponents=exponents, accuracy=accuracy, time=time, transient=transient, interval=step,
                              block_exponents=estimates, state=np.array(x), block_sum_rounding=block_rounding / block_time)
+
+
+#: The most reorthonormalisation intervals a run may take (``blocks`` times the intervals of a block): each is a
+#: variational integration and a QR factorisation, some 20 microseconds at the least, minutes in all past this.
+MAX_INTERVALS = 10**6
+
+#: Each block must cover at least this fraction of the motion's time scale (the forcing period of a forced model,
+#: one time unit of an autonomous one): over less, consecutive blocks see the same stretch of the motion, their
+#: spread is no measure of the error (ten blocks of half a time unit of the damped trilinear oscillator spread by
+#: a twentieth of their error).
+MIN_BLOCK = 0.5
+
+#: The interval (the time between two factorisations) must be at least this fraction of the largest time of the
+#: run, ``|t0| + transient + time``: a shorter one does not move the clock.
+MIN_RELATIVE_INTERVAL = 1e-9
+
+
+def plan_run(
+    system,
+    parameters: np.ndarray,
+    *,
+    time: float,
+    transient: float = 0.0,
+    t0: float = 0.0,
+    interval: float | None = None,
+    blocks: int = 10,
+    names: Mapping[str, str] | None = None,
+) -> tuple[float, float, float, float, int, int]:
+    """The arguments of :func:`lyapunov_exponents` checked, and the intervals of its run, before any integration.
+
+    Parameters
+    ----------
+    system : PiecewiseSystem
+    parameters : ndarray
+        The parameter values (to evaluate the forcing period).
+    time, transient, t0, interval, blocks
+        As for :func:`lyapunov_exponents`.
+    names : mapping, optional
+        How a message names each argument (the command line's ``{"time": "--time"}``); by its name otherwise.
+
+    Returns
+    -------
+    time, transient, t0, interval : float
+        ``interval`` the base interval (its default filled in).
+    blocks : int
+    per_block : int
+        Intervals per block: ``time / (blocks * per_block)`` is the interval the run takes.
+
+    Raises
+    ------
+    ModelError
+        Naming the argument and what it must be: ``time`` not positive and finite, or shorter than ``blocks``
+        times half the motion's time scale (:data:`MIN_BLOCK`: the forcing period, or one time unit of an
+        autonomous model), so that no accuracy can be estimated; ``transient`` negative or not finite; ``t0`` not
+        finite; ``blocks`` not an integer from 2 to :data:`MAX_INTERVALS`; ``interval`` not positive and finite,
+        or below :data:`MIN_RELATIVE_INTERVAL` of ``|t0| + transient + time``; or a run of more than
+        :data:`MAX_INTERVALS` intervals (the estimated number given).
+    """
+    names = dict(names or {})
+
+    def name(argument: str) -> str:
+        return names.get(argument, argument)
+
+    def number(argument: str, value) -> float:
+        try:
+            if isinstance(value, bool):
+                raise TypeError
+            return float(value)
+        except (TypeError, ValueError):
+            raise ModelError(f"{name(argument)} must be a real number, got {value!r}") from None
+
+    time, transient, t0 = number("time", time), number("transient", transient), number("t0", t0)
+    if not (math.isfinite(time) and time > 0.0):
+        raise ModelError(f"{name('time')} must be positive and finite, got {time}")
+    if not (math.isfinite(transient) and transient >= 0.0):
+        raise ModelError(f"{name('transient')} must be non-negative and finite, got {transient}")
+    if not math.isfinite(t0):
+        raise ModelError(f"{name('t0')} (the start time) must be finite, got {t0}")
+    try:
+        whole = not isinstance(blocks, bool) and int(blocks) == blocks
+    except (TypeError, ValueError, OverflowError):
+        whole = False
+    if not whole or not 2 <= blocks <= MAX_INTERVALS:
+        raise ModelError(f"{name('blocks')} must be an integer from 2 to {MAX_INTERVALS} (each block is at least one "
+                         f"interval of the run, and a run takes at most {MAX_INTERVALS}), got {blocks!r}")
+    blocks = int(blocks)
+    if system.is_autonomous:
+        scale, what = 1.0, "a time unit"
+    else:
+        scale = system.forcing_period(parameters)
+        what = f"the forcing period {scale:g}"
+    shortest = blocks * MIN_BLOCK * scale
+    if time < shortest * (1.0 - 1e-12):
+        raise ModelError(
+            f"{name('time')} = {time:g} is too short to estimate an accuracy: each of the {blocks} blocks must "
+            f"cover at least {MIN_BLOCK:g} times {what} (over less, consecutive blocks see the same stretch of the "
+            f"motion and their spread is no measure of the error), so {name('time')} must be at least {shortest:g}")
+    given = interval is not None
+    if not given:
+        interval = min(scale, time / blocks)
+    interval = number("interval", interval)
+    if not (math.isfinite(interval) and interval > 0.0):
+        raise ModelError(f"{name('interval')} must be positive and finite, got {interval}")
+    with np.errstate(over="ignore"):
+        per = time / blocks / interval * (1.0 - 1e-12)  # (a whole number of intervals is not rounded up by a last ulp)
+    count = blocks * math.ceil(per) if math.isfinite(per) else math.inf
+    if count > MAX_INTERVALS:
+        culprit = name("interval") if given else name("time")
+        raise ModelError(
+            f"{culprit}: a run of time {time:g} in intervals of {interval:g} takes {count:.3g} intervals, more than the "
+            f"{MAX_INTERVALS} a run may take (each is a variational integration and a QR factorisation); "
+            f"ask for a shorter time" + (" or a longer interval" if given else ""))
+    per_block = max(1, int(math.ceil(per)))
+    step = time / (blocks * per_block)
+    latest = abs(t0) + transient + time
+    if step < MIN_RELATIVE_INTERVAL * latest:
+        raise ModelError(
+            f"the intervals of {step:g} ({name('interval')}) are below {MIN_RELATIVE_INTERVAL:g} of the run's largest "
+            f"time |{name('t0')}| + {name('transient')} + {name('time')} = {latest:g}: the clock does not resolve them "
+            f"(a forced model's phase is {name('t0')} modulo its period)")
+    return time, transient, t0, interval, blocks, per_block
 
 
 #: the largest condition number the fundamental matrix may reach between two QR factorisations: its smallest
@@ -267,4 +383,5 @@ def _next_mode(mode: str) -> str | None:
     return None if "|" in mode else mode
 
 
-__all__ = ["COLLAPSE", "MAX_CONDITION", "MIN_PIECE", "LyapunovExponents", "lyapunov_exponents"]
+__all__ = ["COLLAPSE", "MAX_CONDITION", "MAX_INTERVALS", "MIN_BLOCK", "MIN_PIECE", "MIN_RELATIVE_INTERVAL",
+           "LyapunovExponents", "lyapunov_exponents", "plan_run"]

@@ -104,8 +104,9 @@ def find_pseudo_equilibrium(
     parameters : mapping or ndarray, optional
         Parameter values (the model's defaults otherwise).
     tol : float
-        Newton stops when ``|r| <= tol (1 + |x|)``.
+        Newton stops when ``|r| <= tol (1 + |x|)``: positive and finite.
     max_iter : int
+        The most Newton steps, a non-negative integer.
 
     Returns
     -------
@@ -114,8 +115,10 @@ def find_pseudo_equilibrium(
     Raises
     ------
     ModelError
-        If the model is forced, the surface unknown, the guess of the wrong size, or the same mode lies
-        on both sides of the surface at the guess.
+        If the model is forced, the surface unknown, the guess of the wrong size or not finite, ``tol`` not
+        positive and finite, ``max_iter`` not a non-negative integer, or the same mode lies on both sides of
+        the surface at the guess; or if both fields vanish at the point found (to ``tol (1 + |x|)``): the
+        sliding weight is undefined there (the point is an equilibrium of both modes, not of a sliding motion).
     ConvergenceError
         If Newton does not converge (with the residual history), or its Jacobian is singular.
 
@@ -134,12 +137,27 @@ def find_pseudo_equilibrium(
     x = np.asarray(state0, dtype=float).reshape(-1)
     if x.shape != (model.n,):
         raise ModelError(f"the guess must have {model.n} components, got {x.shape[0]}")
+    if not np.all(np.isfinite(x)):
+        raise ModelError(f"the guess is not finite: {x.tolist()}")
+    try:
+        tol_ok = not isinstance(tol, bool) and math.isfinite(float(tol)) and float(tol) > 0.0
+    except (TypeError, ValueError):
+        tol_ok = False
+    if not tol_ok:
+        raise ModelError(f"tol must be positive and finite (Newton stops when |r| <= tol (1 + |x|)), got {tol!r}")
+    tol = float(tol)
+    try:
+        iter_ok = not isinstance(max_iter, bool) and int(max_iter) == max_iter and max_iter >= 0
+    except (TypeError, ValueError, OverflowError):
+        iter_ok = False
+    if not iter_ok:
+        raise ModelError(f"max_iter must be a non-negative integer (the Newton steps), got {max_iter!r}")
     p = flow.parameters(parameters)
     minus, plus = _sides(flow, surface, x, p)
     a = sliding_weight(flow, surface, minus, plus, x, p)
     a = 0.5 if not math.isfinite(a) else a
     history: list[float] = []
-    for _ in range(max_iter + 1):
+    for _ in range(int(max_iter) + 1):
         fm, fp = flow.vector_field(minus, 0.0, x, p), flow.vector_field(plus, 0.0, x, p)
         h = flow.indicator(surface, 0.0, x, p)
         r = np.append((1.0 - a) * fm + a * fp, h)
@@ -161,6 +179,7 @@ def find_pseudo_equilibrium(
     else:
         raise ConvergenceError(f"pseudo-equilibrium on {surface!r}: Newton did not converge from {list(map(float, state0))}",
                                history)
+    _check_weight_defined(flow, surface, minus, plus, x, p, tol * (1.0 + float(np.linalg.norm(x))))
     eigenvalues = _sliding_eigenvalues(flow, surface, minus, plus, x, p)
     return PseudoEquilibrium(state=x, surface=surface, modes=(model.mode_names[minus], model.mode_names[plus]),
                              weights=(1.0 - a, a), eigenvalues=eigenvalues, admissible=bool(0.0 < a < 1.0),
@@ -210,6 +229,18 @@ def _sides(flow: Flow, surface: str, x: np.ndarray, p: np.ndarray) -> tuple[int,
     return minus, plus
 
 
+def _check_weight_defined(flow: Flow, surface: str, minus: int, plus: int, x: np.ndarray, p: np.ndarray,
+                          small: float) -> None:
+    """Raise where both fields vanish at ``x`` (to ``small``): every weight makes the sliding field vanish there."""
+    fm, fp = flow.vector_field(minus, 0.0, x, p), flow.vector_field(plus, 0.0, x, p)
+    if max(float(np.linalg.norm(fm)), float(np.linalg.norm(fp))) <= small:
+        names = flow.system.mode_names
+        raise ModelError(
+            f"both fields vanish here: the sliding weight is undefined at x = {x.tolist()} on surface {surface!r} "
+            f"(an equilibrium of both modes {names[minus]!r} and {names[plus]!r} on the surface, not a rest point of a "
+            f"sliding motion)")
+
+
 def _sliding_eigenvalues(flow: Flow, surface: str, minus: int, plus: int, x: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Eigenvalues of the sliding field's Jacobian on the surface's tangent space at ``x`` (central
     differences of the sliding field along an orthonormal basis of the tangent space, steps 1e-6)."""
@@ -227,6 +258,10 @@ def _sliding_eigenvalues(flow: Flow, surface: str, minus: int, plus: int, x: np.
     step = 1e-6 * (1.0 + float(np.linalg.norm(x)))
     columns = [(sliding(x + step * t) - sliding(x - step * t)) / (2 * step) for t in tangent.T]
     restricted = tangent.T @ np.column_stack(columns)
+    if not np.all(np.isfinite(restricted)):  # both fields' normal components equal next to x: no sliding field there
+        _check_weight_defined(flow, surface, minus, plus, x, p, 1e3 * np.finfo(float).eps * (1.0 + float(np.linalg.norm(x))))
+        raise ModelError(f"the sliding weight is undefined next to x = {x.tolist()} on surface {surface!r}: both fields "
+                         f"have the same component normal to it there (both tangent to it, or both vanish)")
     return np.sort_complex(np.linalg.eigvals(restricted).astype(complex))
 
 

@@ -86,6 +86,54 @@ STATIONARY_FACTOR = 100.0
 #: stationary state's excursion is what rounding and Newton's tolerance leave, whatever the integration tolerance;
 #: at ``rtol = 1e-2``, 100 times the tolerance is the size of the orbits themselves.
 STATIONARY_FRACTION = 1e-5
+#: The most segments of multiple shooting.  Each segment holds an n x n transfer matrix and costs a variational
+#: integration per Newton step, and the Newton system is dense: ``(m n)^2`` numbers, 32 MB for 1000 segments of a
+#: model of 2 states (1000 segments bring a multiplier of 1e300 down to 2 per segment: plenty).
+MAX_SEGMENTS = 1000
+#: The most node values ``m n`` of multiple shooting: its dense Newton matrix of ``(m n)^2`` numbers, 128 MB here.
+MAX_NODE_VALUES = 4000
+
+
+def check_segments(segments, n: int | None = None, name: str = "segments") -> int:
+    """The number of shooting segments as an int, or an error that says what it must be.
+
+    Parameters
+    ----------
+    segments : int
+        A positive integer, at most :data:`MAX_SEGMENTS`.
+    n : int, optional
+        The model's number of states: ``segments * n`` must then be at most :data:`MAX_NODE_VALUES`.
+    name : str
+        How the message names the argument.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    ModelError
+        If ``segments`` is not an integer from 1 to :data:`MAX_SEGMENTS` (not a number, not finite, a
+        fraction, a bool), or makes more than :data:`MAX_NODE_VALUES` node values with ``n`` states.
+    """
+    try:
+        whole = not isinstance(segments, bool) and int(segments) == segments
+    except (TypeError, ValueError, OverflowError):
+        whole = False
+    why = (f"each segment holds an n x n transfer matrix and costs an integration per Newton step, and the Newton "
+           f"system is dense in the m n node values; {MAX_SEGMENTS} segments bring a multiplier of 1e300 down to 2 "
+           f"per segment")
+    if not whole or not 1 <= segments <= MAX_SEGMENTS:
+        raise ModelError(f"{name} must be a positive integer of at most {MAX_SEGMENTS} ({why}), got {segments!r}")
+    segments = int(segments)
+    if n is not None and segments * n > MAX_NODE_VALUES:
+        raise ModelError(
+            f"{name} = {segments} with {n} states makes {segments * n} node values, more than the {MAX_NODE_VALUES} "
+            f"multiple shooting takes (its Newton matrix is dense: (m n)^2 numbers); at most "
+            f"{MAX_NODE_VALUES // n} segments for this model")
+    return segments
+
+
 #: Newton steps of an autonomous orbit that make the period longer than this many times its guess are
 #: shortened (as steps that do not reduce the residual): a period near zero can throw the next iterate far away.
 PERIOD_GROWTH = 100.0
@@ -1437,7 +1485,8 @@ def find_periodic_orbit(
         (:class:`MultipleShootingProblem`), for strongly unstable orbits, long periods and large
         models.  ``state0`` is then either one state (the nodes are taken from its trajectory, which
         on a strongly unstable orbit drifts away within the period) or a guess of every node, shape
-        ``(m, n)``, at ``t0 + i T / m``.
+        ``(m, n)``, at ``t0 + i T / m``.  At most :data:`MAX_SEGMENTS`, and ``m n`` at most
+        :data:`MAX_NODE_VALUES` (the Newton matrix of multiple shooting is dense).
     transient_length : float, optional
         Length of the transient of an autonomous model, when one is needed
         (:data:`saltation.orbits.start.TRANSIENT_TIME` by default).
@@ -1488,6 +1537,7 @@ def find_periodic_orbit(
     """
     if not isinstance(flow, Flow):  # a model
         flow = Flow(flow, tolerances=tolerances)
+    segments = check_segments(segments, flow.system.n)  # (before a transient is integrated for a guess)
     if state0 is not None and np.ndim(state0) == 2 and period is None and flow.system.is_autonomous:
         raise ModelError(f"a guess of every node of the autonomous model {flow.system.name!r} needs a period guess")
     prob = ShootingProblem(flow, parameters, backward=backward, t0=t0, tolerances=tolerances, mode0=mode0)
@@ -1553,12 +1603,14 @@ class MultipleShootingProblem:
     problem : ShootingProblem
         The single-shooting problem of the orbit (one forcing period).
     segments : int
-        The number of segments ``m`` (at least 1; 1 is single shooting written as this problem).
+        The number of segments ``m`` (at least 1; 1 is single shooting written as this problem), at most
+        :data:`MAX_SEGMENTS`, and ``m n`` at most :data:`MAX_NODE_VALUES` (the Newton matrix is dense).
 
     Raises
     ------
     ModelError
-        If ``segments`` is not a positive integer, or ``problem`` closes after several forcing periods.
+        If ``segments`` is not a positive integer of at most :data:`MAX_SEGMENTS` (and :data:`MAX_NODE_VALUES`
+        node values), or ``problem`` closes after several forcing periods.
 
     References
     ----------
@@ -1568,12 +1620,11 @@ class MultipleShootingProblem:
     """
 
     def __init__(self, problem: ShootingProblem, segments: int):
-        if isinstance(segments, bool) or int(segments) != segments or segments < 1:
-            raise ModelError(f"segments must be a positive integer, got {segments!r}")
+        segments = check_segments(segments, problem.system.n)
         if problem.periods != 1:
             raise ModelError("multiple shooting of an orbit of several forcing periods: give segments for one period")
         self.problem = problem
-        self.segments = int(segments)
+        self.segments = segments
         self.n = problem.system.n
         # what the continuation engine reads of a problem (the base problem's)
         self.flow, self.system, self.p = problem.flow, problem.system, problem.p
