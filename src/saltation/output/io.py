@@ -99,6 +99,23 @@ PERIOD_MAP_FORMAT = "saltation.period_map"
 FORMAT_VERSION = 1
 EVENT_SEPARATOR = ";"
 
+#: Every ``"format"`` string the library has ever written, and what it reads it as: ``(format,
+#: versioned)``, the current format of the file and whether the file also carries ``"version"``
+#: (:data:`FORMAT_VERSION`). A record of an earlier release reads as the current one (the fields it
+#: lacks take their defaults); a name not listed here is refused.
+FORMAT_NAMES: dict[str, tuple[str, bool]] = {
+    BRANCH_FORMAT: (BRANCH_FORMAT, True),  # branch JSON, each branch of a diagram, a CSV's side file
+    DIAGRAM_FORMAT: (DIAGRAM_FORMAT, True),
+    SWEEP_FORMAT: (SWEEP_FORMAT, True),
+    PERIOD_MAP_FORMAT: (PERIOD_MAP_FORMAT, True),
+    # before the re-layout of the package into folders (2026-11-22 to 2026-11-25)
+    "saltation.branch": (BRANCH_FORMAT, True),
+    "saltation.diagram": (DIAGRAM_FORMAT, True),
+    # before the format and its version were two keys (2026-11-22 to 2026-11-25)
+    "saltation.sweep/1": (SWEEP_FORMAT, False),
+    "saltation.period_map/1": (PERIOD_MAP_FORMAT, False),
+}
+
 PathType = str | PathLike[str]
 T = TypeVar("T")
 
@@ -477,16 +494,24 @@ def format_header(name: str) -> dict[str, Any]:
 
 
 def _check_format(d: Any, expected: str, fields: _Fields, where: str = "", *, legacy: str | None = None) -> dict[str, Any]:
-    """``d`` as an object of format ``expected``, version :data:`FORMAT_VERSION` (:func:`format_header`);
-    ``legacy`` is the single ``"format"`` string that files of earlier releases wrote instead of the two keys."""
+    """``d`` as an object of format ``expected``, version :data:`FORMAT_VERSION` (:func:`format_header`),
+    or of a name an earlier release wrote for it (:data:`FORMAT_NAMES`); ``legacy`` is one more
+    single ``"format"`` string (without ``"version"``) to accept."""
     d = fields.obj(d, where or "(top level)")
     fmt = d.get("format", _MISSING)
     if fmt is _MISSING:
         fields.fail(_sub(where, "format"), f"missing: not a {expected} file")
-    if legacy is not None and fmt == legacy and "version" not in d:
+    known = FORMAT_NAMES.get(fmt) if isinstance(fmt, str) else None
+    if known is None and legacy is not None and fmt == legacy:
+        known = (expected, False)
+    if known is None or known[0] != expected:
+        earlier = [repr(name) for name, (current, _) in FORMAT_NAMES.items() if current == expected and name != expected]
+        also = f" (earlier releases wrote {' or '.join(earlier)})" if earlier else ""
+        what = f" (a {known[0]} file of an earlier release)" if known is not None and known[0] != fmt else ""
+        fields.fail(_sub(where, "format"), f"expected format {expected!r}, found {_show(fmt)}{what}: "
+                    f"not a {expected} record{also}")
+    if not known[1] and "version" not in d:  # the name says the version
         return d
-    if fmt != expected:
-        fields.fail(_sub(where, "format"), f"expected format {expected!r}, found {_show(fmt)}: not a {expected} record")
     version = d.get("version", _MISSING)
     if version is _MISSING:
         fields.fail(_sub(where, "version"), "missing")

@@ -1,0 +1,126 @@
+"""Files and messages that must not mislead.
+
+* Every ``"format"`` string the library ever wrote (:data:`saltation.output.io.FORMAT_NAMES`) reads
+  as its current format: the files of ``tests/data/old_formats`` (written by earlier releases, see
+  its README) load to the branch, diagram, CSV, sweep and period map they were written from.
+* Saving onto something that is not a regular file (a named pipe, a device) is refused, naming the
+  path and what it is, and leaves it in place.
+* Messages say what is true: a state too large for the integration, an infinite value in a mode,
+  an unencodable field of a branch, an expression too deep to simplify.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from saltation.apps.sweeps import PeriodMap, SweepResult, SweepStart
+from saltation.branches.branch import BranchKind, SpecialPointKind, StopReason
+from saltation.output import io
+from saltation.output.io import FileFormatError
+
+OLD = Path(__file__).parent / "data" / "old_formats"
+RELEASES = sorted(p.name for p in OLD.iterdir() if p.is_dir())
+
+
+# ---------------------------------------------------------------------------------------------
+# files of earlier releases
+# ---------------------------------------------------------------------------------------------
+
+def check_old_branch(b, label: str = "main", n: int = 3) -> None:
+    """``b`` is the branch ``write_old_formats.py`` wrote (every field compared with what it set)."""
+    assert (b.model, b.parameter_name, b.kind, b.label, b.backward, b.autonomous) == (
+        "trilinear", "omega", BranchKind.PERIODIC, label, False, False)
+    assert b.stop_reason is StopReason.MAX_POINTS
+    assert b.fixed_parameters == {"zeta": 0.05, "g": 2.0}
+    assert len(b.points) == n
+    for k, p in enumerate(b.points):
+        lam = 1.0 + 0.25 * k
+        assert (p.parameter, p.period, p.amplitude, p.half_peak_to_peak) == (lam, 2 * np.pi / lam, 1.5 + k / 4,
+                                                                             1.25 + k / 4)
+        assert np.array_equal(p.state, [0.5 + k / 8, -0.25])
+        assert np.array_equal(p.multipliers, [0.5 + 0.25j, 0.5 - 0.25j])
+        assert (p.stable, p.event_labels, p.step, p.iterations) == (True, ("hit stop", "leave stop"), 0.125, 3)
+    (sp,) = b.special_points
+    assert (sp.kind, sp.parameter, tuple(sp.bracket), sp.accuracy, sp.index, sp.period, sp.amplitude, sp.note) == (
+        SpecialPointKind.FOLD, 1.375, (1.25, 1.5), 0.25, 1, 4.5, 1.75, "smooth fold")
+    assert np.array_equal(sp.state, [0.625, -0.25]) and np.array_equal(sp.multipliers, [1.0, 0.25])
+
+
+def written_format(path: Path) -> str:
+    return json.loads(path.read_text())["format"]
+
+
+@pytest.mark.parametrize("release", RELEASES)
+def test_branch_diagram_and_csv_files_of_earlier_releases_read(release):
+    """A branch JSON (``"saltation.branch"``), a diagram (``"saltation.diagram"``, whose branches say
+    ``"saltation.branch"``) and a CSV with its side file (``"saltation.branch"``) of each earlier release
+    read back to the branch they were written from."""
+    folder = OLD / release
+    assert written_format(folder / "branch.json") == "saltation.branch"
+    assert written_format(folder / "branch.meta.json") == "saltation.branch"
+    assert written_format(folder / "diagram.json") == "saltation.diagram"
+    check_old_branch(io.load_branch_json(folder / "branch.json"))
+    main, second = io.load_diagram_json(folder / "diagram.json")
+    check_old_branch(main)
+    check_old_branch(second, "second", 2)
+    check_old_branch(io.load_branch_csv(folder / "branch.csv"))
+
+
+@pytest.mark.parametrize("release", [r for r in RELEASES if (OLD / r / "sweep.json").exists()])
+def test_sweep_and_period_map_files_of_earlier_releases_read(release):
+    """A sweep (``"saltation.sweep/1"``) and a period map (``"saltation.period_map/1"``), with no
+    ``"version"`` key, read back to what was written (without ``start``: each value from the previous)."""
+    folder = OLD / release
+    assert written_format(folder / "sweep.json") == "saltation.sweep/1"
+    assert written_format(folder / "period_map.json") == "saltation.period_map/1"
+    s = SweepResult.load(folder / "sweep.json")
+    assert (s.model, s.parameter_name, s.section, s.state_names, s.start) == (
+        "trilinear", "omega", "poincare", ("x", "v"), SweepStart.PREVIOUS)
+    assert s.values.tolist() == [1.0, 1.5] and s.counts.tolist() == [2, 1]
+    assert s.parameter_points.tolist() == [1.0, 1.0, 1.5]
+    assert s.states.tolist() == [[0.5, -0.25], [0.75, 0.125], [0.625, 0.0]]
+    assert s.settings == {"periods": 4, "transient": 2}
+    m = PeriodMap.load(folder / "period_map.json")
+    assert (m.model, m.parameter_name, m.parameter2_name, m.max_period, m.start) == (
+        "trilinear", "omega", "zeta", 8, SweepStart.PREVIOUS)
+    assert m.values.tolist() == [1.0, 1.5] and m.values2.tolist() == [0.0, 0.05, 0.1]
+    assert m.periods.tolist() == [[1, 2], [1, -1], [4, 1]]
+    assert m.failures == ((1.5, 0.05, "no convergence"),)
+
+
+def test_every_format_string_ever_written_is_in_the_table():
+    """The table holds the four current formats (each its own, with ``"version"``) and every name the
+    fixtures of earlier releases hold, each mapped to the current format of that kind of file."""
+    current = {io.BRANCH_FORMAT, io.DIAGRAM_FORMAT, io.SWEEP_FORMAT, io.PERIOD_MAP_FORMAT}
+    assert {name: io.FORMAT_NAMES[name] for name in current} == {name: (name, True) for name in current}
+    kinds = {"branch.json": io.BRANCH_FORMAT, "branch.meta.json": io.BRANCH_FORMAT, "diagram.json": io.DIAGRAM_FORMAT,
+             "sweep.json": io.SWEEP_FORMAT, "period_map.json": io.PERIOD_MAP_FORMAT}
+    seen = set()
+    for path in OLD.glob("*/*.json"):
+        name = written_format(path)
+        seen.add(name)
+        assert io.FORMAT_NAMES[name][0] == kinds[path.name], path
+        assert io.FORMAT_NAMES[name][1] == ("version" in json.loads(path.read_text())), path
+    assert seen | current == set(io.FORMAT_NAMES)
+
+
+def test_a_file_of_another_kind_is_refused_naming_both(tmp_path):
+    """An old diagram given to the branch loader, or an old branch to the diagram loader, is refused as
+    what it is; an unknown name is refused."""
+    with pytest.raises(FileFormatError) as info:
+        io.load_branch_json(OLD / "2026-11-25" / "diagram.json")
+    assert info.value.field == "format"
+    assert "found \"saltation.diagram\" (a saltation.apps.diagram file of an earlier release)" in str(info.value)
+    assert "earlier releases wrote 'saltation.branch'" in str(info.value)
+    with pytest.raises(FileFormatError, match="not a saltation.apps.diagram record"):
+        io.load_diagram_json(OLD / "2026-11-25" / "branch.json")
+    d = json.loads((OLD / "2026-11-25" / "branch.json").read_text())
+    for bad in ("saltation.branch/1", "saltation.sweep"):
+        d["format"] = bad
+        (tmp_path / "b.json").write_text(json.dumps(d))
+        with pytest.raises(FileFormatError, match="not a saltation.branches.branch record"):
+            io.load_branch_json(tmp_path / "b.json")
