@@ -12,6 +12,8 @@
 from __future__ import annotations
 
 import json
+import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -124,3 +126,64 @@ def test_a_file_of_another_kind_is_refused_naming_both(tmp_path):
         (tmp_path / "b.json").write_text(json.dumps(d))
         with pytest.raises(FileFormatError, match="not a saltation.branches.branch record"):
             io.load_branch_json(tmp_path / "b.json")
+
+
+# ---------------------------------------------------------------------------------------------
+# saving onto something that is not a regular file
+# ---------------------------------------------------------------------------------------------
+
+def old_branch():
+    return io.load_branch_json(OLD / "2026-11-25" / "branch.json")
+
+
+def refused_onto(save, target: Path, kind: str) -> None:
+    """``save(target)`` raises FileExistsError naming ``target`` and ``kind``; ``target`` keeps its kind and
+    no other file appears in its folder."""
+    mode = os.lstat(target).st_mode
+    before = sorted(os.listdir(target.parent))
+    with pytest.raises(FileExistsError) as info:
+        save(target)
+    assert info.value.filename == str(target)
+    assert f"is {kind}, not a regular file" in str(info.value) and str(target) in str(info.value)
+    assert os.lstat(target).st_mode == mode
+    assert sorted(os.listdir(target.parent)) == before
+
+
+def test_saving_onto_a_named_pipe_is_refused_and_leaves_it(tmp_path):
+    """``save_branch_json`` onto a FIFO used to rename a regular file over it: it is refused, naming the
+    path and what it is, and the pipe stays a pipe (no temporary file is left either)."""
+    pipe = tmp_path / "branch.json"
+    os.mkfifo(pipe)
+    b = old_branch()
+    refused_onto(lambda p: io.save_branch_json(b, p), pipe, "a named pipe (FIFO)")
+    assert stat.S_ISFIFO(os.lstat(pipe).st_mode)
+    # through a symbolic link, and as the side file of a CSV (then neither file of the pair is written)
+    (tmp_path / "link.json").symlink_to(pipe)
+    with pytest.raises(FileExistsError, match="named pipe"):
+        io.save_branch_json(b, tmp_path / "link.json")
+    assert stat.S_ISFIFO(os.lstat(pipe).st_mode) and (tmp_path / "link.json").is_symlink()
+    os.mkfifo(tmp_path / "curve.meta.json")
+    with pytest.raises(FileExistsError, match="curve.meta.json"):
+        io.save_branch_csv(b, tmp_path / "curve.csv")
+    assert not (tmp_path / "curve.csv").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["branch.json", "curve.meta.json", "link.json"]
+
+
+def test_saving_onto_a_device_or_a_folder_is_refused(tmp_path):
+    """A copy of ``/dev/full`` (a character device, where ``mknod`` is permitted) and a folder are refused
+    by every writer; a regular file is still replaced."""
+    folder = tmp_path / "out.json"
+    folder.mkdir()
+    refused_onto(lambda p: io.write_json({"a": 1}, p), folder, "a folder")
+    device = tmp_path / "full"
+    try:
+        os.mknod(device, 0o666 | stat.S_IFCHR, os.makedev(1, 7))
+    except (PermissionError, AttributeError):
+        pass  # not root: the FIFO above stands for every special file
+    else:
+        refused_onto(lambda p: io.save_branch_json(old_branch(), p), device, "a character device")
+        assert stat.S_ISCHR(os.lstat(device).st_mode)
+    plain = tmp_path / "plain.json"
+    plain.write_text("old\n")
+    io.save_branch_json(old_branch(), plain)
+    check_old_branch(io.load_branch_json(plain))

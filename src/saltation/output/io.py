@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import errno
 import io as _io
 import json
 import math
@@ -191,6 +192,24 @@ def _stage(path: Path, data: bytes) -> str:
     return tmp
 
 
+#: What a file that is not a regular one is, by its ``stat`` mode.
+_FILE_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),
+               (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def _refuse_special(path: Path) -> None:
+    """Raise ``FileExistsError`` naming ``path`` if it exists and is not a regular file (a folder, a
+    named pipe, a device, a socket): renaming a file over it would replace it."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return  # absent (or unreadable: the writing says why)
+    if stat.S_ISREG(mode):
+        return
+    kind = next((name for test, name in _FILE_KINDS if test(mode)), "not a regular file")
+    raise OSError(errno.EEXIST, f"is {kind}, not a regular file: not replaced by the file to write", str(path))
+
+
 def _remove(tmp: str) -> None:
     try:
         os.unlink(tmp)
@@ -219,14 +238,17 @@ def write_atomically(files: Mapping[PathType, bytes | str]) -> list[Path]:
     ------
     OSError
         If a folder cannot be created or a file cannot be written (a full disk, no permission),
-        naming the file. No temporary file is left behind, and no file given is changed (unless
+        naming the file; ``FileExistsError`` if a path given exists and is not a regular file (a
+        folder, a named pipe, a device such as ``/dev/null``, a socket), which is left as it is. No temporary file is left behind, and no file given is changed (unless
         the failure is in the renaming itself, after some were replaced).
     """
     targets = [(Path(p), c.encode("utf-8") if isinstance(c, str) else bytes(c)) for p, c in files.items()]
+    reals = [Path(os.path.realpath(path)) if path.is_symlink() else path for path, _ in targets]
+    for real in reals:
+        _refuse_special(real)
     staged: list[tuple[str, Path]] = []
     try:
-        for path, data in targets:
-            real = Path(os.path.realpath(path)) if path.is_symlink() else path
+        for (path, data), real in zip(targets, reals):
             real.parent.mkdir(parents=True, exist_ok=True)
             staged.append((_stage(real, data), real))
         while staged:
