@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import stat
@@ -187,3 +188,33 @@ def test_saving_onto_a_device_or_a_folder_is_refused(tmp_path):
     plain.write_text("old\n")
     io.save_branch_json(old_branch(), plain)
     check_old_branch(io.load_branch_json(plain))
+
+
+# ---------------------------------------------------------------------------------------------
+# messages that say what is true
+# ---------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize(("change", "field", "problem"), [
+    (lambda b: setattr(b, "label", object()), "label", "expected a string, got object <object object at"),
+    (lambda b: setattr(b, "label", b"main"), "label", "expected a string, got bytes b'main'"),
+    (lambda b: b.special_points.__setitem__(0, dataclasses.replace(b.special_points[0], note=3)),
+     "special_points[0].note", "expected a string, got int 3"),
+    (lambda b: b.points.__setitem__(2, dataclasses.replace(b.points[2], event_labels=("hit stop", None))),
+     "points[2].event_labels[1]", "expected a string, got NoneType None"),
+    (lambda b: b.points.__setitem__(1, dataclasses.replace(b.points[1], parameter="x")),
+     "points[1].parameter", "str 'x' (ValueError: could not convert string to float"),
+])
+def test_a_field_that_cannot_be_written_is_named(tmp_path, change, field, problem):
+    """A branch holding a value its file cannot hold (a label that is an object or bytes, ...) is refused
+    by the JSON and CSV writers with UnwritableFieldError (a TypeError) naming the field, before any file
+    is written (an object's label was written as its repr before)."""
+    b = old_branch()
+    change(b)
+    for save, name in ((io.save_branch_json, "b.json"), (io.save_branch_csv, "b.csv"),
+                       (lambda b, p: io.save_diagram_json([b], p), "d.json")):
+        with pytest.raises(io.UnwritableFieldError) as info:
+            save(b, tmp_path / name)
+        assert isinstance(info.value, TypeError)
+        assert info.value.field.endswith(field) and problem in info.value.problem
+        assert str(info.value).startswith(f"cannot write field {info.value.field}: ")
+    assert list(tmp_path.iterdir()) == []

@@ -76,6 +76,7 @@ from saltation.errors import SaltationError
 
 __all__ = [
     "FileFormatError",
+    "UnwritableFieldError",
     "branch_from_dict",
     "branch_to_dict",
     "csv_metadata_path",
@@ -141,6 +142,54 @@ class FileFormatError(SaltationError, ValueError):
     def __init__(self, source: str, field: str, problem: str):
         self.source, self.field, self.problem = str(source), field, problem
         super().__init__(f"{self.source}: {field}: {problem}" if field else f"{self.source}: {problem}")
+
+
+class UnwritableFieldError(SaltationError, TypeError):
+    """A field of a record cannot be written to its file (a label that is not a string, a number
+    that is not a number), raised before anything is written.
+
+    Attributes
+    ----------
+    field : str
+        The field, e.g. ``"label"``, ``"special_points[1].note"``, ``"points[3].event_labels[0]"``.
+    problem : str
+        What is wrong with its value.
+    """
+
+    def __init__(self, field: str, problem: str):
+        self.field, self.problem = field, problem
+        super().__init__(f"cannot write field {field}: {problem}")
+
+
+def _enc_str(s: Any) -> str:
+    if not isinstance(s, str):
+        raise UnwritableFieldError("", f"expected a string, got {type(s).__name__} {_short(s)}")
+    return str(s)
+
+
+def _enc_strs(items: Any) -> list[str]:
+    return _enc_items(_enc_str)(items)
+
+
+def _enc_items(enc: Callable[[Any], Any]) -> Callable[[Any], list[Any]]:
+    """An encoder of a list whose items ``enc`` encodes, naming the item that fails."""
+
+    def encode(items: Any) -> list[Any]:
+        out = []
+        for k, x in enumerate(items):
+            try:
+                out.append(enc(x))
+            except UnwritableFieldError as exc:
+                raise UnwritableFieldError(f"[{k}]" + (f".{exc.field}" if exc.field and exc.field[0] != "[" else exc.field),
+                                           exc.problem) from None
+        return out
+
+    return encode
+
+
+def _short(v: Any) -> str:
+    text = repr(v)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 # ---------------------------------------------------------------------------
@@ -239,8 +288,9 @@ def write_atomically(files: Mapping[PathType, bytes | str]) -> list[Path]:
     OSError
         If a folder cannot be created or a file cannot be written (a full disk, no permission),
         naming the file; ``FileExistsError`` if a path given exists and is not a regular file (a
-        folder, a named pipe, a device such as ``/dev/null``, a socket), which is left as it is. No temporary file is left behind, and no file given is changed (unless
-        the failure is in the renaming itself, after some were replaced).
+        folder, a named pipe, a device such as ``/dev/null``, a socket), which is left as it is.
+        No temporary file is left behind, and no file given is changed (unless the failure is in
+        the renaming itself, after some were replaced).
     """
     targets = [(Path(p), c.encode("utf-8") if isinstance(c, str) else bytes(c)) for p, c in files.items()]
     reals = [Path(os.path.realpath(path)) if path.is_symlink() else path for path, _ in targets]
@@ -641,11 +691,11 @@ _BY_TYPE: dict[str, tuple[Encoder, Decoder]] = {
     "float": (lambda x: _enc_float(x), _dec("real")),
     "bool": (bool, _dec("boolean")),
     "int": (int, _dec("integer")),
-    "str": (str, _dec("string")),
-    "tuple[str, ...]": (list, _dec("strings")),
+    "str": (_enc_str, _dec("string")),
+    "tuple[str, ...]": (_enc_strs, _dec("strings")),
     "tuple[float, ...]": (lambda a: [_enc_float(x) for x in a], _as_tuple(_dec("reals"))),
     "float | None": (lambda x: None if x is None else _enc_float(x), _nullable(_dec("real"))),
-    "str | None": (lambda s: None if s is None else str(s), _nullable(_dec("string"))),
+    "str | None": (lambda s: None if s is None else _enc_str(s), _nullable(_dec("string"))),
     "complex | None": (lambda z: None if z is None else _enc_complex(z), _nullable(_dec("complex"))),
 }
 _REAL_ARRAY = (_enc_real_array, _nullable(_dec("reals")))
@@ -691,7 +741,19 @@ class _Codec:
             self.fields.append((fld.name, *codec, required))
 
     def encode(self, obj: Any) -> dict[str, Any]:
-        return {name: enc(getattr(obj, name)) for name, enc, _, _ in self.fields}
+        """The record as a JSON-ready object; :class:`UnwritableFieldError` names a field that cannot be written."""
+        out = {}
+        for name, enc, _, _ in self.fields:
+            value = getattr(obj, name)
+            try:
+                out[name] = enc(value)
+            except UnwritableFieldError as exc:
+                inner = exc.field if not exc.field or exc.field[0] == "[" else "." + exc.field
+                raise UnwritableFieldError(name + inner, exc.problem) from None
+            except (TypeError, ValueError, OverflowError, AttributeError) as exc:
+                raise UnwritableFieldError(name, f"{type(value).__name__} {_short(value)} ({type(exc).__name__}: "
+                                           f"{exc})") from None
+        return out
 
     def decode(self, f: _Fields, v: Any, where: str, **given: Any) -> Any:
         """The record from its object ``v`` (the field path ``where``); ``given`` are the skipped fields."""
@@ -794,7 +856,7 @@ _BRANCH_CODEC = _Codec(
     Branch,
     {
         "kind": _enum(BranchKind),
-        "special_points": (lambda sps: [_special_point_to_dict(sp) for sp in sps],
+        "special_points": (_enc_items(lambda sp: _special_point_to_dict(sp)),
                            _dec_list(lambda f, v, field, done: _special_point_from_dict(v, f, field))),
         "stop_reason": _STOP,
         "stop_reasons": (lambda rs: [_enc_stop(r) for r in rs], _dec_list(_STOP[1])),
@@ -825,7 +887,10 @@ def branch_to_dict(branch: Branch) -> dict[str, Any]:
         docstring (no bare infinities or NaNs, complex numbers as ``[re, im]``).
     """
     d = _metadata_to_dict(branch)
-    d["points"] = [_point_to_dict(p) for p in branch.points]
+    try:
+        d["points"] = _enc_items(_point_to_dict)(branch.points)
+    except UnwritableFieldError as exc:
+        raise UnwritableFieldError("points" + exc.field, exc.problem) from None
     return d
 
 
@@ -1085,6 +1150,7 @@ def save_branch_csv(branch: Branch, path: PathType, *, metadata: bool = True) ->
         If a file cannot be written; the old files are untouched.
     """
     path = Path(path)
+    branch_to_dict(branch)  # every field writable, or UnwritableFieldError naming the one that is not
     files: dict[Path, str] = {path: _csv_text(branch)}
     if metadata:
         meta = _metadata_to_dict(branch)
