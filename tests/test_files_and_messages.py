@@ -15,6 +15,7 @@ import dataclasses
 import json
 import os
 import stat
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -218,3 +219,65 @@ def test_a_field_that_cannot_be_written_is_named(tmp_path, change, field, proble
         assert info.value.field.endswith(field) and problem in info.value.problem
         assert str(info.value).startswith(f"cannot write field {info.value.field}: ")
     assert list(tmp_path.iterdir()) == []
+
+
+def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
+    """``saltation ARGV`` in this process: exit status, standard output and error."""
+    from saltation.apps import cli
+
+    try:
+        status = cli.main(list(argv))
+    except SystemExit as exc:
+        status = exc.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_a_finite_start_too_large_for_the_integration_is_said_so(capsys):
+    """``--x0 1e308,1e308`` is finite: it is refused as bad usage (exit status 2) in one line saying that
+    the field of its mode overflows there, with no RuntimeWarning (the check summed the state, which
+    overflowed, and called it not finite); ``--x0 1e200,0``, whose residual's norm overflowed, converges."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        status, out, err = run_cli(capsys, "orbit", "trilinear", "--x0", "1e308,1e308")
+    assert status == 2 and out == ""
+    assert err.count("\n") == 1 and "not finite" not in err.split("field")[0], err
+    assert "--x0 '1e308,1e308': the vector field of mode 'contact_1' is not finite at this state" in err
+    assert "it overflows, the state is too large for the integration" in err
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        status, out, err = run_cli(capsys, "orbit", "trilinear", "--x0", "1e200,0")
+    assert (status, err) == (0, "") and "period       5.235987756" in out
+
+
+def test_a_huge_finite_state_is_finite_for_the_flow(trilinear_flow):
+    """``Flow.run`` from a finite state whose sum overflows says what fails (the field of its mode), not
+    that the state is not finite, and no RuntimeWarning escapes."""
+    from saltation.errors import NonFiniteError
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(NonFiniteError) as info:
+            trilinear_flow.run([1e308, 1e308], 0.0, 1.0, trilinear_flow.parameters())
+    assert "the vector field of mode 'contact_1' returned NaN or infinity at t = 0" in str(info.value)
+    assert "initial state" not in str(info.value)
+
+
+@pytest.mark.parametrize(("expression", "says"), [
+    ("oo", "'oo' is not finite: it is infinite"), ("-oo", "'-oo' is not finite: it is infinite"), ("x*oo", "'x*oo' is not finite: it is infinite"),
+    ("zoo", "'zoo' is not finite: it is infinite"), ("nan", "'nan' is not finite: it is not a number (NaN)"),
+    ("2 + 3*I", "'2 + 3*I' is complex-valued"),
+    ("sin(-Pow(2.5, 1e308))", "sympy cannot evaluate expression 'sin(-Pow(2.5, 1e308))' (RecursionError"),
+])
+def test_a_field_expression_is_refused_for_what_it_is(expression, says):
+    """An infinite field (``oo``) was refused as complex-valued, and ``sin(-Pow(2.5, 1e308))`` raised a
+    RecursionError: each is a ModelError naming the mode and the expression, saying what is wrong."""
+    from saltation import Crossing, Mode, ModelError, PiecewiseSystem, Transition
+
+    with pytest.raises(ModelError) as info:
+        PiecewiseSystem(name="m", states=["x", "v"], parameters={"a": 1.0},
+                        modes=[Mode("m1", ["v", expression]), Mode("m2", ["v", "-x"])], surfaces={"wall": "x - a"},
+                        transitions=[Transition("m1", "wall", Crossing.RISING, "m2"),
+                                     Transition("m2", "wall", Crossing.FALLING, "m1")])
+    assert str(info.value).startswith("mode 'm1', field component 1: ")
+    assert says in str(info.value)
