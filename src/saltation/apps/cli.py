@@ -305,6 +305,31 @@ def parse_vector(text: str, system: PiecewiseSystem, option: str = "--x0") -> np
     return np.array(values)
 
 
+def check_start_field(flow, x0: np.ndarray, p: np.ndarray, text: str, t0: float = 0.0,
+                      mode0: str | None = None, option: str = "--x0") -> None:
+    """Bad usage if the field of the start's mode is not finite at ``x0`` (a finite state too large for
+    the integration: its field overflows), naming the option, the mode and the field.
+
+    Raises
+    ------
+    UsageError
+        If the vector field at ``(t0, x0)`` holds an infinity or a NaN.
+    """
+    try:
+        mode = flow.start_mode(x0, p, t0, mode0)
+    except SaltationError:
+        return  # the run says why (a state in no mode's domain, a mode0 that does not hold it)
+    with np.errstate(all="ignore"):
+        field = flow.vector_field(mode, t0, x0, p)
+    if np.isfinite(field).all():
+        return
+    name = flow.system.mode_names[mode]
+    why = (": it overflows, the state is too large for the integration"
+           if np.isinf(field).any() and np.max(np.abs(x0)) > 1e100 else "")
+    raise UsageError(f"{option} {text!r}: the vector field of mode {name!r} is not finite at this state "
+                     f"({', '.join(_fmt(v) for v in field)}){why}")
+
+
 def _non_negative(option: str) -> Callable[[str], float]:
     """A converter of a non-negative finite number."""
 
@@ -696,6 +721,8 @@ def cmd_orbit(args: argparse.Namespace) -> int:
         period = None  # shooting takes the forcing period
     flow = make_flow(system)
     p = flow.parameters(overrides)
+    if x0 is not None:
+        check_start_field(flow, x0, p, args.x0, t0, mode0)
     if x0 is None or (system.is_autonomous and period is None):
         traj, _ = transient(flow, args.model, p, x0, t0=t0, backward=args.backward, mode0=mode0)
         if x0 is None:  # the guess is the transient's end, in the mode it ends in

@@ -328,7 +328,7 @@ class SweepResult:
             value's); the message names ``source`` and the field.
         """
         f = _Fields(source)
-        d = check_format(d, SWEEP_FORMAT, f, legacy="saltation.sweep/1")  # (the one key of files before 2026-11-26)
+        d = check_format(d, SWEEP_FORMAT, f)  # (or a name of an earlier release: FORMAT_NAMES)
         names = f.take(d, "", "state_names", f.strings)
         if not names:
             f.fail("state_names", "expected at least one state name")
@@ -770,7 +770,7 @@ class PeriodMap:
             value of ``values2``); the message names ``source`` and the field.
         """
         f = _Fields(source)
-        d = check_format(d, PERIOD_MAP_FORMAT, f, legacy="saltation.period_map/1")  # (files before 2026-11-26)
+        d = check_format(d, PERIOD_MAP_FORMAT, f)  # (or a name of an earlier release: FORMAT_NAMES)
         values = f.take(d, "", "values", lambda v, field: f.reals(v, field, finite=True))
         values2 = f.take(d, "", "values2", lambda v, field: f.reals(v, field, finite=True))
         max_period = f.take(d, "", "max_period", lambda v, field: f.integer(v, field, minimum=1))

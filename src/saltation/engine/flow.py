@@ -972,10 +972,10 @@ class Flow:
         x0 = np.array(x0, dtype=float).reshape(-1)  # a copy: the trajectory keeps it
         if x0.shape != (sys_.n,):
             raise ModelError(f"initial state must have {sys_.n} components {list(sys_.state_names)}, got {x0.size}")
-        if not math.isfinite(x0.sum()):
+        if not np.isfinite(x0).all():  # (a sum of finite values may overflow)
             raise ModelError(f"initial state {x0.tolist()} is not finite")
         p = _c_array(p)
-        if p.shape != (sys_.n_params,) or not math.isfinite(p.sum()):
+        if p.shape != (sys_.n_params,) or not np.isfinite(p).all():
             raise ModelError(f"parameters of {sys_.name!r}: expected {sys_.n_params} finite values "
                              f"{list(sys_.parameter_names)}, got {p.tolist()}")
         t0, t1 = float(t0), float(t1)

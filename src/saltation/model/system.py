@@ -191,6 +191,10 @@ def _sympify(value: Expr, symbols: Mapping[str, sp.Symbol], where: str, *, relat
         raise
     except (sp.SympifyError, SyntaxError, TypeError, AttributeError, ValueError, ZeroDivisionError) as exc:
         raise ModelError(f"{where}: cannot parse expression {value!r}: {type(exc).__name__}: {exc}") from None
+    except (RecursionError, OverflowError, MemoryError) as exc:  # sympy evaluating while it parses
+        raise ModelError(f"{where}: sympy cannot evaluate expression {value!r} ({type(exc).__name__}: "
+                         f"{' '.join(str(exc).split())[:200]}): it is nested too deeply or holds a number too large "
+                         "for sympy; simplify it") from None
     if not isinstance(expr, sp.Basic):
         raise ModelError(f"{where}: {value!r} is not an expression")
     if isinstance(expr, Boolean) and not isinstance(expr, sp.Expr) and not relation:
@@ -208,10 +212,11 @@ def _sympify(value: Expr, symbols: Mapping[str, sp.Symbol], where: str, *, relat
         )
     # Re-bind symbols created elsewhere with other assumptions to ours.
     expr = expr.xreplace({s: symbols[s.name] for s in expr.free_symbols})
+    if any(expr.has(z) for z in _NOT_FINITE):  # (first: sympy's oo is not "real" either)
+        infinite = "infinite" if any(expr.has(z) for z in (sp.oo, -sp.oo, sp.zoo)) else "not a number (NaN)"
+        raise ModelError(f"{where}: {value!r} is not finite: it is {infinite} (it evaluates to {expr})")
     if expr.has(sp.I) or any(a.is_real is False for a in expr.atoms(sp.Number)):
         raise ModelError(f"{where}: {value!r} is complex-valued; a model's expressions are real")
-    if any(expr.has(z) for z in _NOT_FINITE):
-        raise ModelError(f"{where}: {value!r} is not finite (it evaluates to {expr})")
     return expr
 
 

@@ -292,6 +292,17 @@ def stationary_floor(tolerances: Tolerances, size: float) -> float:
     return min(STATIONARY_FACTOR * (tolerances.atol + tolerances.rtol * scale), STATIONARY_FRACTION * scale)
 
 
+def _norm(v: np.ndarray) -> float:
+    """The 2-norm of ``v``, scaled so that it overflows only when the norm itself exceeds the largest
+    float (``np.linalg.norm`` squares the entries: a residual of ``1e200`` would read as infinite)."""
+    with np.errstate(over="ignore"):
+        norm = float(np.linalg.norm(v))
+        if math.isfinite(norm) or not np.isfinite(v).all():
+            return norm
+        big = float(np.max(np.abs(v)))
+        return big * float(np.linalg.norm(np.asarray(v, dtype=float) / big))
+
+
 def newton(
     fun, u0: np.ndarray, *, tol: float = 1e-10, max_iter: int = 30, what: str = "Newton", damped: bool = False
 ) -> tuple[np.ndarray, list[float], object]:
@@ -338,11 +349,13 @@ def newton(
     history: list[float] = []
     r, J, extra = fun(u)
     for it in range(max_iter + 1):
-        rn = float(np.linalg.norm(r))
+        rn = _norm(r)
         history.append(rn)
         if not np.isfinite(rn):
-            raise ConvergenceError(f"{what}: residual is not finite at iteration {it}", history)
-        if rn <= tol * (1.0 + float(np.linalg.norm(u))):
+            why = ("not finite" if not np.isfinite(r).all() else
+                   f"too large for a float (its entries reach {float(np.max(np.abs(r))):.3g})")
+            raise ConvergenceError(f"{what}: residual is {why} at iteration {it}", history)
+        if rn <= tol * (1.0 + _norm(u)):
             return u, history, extra
         if it == max_iter:
             break
@@ -356,7 +369,7 @@ def newton(
                 trial = fun(u + du)
             except SaltationError:
                 trial = None
-            if trial is not None and (not damped or np.linalg.norm(trial[0]) < rn):
+            if trial is not None and (not damped or _norm(trial[0]) < rn):
                 break
             du = 0.5 * du
             trial = None

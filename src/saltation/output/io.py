@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import errno
 import io as _io
 import json
 import math
@@ -75,6 +76,7 @@ from saltation.errors import SaltationError
 
 __all__ = [
     "FileFormatError",
+    "UnwritableFieldError",
     "branch_from_dict",
     "branch_to_dict",
     "csv_metadata_path",
@@ -98,6 +100,23 @@ SWEEP_FORMAT = "saltation.sweep"
 PERIOD_MAP_FORMAT = "saltation.period_map"
 FORMAT_VERSION = 1
 EVENT_SEPARATOR = ";"
+
+#: Every ``"format"`` string the library has ever written, and what it reads it as: ``(format,
+#: versioned)``, the current format of the file and whether the file also carries ``"version"``
+#: (:data:`FORMAT_VERSION`). A record of an earlier release reads as the current one (the fields it
+#: lacks take their defaults); a name not listed here is refused.
+FORMAT_NAMES: dict[str, tuple[str, bool]] = {
+    BRANCH_FORMAT: (BRANCH_FORMAT, True),  # branch JSON, each branch of a diagram, a CSV's side file
+    DIAGRAM_FORMAT: (DIAGRAM_FORMAT, True),
+    SWEEP_FORMAT: (SWEEP_FORMAT, True),
+    PERIOD_MAP_FORMAT: (PERIOD_MAP_FORMAT, True),
+    # before the re-layout of the package into folders (2026-11-22 to 2026-11-25)
+    "saltation.branch": (BRANCH_FORMAT, True),
+    "saltation.diagram": (DIAGRAM_FORMAT, True),
+    # before the format and its version were two keys (2026-11-22 to 2026-11-25)
+    "saltation.sweep/1": (SWEEP_FORMAT, False),
+    "saltation.period_map/1": (PERIOD_MAP_FORMAT, False),
+}
 
 PathType = str | PathLike[str]
 T = TypeVar("T")
@@ -123,6 +142,54 @@ class FileFormatError(SaltationError, ValueError):
     def __init__(self, source: str, field: str, problem: str):
         self.source, self.field, self.problem = str(source), field, problem
         super().__init__(f"{self.source}: {field}: {problem}" if field else f"{self.source}: {problem}")
+
+
+class UnwritableFieldError(SaltationError, TypeError):
+    """A field of a record cannot be written to its file (a label that is not a string, a number
+    that is not a number), raised before anything is written.
+
+    Attributes
+    ----------
+    field : str
+        The field, e.g. ``"label"``, ``"special_points[1].note"``, ``"points[3].event_labels[0]"``.
+    problem : str
+        What is wrong with its value.
+    """
+
+    def __init__(self, field: str, problem: str):
+        self.field, self.problem = field, problem
+        super().__init__(f"cannot write field {field}: {problem}")
+
+
+def _enc_str(s: Any) -> str:
+    if not isinstance(s, str):
+        raise UnwritableFieldError("", f"expected a string, got {type(s).__name__} {_short(s)}")
+    return str(s)
+
+
+def _enc_strs(items: Any) -> list[str]:
+    return _enc_items(_enc_str)(items)
+
+
+def _enc_items(enc: Callable[[Any], Any]) -> Callable[[Any], list[Any]]:
+    """An encoder of a list whose items ``enc`` encodes, naming the item that fails."""
+
+    def encode(items: Any) -> list[Any]:
+        out = []
+        for k, x in enumerate(items):
+            try:
+                out.append(enc(x))
+            except UnwritableFieldError as exc:
+                raise UnwritableFieldError(f"[{k}]" + (f".{exc.field}" if exc.field and exc.field[0] != "[" else exc.field),
+                                           exc.problem) from None
+        return out
+
+    return encode
+
+
+def _short(v: Any) -> str:
+    text = repr(v)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 # ---------------------------------------------------------------------------
@@ -174,6 +241,24 @@ def _stage(path: Path, data: bytes) -> str:
     return tmp
 
 
+#: What a file that is not a regular one is, by its ``stat`` mode.
+_FILE_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),
+               (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def _refuse_special(path: Path) -> None:
+    """Raise ``FileExistsError`` naming ``path`` if it exists and is not a regular file (a folder, a
+    named pipe, a device, a socket): renaming a file over it would replace it."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return  # absent (or unreadable: the writing says why)
+    if stat.S_ISREG(mode):
+        return
+    kind = next((name for test, name in _FILE_KINDS if test(mode)), "not a regular file")
+    raise OSError(errno.EEXIST, f"is {kind}, not a regular file: not replaced by the file to write", str(path))
+
+
 def _remove(tmp: str) -> None:
     try:
         os.unlink(tmp)
@@ -202,14 +287,18 @@ def write_atomically(files: Mapping[PathType, bytes | str]) -> list[Path]:
     ------
     OSError
         If a folder cannot be created or a file cannot be written (a full disk, no permission),
-        naming the file. No temporary file is left behind, and no file given is changed (unless
-        the failure is in the renaming itself, after some were replaced).
+        naming the file; ``FileExistsError`` if a path given exists and is not a regular file (a
+        folder, a named pipe, a device such as ``/dev/null``, a socket), which is left as it is.
+        No temporary file is left behind, and no file given is changed (unless the failure is in
+        the renaming itself, after some were replaced).
     """
     targets = [(Path(p), c.encode("utf-8") if isinstance(c, str) else bytes(c)) for p, c in files.items()]
+    reals = [Path(os.path.realpath(path)) if path.is_symlink() else path for path, _ in targets]
+    for real in reals:
+        _refuse_special(real)
     staged: list[tuple[str, Path]] = []
     try:
-        for path, data in targets:
-            real = Path(os.path.realpath(path)) if path.is_symlink() else path
+        for (path, data), real in zip(targets, reals):
             real.parent.mkdir(parents=True, exist_ok=True)
             staged.append((_stage(real, data), real))
         while staged:
@@ -477,16 +566,24 @@ def format_header(name: str) -> dict[str, Any]:
 
 
 def _check_format(d: Any, expected: str, fields: _Fields, where: str = "", *, legacy: str | None = None) -> dict[str, Any]:
-    """``d`` as an object of format ``expected``, version :data:`FORMAT_VERSION` (:func:`format_header`);
-    ``legacy`` is the single ``"format"`` string that files of earlier releases wrote instead of the two keys."""
+    """``d`` as an object of format ``expected``, version :data:`FORMAT_VERSION` (:func:`format_header`),
+    or of a name an earlier release wrote for it (:data:`FORMAT_NAMES`); ``legacy`` is one more
+    single ``"format"`` string (without ``"version"``) to accept."""
     d = fields.obj(d, where or "(top level)")
     fmt = d.get("format", _MISSING)
     if fmt is _MISSING:
         fields.fail(_sub(where, "format"), f"missing: not a {expected} file")
-    if legacy is not None and fmt == legacy and "version" not in d:
+    known = FORMAT_NAMES.get(fmt) if isinstance(fmt, str) else None
+    if known is None and legacy is not None and fmt == legacy:
+        known = (expected, False)
+    if known is None or known[0] != expected:
+        earlier = [repr(name) for name, (current, _) in FORMAT_NAMES.items() if current == expected and name != expected]
+        also = f" (earlier releases wrote {' or '.join(earlier)})" if earlier else ""
+        what = f" (a {known[0]} file of an earlier release)" if known is not None and known[0] != fmt else ""
+        fields.fail(_sub(where, "format"), f"expected format {expected!r}, found {_show(fmt)}{what}: "
+                    f"not a {expected} record{also}")
+    if not known[1] and "version" not in d:  # the name says the version
         return d
-    if fmt != expected:
-        fields.fail(_sub(where, "format"), f"expected format {expected!r}, found {_show(fmt)}: not a {expected} record")
     version = d.get("version", _MISSING)
     if version is _MISSING:
         fields.fail(_sub(where, "version"), "missing")
@@ -594,11 +691,11 @@ _BY_TYPE: dict[str, tuple[Encoder, Decoder]] = {
     "float": (lambda x: _enc_float(x), _dec("real")),
     "bool": (bool, _dec("boolean")),
     "int": (int, _dec("integer")),
-    "str": (str, _dec("string")),
-    "tuple[str, ...]": (list, _dec("strings")),
+    "str": (_enc_str, _dec("string")),
+    "tuple[str, ...]": (_enc_strs, _dec("strings")),
     "tuple[float, ...]": (lambda a: [_enc_float(x) for x in a], _as_tuple(_dec("reals"))),
     "float | None": (lambda x: None if x is None else _enc_float(x), _nullable(_dec("real"))),
-    "str | None": (lambda s: None if s is None else str(s), _nullable(_dec("string"))),
+    "str | None": (lambda s: None if s is None else _enc_str(s), _nullable(_dec("string"))),
     "complex | None": (lambda z: None if z is None else _enc_complex(z), _nullable(_dec("complex"))),
 }
 _REAL_ARRAY = (_enc_real_array, _nullable(_dec("reals")))
@@ -644,7 +741,19 @@ class _Codec:
             self.fields.append((fld.name, *codec, required))
 
     def encode(self, obj: Any) -> dict[str, Any]:
-        return {name: enc(getattr(obj, name)) for name, enc, _, _ in self.fields}
+        """The record as a JSON-ready object; :class:`UnwritableFieldError` names a field that cannot be written."""
+        out = {}
+        for name, enc, _, _ in self.fields:
+            value = getattr(obj, name)
+            try:
+                out[name] = enc(value)
+            except UnwritableFieldError as exc:
+                inner = exc.field if not exc.field or exc.field[0] == "[" else "." + exc.field
+                raise UnwritableFieldError(name + inner, exc.problem) from None
+            except (TypeError, ValueError, OverflowError, AttributeError) as exc:
+                raise UnwritableFieldError(name, f"{type(value).__name__} {_short(value)} ({type(exc).__name__}: "
+                                           f"{exc})") from None
+        return out
 
     def decode(self, f: _Fields, v: Any, where: str, **given: Any) -> Any:
         """The record from its object ``v`` (the field path ``where``); ``given`` are the skipped fields."""
@@ -747,7 +856,7 @@ _BRANCH_CODEC = _Codec(
     Branch,
     {
         "kind": _enum(BranchKind),
-        "special_points": (lambda sps: [_special_point_to_dict(sp) for sp in sps],
+        "special_points": (_enc_items(lambda sp: _special_point_to_dict(sp)),
                            _dec_list(lambda f, v, field, done: _special_point_from_dict(v, f, field))),
         "stop_reason": _STOP,
         "stop_reasons": (lambda rs: [_enc_stop(r) for r in rs], _dec_list(_STOP[1])),
@@ -778,7 +887,10 @@ def branch_to_dict(branch: Branch) -> dict[str, Any]:
         docstring (no bare infinities or NaNs, complex numbers as ``[re, im]``).
     """
     d = _metadata_to_dict(branch)
-    d["points"] = [_point_to_dict(p) for p in branch.points]
+    try:
+        d["points"] = _enc_items(_point_to_dict)(branch.points)
+    except UnwritableFieldError as exc:
+        raise UnwritableFieldError("points" + exc.field, exc.problem) from None
     return d
 
 
@@ -1038,6 +1150,7 @@ def save_branch_csv(branch: Branch, path: PathType, *, metadata: bool = True) ->
         If a file cannot be written; the old files are untouched.
     """
     path = Path(path)
+    branch_to_dict(branch)  # every field writable, or UnwritableFieldError naming the one that is not
     files: dict[Path, str] = {path: _csv_text(branch)}
     if metadata:
         meta = _metadata_to_dict(branch)
