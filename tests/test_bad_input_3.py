@@ -276,3 +276,22 @@ def test_good_signs_make_the_diagonal_symmetry():
 
     assert Symmetry.of_signs([-1, 1.0]).matrix == ((-1.0, 0.0), (0.0, 1.0))
     assert Symmetry.of_signs((-1, -1)).matrix == ((-1.0, 0.0), (0.0, -1.0))
+
+
+def test_a_band_narrower_than_the_state_resolution_is_refused():
+    """block_on_belt with ``eta = 1e-16`` (half an ulp of ``v_dr = 1``) ran onto the equilibrium without an error;
+    the band between ``band_upper`` and ``band_lower`` (``h_u - h_l = -2 eta``) is no wider than the resolution of
+    its edges there (16 rounding units of ``|v| + |v_dr| + |eta|``, 7.1e-15): a named error.  A band above it runs,
+    and its stick-slip orbit is the one of wider bands (the trajectory from the same start at eta = 1e-14 and
+    1e-10 agree to the integration's accuracy)."""
+    from saltation import Flow
+    from saltation.errors import ModelError
+    from saltation.models import block_on_belt
+
+    flow = Flow(block_on_belt())
+    with pytest.raises(ModelError, match=r"band between surfaces 'band_upper' and 'band_lower' is 2e-16 wide.*eta"):
+        flow.run([0.0, 1.0], 0.0, 100.0, flow.parameters({"eta": 1e-16}))
+    narrow = flow.run([0.0, 1.0], 0.0, 100.0, flow.parameters({"eta": 1e-14})).x1
+    wide = flow.run([0.0, 1.0], 0.0, 100.0, flow.parameters({"eta": 1e-10})).x1
+    # the band's width moves the orbit by O(eta); the integration's error over 100 time units is below 1e-7
+    np.testing.assert_allclose(narrow, wide, atol=1e-7)

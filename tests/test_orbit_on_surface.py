@@ -124,7 +124,10 @@ def test_the_free_whirl_ends_where_it_lies_on_the_clearance_circle(mu, start, bo
     mu_plus = np.linalg.eigvals(contact_side_monodromy(q, w))
     assert unstable_count(sp.multipliers_minus, autonomous=False) == unstable_count(mu_minus, autonomous=False) == 0
     assert unstable_count(sp.multipliers_plus, autonomous=False) == unstable_count(mu_plus, autonomous=False)
-    assert np.max(np.abs(mu_plus)) == pytest.approx(np.max(np.abs(sp.multipliers_plus)), abs=1e-6)
+    # the limit at the point's own parameter: the library integrates the variational equation along its dense
+    # output (rtol 1e-10), and a multiplier of 33.6 of a non-normal matrix amplifies that: 1e-6 relative
+    at_point = np.linalg.eigvals(contact_side_monodromy(q, sp.parameter))
+    assert np.max(np.abs(at_point)) == pytest.approx(np.max(np.abs(sp.multipliers_plus)), rel=1e-6)
     if mu > 0:
         assert np.max(np.abs(mu_plus)) == pytest.approx(1.18356, abs=1e-5)  # the trial's value, to its digits
         assert abs(sp.crossing_point) == pytest.approx(1.0, abs=1e-9) and abs(sp.crossing_point.imag) > 0.1

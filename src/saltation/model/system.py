@@ -29,7 +29,7 @@ import enum
 import math
 import threading
 import unicodedata
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -748,6 +748,21 @@ class PiecewiseSystem(NamedParts):
         """``dh/dt = h_x f + h_t`` of a surface along the field of a mode."""
         d = self.surface_derivatives(surface)
         return sp.expand((d.h_x * self.fields[self.mode_index(mode)])[0, 0] + d.h_t)
+
+    @cached_property
+    def parallel_surfaces(self) -> tuple[tuple[int, int, Callable], ...]:
+        """Pairs of surfaces ``(i, j, gap)`` whose indicators differ by an amount the state does not change:
+        ``h_i - h_j = gap(t, p)`` (the two edges of a band, such as a stick band ``|v - v_dr| < eta``).  A band
+        narrower than the state's resolution cannot be told from its edges (:meth:`Flow.run
+        <saltation.engine.flow.Flow.run>` refuses it)."""
+        out = []
+        for i in range(len(self.indicators)):
+            for j in range(i + 1, len(self.indicators)):
+                gap = sp.simplify(self.indicators[i] - self.indicators[j])
+                if gap.free_symbols & set(self.x) or gap == 0:
+                    continue
+                out.append((i, j, sp.lambdify([self.t, *self.p], gap, modules="math")))
+        return tuple(out)
 
     @cached_property
     def logic_states(self) -> tuple[int, ...]:
