@@ -722,22 +722,30 @@ class Flow:
 
     def _check_bands(self, x0: np.ndarray, t0: float, p: np.ndarray) -> None:
         """Refuse a band between two parallel surfaces (:attr:`~saltation.model.system.PiecewiseSystem.parallel_surfaces`)
-        that is no wider than either edge's resolution at the start, 16 rounding units of the terms of its
-        indicator (as the engine resolves a surface): the integration cannot tell the band's inside from its
-        edges (a stick band of ``eta = 1e-16`` ran onto the equilibrium without an error)."""
-        key = (p.tobytes(), float(t0), int(np.log2(1.0 + float(np.max(np.abs(x0))))))  # checked once per scale
-        checked = self.__dict__.setdefault("_bands_checked", set())
-        if key in checked:
+        that is no wider than either edge's resolution at a state of size 1, 16 rounding units of the terms of its
+        indicator, ``|h_x_i| + |h_t| max(1, |t|) + |h_p_j p_j|`` there (as the engine resolves a surface): the
+        integration cannot tell the band's inside from its edges (a stick band of ``eta = 1e-16`` ran onto the
+        equilibrium without an error).  (A band that only a huge state cannot resolve is the state's problem.)"""
+        key = (p.tobytes(), float(t0))
+        cache = self.__dict__.setdefault("_bands", {"checked": set(), "gaps": None})
+        if key in cache["checked"]:
             return
         sys_ = self.system
+        if cache["gaps"] is None:
+            import sympy as sp
+
+            cache["gaps"] = [(i, j, sp.lambdify([sys_.t, *sys_.p], gap, modules="math"))
+                             for i, j, gap in sys_.parallel_surfaces]
         eps = float(np.finfo(float).eps)
-        for i, j, gap in sys_.parallel_surfaces:
+        unit = np.clip(x0, -1.0, 1.0)  # a state of size 1 on the start's side (a huge start is its own problem)
+        for i, j, gap in cache["gaps"]:
             width = abs(float(gap(t0, *p)))
             resolution = 0.0
             for k in (i, j):
-                hx, ht, hp = self.indicator_gradient(k, t0, x0, p)
-                terms = (np.abs(hx) * np.maximum(1.0, np.abs(x0))).sum() + abs(ht) * max(1.0, abs(t0)) + np.abs(hp * p).sum()
-                resolution = max(resolution, 16.0 * eps * float(terms))
+                hx, ht, hp = self.indicator_gradient(k, t0, unit, p)
+                with np.errstate(all="ignore"):
+                    parts = np.concatenate([np.abs(hx), [abs(ht) * max(1.0, abs(t0))], np.abs(hp * p)])
+                resolution = max(resolution, 16.0 * eps * float(parts[np.isfinite(parts)].sum()))
             if width <= resolution:
                 names = sys_.surface_names
                 raise ModelError(
@@ -745,9 +753,9 @@ class Flow:
                     f"({sys_.indicators[i] - sys_.indicators[j]} at parameters {dict(zip(sys_.parameter_names, p.tolist()))}), "
                     f"no wider than the state's resolution there ({resolution:.3g}): the integration cannot tell the band "
                     f"from its edges; widen it")
-        if len(checked) > 1024:
-            checked.clear()
-        checked.add(key)
+        if len(cache["checked"]) > 1024:
+            cache["checked"].clear()
+        cache["checked"].add(key)
 
     def indicator_gradient(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
         """The derivatives ``(h_x, h_t, h_p)`` of a switching surface's indicator at ``(t, x)``.
@@ -1010,7 +1018,7 @@ class Flow:
         t0, t1 = float(t0), float(t1)
         if not (math.isfinite(t0) and math.isfinite(t1)):
             raise ValueError(f"integration times must be finite, got t0={t0}, t1={t1}")
-        if sys_.parallel_surfaces:
+        if getattr(sys_, "parallel_surfaces", ()):
             self._check_bands(x0, t0, p)
         m0 = self.initial_mode(x0, p, t0) if mode0 is None else sys_.mode_index(mode0)
         sens = sys_.parameter_index(sensitivity) if isinstance(sensitivity, str) else int(sensitivity)

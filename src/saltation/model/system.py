@@ -29,7 +29,7 @@ import enum
 import math
 import threading
 import unicodedata
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -750,10 +750,10 @@ class PiecewiseSystem(NamedParts):
         return sp.expand((d.h_x * self.fields[self.mode_index(mode)])[0, 0] + d.h_t)
 
     @cached_property
-    def parallel_surfaces(self) -> tuple[tuple[int, int, Callable], ...]:
+    def parallel_surfaces(self) -> tuple[tuple[int, int, sp.Expr], ...]:
         """Pairs of surfaces ``(i, j, gap)`` whose indicators differ by an amount the state does not change:
         ``h_i - h_j = gap(t, p)`` (the two edges of a band, such as a stick band ``|v - v_dr| < eta``).  A band
-        narrower than the state's resolution cannot be told from its edges (:meth:`Flow.run
+        narrower than its edges' resolution cannot be told from them (:meth:`Flow.run
         <saltation.engine.flow.Flow.run>` refuses it)."""
         out = []
         for i in range(len(self.indicators)):
@@ -761,7 +761,7 @@ class PiecewiseSystem(NamedParts):
                 gap = sp.simplify(self.indicators[i] - self.indicators[j])
                 if gap.free_symbols & set(self.x) or gap == 0:
                     continue
-                out.append((i, j, sp.lambdify([self.t, *self.p], gap, modules="math")))
+                out.append((i, j, gap))
         return tuple(out)
 
     @cached_property
