@@ -756,10 +756,14 @@ class PiecewiseSystem(NamedParts):
         narrower than its edges' resolution cannot be told from them (:meth:`Flow.run
         <saltation.engine.flow.Flow.run>` refuses it)."""
         out = []
+        states = set(self.x)
+        reads = [h.free_symbols & states for h in self.indicators]
         for i in range(len(self.indicators)):
             for j in range(i + 1, len(self.indicators)):
-                gap = sp.simplify(self.indicators[i] - self.indicators[j])
-                if gap.free_symbols & set(self.x) or gap == 0:
+                if reads[i] != reads[j]:
+                    continue  # (a quick test before the expansion: the pairs are many in a large model)
+                gap = sp.expand(self.indicators[i] - self.indicators[j])
+                if gap.free_symbols & states or gap == 0:
                     continue
                 out.append((i, j, gap))
         return tuple(out)
