@@ -281,3 +281,20 @@ def test_a_field_expression_is_refused_for_what_it_is(expression, says):
                                      Transition("m2", "wall", Crossing.FALLING, "m1")])
     assert str(info.value).startswith("mode 'm1', field component 1: ")
     assert says in str(info.value)
+
+
+@pytest.mark.parametrize("command", [
+    ["continue", "trilinear", "--param", "omega", "--from", "1.0", "--to", "1.1", "--no-progress"],
+    ["locus", "trilinear", "--kind", "fold", "--param", "omega", "--range", "1.0,1.3", "--param2", "f0",
+     "--range2", "0.1,0.3", "--no-progress"],
+    ["lyapunov", "trilinear", "--time", "100"],
+], ids=["continue", "locus", "lyapunov"])
+def test_a_start_too_large_for_the_integration_is_bad_usage_in_every_command(capsys, command, tmp_path):
+    """As for ``orbit``: a finite ``--x0`` whose field overflows is bad usage (exit 2), in one line naming the mode."""
+    extra = ["--out", str(tmp_path)] if command[0] == "continue" else []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        status, out, err = run_cli(capsys, *command, *extra, "--x0", "1e308,1e308")
+    assert status == 2 and out == ""
+    assert err.count("\n") == 1
+    assert "--x0 '1e308,1e308': the vector field of mode 'contact_1' is not finite at this state" in err

@@ -950,6 +950,8 @@ def cmd_continue(args: argparse.Namespace) -> int:
     flow = make_flow(system)
     p = flow.parameters(overrides)
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
+    if x0 is not None:
+        check_start_field(flow, x0, p, args.x0, 0.0, args.mode0)
     direction = 1 if stop > start else -1
     update, close = _progress_bar(not args.no_progress)
     counter = (lambda point: update(f"{args.model}: {args.param}", 0)) if update else None
@@ -1216,6 +1218,8 @@ def cmd_locus(args: argparse.Namespace) -> int:
     if not lo2 <= p[system.parameter_index(args.param2)] <= hi2 and not hi2 <= p[system.parameter_index(args.param2)] <= lo2:
         raise UsageError(f"the value of {args.param2} ({p[system.parameter_index(args.param2)]:g}) lies outside --range2")
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
+    if x0 is not None:
+        check_start_field(flow, x0, p, args.x0, 0.0, args.mode0)
     settings = _step_settings(args, (start, stop))
     update, close = _progress_bar(not args.no_progress)
     counter = (lambda point: update(f"{args.model}: {args.param}", 0)) if update else None
@@ -1617,6 +1621,7 @@ def cmd_lyapunov(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     if args.x0 is not None:
         x0 = parse_vector(args.x0, system)
+        check_start_field(flow, x0, p, args.x0)
     else:  # the shipped model's start, or (autonomous) a start whose transient moves
         x0 = transient(flow, args.model, p, None, t0=0.0, backward=False)[1]
     result = lyapunov_exponents(flow, x0, parameters=p, time=args.time, transient=args.transient)
