@@ -55,6 +55,13 @@ A, B = 0.5, 0.3
 NEWTON_TOL = 1e-12
 #: what that promises of the period and the state, with margin
 ACCURACY = 1e-10
+#: what a branch point or a command's orbit promises: Newton's default tolerance 1e-10 on states of size 1, and
+#: the default rtol 1e-10 integrated over a period of ~2 (the multipliers inherit both)
+SOLVED = 1e-9
+#: the scipy reference (DOP853 at rtol 1e-13, atol 1e-15) over one period, against the closed form
+REFERENCE = 1e-11
+#: a central difference with h = 1e-3 of a return map affine in y (exact but for the reference's 1e-13 error / h)
+DIFFERENCE = 1e-9
 
 MODEL_SOURCE = '''
 from saltation import Crossing, Mode, PiecewiseSystem, Transition
@@ -141,14 +148,14 @@ def test_the_reference_agrees_with_solve_ivp():
     slope of the return map (central differences; the map is affine in y, so the difference is exact)."""
     y0 = y_on_orbit(0.0, "heat")
     T, y1 = return_map(y0)
-    assert T == pytest.approx(period(), rel=1e-11)
-    assert y1 == pytest.approx(y0, abs=1e-11)
+    assert T == pytest.approx(period(), rel=REFERENCE)
+    assert y1 == pytest.approx(y0, abs=REFERENCE)
     _, z = leg([0.0, y0], "heat", A, 1)
     _, z = leg(z, "cool", 0.0, -1)
-    assert z[1] == pytest.approx(y_on_orbit(0.0, "cool"), abs=1e-11)
+    assert z[1] == pytest.approx(y_on_orbit(0.0, "cool"), abs=REFERENCE)
     h = 1e-3
     slope = (return_map(y0 + h)[1] - return_map(y0 - h)[1]) / (2 * h)
-    assert slope == pytest.approx(multiplier(), rel=1e-9)
+    assert slope == pytest.approx(multiplier(), rel=DIFFERENCE)
 
 
 # -- orbits -----------------------------------------------------------------------------------
@@ -162,7 +169,7 @@ def test_an_orbit_starts_in_the_named_memory_mode(flow, mode):
     x, y = orbit.state0
     assert y == pytest.approx(y_on_orbit(x, mode), abs=ACCURACY)
     mu = np.sort(orbit.multipliers.real)
-    assert mu == pytest.approx([multiplier(), 1.0], abs=1e-9)
+    assert mu == pytest.approx([multiplier(), 1.0], abs=SOLVED)
     assert f"in {mode!r}" in repr(orbit)
 
 
@@ -197,7 +204,7 @@ def test_multiple_shooting_nodes_keep_the_mode_of_their_segment(flow):
         run = flow.run(node, i * orbit.period / 3, (i + 1) * orbit.period / 3, flow.parameters(), mode0=mode)
         mode = run.mode1
     assert mode == "cool" and "heat" in modes
-    assert np.sort(orbit.multipliers.real) == pytest.approx([multiplier(), 1.0], abs=1e-9)
+    assert np.sort(orbit.multipliers.real) == pytest.approx([multiplier(), 1.0], abs=SOLVED)
 
 
 def test_a_shot_that_closes_its_state_but_not_its_mode_is_no_orbit(flow):
@@ -246,8 +253,8 @@ def test_a_branch_keeps_the_start_mode(flow, mode, tmp_path):
     assert set(branch.mode0) == {mode}
     for p in branch.points:
         a = p.parameter
-        assert p.period == pytest.approx(period(a), rel=1e-9)
-        assert p.state[1] == pytest.approx(y_on_orbit(p.state[0], mode, a), abs=1e-9)
+        assert p.period == pytest.approx(period(a), rel=SOLVED)
+        assert p.state[1] == pytest.approx(y_on_orbit(p.state[0], mode, a), abs=SOLVED)
         assert np.sort(p.multipliers.real) == pytest.approx([multiplier(a), 1.0], abs=1e-8)
     path = io.save_branch_json(branch, tmp_path / "branch.json")
     assert io.load_branch_json(path).mode0 == branch.mode0
@@ -305,8 +312,8 @@ def test_cli_orbit_mode0(capsys, model_file, mode):
     assert code == 0, err
     data = json.loads(out)
     assert data["mode0"] == mode
-    assert data["period"] == pytest.approx(period(), rel=1e-9)
-    assert data["state0"][1] == pytest.approx(y_on_orbit(data["state0"][0], mode), abs=1e-9)
+    assert data["period"] == pytest.approx(period(), rel=SOLVED)
+    assert data["state0"][1] == pytest.approx(y_on_orbit(data["state0"][0], mode), abs=SOLVED)
     code, out, err = _run(capsys, "orbit", model_file, "--x0", "0,0", "--period", "2.2", "--mode0", mode)
     assert code == 0, err
     assert f"in mode {mode}" in out
@@ -327,7 +334,7 @@ def test_cli_continue_and_sweep_mode0(capsys, model_file, tmp_path):
     assert code == 0, err
     branch = io.load_branch_json(tmp_path / "test_thermostat_memory_a_branch.json")
     assert len(branch) > 2 and set(branch.mode0) == {"cool"}
-    assert branch.period == pytest.approx([period(a) for a in branch.parameter], rel=1e-9)
+    assert branch.period == pytest.approx([period(a) for a in branch.parameter], rel=SOLVED)
     code, out, err = _run(capsys, "sweep", model_file, "--param", "a", "--from", "0.5", "--to", "0.5", "--num", "1",
                           "--x0", "0,0", "--mode0", "cool", "--periods", "2", "--transient", "0", "--workers", "1",
                           "--out", str(tmp_path))
