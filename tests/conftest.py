@@ -30,6 +30,11 @@ RISING, FALLING = Crossing.RISING, Crossing.FALLING
 TIGHT = Tolerances(rtol=1e-13, atol=1e-15)
 
 
+def pytest_addoption(parser):
+    parser.addoption("--thorough", action="store_true", default=False,
+                     help="also run the literature corpus's thorough steps (longer branches, finer sweeps)")
+
+
 #: the models users wrote from the docs, beside the checkout (CI clones the repository with ../shared beside it)
 TRIAL_MODELS = Path(__file__).parents[2] / "shared" / "trial-models"
 

@@ -177,6 +177,8 @@ SIDE_NUDGE = 1e-10  # relative: how far off its surface a sliding state is moved
 # integers: a literal int argument would make numba compile the callee once more for it
 KIND_INDICATOR = np.int64(0)
 NONE = np.int64(-1)
+#: bit of a surface's ``fires`` flags: its crossing has been taken at the current instant (see _exit_at_once)
+FIRED_NOW = np.int64(16)
 # the same for flags passed to the integrator from compiled code (a literal True is a type of its own)
 ON = np.bool_(True)
 OFF = np.bool_(False)
@@ -1009,7 +1011,8 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
     # sign memory of every surface watched in this mode, in the direction of travel
     for s in range(n_surfaces):
         # bit 4 of fires: the surface was watched by the motion just left, so its side (surf_sign) is current
-        fires[s] = 4 if watched[s] else 0
+        # (bit 16, a crossing already taken at this instant, is kept: see _exit_at_once)
+        fires[s] = (4 if watched[s] else 0) | (fires[s] & FIRED_NOW)
         watched[s] = False
     for k in range(n_tr):
         src = tr_table[k, 0]
@@ -1092,6 +1095,10 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surfac
             if not at_start and (fixed_sign[s] or ((fires[s] & 8) == 0 and surf_sign[s] != -tr_table[k, 2])):
                 continue  # after an event: a surface reached from the side its transition fires from, or one whose
                 #           side no motion has watched (as at the start)
+            if not at_start and fires[s] & FIRED_NOW:
+                continue  # a crossing is one event: a surface already crossed at this instant (a clock h(t), which
+                #           stays at zero through the instant, after the comparator's event that followed it) is not
+                #           crossed again without a step
             if model[GUARD](k, t + dt_nudge, xtmp, p):
                 pending = k
                 break
@@ -1939,6 +1946,8 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
             for i in range(N):
                 ynew[i] = y[i]
         else:
+            for s in range(n_surfaces):
+                fires[s] &= ~FIRED_NOW  # a step: a new instant
             if n_steps >= max_steps:
                 status = STATUS_MAX_STEPS
                 info_mode = mode
@@ -2190,6 +2199,8 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
         _saltation_jump(gx, gt, gp, fa, fplus, hx, hp, den, y, var, pidx, S, wvec, Phi_tmp, psi_tmp)
         # log
         _log_event(ev, ev_int, n_ev, t_e, kind_logged, best_tr, best_idx, mode_from, mode_to, x_e, xplus, S)
+        if best_kind == KIND_INDICATOR:
+            fires[best_idx] |= FIRED_NOW
         chatter_ring[n_ev % CHATTER_WINDOW] = t_e
         h_events = max(h_events, abs(h))
         last_kind = kind_logged

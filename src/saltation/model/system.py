@@ -564,10 +564,16 @@ class PiecewiseSystem(NamedParts):
         for sname, h in zip(self.surface_names, self.indicators):
             _check_compilable(h, variables, f"surface {sname!r}", smooth=True)
         for sname, h in zip(self.surface_names, self.indicators):
-            if not (h.free_symbols & set(self.x)):
+            if TIME in h.free_symbols and period is None:
                 raise ModelError(
-                    f"surface {sname!r}: indicator {h} does not depend on the state {list(self.state_names)}; "
-                    "a switching surface must be crossed by moving in state space"
+                    f"surface {sname!r}: indicator {h} depends on time t but no forcing period is given "
+                    "(period=...); a surface that moves with time, or a clock, belongs to a forced model"
+                )
+            if not (h.free_symbols & (set(self.x) | {TIME})):
+                raise ModelError(
+                    f"surface {sname!r}: indicator {h} depends on neither the state {list(self.state_names)} nor "
+                    "time t; a switching surface is crossed by moving in state space, or is a clock h(t) of a "
+                    "forced model"
                 )
 
         if isinstance(transitions, (str, Transition)) or not isinstance(transitions, Sequence):
