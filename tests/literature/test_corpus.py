@@ -19,11 +19,17 @@ _ORBITS: dict[str, object] = {}
 _BRANCHES: dict[str, object] = {}
 
 
-def _skip_unless(step, request) -> None:
+def _skip_unless(step, request, case: LiteratureCase, name: str) -> None:
     if step is None:
         pytest.skip("the case has no such step")
     if getattr(step, "thorough", False) and not request.config.getoption("--thorough"):
         pytest.skip("runs with --thorough")
+    _known_failure(request, case, name)
+
+
+def _known_failure(request, case: LiteratureCase, name: str) -> None:
+    if name in case.known_failures:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=case.known_failures[name]))
 
 
 def _orbit(case: LiteratureCase):
@@ -62,8 +68,9 @@ def test_case_is_described(case: LiteratureCase):
 
 
 @pytest.mark.parametrize("case", CASES, ids=IDS)
-def test_orbit_from_the_natural_guess(case: LiteratureCase):
+def test_orbit_from_the_natural_guess(case: LiteratureCase, request):
     """The orbit from the case's natural guess; its multipliers against the reference's."""
+    _known_failure(request, case, "orbit")
     orbit = _orbit(case)
     assert orbit.converged
     mu = np.asarray(orbit.multipliers, dtype=complex)
@@ -84,7 +91,7 @@ def test_orbit_from_the_natural_guess(case: LiteratureCase):
 @pytest.mark.parametrize("case", CASES, ids=IDS)
 def test_branch_special_points(case: LiteratureCase, request):
     """The branch's special points are the reference's, kind by kind, and no others."""
-    _skip_unless(case.branch, request)
+    _skip_unless(case.branch, request, case, "branch")
     branch = _branch(case)
     expected = list(case.branch.expected())
     found = list(branch.special_points)
@@ -104,7 +111,7 @@ def test_branch_special_points(case: LiteratureCase, request):
 @pytest.mark.parametrize("case", CASES, ids=IDS)
 def test_two_parameter_curve(case: LiteratureCase, request):
     """The curve of one special point in a second parameter against the reference's curve."""
-    _skip_unless(case.locus, request)
+    _skip_unless(case.locus, request, case, "locus")
     step = case.locus
     branch = _branch(case)
     points = [sp for sp in branch.special_points if sp.kind.value == step.kind]
@@ -124,7 +131,7 @@ def test_two_parameter_curve(case: LiteratureCase, request):
 @pytest.mark.parametrize("case", CASES, ids=IDS)
 def test_sweep(case: LiteratureCase, request):
     """A brute-force sweep, checked by the case against its reference."""
-    _skip_unless(case.sweep, request)
+    _skip_unless(case.sweep, request, case, "sweep")
     step = case.sweep
     result = sweep(case.model(), step.parameter, step.values, parameters=dict(case.orbit.parameters),
                    workers=1, **dict(step.options))
@@ -134,7 +141,7 @@ def test_sweep(case: LiteratureCase, request):
 @pytest.mark.parametrize("case", CASES, ids=IDS)
 def test_lyapunov_exponents(case: LiteratureCase, request):
     """Lyapunov exponents where the motion is chaotic, against the reference."""
-    _skip_unless(case.lyapunov, request)
+    _skip_unless(case.lyapunov, request, case, "lyapunov")
     step = case.lyapunov
     result = lyapunov_exponents(Flow(case.model()), step.state0, parameters=dict(step.parameters), time=step.time,
                                 transient=step.transient, mode0=step.mode0)
