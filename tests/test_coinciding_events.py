@@ -103,3 +103,47 @@ def test_the_comparator_at_a_clock_instant_is_not_lost(flow):
     at_three = [(e.surface, e.mode_to) for e in traj.events if abs(e.t - 3.0) <= 1e-12]
     assert ("peak", "off") in at_three and at_three[-1][1] == "off"  # the latch ends reset at that instant
     assert traj.x1[0] == pytest.approx(2.5, abs=1e-12) and traj.x1[0] < 3.0
+
+
+@functools.cache
+def clocked_ramp() -> PiecewiseSystem:
+    """The same automaton with the clock a time-triggered transition of a forced model: the surface
+    ``sin(2 pi t)`` rises through zero at every integer ``t``, and the latch is the mode (no logic state)."""
+    return PiecewiseSystem(
+        "test_clocked_ramp", states=["x"], parameters={"a": 1.0, "b": 1.0, "c": 1.0},
+        modes=[Mode("on", ["a"], domain=["x - c < 0"]), Mode("off", ["-b"])],
+        surfaces={"peak": "x - c", "clock": "sin(2*pi*t)"},
+        transitions=[
+            Transition("on", "peak", RISING, "off"),
+            Transition("off", "clock", RISING, "on", guard=["x - c < 0"]),
+        ],
+        period="1",
+    )
+
+
+@pytest.fixture(scope="module")
+def clocked_flow() -> Flow:
+    return Flow(clocked_ramp())
+
+
+@settings(max_examples=60, deadline=None)
+@given(a=rationals, b=rationals, tau0=st.builds(Fraction, st.integers(1, 7), st.just(8)), k=st.integers(1, 3),
+       x0=st.builds(Fraction, st.integers(-4, 4), st.just(4)))
+def test_a_time_clock_and_a_threshold_at_one_instant(clocked_flow, a, b, tau0, k, x0):
+    """As above with the clock ``sin(2 pi t)``: the run starts at ``t = tau0`` (the clock's phase), and after the
+    comparator and the clock at one instant the clock, still at zero there, is not crossed again (it chattered)."""
+    t_k = k - tau0
+    c = x0 + a * t_k
+    t_end = t_k + Fraction(7, 2)
+    (x, _, on), resets, ticks = reference(x0, tau0, True, a, b, c, t_end)
+    p = clocked_flow.parameters({"a": float(a), "b": float(b), "c": float(c)})
+    traj = clocked_flow.run([float(x0)], float(tau0), float(tau0 + t_end), p, mode0="on")
+    scale = float(max(abs(c), 1, a * 4, b * 4))
+    # ramps integrated exactly; the clock's instants are roots of sin(2 pi t), found to the resolution of t
+    np.testing.assert_allclose(traj.x1, [float(x)], rtol=0, atol=1e-12 * scale)
+    assert traj.mode1 == ("on" if on else "off")
+    for surface, expected in (("peak", resets), ("clock", [r for r in ticks if r not in resets or True])):
+        fired = [e.t - float(tau0) for e in traj.events if e.surface == surface]
+        assert len(np.unique(np.round(fired, 9))) == len(fired) or surface == "peak", f"{surface} crossed twice at one instant"
+        if surface == "peak":
+            np.testing.assert_allclose(np.unique(np.round(fired, 9)), [float(r) for r in expected], rtol=0, atol=1e-9)

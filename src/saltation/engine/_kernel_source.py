@@ -177,8 +177,11 @@ SIDE_NUDGE = 1e-10  # relative: how far off its surface a sliding state is moved
 # integers: a literal int argument would make numba compile the callee once more for it
 KIND_INDICATOR = np.int64(0)
 NONE = np.int64(-1)
-#: bit of a surface's ``fires`` flags: its crossing has been taken at the current instant (see _exit_at_once)
+#: bits of a surface's ``fires`` flags: its crossing has been taken at the current instant and no motion has
+#: turned back across it since (see _exit_at_once), and the side that crossing left the state on (set: positive)
 FIRED_NOW = np.int64(16)
+FIRED_POSITIVE = np.int64(32)
+FIRED_BITS = np.int64(48)
 # the same for flags passed to the integrator from compiled code (a literal True is a type of its own)
 ON = np.bool_(True)
 OFF = np.bool_(False)
@@ -1011,8 +1014,14 @@ def _watch_surfaces(model, mode, slide, t, y, K, p, direction, last_kind, tr_tab
     # sign memory of every surface watched in this mode, in the direction of travel
     for s in range(n_surfaces):
         # bit 4 of fires: the surface was watched by the motion just left, so its side (surf_sign) is current
-        # (bit 16, a crossing already taken at this instant, is kept: see _exit_at_once)
-        fires[s] = (4 if watched[s] else 0) | (fires[s] & FIRED_NOW)
+        # (bits 16 and 32, a crossing already taken at this instant and its side, are kept: see _exit_at_once)
+        fires[s] = (4 if watched[s] else 0) | (fires[s] & FIRED_BITS)
+        if fires[s] & FIRED_NOW:
+            # a zero-length visit whose motion turns back across the surface just crossed: crossing it again at
+            # this instant is a new crossing (a latch set again at the comparator's level is reset again)
+            sl = direction * _slope(model, mode, slide, KIND_INDICATOR, s, t, y[:n], K[0, :n], p, hx, hp, gtmp, gptmp)
+            if sl * (1.0 if fires[s] & FIRED_POSITIVE else -1.0) < 0.0:
+                fires[s] &= ~FIRED_BITS
         watched[s] = False
     for k in range(n_tr):
         src = tr_table[k, 0]
@@ -1096,9 +1105,9 @@ def _exit_at_once(model, mode, slide, t, y, K, p, direction, at_start, on_surfac
                 continue  # after an event: a surface reached from the side its transition fires from, or one whose
                 #           side no motion has watched (as at the start)
             if not at_start and fires[s] & FIRED_NOW:
-                continue  # a crossing is one event: a surface already crossed at this instant (a clock h(t), which
-                #           stays at zero through the instant, after the comparator's event that followed it) is not
-                #           crossed again without a step
+                continue  # a crossing is one event: a surface crossed at this instant, and not crossed back by any
+                #           motion since, is not crossed again without a step (a clock h(t), which stays at zero
+                #           through the instant and which every mode's motion crosses the same way)
             if model[GUARD](k, t + dt_nudge, xtmp, p):
                 pending = k
                 break
@@ -1947,7 +1956,7 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
                 ynew[i] = y[i]
         else:
             for s in range(n_surfaces):
-                fires[s] &= ~FIRED_NOW  # a step: a new instant
+                fires[s] &= ~FIRED_BITS  # a step: a new instant
             if n_steps >= max_steps:
                 status = STATUS_MAX_STEPS
                 info_mode = mode
@@ -2200,7 +2209,7 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
         # log
         _log_event(ev, ev_int, n_ev, t_e, kind_logged, best_tr, best_idx, mode_from, mode_to, x_e, xplus, S)
         if best_kind == KIND_INDICATOR:
-            fires[best_idx] |= FIRED_NOW
+            fires[best_idx] = (fires[best_idx] & ~FIRED_BITS) | FIRED_NOW | (FIRED_POSITIVE if surf_sign[best_idx] > 0 else 0)
         chatter_ring[n_ev % CHATTER_WINDOW] = t_e
         h_events = max(h_events, abs(h))
         last_kind = kind_logged

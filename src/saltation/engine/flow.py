@@ -33,7 +33,7 @@ from saltation.errors import (
     SlidingError,
     StepSizeError,
 )
-from saltation.model.system import PiecewiseSystem
+from saltation.model.system import TIME, PiecewiseSystem
 
 
 class Status(enum.IntEnum):
@@ -56,6 +56,8 @@ _STATUS_OK = kc.STATUS_OK
 #: A state outside a named start mode's domain by at most this much (relative to ``1 + max |x_i|``) lies on
 #: its boundary, within rounding (the engine's tolerance for a state that leaves its mode's domain).
 DOMAIN_ROUNDING = 1e-8
+#: the steps per forcing period, at least, of a forced model with a surface that moves with time (Flow)
+TIME_SURFACE_STEPS = 16
 
 
 @dataclass(frozen=True)
@@ -375,7 +377,8 @@ class Tolerances:
     rtol, atol : float
         Relative and absolute local error tolerances on the state.
     max_step : float
-        Largest step size (inf for none).
+        Largest step size (inf for none).  A forced model with a surface that moves with time (a clock
+        ``h(t)``, a moving wall) steps at most a sixteenth of its forcing period in any case.
     max_events : int
         Largest number of switching events in one integration.
     max_steps : int
@@ -459,6 +462,21 @@ class Flow:
         self._identity = np.eye(system.n)  # read-only inputs of the kernel
         self._offsets = kc.result_offsets(system.n)
         self._zeros = np.zeros(system.n)
+        #: a forced model with a surface that moves with time (a clock h(t), a moving wall): its steps are at most
+        #: 1 / TIME_SURFACE_STEPS of the forcing period, so that no step passes two of its crossings (the exact
+        #: flow of a mode whose field is constant has no step bound of its own)
+        indicators = getattr(system, "indicators", ())
+        self._time_surfaces = bool(indicators) and not system.is_autonomous and any(
+            TIME in h.free_symbols for h in indicators)
+
+    def _kernel_tolerances(self, tol: Tolerances, p: np.ndarray):
+        """``tol`` as the kernel takes it, the step bounded for surfaces that move with time (see above)."""
+        steps, limits, flags = tol.kernel_arguments
+        if self._time_surfaces:
+            bound = self.system.forcing_period(p) / TIME_SURFACE_STEPS
+            if bound < limits[0]:
+                limits = (float(bound), limits[1], limits[2])
+        return steps, limits, flags
 
     def __repr__(self) -> str:
         t = self.tolerances
@@ -1030,7 +1048,7 @@ class Flow:
         psi = self._zeros if psi0 is None else _c_array(psi0)
         if psi.shape != (sys_.n,):
             raise ModelError(f"initial parameter sensitivity must have shape ({sys_.n},), got {psi.shape}")
-        steps, limits, flags = tol.kernel_arguments
+        steps, limits, flags = self._kernel_tolerances(tol, p)
         table = self._table
         if len(disabled):
             table = table.copy()
@@ -1101,7 +1119,7 @@ class Flow:
         """
         if span == 0.0 and phase is None and not isinstance(self.system, PiecewiseSystem):
             return None  # the forcing period is a Python callable
-        steps, limits, flags = (tolerances or self.tolerances).kernel_arguments
+        steps, limits, flags = self._kernel_tolerances(tolerances or self.tolerances, _c_array(p))
         x_ref, f_ref = (_c_array(a) for a in phase) if phase is not None else (self._zeros, self._zeros)
         z0 = _c_array(z0)
         code, it, packed, *out = self._engine.correct_periodic(
