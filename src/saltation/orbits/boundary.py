@@ -126,8 +126,11 @@ def saltation_at_corner(
 ) -> np.ndarray | None:
     """Product ``S_last ... S_first`` of closed-form saltation matrices at ``(t, x)``.
 
-    None when the model has no closed form (compiled callables) or a factor
-    is not finite there.
+    None when the model has no closed form (compiled callables), or a factor is not finite there, or a factor
+    whose source field is tangent to its surface there is unbounded (:func:`_factor_is_unbounded`): the
+    excursion enters with the normal speed ``+d`` and leaves with ``-d'``, so factors that grow like ``1/d`` do
+    not cancel in the excursion's map (a field that jumps along its surface, as at a pre-stressed stop, gives
+    ``S_exit S_entry = I`` when both are taken at one point, while the excursion's map grows like ``1/d``).
     """
     if not isinstance(system, PiecewiseSystem):
         return None
@@ -137,11 +140,28 @@ def saltation_at_corner(
     for k in transitions:
         with np.errstate(divide="ignore", invalid="ignore"):  # 0/0 at a tangency: reported as None below
             S = np.asarray(_closed_form_saltation(system, int(k))(t, list(x), list(p)), dtype=float).reshape(n, n)
-        if not np.all(np.isfinite(S)):
+        if not np.all(np.isfinite(S)) or _factor_is_unbounded(system, int(k), t, x, p, S):
             return None
         P = S @ P
         x = _reset(system, int(k), t, x, p)
     return P
+
+
+#: a transition's source field is tangent to its surface where its normal speed is below this fraction of
+#: ``|h_x| |f|`` (a located tangency reaches 1e-17 to 1e-7; a transversal crossing is of order one)
+TANGENT_SPEED = 1e-6
+
+
+def _factor_is_unbounded(system: PiecewiseSystem, transition: int, t: float, x: np.ndarray, p: np.ndarray,
+                         S: np.ndarray) -> bool:
+    """Whether the saltation matrix ``S`` of ``transition`` at a tangency grows like ``1 / d`` (eq. 9 with a
+    numerator that does not vanish there), told apart from a bounded one as in
+    :func:`corner_saltation_is_bounded`; False where the crossing is transversal."""
+    speed, hx, f = (float(v) for v in _tangency_terms(system, transition)(t, list(np.asarray(x, float)), list(p)))
+    scale = hx * f
+    if not scale > 0.0 or abs(speed) > TANGENT_SPEED * scale:
+        return False
+    return bool(np.linalg.norm(S) > np.sqrt(scale / max(abs(speed), np.finfo(float).tiny)))
 
 
 @lru_cache(maxsize=256)

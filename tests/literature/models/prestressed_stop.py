@@ -167,11 +167,4 @@ CASE = LiteratureCase(
     branch=BranchStep("omega", (0.5, 1.5), _expected, ds_max=0.05),
     sweep=SweepStep("omega", [0.8, 1.0], _sweep_follows_the_map,
                     options={"x0": [1.0, 0.5], "periods": 6, "transient": 400}),
-    known_failures={"branch": (
-        "the grazings of the stop (a jump of the field, -P_0, across x = e) are reported 'bounded' with the "
-        "grazing orbit's multipliers on both sides: the library takes the product S_out S_in of the two crossings' "
-        "saltation matrices at the tangency, which is the identity, but the contact lasts ~2 v / (P_0 + |x''|) "
-        "between them, and S_out exp(A dt) S_in grows like 1/v; the reference's impacting orbit has a multiplier "
-        "-4.28 at omega_g + 1.3e-3 and -11.9 at omega_g + 3.1e-4 (unbounded). Branch.check: uncovered_change "
-        "0 -> 1 unstable at both grazings")},
 )
