@@ -288,10 +288,11 @@ def test_a_field_expression_is_refused_for_what_it_is(expression, says):
     ["locus", "trilinear", "--kind", "fold", "--param", "omega", "--range", "1.0,1.3", "--param2", "f0",
      "--range2", "0.1,0.3", "--no-progress"],
     ["lyapunov", "trilinear", "--time", "100"],
-], ids=["continue", "locus", "lyapunov"])
+    ["sweep", "trilinear", "--param", "omega", "--from", "1.0", "--to", "1.1", "--num", "2", "--workers", "1"],
+], ids=["continue", "locus", "lyapunov", "sweep"])
 def test_a_start_too_large_for_the_integration_is_bad_usage_in_every_command(capsys, command, tmp_path):
     """As for ``orbit``: a finite ``--x0`` whose field overflows is bad usage (exit 2), in one line naming the mode."""
-    extra = ["--out", str(tmp_path)] if command[0] == "continue" else []
+    extra = ["--out", str(tmp_path)] if command[0] in ("continue", "sweep") else []
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         status, out, err = run_cli(capsys, *command, *extra, "--x0", "1e308,1e308")

@@ -95,6 +95,10 @@ def test_bad_input_is_named(trilinear_flow):
         lyapunov_exponents(trilinear_flow, [0.0], time=1.0)
     with pytest.raises(ModelError, match="blocks"):
         lyapunov_exponents(trilinear_flow, [0.0, 0.0], time=1.0, blocks=1)
+    # a transient longer than any integration's step budget is refused before it runs (it ran to the step limit)
+    period = trilinear_flow.system.forcing_period(trilinear_flow.parameters())
+    with pytest.raises(ModelError, match=r"transient = .* is 1e\+07 times the forcing period"):
+        lyapunov_exponents(trilinear_flow, [0.0, 0.0], time=100 * period, transient=1e7 * period)
 
 
 def test_the_command_prints_the_exponents_as_json(capsys):

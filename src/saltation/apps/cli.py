@@ -1476,7 +1476,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     x0, rule = sweep_start(args, system)
     mode0 = check_mode0(args, system)
     check_out_dir(args.out)
-    make_flow(system)  # compile (or load) here, with the notice, before the workers load it from the cache
+    flow = make_flow(system)  # compile (or load) here, with the notice, before the workers load it from the cache
+    if args.x0 is not None and isinstance(x0, np.ndarray):
+        p = flow.parameters(overrides)
+        p[system.parameter_index(args.param)] = values[0]
+        check_start_field(flow, x0, p, args.x0, 0.0, mode0)
     client = _dask_client(args.scheduler)
     try:
         if args.param2 is not None:

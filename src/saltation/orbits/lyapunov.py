@@ -228,6 +228,10 @@ MAX_INTERVALS = 10**6
 #: a twentieth of their error).
 MIN_BLOCK = 0.5
 
+#: The longest transient, in time scales of the motion (forcing periods, or time units of an autonomous model):
+#: the integration takes at most a million steps (Tolerances.max_steps), and every time scale takes at least one
+MAX_TRANSIENT = 1e6
+
 #: The interval (the time between two factorisations) must be at least this fraction of the largest time of the
 #: run, ``|t0| + transient + time``: a shorter one does not move the clock.
 MIN_RELATIVE_INTERVAL = 1e-9
@@ -269,7 +273,8 @@ def plan_run(
     ModelError
         Naming the argument and what it must be: ``time`` not positive and finite, or shorter than ``blocks``
         times half the motion's time scale (:data:`MIN_BLOCK`: the forcing period, or one time unit of an
-        autonomous model), so that no accuracy can be estimated; ``transient`` negative or not finite; ``t0`` not
+        autonomous model), so that no accuracy can be estimated; ``transient`` negative or not finite, or longer
+        than :data:`MAX_TRANSIENT` time scales; ``t0`` not
         finite; ``blocks`` not an integer from 2 to :data:`MAX_INTERVALS`; ``interval`` not positive and finite,
         or below :data:`MIN_RELATIVE_INTERVAL` of ``|t0| + transient + time``; or a run of more than
         :data:`MAX_INTERVALS` intervals (the estimated number given).
@@ -307,6 +312,11 @@ def plan_run(
     else:
         scale = system.forcing_period(parameters)
         what = f"the forcing period {scale:g}"
+    if transient > MAX_TRANSIENT * scale:
+        raise ModelError(
+            f"{name('transient')} = {transient:g} is {transient / scale:.3g} times {what}, more than the "
+            f"{MAX_TRANSIENT:.0e} an integration's step budget can cover (every time scale of the motion takes steps); "
+            f"ask for a shorter {name('transient')}")
     shortest = blocks * MIN_BLOCK * scale
     if time < shortest * (1.0 - 1e-12):
         raise ModelError(
