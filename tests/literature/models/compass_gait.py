@@ -93,7 +93,7 @@ def _impact(q, x):
 def _step(q, x):
     """One step from a post-impact state: the time to the next heel strike and the post-impact state."""
     f = _field(q)
-    opts = dict(method="DOP853", rtol=1e-12, atol=1e-12)
+    opts = {"method": "DOP853", "rtol": 1e-12, "atol": 1e-12}
 
     def passing(t, y):  # the legs pass each other (the swing foot scuffs the slope here: no heel strike)
         return y[0] - y[1]
@@ -123,8 +123,8 @@ def poincare_jacobian(q, y, h=1e-3):
     for k in range(3):
         e = np.zeros(3)
         e[k] = h
-        P = lambda s: poincare(q, y + s * e)[0]  # noqa: E731
-        cols.append((-P(2) + 8 * P(1) - 8 * P(-1) + P(-2)) / (12 * h))
+        P = [poincare(q, y + s * e)[0] for s in (2, 1, -1, -2)]
+        cols.append((-P[0] + 8 * P[1] - 8 * P[2] + P[3]) / (12 * h))
     return np.array(cols).T
 
 
@@ -143,8 +143,8 @@ def multipliers(p):
     return np.linalg.eigvals(fixed_point(dict(p))[1])
 
 
-def period_doubling(q, lo=np.deg2rad(4.0), hi=np.deg2rad(4.5)):
-    """The slope where a multiplier of the period-1 gait is -1."""
+def period_doubling(q, lo=0.0698, hi=0.0785):
+    """The slope where a multiplier of the period-1 gait is -1 (bracketed by 4.0 and 4.5 degrees)."""
     return brentq(lambda phi: np.linalg.det(fixed_point(dict(q, phi=phi))[1] + np.eye(3)), lo, hi, xtol=1e-13)
 
 

@@ -17,6 +17,8 @@ reference's stroboscopic map and its rotation number.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 from corpus import BranchStep, Expected, LiteratureCase, Orbit, SweepStep
 from scipy.optimize import brentq
@@ -64,8 +66,8 @@ def _first_spike(q, t0, v0, t_end=np.inf):
     ``T / 400`` (one forcing period at a time, vectorized); in a step where ``v'`` turns from rising to
     falling, the local maximum is checked too (a threshold crossing hidden between two scan points)."""
     T = 2 * np.pi / q["omega"]
-    f = lambda t: _v(q, t0, v0, t) - 1.0  # noqa: E731
-    df = lambda t: _dv(q, t0, v0, t)  # noqa: E731
+    f = lambda t: _v(q, t0, v0, t) - 1.0
+    df = lambda t: _dv(q, t0, v0, t)
     a = t0
     while a < t_end:
         ts = np.minimum(a + np.arange(401) * (T / 400), t_end)
@@ -185,7 +187,7 @@ def _sweep_follows_the_map(result) -> None:
         q = dict(DEFAULTS, I=I)
         x = np.asarray(result.at(k), dtype=float)[:, 0]
         assert len(x) == 200
-        for a, b in zip(x[:-1], x[1:]):
+        for a, b in itertools.pairwise(x):
             y, _ = strobe(q, 0.0, a)
             # the reset forgets: one period amplifies a sample's error by at most exp(-T) times f+/f-
             assert abs(y - b) <= 1e-7, (I, a, b, y)
