@@ -76,7 +76,7 @@ def _y_minus(t: float, x0: np.ndarray, p) -> float:
 def half_period(p) -> float:
     """The first root of ``C x0(h) = eps`` that is a genuine cycle: ``y`` rising at the switch, and above
     ``-eps`` in between (``brentq`` to rounding)."""
-    g = lambda h: float(C @ _x0(h, p)) - p["eps"]  # noqa: E731
+    g = lambda h: float(C @ _x0(h, p)) - p["eps"]
     grid = np.arange(0.05, 40.0, 0.05)
     values = [g(h) for h in grid]
     for a, b, ga, gb in zip(grid[:-1], grid[1:], values[:-1], values[1:]):
@@ -156,7 +156,7 @@ CASE = LiteratureCase(
         multipliers=lambda p: multipliers(p),
     ),
     # the cycle stays stable from eps = 0.1 to 1.5 (K = 2): the reference has no special point there
-    branch=BranchStep("eps", (0.02, 1.5), lambda: [], ds=0.05, ds_max=0.1),
+    branch=BranchStep("eps", (0.02, 1.5), list, ds=0.05, ds_max=0.1),
     sweep=SweepStep("eps", SWEEP_EPS, _sweep_maxima_on_the_cycle,
                     options={"x0": [0.5, 0.0, 0.0], "mode0": "plus", "transient": 60, "periods": 20,
                              "period": 5.0}),
