@@ -393,5 +393,5 @@ def _next_mode(mode: str) -> str | None:
     return None if "|" in mode else mode
 
 
-__all__ = ["COLLAPSE", "MAX_CONDITION", "MAX_INTERVALS", "MIN_BLOCK", "MIN_PIECE", "MIN_RELATIVE_INTERVAL",
+__all__ = ["COLLAPSE", "MAX_CONDITION", "MAX_INTERVALS", "MAX_TRANSIENT", "MIN_BLOCK", "MIN_PIECE", "MIN_RELATIVE_INTERVAL",
            "LyapunovExponents", "lyapunov_exponents", "plan_run"]
