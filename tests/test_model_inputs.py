@@ -82,6 +82,10 @@ def build(*, field=("v", "-x"), surface="x - a", reset=None, guard=(), domain=()
         ({"parameters": {"a": 0.0, "k": 2.0}, "field": ("v", "-x/a")}, ["divides by a", "a = 0"]),
         ({"period": "2*pi/k", "field": ("v", "-x + sin(t)*foo(t)")}, ["unknown function"]),
         ({"period": "x"}, ["forcing period", "parameters only"]),
+        # a surface of time: a clock h(t) or a moving wall belongs to a forced model; a constant is no surface
+        ({"surface": "sin(2*pi*t)"}, ["surface 'wall'", "depends on time t but no forcing period"]),
+        ({"surface": "x - a*sin(t)"}, ["surface 'wall'", "depends on time t but no forcing period"]),
+        ({"surface": "a - 1"}, ["surface 'wall'", "depends on neither the state"]),
     ],
 )
 def test_bad_definitions_are_model_errors_naming_the_slot(kwargs, culprits):
