@@ -1247,6 +1247,26 @@ def _goes_on_without_sliding(model, mode_to, s, t_e, xplus, fb, p, tr_table, dir
     return model[IN_DOMAIN](mode_to, t_e + tau, xn, p)
 
 
+@njit(cache=True, _nrt=False)  # not inlined: called only after a reset that leaves the state on its surface
+def _crossing_fires(model, mode_to, s, side, t_e, xplus, fb, p, tr_table, direction, xn):
+    """Whether a transition of ``mode_to`` fires where its motion crosses surface ``s`` from ``xplus`` on it
+    towards ``side`` (+-1): one on ``s`` in that direction (or either) whose guard holds a hair along the
+    motion."""
+    n = N_STATE or xplus.shape[0]  # (see the engine's header)
+    tau = direction * (1e-10 + 16.0 * EPS * abs(t_e))  # a hair (as _exit_at_once's nudge)
+    for i in range(n):
+        xn[i] = xplus[i] + tau * fb[i]
+    for k in range(tr_table.shape[0]):
+        if tr_table[k, 0] != mode_to or tr_table[k, 1] != s:
+            continue
+        dk = tr_table[k, 2]
+        if dk != 0 and dk * side < 0.0:
+            continue
+        if model[GUARD](k, t_e + tau, xn, p):
+            return True
+    return False
+
+
 @njit(cache=True, _nrt=False)  # not inlined: called only for transitions with a reset, it keeps the integrator's loop lean
 def _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cross, den, sig_b, ht, hx, fb, n_ev,
                    chatter_ring, slide, h_scale, xn, fn, wn, wp):
@@ -1277,6 +1297,11 @@ def _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cro
                     xn[i] = xplus[i] + tau * fb[i]
                 model[VECTOR_FIELD](mode_to, t_e + tau, xn, p, fn)
                 pushes = direction * model[INDICATOR_RATE](s, t_e + tau, xn, fn, p, wn, wp) * back < 0.0
+            if pushes and not _crossing_fires(model, mode_to, s, -back, t_e, xplus, fb, p, tr_table, direction, xn):
+                # the new mode has no transition that this crossing of its surface fires (none watches it that
+                # way, or their guards fail a hair along the motion: a walker's legs swapped at heel strike
+                # leave the swing foot on the ground with the stance leg ahead): the motion goes on across it
+                return STATUS_OK, 0.0
             if pushes:
                 if n_ev >= 1 and abs(t_e - chatter_ring[(n_ev - 1) % CHATTER_WINDOW]) <= _chatter_width(t_e, h_scale):
                     # the impact before lies below the resolution of the motion: impacts accumulate
