@@ -182,6 +182,9 @@ class SpecialPoint:
         At a BOUNDARY_EQUILIBRIUM: ``persistence`` (the equilibrium of the mode and the pseudo-equilibrium
         exist on opposite sides of the point: one goes on as the other) or ``nonsmooth_fold`` (on the same
         side: they meet and disappear together).
+    t0 : float
+        The time at which the orbit passes ``state`` (a forced orbit's section, as for
+        :attr:`BranchPoint.t0`); 0 for autonomous orbits and equilibria.
 
     Raises
     ------
@@ -217,6 +220,7 @@ class SpecialPoint:
     second_parameter: float = float("nan")
     sides: tuple[str, ...] = ()
     classification: str = ""
+    t0: float = 0.0
 
     def __post_init__(self):
         # names as files and older callers give them

@@ -321,14 +321,14 @@ class Continuation:
             if new is None:
                 collapse = self._collapse(strict=False)
                 if collapse is not None:
-                    self.branch.special_points.append(collapse)
+                    self._add_special(collapse)
                     self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
                     return
                 self.branch.stop_reason = StopReason.MIN_STEP
                 ending = (detector.at_failure(prev, float(self.last_failure[-1]))
                           if detector is not None and self.last_failure is not None else None)
                 if ending is not None:
-                    self.branch.special_points.append(replace(ending, index=len(self.branch.points) - 1))
+                    self._add_special(replace(ending, index=len(self.branch.points) - 1))
                 if self.last_error is not None:
                     self.branch.stop_detail = (f"at {self.problem.lam_name} = {prev.lam:.10g}: "
                                                f"{type(self.last_error).__name__}: {self.last_error}")
@@ -336,17 +336,17 @@ class Continuation:
             self._accept(new)
             closed = self._passes_start(prev, new)
             if jumped is not None:
-                self.branch.special_points.append(replace(grazing, index=len(self.branch.points) - 2))
+                self._add_special(replace(grazing, index=len(self.branch.points) - 2))
                 ds = s.ds
             elif detector is not None:
                 for sp in detector.check(self.solutions[-2], self.solutions[-1], len(self.branch.points) - 2):
                     if any(_same_special_point(sp, old) for old in self.branch.special_points):
                         closed = True  # met again, from the same side: the branch has come round a loop
                     else:
-                        self.branch.special_points.append(sp)
+                        self._add_special(sp)
             collapse = self._collapse(strict=True)
             if collapse is not None:
-                self.branch.special_points.append(collapse)
+                self._add_special(collapse)
             yield self.branch.points[-1]
             if collapse is not None:
                 self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
@@ -441,15 +441,26 @@ class Continuation:
 
     def _rephased(self, prev: Solution) -> Solution | None:
         """``prev``'s orbit with its shooting state moved off the switching events (the middle of its longest
-        stretch between them, :meth:`~saltation.orbits.shooting.ShootingProblem.start_off_surfaces`),
-        corrected at the same parameter and put in ``prev``'s place; None where the problem cannot move its
-        state, the state is not near an event, or the moved state does not give the same orbit back."""
-        move = getattr(self.problem, "start_off_surfaces", None)
+        stretch between them: :meth:`~saltation.orbits.shooting.ShootingProblem.start_off_surfaces` for an
+        autonomous orbit, :meth:`~saltation.orbits.shooting.ShootingProblem.move_section` with its section time
+        for a forced one), corrected at the same parameter and put in ``prev``'s place; None where the problem
+        cannot move its state, the state is not near an event, or the moved state does not give the same orbit
+        back (the problem's section and start mode are then as before)."""
+        forced = getattr(self.problem, "autonomous", True) is False
+        move = getattr(self.problem, "move_section" if forced else "start_off_surfaces", None)
         if move is None:
             return None
+        saved = {k: getattr(self.problem, k) for k in ("t0", "mode0") if hasattr(self.problem, k)}
+
+        def restore() -> None:
+            for k, v in saved.items():
+                setattr(self.problem, k, v)
+            self.problem.accept(prev.u, prev.lam)
+
         try:
             u = move(prev.u, prev.lam)
         except SaltationError:
+            restore()
             return None
         if np.array_equal(u, prev.u):
             return None
@@ -457,10 +468,10 @@ class Continuation:
             self.problem.accept(u, prev.lam)
             sol = self.corrector.solve_fixed(u, prev.lam)
         except SaltationError:
-            self.problem.accept(prev.u, prev.lam)
+            restore()
             return None
         if canonical_events(sol.summary.event_ids) != canonical_events(prev.summary.event_ids):
-            self.problem.accept(prev.u, prev.lam)
+            restore()
             return None
         # the tangent oriented as before: along the same direction of the period and the parameter
         n = self.problem.system.n
@@ -474,10 +485,23 @@ class Continuation:
         self.solutions[-1] = sol
         return sol
 
+    def _section(self) -> float:
+        """The problem's section time (a forced orbit's, which :meth:`_rephased` may move); 0 otherwise."""
+        return float(getattr(self.problem, "t0", 0.0) or 0.0) if getattr(self.problem, "autonomous", True) is False else 0.0
+
+    def _add_special(self, sp) -> None:
+        """A located special point, stamped with the section its state lies at."""
+        t0 = self._section()
+        self.branch.special_points.append(sp if t0 == sp.t0 else replace(sp, t0=t0))
+
     def _accept(self, sol: Solution) -> None:
         self.problem.accept(sol.u, sol.lam)
         self.solutions.append(sol)
-        self.branch.points.append(sol.summary.recorded(sol.lam, sol.step, sol.iterations))
+        point = sol.summary.recorded(sol.lam, sol.step, sol.iterations)
+        t0 = self._section()
+        if t0 != point.t0:
+            object.__setattr__(point, "t0", t0)  # (a fresh record: see BranchPoint.recorded)
+        self.branch.points.append(point)
 
 
 def _same_special_point(a, b, rtol: float = 1e-6) -> bool:

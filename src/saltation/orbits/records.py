@@ -71,6 +71,10 @@ class BranchPoint:
     mode0 : str or None
         The mode the orbit is in at ``state`` (where its shooting starts); None for an equilibrium, and
         in files written before it was recorded.
+    t0 : float
+        The time at which the orbit passes ``state``: a forced orbit's section, which a branch moves off an
+        event where one reaches it (:meth:`~saltation.orbits.shooting.ShootingProblem.move_section`); 0 for
+        autonomous orbits and equilibria, and in files written before it was recorded.
     """
 
     parameter: float
@@ -89,6 +93,7 @@ class BranchPoint:
     excursion: float = float("nan")
     second_parameter: float = float("nan")
     mode0: str | None = None
+    t0: float = 0.0
 
     def recorded(self, parameter: float, step: float, iterations: int) -> BranchPoint:
         """This point as a branch records it: with its parameter, the step that led to it and the corrector's

@@ -663,13 +663,30 @@ class ShootingProblem:
             traj = self.flow.run(x0, self.t0, self.t0 + self.sign * T, p, mode0=self.mode0, tolerances=self.tolerances)
         except SaltationError:
             return u
+        t_mid = self._off_the_seam(traj, x0, T, p)
+        if t_mid is None:
+            return u
+        try:
+            mid = self.flow.run(x0, self.t0, self.t0 + self.sign * t_mid, p, mode0=self.mode0, tolerances=self.tolerances)
+        except SaltationError:
+            return u
+        if self.mode0 is not None:
+            self.mode0 = mid.mode1  # (the stretch's mode)
+        return np.append(mid.x1, T)
+
+    def _off_the_seam(self, traj, x0: np.ndarray, T: float, p: np.ndarray) -> float | None:
+        """Where along one period ``traj`` (from ``x0``) a shooting state lies away from every event: the
+        middle of the longest stretch between events that is not a sliding motion (of the start mode's, if
+        :attr:`mode0` is set and it is long enough), as a time from the start; None where the seam is clear
+        already (no event within :data:`SEAM_MARGIN` of the period of either end, nor a surface that near) or no
+        stretch is long enough."""
         times = [abs(e.t - self.t0) for e in traj.events]
         margin = SEAM_MARGIN * T
         # the period's end counts as its start: a state whose flow reaches a surface right at the end of the
         # period (the image of a reset there, as a clock's phase 0) sits on the seam too
         if not times or (min(times[0], T - times[-1]) >= margin and self._time_to_surfaces(x0, p) >= margin
                          and self._time_to_surfaces(traj.x1, p) >= margin):
-            return u
+            return None
         stretches = []  # (length, middle, mode) of each stretch between events that is not a sliding motion
         sliding, mode = False, traj.mode0
         for k, (a, b) in enumerate(zip([0.0, *times], [*times, T])):
@@ -681,14 +698,49 @@ class ShootingProblem:
         own = [s for s in stretches if s[2] == self.mode0 and s[0] >= 2.0 * margin]
         best, t_mid, mode = max(own or stretches, key=lambda s: s[0], default=(0.0, None, None))
         if t_mid is None or best < 2.0 * margin:
+            return None
+        return t_mid
+
+    def move_section(self, u: np.ndarray, lam: float | None = None) -> np.ndarray:
+        """A forced orbit's shooting state moved, with the section time :attr:`t0`, off the switching events.
+
+        A forced orbit's section is a choice: where an event of the orbit lies at (or next to) ``t0``, the
+        stroboscopic map has a kink there and Newton cycles across it.  The section is moved along the orbit
+        to the middle of its longest stretch between events (as :meth:`start_off_surfaces` moves an autonomous
+        orbit's state), and :attr:`t0` (and :attr:`mode0`, if set) with it; the multipliers do not change.
+        This changes the problem: the points a branch records carry their own ``t0``.
+
+        Parameters
+        ----------
+        u : ndarray
+            The state ``x0`` of a forced orbit at :attr:`t0`.
+        lam : float, optional
+            Value of the continuation parameter.
+
+        Returns
+        -------
+        ndarray
+            The state at the new :attr:`t0`, or ``u`` itself where the seam is clear, the problem is autonomous
+            or the orbit cannot be integrated.
+        """
+        if self.autonomous:
             return u
+        n = self.system.n
+        x0 = np.asarray(u[:n], dtype=float)
+        p = self.parameters_at(lam)
+        T = self.period_of(u, lam)
         try:
+            traj = self.flow.run(x0, self.t0, self.t0 + self.sign * T, p, mode0=self.mode0, tolerances=self.tolerances)
+            t_mid = self._off_the_seam(traj, x0, T, p)
+            if t_mid is None:
+                return u
             mid = self.flow.run(x0, self.t0, self.t0 + self.sign * t_mid, p, mode0=self.mode0, tolerances=self.tolerances)
         except SaltationError:
             return u
         if self.mode0 is not None:
-            self.mode0 = mid.mode1  # (the stretch's mode)
-        return np.append(mid.x1, T)
+            self.mode0 = mid.mode1
+        self.t0 = math.fmod(self.t0 + self.sign * t_mid, self.system.forcing_period(p))
+        return np.asarray(mid.x1, dtype=float)
 
     def _time_to_surfaces(self, x: np.ndarray, p: np.ndarray) -> float:
         """The least time ``|h| / |dh/dt|`` in which the flow at ``x`` reaches a switching surface (linearised)."""
