@@ -17,10 +17,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import sys
+from pathlib import Path
+
 from stick_slip_forced import reference_flow, stick_slip
 
 from saltation import ContinuationSettings, find_periodic_orbit
 from saltation.special_points.continuation import continue_orbit
+
+sys.path.insert(0, str(Path(__file__).parent / "literature"))  # (the corpus's models, for the converter)
 
 OMEGA = 0.8
 PERIOD = 2 * math.pi / OMEGA
@@ -54,3 +59,30 @@ def test_an_event_that_reaches_the_section_moves_it_and_the_branch_goes_on():
         ref = np.sort(np.abs(reference_multipliers(np.asarray(pt.state), pt.t0, pt.parameter)))
         # central differences of step 1e-6 on a map integrated to 1e-12: about 1e-6
         np.testing.assert_allclose(mu, ref, rtol=0, atol=1e-5)
+
+
+def test_a_special_point_is_continued_at_its_own_section():
+    """A special point carries the section its state lies at: a curve started from it with a problem whose
+    section differs (a branch's problem after it moved its section) takes the point's.  The current-mode boost
+    converter's period doubling (the literature corpus's model, a clock h(t) on a forced model), located at
+    ``t0 = 0``, continued in ``C`` by a problem built at ``t0 = 0.5``, against the closed-form map's brentq."""
+    import boost_reference as ref
+    from corpus import load_cases
+
+    from saltation import Flow, ShootingProblem
+    from saltation.special_points.loci import follow_locus
+
+    case = next(c for c in load_cases() if c.name == "boost_current_mode")
+    orbit = find_periodic_orbit(case.model(), case.orbit.guess, parameters=dict(case.orbit.parameters), mode0="off")
+    branch = continue_orbit(orbit, "I_ref", bounds=(1.5, 1.8), settings=ContinuationSettings(ds_max=0.02),
+                            directions=(1,))
+    point = next(sp for sp in branch.special_points if sp.kind.value == "period_doubling")
+    assert point.t0 == 0.0
+    problem = ShootingProblem(Flow(case.model()), {"I_ref": point.parameter}, continuation_parameter="I_ref",
+                              t0=0.5, mode0="off")
+    locus = follow_locus(problem, point, "C", (11e-6, 13e-6))
+    assert problem.t0 == 0.0
+    assert len(locus.values) >= 5, locus.stop_reason
+    for I_ref, C in locus.values:
+        # the curve's corrector to 1e-10 on the shooting residual: its points within 1e-7 of the closed form
+        assert abs(I_ref - ref.period_doubling(dict(ref.DEFAULTS, C=C), 1.45, 2.0)) <= 1e-7

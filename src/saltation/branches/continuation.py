@@ -480,7 +480,10 @@ class Continuation:
         if not np.any(reference):
             reference[-1] = 1.0
         sol.tangent = self.corrector.tangent(sol, reference)
-        sol.step = prev.step
+        # no step leads to it from the point before in these coordinates (its state lies elsewhere on the orbit):
+        # the predictor's curvature term, (t_k - t_{k-1}) / ds_{k-1}, is left out after it (with the tiny step
+        # that failed it predicted far off the branch, and the corrector landed on the parameter bound)
+        sol.step = 0.0
         self.problem.accept(sol.u, sol.lam)
         self.solutions[-1] = sol
         return sol

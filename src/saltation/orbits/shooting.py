@@ -701,6 +701,14 @@ class ShootingProblem:
             return None
         return t_mid
 
+    def align_section(self, point) -> None:
+        """Take the section time of a recorded point (a branch point or a special point): a forced orbit's
+        state lies on its orbit at the point's own ``t0``, which a branch may have moved
+        (:meth:`move_section`) since the problem was built."""
+        t0 = float(getattr(point, "t0", 0.0) or 0.0)
+        if not self.autonomous and math.isfinite(t0) and t0 != self.t0:
+            self.t0 = t0
+
     def move_section(self, u: np.ndarray, lam: float | None = None) -> np.ndarray:
         """A forced orbit's shooting state moved, with the section time :attr:`t0`, off the switching events.
 

@@ -126,6 +126,7 @@ def follow_period_doubled_branch(
     """
     if point.kind is not SpecialPointKind.PERIOD_DOUBLING:
         raise ModelError(f"branch switching needs a period_doubling point, got {point.kind.value}")
+    getattr(problem, "align_section", lambda point: None)(point)  # (the point's state lies at its own section)
     if problem.autonomous:
         raise ModelError("branch switching at period doubling is implemented for forced models")
     doubled = period_doubled_problem(problem)

@@ -436,6 +436,7 @@ def follow_locus(
     """
     if problem.autonomous or problem.backward or problem.periods != 1:
         raise ModelError("two-parameter curves are implemented for forced models in forward time, over one forcing period")
+    getattr(problem, "align_section", lambda point: None)(point)  # (the point's state lies at its own section)
     # with multiple shooting the curve's defining system shoots by segments; what is read off a curve point
     # (the kind of a corner, the grazing that ends a fold curve) is computed on the single problem
     single = getattr(problem, "problem", problem)
