@@ -92,7 +92,9 @@ def run(x, s, p, T, stop=None):
                 hi.direction, lo.direction = 1, -1
                 evs += [(hi, i, "hi"), (lo, i, "lo")]
             else:
-                def arrive(tt, y, i=i, t_in=fresh.get(i, -1.0)):
+                t_in = fresh.get(i, -1.0)
+
+                def arrive(tt, y, i=i, t_in=t_in):
                     # just after a switch of this block its relative velocity leaves 0 (quadratically out of a
                     # stick phase): no arrival within 1e-6 (solve_ivp would take the start, where w = 0)
                     if t_in >= 0.0 and tt - t_in < 1e-6:
@@ -104,7 +106,7 @@ def run(x, s, p, T, stop=None):
         for e in evs:
             e[0].terminal = True
         modes = list(s)
-        sol = solve_ivp(lambda tt, y: _rhs(y, modes, p), (t, T), x, events=[e[0] for e in evs],
+        sol = solve_ivp(lambda tt, y, modes=modes: _rhs(y, modes, p), (t, T), x, events=[e[0] for e in evs],
                         rtol=1e-12, atol=1e-12, method="DOP853")
         hits = [(sol.t_events[k][0], k) for k in range(len(evs)) if len(sol.t_events[k])]
         if not hits:
