@@ -20,7 +20,7 @@ its multipliers have ``|mu| = r^2`` while complex (the map's determinant is ``r^
 from __future__ import annotations
 
 import numpy as np
-from corpus import LiteratureCase, Orbit
+from corpus import BranchStep, LiteratureCase, Orbit
 from scipy.optimize import brentq
 
 from saltation import Crossing, Mode, PiecewiseSystem, Transition
@@ -111,8 +111,7 @@ CASE = LiteratureCase(
     source="Hogan, Proc. R. Soc. Lond. A 425 (1989) 441-476 (rigid block rocking under harmonic forcing)",
     model=rocking_block,
     orbit=Orbit(parameters=dict(DEFAULTS), guess=[0.19, -0.07], multipliers=multipliers, state=fixed_point),
-    known_failures={"orbit": "SlidingError at the first impact: the reset w -> r w keeps the block moving into "
-                             "phi < 0, the region of the target mode 'left', but the engine reports that the field "
-                             "of 'left' pushes the state back across the surface (it treats the impact as a "
-                             "rebound to the source side)"},
+    # the reference's scan of beta from 0.5 to 4.75 at omega = 4: the multipliers stay a complex pair of modulus
+    # r^2 (the map's determinant is r^4), so the branch has no special point
+    branch=BranchStep("beta", (1.6, 3.0), lambda: [], ds_max=0.05),
 )
