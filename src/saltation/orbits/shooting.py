@@ -702,9 +702,14 @@ class ShootingProblem:
         return t_mid
 
     def align_section(self, point) -> None:
-        """Take the section time of a recorded point (a branch point or a special point): a forced orbit's
-        state lies on its orbit at the point's own ``t0``, which a branch may have moved
-        (:meth:`move_section`) since the problem was built."""
+        """Take the section time of a recorded point: a forced orbit's state lies on its orbit at the point's own
+        ``t0``, which a branch may have moved (:meth:`move_section`) since the problem was built.
+
+        Parameters
+        ----------
+        point : BranchPoint or SpecialPoint
+            A point whose ``t0`` (0 where it has none) becomes :attr:`t0` of a forced problem.
+        """
         t0 = float(getattr(point, "t0", 0.0) or 0.0)
         if not self.autonomous and math.isfinite(t0) and t0 != self.t0:
             self.t0 = t0
@@ -1633,7 +1638,9 @@ def find_periodic_orbit(
             return prob.solve(prob.pack(state0, period), tol=tol, max_iter=max_iter)
         multiple = MultipleShootingProblem(prob, segments)
         u0 = prob.start_off_surfaces(prob.pack(state0, period))
-        return multiple.solve(multiple.pack(u0), tol=tol, max_iter=max_iter)
+        # the nodes together along the orbit: off the events, and out of its sliding motions where they fit
+        U0 = multiple.start_off_surfaces(multiple.pack(u0))
+        return multiple.solve(U0, tol=tol, max_iter=max_iter)
     multiple = MultipleShootingProblem(prob, segments)
     if guess.shape != (multiple.segments, flow.system.n):
         raise ModelError(f"a guess of every node of {segments} segments has shape ({segments}, {flow.system.n}), "
@@ -1812,17 +1819,31 @@ class MultipleShootingProblem:
             return U
         events = np.array([abs(e.t - prob.t0) for e in traj.events] + [0.0])  # the period's seam is one too
         offsets = T * np.arange(self.segments) / self.segments
+        # the sliding motions' stretches of the period: a node inside one is avoidable where another shift has
+        # fewer (a node there lies on the surface, where the shot starts in a sliding motion of its own)
+        sliding = []
+        for k, e in enumerate(traj.events):
+            if e.kind == EventKind.SLIDING_START:
+                end = abs(traj.events[k + 1].t - prob.t0) if k + 1 < len(traj.events) else T
+                sliding.append((abs(e.t - prob.t0), end))
 
         def clearance(shift: float) -> float:
             d = np.abs(((offsets[:, None] + shift - events[None, :]) + 0.5 * T) % T - 0.5 * T)
             return float(d.min())
 
+        def in_sliding(shift: float) -> int:
+            at = (offsets + shift) % T
+            return int(sum(np.count_nonzero((at > a) & (at < b)) for a, b in sliding))
+
+        def score(shift: float) -> tuple[int, float]:
+            return (-in_sliding(shift), min(clearance(shift), SEAM_MARGIN * T))
+
         margin = SEAM_MARGIN * T
-        if clearance(0.0) >= margin:
+        if clearance(0.0) >= margin and in_sliding(0.0) == 0:
             return U
         shifts = np.linspace(0.0, T / self.segments, 201)[:-1]
-        best = max(shifts, key=clearance)
-        if clearance(best) <= clearance(0.0):
+        best = max(shifts, key=lambda s: (score(s), clearance(s)))
+        if (score(best), clearance(best)) <= (score(0.0), clearance(0.0)):
             return U
         try:
             moved = prob.flow.run(x0, prob.t0, prob.t0 + prob.sign * best, p, mode0=prob.mode0, tolerances=prob.tolerances)
