@@ -1639,7 +1639,7 @@ def find_periodic_orbit(
         multiple = MultipleShootingProblem(prob, segments)
         u0 = prob.start_off_surfaces(prob.pack(state0, period))
         # the nodes together along the orbit: off the events, and out of its sliding motions where they fit
-        U0 = multiple.start_off_surfaces(multiple.pack(u0))
+        U0 = multiple.start_off_surfaces(multiple.pack(u0), sliding_only=True)
         return multiple.solve(U0, tol=tol, max_iter=max_iter)
     multiple = MultipleShootingProblem(prob, segments)
     if guess.shape != (multiple.segments, flow.system.n):
@@ -1785,13 +1785,15 @@ class MultipleShootingProblem:
         U = np.concatenate(nodes)
         return np.append(U, T) if prob.autonomous else U
 
-    def start_off_surfaces(self, U: np.ndarray, lam: float | None = None) -> np.ndarray:
+    def start_off_surfaces(self, U: np.ndarray, lam: float | None = None, *, sliding_only: bool = False) -> np.ndarray:
         """Nodes of an autonomous orbit moved together along it, so that none lies near a switching event.
 
         The nodes sit at the fractions ``i / m`` of the period from the first: a node on an event (a clock's
         reset) makes the matching condition jump.  All nodes are moved by the same time ``s`` along the orbit,
-        the ``s`` in ``[0, T / m)`` that keeps them farthest (in time, modulo the period) from every event of
-        the period, if the nodes lie within :data:`SEAM_MARGIN` of the period of one now.
+        the ``s`` in ``[0, T / m)`` that puts the fewest of them inside a sliding motion (a node there starts
+        its segment on the surface) and then keeps them farthest (in time, modulo the period) from every event
+        of the period, if the nodes lie within :data:`SEAM_MARGIN` of the period of one now, or inside a sliding
+        motion.
 
         Parameters
         ----------
@@ -1799,6 +1801,9 @@ class MultipleShootingProblem:
             The nodes ``(x_1, ..., x_m, T)``.
         lam : float, optional
             Value of the continuation parameter.
+        sliding_only : bool
+            Move the nodes only where one lies inside a sliding motion (the start of
+            :func:`find_periodic_orbit`, whose first node is the user's guess where it is not).
 
         Returns
         -------
@@ -1839,7 +1844,7 @@ class MultipleShootingProblem:
             return (-in_sliding(shift), min(clearance(shift), SEAM_MARGIN * T))
 
         margin = SEAM_MARGIN * T
-        if clearance(0.0) >= margin and in_sliding(0.0) == 0:
+        if in_sliding(0.0) == 0 and (sliding_only or clearance(0.0) >= margin):
             return U
         shifts = np.linspace(0.0, T / self.segments, 201)[:-1]
         best = max(shifts, key=lambda s: (score(s), clearance(s)))
