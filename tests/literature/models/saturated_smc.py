@@ -223,10 +223,4 @@ CASE = LiteratureCase(
     locus=LocusStep("grazing", "omega", (0.8, 1.3), _grazing_in_omega, tol=1e-8),
     sweep=SweepStep("D", SWEEP_D, _sweep_on_the_fixed_points,
                     options={"x0": [0.2, 0.1], "transient": 60, "periods": 20, "start": "own"}),
-    known_failures={
-        "locus": "follow_locus from the first grazing (the orbit in `linear` touching s = phi from below) takes "
-                 "the transition sat_minus -> linear (grazed_transitions returns (1, t)) instead of linear -> "
-                 "sat_minus, although the point's touch_mode is 'linear': the corrector does not converge "
-                 "(residual 82.65), in omega and in c alike",
-    },
 )
