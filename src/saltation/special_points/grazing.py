@@ -554,4 +554,4 @@ def growth_exponent(distances: np.ndarray, magnitudes: np.ndarray) -> float:
     return float(slope)
 
 
-__all__ = ["GrazingOrbit", "TangentialReturn", "grazing_candidates", "growth_exponent", "indicator_rate", "locate_grazing", "locate_tangential_return", "location_tolerances", "tangency_time"]
+__all__ = ["GRAZING_VISIT", "GrazingOrbit", "TangentialReturn", "grazing_candidates", "growth_exponent", "indicator_rate", "locate_grazing", "locate_tangential_return", "location_tolerances", "tangency_time"]
