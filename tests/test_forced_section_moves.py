@@ -86,3 +86,19 @@ def test_a_special_point_is_continued_at_its_own_section():
     for I_ref, C in locus.values:
         # the curve's corrector to 1e-10 on the shooting residual: its points within 1e-7 of the closed form
         assert abs(I_ref - ref.period_doubling(dict(ref.DEFAULTS, C=C), 1.45, 2.0)) <= 1e-7
+
+
+def test_the_sections_travel_with_the_branch_file(tmp_path):
+    """Each point's and special point's section is written to the branch file and read back (files written
+    before it was recorded read as 0)."""
+    from saltation.output.io import load_branch_json, save_branch_json
+
+    orbit = find_periodic_orbit(stick_slip(), [1.2, 0.7], parameters={"a": 1.0})
+    branch = continue_orbit(orbit, "a", bounds=(0.45, 1.0), settings=ContinuationSettings(ds=0.02, ds_max=0.05),
+                            directions=(-1,))
+    assert any(pt.t0 != 0.0 for pt in branch.points)
+    path = tmp_path / "branch.json"
+    save_branch_json(branch, path)
+    back = load_branch_json(path)
+    assert [pt.t0 for pt in back.points] == [pt.t0 for pt in branch.points]
+    assert [sp.t0 for sp in back.special_points] == [sp.t0 for sp in branch.special_points]
