@@ -17,14 +17,15 @@ force is continuous at ``x = +-b``, so every saltation matrix is the identity an
 the product of the modes' ``exp(A dt)`` (their ``(x, v)`` block).  The linear drive-side response
 ``x = b + F_m + A cos(omega t - theta)``, ``A = F_a / sqrt((1 - omega^2)^2 + (2 zeta omega)^2)``, loses contact
 (grazes ``x = b`` from the contact side) where ``A = F_m``: two frequencies either side of the resonance, in closed
-form.  Between them the teeth separate once a period and the resonance bends to lower frequencies (softening):
+form, and so is its curve in a second parameter (the lower root in ``omega`` as the mean load ``F_m`` varies).
+Between them the teeth separate once a period and the resonance bends to lower frequencies (softening):
 the folds are the solutions of periodicity plus ``det(DP - I) = 0`` (``fsolve`` on the reference map).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from corpus import BranchStep, Expected, LiteratureCase, Orbit, SweepStep
+from corpus import BranchStep, Expected, LiteratureCase, LocusStep, Orbit, SweepStep
 from scipy.linalg import expm
 from scipy.optimize import brentq, fsolve
 
@@ -147,6 +148,11 @@ def fold(p, omega, state):
     return float(u[2])
 
 
+def _lower_grazing_in_F_m(F_m: float) -> float:
+    """The curve of the lower grazing: the smaller root of the quadratic at the mean load ``F_m``."""
+    return grazing_frequencies(dict(DEFAULTS, F_m=F_m))[0]
+
+
 def _expected() -> list[Expected]:
     p = dict(DEFAULTS)
     low, high = grazing_frequencies(p)
@@ -182,6 +188,9 @@ CASE = LiteratureCase(
     orbit=Orbit(parameters=dict(DEFAULTS), guess=[1.1, 0.0], multipliers=lambda p: np.linalg.eigvals(
         fixed_point(dict(p), linear_state(p))[1]), state=linear_state),
     branch=BranchStep("omega", (0.4, 1.4), _expected, ds_max=0.05),
+    # the lower grazing (contact loss below the resonance) continued in the mean load: F_a / F_m from 0.71 to 0.33;
+    # each point of the curve is a grazing solved to the shooting tolerance (1e-10), a few 1e-10 in omega
+    locus=LocusStep("grazing", "F_m", (0.07, 0.15), _lower_grazing_in_F_m, tol=1e-8),
     sweep=SweepStep("omega", [0.9, 1.0, 1.1], _sweep_on_the_resonance,
                     options={"x0": [1.1, 0.0], "periods": 5, "transient": 300}),
 )

@@ -11,7 +11,7 @@ Reference (numpy/scipy only): the explicit solution between spikes, the firing-t
 ``F'(t_n) = exp(-(t_{n+1} - t_n)) (I + A cos(omega t_n)) / (I - 1 + A cos(omega t_{n+1}))``.  A 1:1 locked
 orbit is a root of ``F(t) - t - T``; its Floquet multiplier (of the stroboscopic map) is ``F'`` there.  The
 edge of the 1:1 tongue is a saddle-node of the firing map: the minimum over ``t`` of ``F(t) - t - T`` is zero
-(inner root of ``F' = 1`` by ``brentq``, outer ``brentq`` in ``I``).  The sweep is checked against the
+(inner root of ``F' = 1`` by ``brentq``, outer ``brentq`` in ``I``), and so is its curve in ``A``.  The sweep is checked against the
 reference's stroboscopic map and its rotation number.
 """
 
@@ -20,7 +20,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
-from corpus import BranchStep, Expected, LiteratureCase, Orbit, SweepStep
+from corpus import BranchStep, Expected, LiteratureCase, LocusStep, Orbit, SweepStep
 from scipy.optimize import brentq
 
 from saltation import Crossing, Mode, PiecewiseSystem, Transition
@@ -173,6 +173,13 @@ def _fold():
     return [Expected(("fold",), tongue_edge(dict(DEFAULTS)), 1e-9)]
 
 
+def _tongue_edge_in_A(A: float) -> float:
+    """The curve of the tongue's lower edge in the forcing amplitude: the nested ``brentq`` at each ``A``.  (It
+    agrees to 1e-15 with the straight line ``I = e / (e - 1) - A / sqrt(1 + omega^2)``: a spike at ``t`` followed
+    by one exactly a period later needs ``(I + v_p(t)) (1 - e^{-T}) = 1``, lowest where ``v_p`` is largest.)"""
+    return tongue_edge(dict(DEFAULTS, A=A), 1.30, 1.58)
+
+
 SWEEP_I = [1.05, 1.08, 1.16, 1.30, 1.40, 1.58, 2.00]
 
 
@@ -208,5 +215,7 @@ CASE = LiteratureCase(
     orbit=Orbit(parameters=dict(DEFAULTS), guess=[0.8], t0=T0, multipliers=multipliers, state=state),
     # the stable 1:1 orbit, down to the tongue's lower edge, and back along the unstable 1:1 orbit
     branch=BranchStep("I", (1.52, 1.60), _fold, ds=0.005, ds_max=0.01),
+    # the tongue's lower edge continued in the forcing amplitude; each point a fold located as on the branch
+    locus=LocusStep("fold", "A", (0.1, 0.6), _tongue_edge_in_A, tol=1e-9),
     sweep=SweepStep("I", SWEEP_I, _sweep_follows_the_map, options={"x0": [0.0], "start": "own"}),
 )

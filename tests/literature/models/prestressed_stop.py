@@ -17,7 +17,7 @@ Reference (numpy/scipy only).  Each mode is linear in ``z = (x, v, cos omega t, 
 matrix exponential, the crossings of ``x = e`` are located by ``brentq`` on it, and the derivative of the period map
 is the product of the modes' ``(x, v)`` blocks and the saltation matrices above.  The free orbit
 ``x = A cos(omega t - theta)``, ``A = a / sqrt((1 - omega^2)^2 + (2 zeta omega)^2)``, grazes the stop where
-``A = e``: in closed form.
+``A = e``: in closed form, and so is its curve in the gap ``e`` (the lower root in ``omega``).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
-from corpus import BranchStep, Expected, LiteratureCase, Orbit, SweepStep
+from corpus import BranchStep, Expected, LiteratureCase, LocusStep, Orbit, SweepStep
 from scipy.linalg import expm
 from scipy.optimize import brentq, fsolve
 
@@ -118,6 +118,11 @@ def grazing_frequencies(p) -> list[float]:
     return sorted(float(np.sqrt(r)) for r in roots.real if r > 0)
 
 
+def _lower_grazing_in_e(e: float) -> float:
+    """The curve of the lower grazing: the smaller root of the quadratic at the gap ``e``."""
+    return grazing_frequencies(dict(DEFAULTS, e=e))[0]
+
+
 def _solve(p, omega, state, sign):
     """Periodicity and ``det(DP - sign I) = 0`` (a fold for +1, a period doubling for -1) by ``fsolve``."""
 
@@ -165,6 +170,9 @@ CASE = LiteratureCase(
     orbit=Orbit(parameters=dict(DEFAULTS), guess=[1.0, 0.5], multipliers=lambda p: np.linalg.eigvals(
         fixed_point(dict(p), [1.06, 0.28])[1]), state=lambda p: fixed_point(dict(p), [1.06, 0.28])[0]),
     branch=BranchStep("omega", (0.5, 1.5), _expected, ds_max=0.05),
+    # the lower grazing (first contact with the stop below the resonance) continued in the gap: a / e from 0.67 to
+    # 0.33; each point of the curve is a grazing solved to the shooting tolerance (1e-10)
+    locus=LocusStep("grazing", "e", (0.75, 1.5), _lower_grazing_in_e, tol=1e-8),
     sweep=SweepStep("omega", [0.8, 1.0], _sweep_follows_the_map,
                     options={"x0": [1.0, 0.5], "periods": 6, "transient": 400}),
 )
