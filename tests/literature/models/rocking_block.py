@@ -119,8 +119,8 @@ def _sweep_on_the_fixed_point(result) -> None:
         assert len(pts) == 5
         # the integration's rtol 1e-10 over one period of the saddle-like modes (e^T ~ 5): 1e-9
         np.testing.assert_allclose(pts, np.broadcast_to(fixed_point(p), pts.shape), rtol=0, atol=1e-9)
-        for a, b in zip(pts[:-1], pts[1:]):
-            np.testing.assert_allclose(b, strobe(a, p), rtol=0, atol=1e-9)
+        for i in range(len(pts) - 1):
+            np.testing.assert_allclose(pts[i + 1], strobe(pts[i], p), rtol=0, atol=1e-9)
 
 
 CASE = LiteratureCase(
