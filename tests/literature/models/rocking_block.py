@@ -20,7 +20,7 @@ its multipliers have ``|mu| = r^2`` while complex (the map's determinant is ``r^
 from __future__ import annotations
 
 import numpy as np
-from corpus import BranchStep, LiteratureCase, Orbit
+from corpus import BranchStep, LiteratureCase, Orbit, SweepStep
 from scipy.optimize import brentq
 
 from saltation import Crossing, Mode, PiecewiseSystem, Transition
@@ -105,6 +105,24 @@ def multipliers(p) -> np.ndarray:
     return np.linalg.eigvals(jacobian(fixed_point(p), p))
 
 
+SWEEP_BETA = [1.8, 2.0, 2.4]
+
+
+def _sweep_on_the_fixed_point(result) -> None:
+    """Each value starts from the orbit's state at beta = 2: after 120 periods (|mu| = r^2 = 0.81, so 0.81^120
+    ~ 1e-11 of a start 0.03 away) every stroboscopic sample is the reference's fixed point, and each sample is
+    the reference map of the one before it."""
+    assert not result.failures, result.failures
+    for k, beta in enumerate(SWEEP_BETA):
+        p = dict(DEFAULTS, beta=beta)
+        pts = np.asarray(result.at(k), dtype=float)
+        assert len(pts) == 5
+        # the integration's rtol 1e-10 over one period of the saddle-like modes (e^T ~ 5): 1e-9
+        np.testing.assert_allclose(pts, np.broadcast_to(fixed_point(p), pts.shape), rtol=0, atol=1e-9)
+        for i in range(len(pts) - 1):
+            np.testing.assert_allclose(pts[i + 1], strobe(pts[i], p), rtol=0, atol=1e-9)
+
+
 CASE = LiteratureCase(
     name="rocking_block",
     field="mechanics",
@@ -114,4 +132,7 @@ CASE = LiteratureCase(
     # the reference's scan of beta from 0.5 to 4.75 at omega = 4: the multipliers stay a complex pair of modulus
     # r^2 (the map's determinant is r^4), so the branch has no special point
     branch=BranchStep("beta", (1.6, 3.0), lambda: [], ds_max=0.05),
+    # measured: the samples within 8e-12 of the fixed point, each within 1.3e-11 of the reference map of the last
+    sweep=SweepStep("beta", SWEEP_BETA, _sweep_on_the_fixed_point,
+                    options={"x0": [0.18807298, -0.07367735], "start": "own", "transient": 120, "periods": 5}),
 )
