@@ -131,7 +131,7 @@ CASE = LiteratureCase(
     orbit=Orbit(parameters=dict(DEFAULTS), guess=[0.19, -0.07], multipliers=multipliers, state=fixed_point),
     # the reference's scan of beta from 0.5 to 4.75 at omega = 4: the multipliers stay a complex pair of modulus
     # r^2 (the map's determinant is r^4), so the branch has no special point
-    branch=BranchStep("beta", (1.6, 3.0), lambda: [], ds_max=0.05),
+    branch=BranchStep("beta", (1.6, 3.0), list, ds_max=0.05),
     # measured: the samples within 8e-12 of the fixed point, each within 1.3e-11 of the reference map of the last
     sweep=SweepStep("beta", SWEEP_BETA, _sweep_on_the_fixed_point,
                     options={"x0": [0.18807298, -0.07367735], "start": "own", "transient": 120, "periods": 5}),
