@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 import sympy as sp
-from corpus import BranchStep, Expected, LiteratureCase, Orbit
+from corpus import BranchStep, Expected, LiteratureCase, Orbit, SweepStep
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -150,6 +150,28 @@ def period_doubling(q, lo=0.0698, hi=0.0785):
     return brentq(lambda phi: np.linalg.det(fixed_point(dict(q, phi=phi))[1] + np.eye(3)), lo, hi, xtol=1e-13)
 
 
+def swing_apex(q) -> float:
+    """The largest swing-leg angle of the period-1 gait: where ``omega_ns`` falls through zero in the swing
+    (``solve_ivp``'s own event on the reference step from the gait's post-impact state)."""
+    y, _, T = fixed_point(q)
+    apex = lambda t, z: z[2]  # noqa: E731
+    apex.direction = -1
+    sol = solve_ivp(_field(q), (0.0, T), np.array([-y[0] - 2 * q["phi"], y[0], y[1], y[2]]), events=apex,
+                    method="DOP853", rtol=1e-12, atol=1e-12)
+    assert sol.t_events[0].size == 1, "one apex of the swing leg per step"
+    return float(sol.y_events[0][0][0])
+
+
+def _sweep_is_the_gait(result) -> None:
+    """The sampled maxima of ``theta_ns`` (the first state) after 60 steps of transient (the multipliers'
+    modulus 0.58 leaves 1e-14 of the start) are the reference gait's swing apex, to 1e-8 (the default
+    integration's rtol 1e-10 and the reference's 1e-12 on an angle of 0.36)."""
+    x = np.asarray(result.states, dtype=float)
+    assert len(x) >= 4
+    np.testing.assert_allclose(x[:, 0], swing_apex(dict(DEFAULTS)), rtol=0, atol=1e-8)
+    np.testing.assert_allclose(x[:, 2], 0.0, rtol=0, atol=1e-6)  # (at a maximum the swing leg stops)
+
+
 def _period_doubling():
     # brentq to 1e-13 on a map whose derivative is good to ~1e-9: the root to ~1e-9
     return [Expected(("period_doubling",), period_doubling(dict(DEFAULTS)), 1e-8)]
@@ -165,4 +187,7 @@ CASE = LiteratureCase(
                 multipliers=multipliers),
     branch=BranchStep("phi", (float(np.deg2rad(3.0)), float(np.deg2rad(5.0))), _period_doubling,
                       ds=0.002, ds_max=0.005),
+    sweep=SweepStep("phi", [DEFAULTS["phi"]], _sweep_is_the_gait,
+                    options={"x0": [-0.3234, 0.2187, -0.3772, -1.0918], "period": 0.75, "periods": 5,
+                             "transient": 60}),
 )
