@@ -286,6 +286,9 @@ class Branch:
     axis_labels : dict of str to str
         The axis label of each state and parameter as the model declares it (mathtext with its unit,
         :meth:`saltation.model.system.PiecewiseSystem.axis_label`); plots use them.
+    problem : BranchProblem or None
+        The problem the branch was computed with (set by the continuation; not written to files, and
+        None for a branch read from one): two-parameter curves and branch switches start from it.
     """
 
     model: str
@@ -304,6 +307,9 @@ class Branch:
     curve_of: SpecialPointKind | None = None
     state_names: tuple[str, ...] = ()
     axis_labels: dict[str, str] = field(default_factory=dict)
+    #: The problem the branch was computed with (set by the continuation; not a field: not compared, not
+    #: written to files).  Curves in two parameters and branch switches start from it.
+    problem = None
 
     def _repr_markdown_(self) -> str:
         """A summary for Jupyter (:mod:`saltation.summary`)."""

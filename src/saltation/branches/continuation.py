@@ -34,8 +34,7 @@ import numpy as np
 from saltation.branches.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind, StopReason
 from saltation.branches.corrector import Corrector, Solution, canonical_events
 from saltation.errors import SaltationError
-from saltation.orbits.shooting import ShootingProblem
-
+from saltation.orbits.problem import BranchProblem
 
 
 def _axis_labels(system) -> dict[str, str]:
@@ -158,6 +157,10 @@ class ContinuationSettings:
             raise ValueError(f"parameter bounds must satisfy lower < upper, got {self.bounds}")
 
 
+#: What :meth:`Continuation._step` returns where the parameter bound lies closer than the smallest step.
+_AT_BOUND = object()
+
+
 class Continuation:
     """Pseudo-arclength continuation of one branch in one direction.
 
@@ -192,9 +195,9 @@ class Continuation:
         branch = cont.branch
     """
 
-    def __init__(self, problem, settings: ContinuationSettings | None = None, *,
+    def __init__(self, problem: BranchProblem, settings: ContinuationSettings | None = None, *,
                  detector: DetectorFactory | None = None):
-        if getattr(problem, "lam_index", -1) < 0:
+        if problem.lam_index < 0:
             raise SaltationError("the problem needs a continuation parameter (continuation_parameter=...)")
         self.problem = problem
         self.settings = settings or ContinuationSettings()
@@ -202,13 +205,14 @@ class Continuation:
         self.branch = Branch(
             model=problem.system.name,
             parameter_name=problem.lam_name,
-            kind=BranchKind(getattr(problem, "branch_kind", BranchKind.PERIODIC.value)),
-            backward=bool(getattr(problem, "backward", False)),
+            kind=BranchKind(problem.branch_kind),
+            backward=bool(problem.backward),
             fixed_parameters=dict(zip(problem.system.parameter_names, map(float, problem.p))),
             autonomous=bool(problem.system.is_autonomous),
             state_names=tuple(problem.system.state_names),
             axis_labels=_axis_labels(problem.system),
         )
+        self.branch.problem = problem
         self.solutions: list[Solution] = []
         self.last_failure: np.ndarray | None = None
         self.last_error: SaltationError | None = None
@@ -265,46 +269,12 @@ class Continuation:
                 self.branch.stop_reason = StopReason.MAX_POINTS
                 return
             prev = self.solutions[-1]
-            new = None
             if len(self.solutions) != tried_at:  # a new point: it may be re-phased once
                 tried_at, rephased = len(self.solutions), False
-            while ds >= s.ds_min:
-                z_pred = self._predict(ds)
-                if z_pred[-1] > hi or z_pred[-1] < lo:
-                    # land exactly on the bound
-                    bound = hi if z_pred[-1] > hi else lo
-                    frac = (bound - prev.z[-1]) / (z_pred[-1] - prev.z[-1])
-                    if frac * ds < s.ds_min:
-                        self.branch.stop_reason = StopReason.PARAMETER_BOUND
-                        return
-                    try:
-                        cand = self.corrector.solve_fixed(prev.u + frac * ds * prev.tangent[:-1], bound)
-                    except SaltationError:
-                        ds *= 0.5
-                        continue
-                    cand.tangent = self.corrector.tangent(cand, prev.tangent)
-                    cand.step = frac * ds
-                    new = cand
-                    break
-                try:
-                    cand = self.corrector.solve_bordered(z_pred, prev.tangent)
-                except SaltationError as exc:
-                    self.last_failure = z_pred
-                    self.last_error = exc
-                    ds *= 0.5
-                    continue
-                cand.tangent = self.corrector.tangent(cand, prev.tangent)
-                cand.step = ds
-                angle = math.acos(max(-1.0, min(1.0, float(cand.tangent @ prev.tangent))))
-                corner = canonical_events(cand.summary.event_ids) != canonical_events(prev.summary.event_ids)
-                if angle > s.max_angle and not corner and ds > 2 * s.ds_min:
-                    ds *= 0.5
-                    continue
-                if corner and ds > 4 * s.ds_min and angle > s.max_angle and cand.iterations > 4:
-                    ds *= 0.5
-                    continue
-                new = cand
-                break
+            new, ds = self._step(prev, ds)
+            if new is _AT_BOUND:
+                self.branch.stop_reason = StopReason.PARAMETER_BOUND
+                return
             if new is None and ds < s.ds_min and not rephased:
                 # before giving up: the shooting state may have drifted onto an event (an autonomous orbit's
                 # phase moves from step to step); moved off every event along its orbit, the step is retried
@@ -313,54 +283,105 @@ class Continuation:
                 if moved is not None:
                     ds = max(s.ds_min, min(s.ds, s.ds_max))
                     continue
-            jumped = None
-            if new is None and detector is not None:
-                jumped = detector.past_failure(prev)
-                if jumped is not None:
-                    new, grazing = jumped
-            if new is None:
-                collapse = self._collapse(strict=False)
-                if collapse is not None:
-                    self._add_special(collapse)
-                    self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
-                    return
-                self.branch.stop_reason = StopReason.MIN_STEP
-                ending = (detector.at_failure(prev, float(self.last_failure[-1]))
-                          if detector is not None and self.last_failure is not None else None)
-                if ending is not None:
-                    self._add_special(replace(ending, index=len(self.branch.points) - 1))
-                if self.last_error is not None:
-                    self.branch.stop_detail = (f"at {self.problem.lam_name} = {prev.lam:.10g}: "
-                                               f"{type(self.last_error).__name__}: {self.last_error}")
-                return
-            self._accept(new)
-            closed = self._passes_start(prev, new)
+            jumped = detector.past_failure(prev) if new is None and detector is not None else None
             if jumped is not None:
-                self._add_special(replace(grazing, index=len(self.branch.points) - 2))
-                ds = s.ds
-            elif detector is not None:
-                for sp in detector.check(self.solutions[-2], self.solutions[-1], len(self.branch.points) - 2):
-                    if any(_same_special_point(sp, old) for old in self.branch.special_points):
-                        closed = True  # met again, from the same side: the branch has come round a loop
-                    else:
-                        self._add_special(sp)
-            collapse = self._collapse(strict=True)
-            if collapse is not None:
-                self._add_special(collapse)
+                new = jumped[0]
+            if new is None:
+                self._end_at_failure(prev, detector)
+                return
+            closed, collapse = self._record(prev, new, jumped, detector)
             yield self.branch.points[-1]
-            if collapse is not None:
-                self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
+            reason = (StopReason.CYCLE_COLLAPSE if collapse is not None else StopReason.CLOSED_LOOP if closed
+                      else StopReason.PARAMETER_BOUND if new.lam >= hi or new.lam <= lo else None)
+            if reason is not None:
+                self.branch.stop_reason = reason
                 return
-            if closed:
-                self.branch.stop_reason = StopReason.CLOSED_LOOP
-                return
-            if new.lam >= hi or new.lam <= lo:
-                self.branch.stop_reason = StopReason.PARAMETER_BOUND
-                return
+            if jumped is not None:
+                ds = s.ds
             if new.iterations <= 3:
                 ds = min(ds * 1.5, s.ds_max)
             elif new.iterations >= 6:
                 ds = max(ds * 0.5, s.ds_min)
+
+    def _step(self, prev: Solution, ds: float) -> tuple[Solution | None | object, float]:
+        """One corrected step from ``prev``, halving ``ds`` until it is accepted or below ``ds_min``.
+
+        Returns the new solution (None where every step failed; ``_AT_BOUND`` where the parameter bound
+        lies closer than the smallest step) and the step it took.
+        """
+        s = self.settings
+        lo, hi = s.bounds
+        while ds >= s.ds_min:
+            z_pred = self._predict(ds)
+            if z_pred[-1] > hi or z_pred[-1] < lo:
+                # land exactly on the bound
+                bound = hi if z_pred[-1] > hi else lo
+                frac = (bound - prev.z[-1]) / (z_pred[-1] - prev.z[-1])
+                if frac * ds < s.ds_min:
+                    return _AT_BOUND, ds
+                try:
+                    cand = self.corrector.solve_fixed(prev.u + frac * ds * prev.tangent[:-1], bound)
+                except SaltationError:
+                    ds *= 0.5
+                    continue
+                cand.tangent = self.corrector.tangent(cand, prev.tangent)
+                cand.step = frac * ds
+                return cand, ds
+            try:
+                cand = self.corrector.solve_bordered(z_pred, prev.tangent)
+            except SaltationError as exc:
+                self.last_failure = z_pred
+                self.last_error = exc
+                ds *= 0.5
+                continue
+            cand.tangent = self.corrector.tangent(cand, prev.tangent)
+            cand.step = ds
+            angle = math.acos(max(-1.0, min(1.0, float(cand.tangent @ prev.tangent))))
+            corner = canonical_events(cand.summary.event_ids) != canonical_events(prev.summary.event_ids)
+            if angle > s.max_angle and not corner and ds > 2 * s.ds_min:
+                ds *= 0.5
+                continue
+            if corner and ds > 4 * s.ds_min and angle > s.max_angle and cand.iterations > 4:
+                ds *= 0.5
+                continue
+            return cand, ds
+        return None, ds
+
+    def _end_at_failure(self, prev: Solution, detector: Detector | None) -> None:
+        """The run ends where no step succeeds: at a cycle collapse ahead, or at the smallest step, with what the
+        detector finds there and the last error."""
+        collapse = self._collapse(strict=False)
+        if collapse is not None:
+            self._add_special(collapse)
+            self.branch.stop_reason = StopReason.CYCLE_COLLAPSE
+            return
+        self.branch.stop_reason = StopReason.MIN_STEP
+        ending = (detector.at_failure(prev, float(self.last_failure[-1]))
+                  if detector is not None and self.last_failure is not None else None)
+        if ending is not None:
+            self._add_special(replace(ending, index=len(self.branch.points) - 1))
+        if self.last_error is not None:
+            self.branch.stop_detail = (f"at {self.problem.lam_name} = {prev.lam:.10g}: "
+                                       f"{type(self.last_error).__name__}: {self.last_error}")
+
+    def _record(self, prev: Solution, new: Solution, jumped, detector: Detector | None
+                ) -> tuple[bool, SpecialPoint | None]:
+        """Accept ``new`` with the special points between ``prev`` and it; whether the branch has closed, and
+        the cycle collapse ahead of it (or None)."""
+        self._accept(new)
+        closed = self._passes_start(prev, new)
+        if jumped is not None:
+            self._add_special(replace(jumped[1], index=len(self.branch.points) - 2))
+        elif detector is not None:
+            for sp in detector.check(self.solutions[-2], self.solutions[-1], len(self.branch.points) - 2):
+                if any(_same_special_point(sp, old) for old in self.branch.special_points):
+                    closed = True  # met again, from the same side: the branch has come round a loop
+                else:
+                    self._add_special(sp)
+        collapse = self._collapse(strict=True)
+        if collapse is not None:
+            self._add_special(collapse)
+        return closed, collapse
 
     def _collapse(self, *, strict: bool) -> SpecialPoint | None:
         """The cycle collapse ahead of the last three orbits of an autonomous branch, or None.
@@ -374,7 +395,7 @@ class Continuation:
         ``2 d``.
         """
         prob = self.problem
-        if not isinstance(prob, ShootingProblem) or not prob.autonomous or len(self.solutions) < 3:
+        if not prob.can_collapse or len(self.solutions) < 3:
             return None
         sols = self.solutions[-3:]
         e = [float(s.summary.excursion) for s in sols]
@@ -446,23 +467,19 @@ class Continuation:
         for a forced one), corrected at the same parameter and put in ``prev``'s place; None where the problem
         cannot move its state, the state is not near an event, or the moved state does not give the same orbit
         back (the problem's section and start mode are then as before)."""
-        forced = getattr(self.problem, "autonomous", True) is False
-        move = getattr(self.problem, "move_section" if forced else "start_off_surfaces", None)
-        if move is None:
-            return None
-        saved = {k: getattr(self.problem, k) for k in ("t0", "mode0") if hasattr(self.problem, k)}
+        problem = self.problem
+        saved = problem.section_settings
 
         def restore() -> None:
-            for k, v in saved.items():
-                setattr(self.problem, k, v)
-            self.problem.accept(prev.u, prev.lam)
+            problem.restore_section(saved)
+            problem.accept(prev.u, prev.lam)
 
         try:
-            u = move(prev.u, prev.lam)
+            u = problem.rephase(prev.u, prev.lam)
         except SaltationError:
             restore()
             return None
-        if np.array_equal(u, prev.u):
+        if u is None or np.array_equal(u, prev.u):
             return None
         try:
             self.problem.accept(u, prev.lam)
@@ -490,7 +507,7 @@ class Continuation:
 
     def _section(self) -> float:
         """The problem's section time (a forced orbit's, which :meth:`_rephased` may move); 0 otherwise."""
-        return float(getattr(self.problem, "t0", 0.0) or 0.0) if getattr(self.problem, "autonomous", True) is False else 0.0
+        return self.problem.section_time
 
     def _add_special(self, sp) -> None:
         """A located special point, stamped with the section its state lies at."""
@@ -569,9 +586,46 @@ def continue_branch(
     Rabinowitz (ed.), *Applications of Bifurcation Theory*, Academic Press.
     """
     lam0 = problem.lam0() if lam0 is None else float(lam0)
+    branch = run_both_ways(lambda d: Continuation(problem, settings, detector=detector), u0, lam0, directions,
+                           progress=progress)
+    branch.label = label
+    return branch
+
+
+def run_both_ways(make_run: Callable[[int], Continuation], u0: np.ndarray, lam0: float,
+                  directions: tuple[int, ...] = (1, -1), *, progress=None) -> Branch:
+    """Run a continuation from one start point in each direction, and stitch the runs into one branch.
+
+    The one stitching of the package: the second direction's points (its start point dropped) are
+    reversed and put before the first's, every special point's index moved to match, and each run's
+    stop reason kept (:attr:`Branch.stop_reason` the first's, :attr:`Branch.stop_reasons` the others').
+
+    Parameters
+    ----------
+    make_run : callable
+        ``make_run(direction)`` returns a fresh :class:`Continuation` for that direction.
+    u0 : ndarray
+        Guess of the unknowns at the start.
+    lam0 : float
+        Start value of the parameter.
+    directions : tuple of int
+        +1 (increasing parameter first), -1, or both.
+    progress : callable, optional
+        Called with each new BranchPoint.
+
+    Returns
+    -------
+    Branch
+        The stitched branch.
+
+    Raises
+    ------
+    SaltationError
+        If no direction is given, or a run cannot start (see :meth:`Continuation.run`).
+    """
     branch: Branch | None = None
     for d in directions:
-        cont = Continuation(problem, settings, detector=detector)
+        cont = make_run(d)
         for point in cont.run(np.asarray(u0, dtype=float), lam0, direction=d):
             if progress is not None:
                 progress(point)
@@ -582,11 +636,10 @@ def continue_branch(
             branch.stop_reasons.append(cont.branch.stop_reason)
     if branch is None:
         raise SaltationError("no continuation direction given")
-    branch.label = label
     return branch
 
 
 __all__ = [
     "Continuation", "ContinuationSettings", "Corrector", "Detector", "DetectorFactory", "Solution", "canonical_events",
-    "continue_branch",
+    "continue_branch", "run_both_ways",
 ]

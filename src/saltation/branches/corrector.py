@@ -14,9 +14,9 @@ from functools import lru_cache
 from typing import Protocol
 
 import numpy as np
-from scipy.linalg import lapack
 
 from saltation.errors import ConvergenceError
+from saltation.orbits.problem import BranchProblem, bordered_solve
 from saltation.orbits.records import BranchPoint, Evaluation
 
 
@@ -114,14 +114,14 @@ class Corrector:
 
     Attributes
     ----------
-    problem : object
-        A problem of the continuation protocol (``evaluate``, ``describe``, and optionally
-        ``correct``, the compiled iteration).
+    problem : BranchProblem
+        The branch's problem (its ``evaluate``, ``describe`` and ``correct``, the compiled iteration
+        where it has one).
     settings : NewtonSettings
         Its ``tol``, ``max_newton`` and ``max_correction`` (:class:`ContinuationSettings` has them).
     """
 
-    problem: object
+    problem: BranchProblem
     settings: NewtonSettings
 
     def solve_bordered(self, z_pred: np.ndarray, normal: np.ndarray) -> Solution:
@@ -154,11 +154,8 @@ class Corrector:
         """
         prob = self.problem
         s = self.settings
-        found = None
-        compiled = getattr(prob, "correct", None)  # shooting problems iterate in the compiled kernel
-        if compiled is not None:
-            found = compiled(z_pred, normal, tol=s.tol, max_newton=s.max_newton, max_correction=s.max_correction)
-        if found is not None:
+        found = prob.correct(z_pred, normal, tol=s.tol, max_newton=s.max_newton, max_correction=s.max_correction)
+        if found is not None:  # the problem's compiled iteration ran
             z, ev, it = found
             return Solution(z=z, evaluation=ev, summary=prob.describe(z[:-1], float(z[-1]), ev), iterations=it)
         z = z_pred.copy()
@@ -173,12 +170,9 @@ class Corrector:
                 return Solution(z=z, evaluation=ev, summary=prob.describe(z[:-1], float(z[-1]), ev), iterations=it)
             if it == s.max_newton:
                 break
-            J = bordered(ev.jac_u, ev.jac_lam, normal)
-            rhs = np.append(ev.residual, normal @ (z - z_pred))
-            try:
-                dz = np.linalg.solve(J, rhs)
-            except np.linalg.LinAlgError:
-                break
+            dz = bordered_solve(ev.jac_u, ev.jac_lam, normal[:-1], normal[-1], np.append(ev.residual, normal @ (z - z_pred)))
+            if dz is None:
+                break  # singular
             if np.linalg.norm(dz) > s.max_correction * (1.0 + np.linalg.norm(z)):
                 break  # diverging: let the step control shorten the step
             z = z - dz
@@ -233,12 +227,11 @@ class Corrector:
             # pivoting (zero where singular: then as below)
             t, info = known[1].copy(), 0
         else:
-            J = bordered(ev.jac_u, ev.jac_lam, previous)
-            rhs = np.zeros(J.shape[0])
+            rhs = np.zeros(len(previous))
             rhs[-1] = 1.0
-            # LAPACK's dgesv (what numpy.linalg.solve calls), without numpy's per-call cost: this runs for
-            # every branch point, on a matrix of a few rows
-            _, _, t, info = lapack.dgesv(J, rhs)
+            t = bordered_solve(ev.jac_u, ev.jac_lam, previous[:-1], previous[-1], rhs)
+            info = 0 if t is not None else 1
+            t = previous.copy() if t is None else t
         # in plain floats (an overflow is inf, without numpy's error state): a few numbers per branch point
         size = sum(v * v for v in t.tolist())
         if info != 0 or not math.isfinite(size) or size == 0.0:  # singular: info > 0

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import abc
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
@@ -42,6 +43,7 @@ import numpy as np
 from saltation.engine.flow import EventKind, Flow, SwitchingEvent, Trajectory
 from saltation.errors import ConvergenceError, ModelError, SaltationError
 from saltation.orbits.floquet import is_stable, multipliers_from_monodromy
+from saltation.orbits.problem import BranchProblem, accuracy, bordered_solve, newton
 from saltation.orbits.records import (
     BranchPoint,
     Evaluation,
@@ -869,16 +871,12 @@ class MultiplierCondition(Condition):
             U, _, Vt = np.linalg.svd(A)
             self._border = (U[:, -1].copy(), Vt[-1].copy())
         b, c = self._border
-        B = np.zeros((n + 1, n + 1))
-        B[:n, :n] = A
-        B[:n, n] = b
-        B[n, :n] = c
         rhs = np.zeros(n + 1)
         rhs[n] = 1.0
-        try:
-            return float(np.linalg.solve(B, rhs)[n])
-        except np.linalg.LinAlgError:
-            raise SaltationError(f"the bordered matrix of the multiplier {self.mu:+g} test is singular") from None
+        solution = bordered_solve(A, b, c, 0.0, rhs)
+        if solution is None:
+            raise SaltationError(f"the bordered matrix of the multiplier {self.mu:+g} test is singular")
+        return float(solution[n])
 
     def rows(self, shot: Shot, extra: np.ndarray, params: Sequence[int], problem: ConditionedProblem) -> Rows:
         """``g`` of the shot's monodromy and its derivatives (central differences, or the kept ones).
@@ -975,7 +973,7 @@ class Located:
     residuals: list[float] = field(default_factory=list)
 
 
-class ConditionedProblem:
+class ConditionedProblem(BranchProblem):
     """A periodic-orbit problem with conditions attached and parameters freed (see the module docstring).
 
     The unknowns are ``u = (x0[, T], p_free..., extras...)``: the base problem's (the state, and the
@@ -1108,26 +1106,36 @@ class ConditionedProblem:
         head.append(np.concatenate([c.start() for c in self.conditions]) if extras is None else extras)
         return np.concatenate(head)
 
-    def parameters_at(self, u: np.ndarray, lam: float | None = None) -> np.ndarray:
-        """Every parameter's value at the unknowns ``u`` (and ``lam``).
+    def parameters_at(self, lam: float | None = None, u: np.ndarray | None = None) -> np.ndarray:
+        """Every parameter's value at ``lam`` and the unknowns ``u`` (the freed parameters are read from them).
 
         Parameters
         ----------
-        u : ndarray
-            The unknowns (the freed parameters are read from them).
         lam : float, optional
             Value of the curve's parameter.
+        u : ndarray, optional
+            The unknowns (without them, the freed parameters keep the problem's values).
 
         Returns
         -------
         ndarray, shape (n_params,)
             A copy of the parameters.
         """
+        if isinstance(lam, np.ndarray) and lam.ndim == 1:  # the order of release 0.1, (u, lam): goes in 0.3.0
+            warnings.warn("ConditionedProblem.parameters_at(u, lam) is now parameters_at(lam, u)", DeprecationWarning,
+                          stacklevel=2)
+            lam, u = u, lam
         p = self.p.copy()
-        p[self.free] = u[self.n_base : self.n_base + len(self.free)]
+        if u is not None:
+            p[self.free] = u[self.n_base : self.n_base + len(self.free)]
         if lam is not None and self.lam_index >= 0:
             p[self.lam_index] = lam
         return p
+
+    @property
+    def section_time(self) -> float:
+        """A forced orbit's section time ``t0`` (0 for an autonomous one)."""
+        return 0.0 if self.autonomous else float(self.t0)
 
     def lam0(self) -> float:
         """The curve's parameter's value in the problem's parameters.
@@ -1283,7 +1291,7 @@ class ConditionedProblem:
                ) -> tuple[np.ndarray, float, list[int], list[np.ndarray]]:
         """What the equations at ``(u, lam)`` are evaluated with: the parameters, the period, the
         parameters of the derivative columns (the freed ones, then ``lam``'s) and the conditions' unknowns."""
-        p = self.parameters_at(u, lam)
+        p = self.parameters_at(lam, u)
         T = float(u[self.n_nodes]) if self.autonomous else self._forcing_period(p)
         if not (T > 0 and math.isfinite(T)):
             raise ConvergenceError(f"the period must be positive and finite, got {T}")
@@ -1602,7 +1610,7 @@ class ConditionedProblem:
         return BranchPoint(
             parameter=math.nan if lam is None else float(lam),
             state=np.array(u[:n]), period=float(u[self.n_nodes]) if self.autonomous else self._forcing_period(
-                self.parameters_at(u, lam)),
+                self.parameters_at(lam, u)),
             multipliers=mu, stable=is_stable(mu, autonomous=self.autonomous), event_labels=event_labels(traj),
             monodromy=traj.monodromy, event_ids=event_ids(traj), **amplitude_measures(traj),
         )
@@ -1629,7 +1637,7 @@ class ConditionedProblem:
                 c.accept(sh, e)
             self.event_ids.append(event_ids((shots[0] if shots else shot).trajectory))
         if self.n_orbit_rows > self.n_nodes:
-            self.single.anchor_phase(np.asarray(u[: self.system.n], dtype=float), self.parameters_at(u, lam))
+            self.single.anchor_phase(np.asarray(u[: self.system.n], dtype=float), self.parameters_at(lam, u))
 
     # -- location -------------------------------------------------------------------------
     def solve(self, u0: np.ndarray, *, tol: float = 1e-12, max_iter: int = 20, what: str = "special point",
@@ -1667,41 +1675,20 @@ class ConditionedProblem:
             If the phase condition would be anchored at an equilibrium.
         """
         u = np.asarray(u0, dtype=float).copy()
-        history = [] if history is None else history
         n, nb, k = self.system.n, self.n_base, len(self.free)
         if self.n_orbit_rows > self.n_nodes and self.single.x_ref is None:
-            self.single.anchor_phase(u[:n].copy(), self.parameters_at(u))
-        for it in range(max_iter + 1):
-            try:
-                r, J, _, shot = self.equations(u, need_lam=False)
-            except ConvergenceError:
-                raise
-            except SaltationError as exc:
-                raise ConvergenceError(f"{what}: {exc}", history) from exc
-            rn = float(np.linalg.norm(r))
-            history.append(rn)
-            if not math.isfinite(rn):
-                break
-            try:
-                du = np.linalg.solve(J, -r)
-            except np.linalg.LinAlgError:
-                raise ConvergenceError(f"{what}: singular Jacobian of the defining system", history) from None
-            if rn <= tol * (1.0 + float(np.linalg.norm(u[: nb + k]))):
-                try:
-                    inverse = np.linalg.inv(J)
-                except np.linalg.LinAlgError:
-                    raise ConvergenceError(f"{what}: singular Jacobian of the defining system", history) from None
-                error = self.flow.integration_error(shot.trajectory, self.tolerances)
-                rows = inverse[nb : nb + k]
-                accuracy = (np.abs(du[nb : nb + k]) + np.abs(rows).sum(axis=1) * error
-                            + 4e-16 * np.maximum(1.0, np.abs(u[nb : nb + k])))
-                return Located(unknowns=u, state0=u[:n].copy(), period=self.period_at(u, shot.parameters),
-                               parameters=shot.parameters,
-                               shot=shot, accuracy=accuracy, residuals=history)
-            if it == max_iter:
-                break
-            u = u + du
-        raise ConvergenceError(f"{what} did not converge in {max_iter} iterations", history)
+            self.single.anchor_phase(u[:n].copy(), self.parameters_at(None, u))
+
+        def equations(v: np.ndarray):
+            r, J, _, shot = self.equations(v, need_lam=False)
+            return r, J, shot
+
+        solved = newton(equations, u, tol=tol, max_iter=max_iter, what=what, history=history, wrap_errors=True,
+                        size=lambda v: float(np.linalg.norm(v[: nb + k])))
+        u, shot = solved.u, solved.extra
+        bounds = accuracy(solved, self.flow.integration_error(shot.trajectory, self.tolerances), slice(nb, nb + k))
+        return Located(unknowns=u, state0=u[:n].copy(), period=self.period_at(u, shot.parameters),
+                       parameters=shot.parameters, shot=shot, accuracy=bounds, residuals=solved.residuals)
 
 
 def join(segs: Sequence[Trajectory]) -> Trajectory:

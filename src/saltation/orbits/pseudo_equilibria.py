@@ -17,9 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from saltation.engine.flow import Flow
-from saltation.errors import ConvergenceError, ModelError
+from saltation.errors import ModelError
 from saltation.model.system import PiecewiseSystem
 from saltation.orbits.records import BranchPoint, Evaluation
+from saltation.orbits.problem import newton
 from saltation.orbits.shooting import EquilibriumProblem
 
 
@@ -156,29 +157,21 @@ def find_pseudo_equilibrium(
     minus, plus = _sides(flow, surface, x, p)
     a = sliding_weight(flow, surface, minus, plus, x, p)
     a = 0.5 if not math.isfinite(a) else a
-    history: list[float] = []
-    for _ in range(int(max_iter) + 1):
+    n = model.n
+
+    def equations(u: np.ndarray):
+        x, a = u[:n], float(u[n])
         fm, fp = flow.vector_field(minus, 0.0, x, p), flow.vector_field(plus, 0.0, x, p)
-        h = flow.indicator(surface, 0.0, x, p)
-        r = np.append((1.0 - a) * fm + a * fp, h)
-        norm = float(np.linalg.norm(r))
-        history.append(norm)
-        if norm <= tol * (1.0 + float(np.linalg.norm(x))):
-            break
         jm, jp = flow.vector_field_jacobian(minus, 0.0, x, p), flow.vector_field_jacobian(plus, 0.0, x, p)
-        hx = flow.indicator_gradient(surface, 0.0, x, p)[0]
-        J = np.zeros((model.n + 1, model.n + 1))
-        J[: model.n, : model.n] = (1.0 - a) * jm + a * jp
-        J[: model.n, model.n] = fp - fm
-        J[model.n, : model.n] = hx
-        try:
-            step = np.linalg.solve(J, r)
-        except np.linalg.LinAlgError:
-            raise ConvergenceError(f"pseudo-equilibrium on {surface!r}: singular Jacobian at x = {x.tolist()}", history) from None
-        x, a = x - step[: model.n], a - float(step[model.n])
-    else:
-        raise ConvergenceError(f"pseudo-equilibrium on {surface!r}: Newton did not converge from {list(map(float, state0))}",
-                               history)
+        J = np.zeros((n + 1, n + 1))
+        J[:n, :n] = (1.0 - a) * jm + a * jp
+        J[:n, n] = fp - fm
+        J[n, :n] = flow.indicator_gradient(surface, 0.0, x, p)[0]
+        return np.append((1.0 - a) * fm + a * fp, flow.indicator(surface, 0.0, x, p)), J, None
+
+    solved = newton(equations, np.append(x, a), tol=tol, max_iter=int(max_iter), what=f"pseudo-equilibrium on {surface!r}",
+                    size=lambda u: float(np.linalg.norm(u[:n])))
+    x, a, history = solved.u[:n].copy(), float(solved.u[n]), solved.residuals
     _check_weight_defined(flow, surface, minus, plus, x, p, tol * (1.0 + float(np.linalg.norm(x))))
     eigenvalues = _sliding_eigenvalues(flow, surface, minus, plus, x, p)
     return PseudoEquilibrium(state=x, surface=surface, modes=(model.mode_names[minus], model.mode_names[plus]),

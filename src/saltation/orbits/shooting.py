@@ -64,6 +64,7 @@ from saltation.orbits.floquet import (
     reciprocal,
     sort_multipliers,
 )
+from saltation.orbits.problem import BranchProblem, newton
 from saltation.orbits.start import starting_guess_and_mode
 from saltation.orbits.records import (
     Evaluation,
@@ -292,95 +293,7 @@ def stationary_floor(tolerances: Tolerances, size: float) -> float:
     return min(STATIONARY_FACTOR * (tolerances.atol + tolerances.rtol * scale), STATIONARY_FRACTION * scale)
 
 
-def _norm(v: np.ndarray) -> float:
-    """The 2-norm of ``v``, scaled so that it overflows only when the norm itself exceeds the largest
-    float (``np.linalg.norm`` squares the entries: a residual of ``1e200`` would read as infinite)."""
-    with np.errstate(over="ignore"):
-        norm = float(np.linalg.norm(v))
-        if math.isfinite(norm) or not np.isfinite(v).all():
-            return norm
-        big = float(np.max(np.abs(v)))
-        return big * float(np.linalg.norm(np.asarray(v, dtype=float) / big))
-
-
-def newton(
-    fun, u0: np.ndarray, *, tol: float = 1e-10, max_iter: int = 30, what: str = "Newton", damped: bool = False
-) -> tuple[np.ndarray, list[float], object]:
-    """Newton's method on ``fun(u) -> (r, J, extra)``.
-
-    Converged when ``|r| <= tol * (1 + |u|)``.  With ``damped``, a step is
-    halved (up to 8 times) until the residual decreases.  A trial step at which
-    ``fun`` raises a :class:`SaltationError` counts as one that does not reduce it.
-
-    Parameters
-    ----------
-    fun : callable
-        ``fun(u)`` returns the residual ``r``, its Jacobian ``J`` (square) and anything else
-        (``extra``) to hand back with the solution.
-    u0 : ndarray
-        Initial iterate.
-    tol : float
-        Tolerance.
-    max_iter : int
-        Largest number of iterations.
-    what : str
-        What is solved, for the error messages.
-    damped : bool
-        Halve steps that do not reduce the residual.
-
-    Returns
-    -------
-    u : ndarray
-        The solution.
-    history : list of float
-        Residual norms, first to last.
-    extra : object
-        The third item of ``fun`` at the solution.
-
-    Raises
-    ------
-    ConvergenceError
-        With the residual history: after ``max_iter`` iterations, when the
-        Jacobian is singular, the residual is not finite, or no step reduces it.
-    SaltationError
-        Whatever ``fun`` raises at ``u0`` (the first evaluation is not a trial step).
-    """
-    u = np.array(u0, dtype=float)
-    history: list[float] = []
-    r, J, extra = fun(u)
-    for it in range(max_iter + 1):
-        rn = _norm(r)
-        history.append(rn)
-        if not np.isfinite(rn):
-            why = ("not finite" if not np.isfinite(r).all() else
-                   f"too large for a float (its entries reach {float(np.max(np.abs(r))):.3g})")
-            raise ConvergenceError(f"{what}: residual is {why} at iteration {it}", history)
-        if rn <= tol * (1.0 + _norm(u)):
-            return u, history, extra
-        if it == max_iter:
-            break
-        try:
-            du = np.linalg.solve(J, -r)
-        except np.linalg.LinAlgError:
-            raise ConvergenceError(f"{what}: singular Jacobian at iteration {it}", history) from None
-        trial = None
-        for _ in range(9 if damped else 1):
-            try:
-                trial = fun(u + du)
-            except SaltationError:
-                trial = None
-            if trial is not None and (not damped or _norm(trial[0]) < rn):
-                break
-            du = 0.5 * du
-            trial = None
-        if trial is None:
-            raise ConvergenceError(f"{what}: no step reduces the residual at iteration {it}", history)
-        u = u + du
-        r, J, extra = trial
-    raise ConvergenceError(f"{what} did not converge in {max_iter} iterations", history)
-
-
-class ShootingProblem:
+class ShootingProblem(BranchProblem):
     """Periodic orbits of a model by single shooting.
 
     The residual is the period map minus the identity, ``r = phi(t0 + s T; t0, x0) - x0``, and its
@@ -503,48 +416,6 @@ class ShootingProblem:
     def dimension(self) -> int:
         """Number of unknowns ``u``."""
         return self.system.n + (1 if self.autonomous else 0)
-
-    def parameters_at(self, lam: float | None) -> np.ndarray:
-        """The parameter vector with the continuation parameter set to ``lam``.
-
-        Parameters
-        ----------
-        lam : float or None
-            Value of the continuation parameter (None: the problem's parameters as they are).
-
-        Returns
-        -------
-        ndarray, shape (n_params,)
-            A copy of the parameters.
-
-        Raises
-        ------
-        ModelError
-            If ``lam`` is given and the problem has no continuation parameter.
-        """
-        p = self.p.copy()
-        if lam is not None:
-            if self.lam_index < 0:
-                raise ModelError("this problem has no continuation parameter")
-            p[self.lam_index] = lam
-        return p
-
-    def lam0(self) -> float:
-        """The continuation parameter's value in the problem's parameters.
-
-        Returns
-        -------
-        float
-            The starting value of ``lam``.
-
-        Raises
-        ------
-        ModelError
-            If the problem has no continuation parameter.
-        """
-        if self.lam_index < 0:
-            raise ModelError("this problem has no continuation parameter")
-        return float(self.p[self.lam_index])
 
     def pack(self, state0: Sequence[float], period: float | None = None) -> np.ndarray:
         """Unknowns ``u`` from an initial state (and period, autonomous systems).
@@ -700,6 +571,43 @@ class ShootingProblem:
         if t_mid is None or best < 2.0 * margin:
             return None
         return t_mid
+
+    @property
+    def can_collapse(self) -> bool:
+        """An autonomous orbit may shrink onto an equilibrium; a forced one keeps its period."""
+        return self.autonomous
+
+    def rephase(self, u: np.ndarray, lam: float | None) -> np.ndarray | None:
+        """The orbit's state moved off its events: :meth:`start_off_surfaces` (autonomous) or
+        :meth:`move_section` (forced, with :attr:`t0`).
+
+        Parameters
+        ----------
+        u : ndarray
+            The unknowns of a solved orbit.
+        lam : float or None
+            The parameter's value.
+
+        Returns
+        -------
+        ndarray
+            The moved unknowns (``u`` itself where the seam is clear).
+
+        Raises
+        ------
+        InitialModeError
+            If the state lies in no mode's domain.
+        """
+        return self.start_off_surfaces(u, lam) if self.autonomous else self.move_section(u, lam)
+
+    @property
+    def section_time(self) -> float:
+        """A forced orbit's section time :attr:`t0` (0 for an autonomous one)."""
+        return 0.0 if self.autonomous else float(self.t0)
+
+    @property
+    def section_settings(self) -> dict:
+        return {"t0": self.t0, "mode0": self.mode0}
 
     def align_section(self, point) -> None:
         """Take the section time of a recorded point: a forced orbit's state lies on its orbit at the point's own
@@ -1651,7 +1559,7 @@ def find_periodic_orbit(
 
 
 # -- multiple shooting ---------------------------------------------------------------------
-class MultipleShootingProblem:
+class MultipleShootingProblem(BranchProblem):
     """A periodic orbit of a :class:`~saltation.orbits.shooting.ShootingProblem` by ``segments`` segments.
 
     Single shooting solves ``phi_T(x0) - x0 = 0`` with the monodromy ``M - I`` as its Jacobian.  On an
@@ -2024,40 +1932,39 @@ class MultipleShootingProblem:
         return r, J, jp
 
     # -- the continuation protocol ----------------------------------------------------------
-    def parameters_at(self, lam: float | None) -> np.ndarray:
-        """The parameter vector with the continuation parameter set to ``lam``.
-
-        Parameters
-        ----------
-        lam : float or None
-            Value of the continuation parameter (None: the problem's parameters as they are).
-
-        Returns
-        -------
-        ndarray, shape (n_params,)
-            A copy of the parameters.
-
-        Raises
-        ------
-        ModelError
-            If ``lam`` is given and the problem has no continuation parameter.
-        """
+    def parameters_at(self, lam: float | None = None, u: np.ndarray | None = None) -> np.ndarray:
         return self.problem.parameters_at(lam)
 
     def lam0(self) -> float:
-        """The continuation parameter's value in the problem's parameters.
+        return self.problem.lam0()
+
+    def rephase(self, u: np.ndarray, lam: float | None) -> np.ndarray | None:
+        """The nodes moved off the orbit's events (:meth:`start_off_surfaces`); a forced orbit's stay.
+
+        Parameters
+        ----------
+        u : ndarray
+            The nodes (and the period of an autonomous orbit).
+        lam : float or None
+            The parameter's value.
 
         Returns
         -------
-        float
-            The starting value of ``lam``.
-
-        Raises
-        ------
-        ModelError
-            If the problem has no continuation parameter.
+        ndarray or None
+            The moved nodes; None for a forced orbit.
         """
-        return self.problem.lam0()
+        return self.start_off_surfaces(u, lam) if self.autonomous else None
+
+    @property
+    def section_time(self) -> float:
+        return self.problem.section_time
+
+    @property
+    def section_settings(self) -> dict:
+        return {"mode0": self.problem.mode0}
+
+    def restore_section(self, settings: dict) -> None:
+        self.problem.mode0 = settings["mode0"]
 
     def evaluate(self, U: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
         """The matching equations at ``(U, lam)`` with their Jacobians by ``U`` and by ``lam``.
@@ -2326,7 +2233,7 @@ class Equilibrium:
         return bool(np.all(self.eigenvalues.real < 0))
 
 
-class EquilibriumProblem:
+class EquilibriumProblem(BranchProblem):
     """Equilibria ``f(x, p) = 0`` of one mode (autonomous systems), in the continuation protocol.
 
     Parameters
@@ -2372,34 +2279,6 @@ class EquilibriumProblem:
     @property
     def dimension(self) -> int:
         return self.system.n
-
-    def parameters_at(self, lam: float | None) -> np.ndarray:
-        """The parameter vector with the continuation parameter set to ``lam``.
-
-        Parameters
-        ----------
-        lam : float or None
-            Value of the continuation parameter (None: the problem's parameters as they are).
-
-        Returns
-        -------
-        ndarray, shape (n_params,)
-            A copy of the parameters.
-        """
-        p = self.p.copy()
-        if lam is not None:
-            p[self.lam_index] = lam
-        return p
-
-    def lam0(self) -> float:
-        """The continuation parameter's value in the problem's parameters.
-
-        Returns
-        -------
-        float
-            The starting value of ``lam``.
-        """
-        return float(self.p[self.lam_index])
 
     def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True) -> Evaluation:
         """The field ``f(x, p)`` of the mode and its Jacobians.

@@ -25,8 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from saltation.errors import ConvergenceError, InconsistentResultError, ModelError
+from saltation.errors import InconsistentResultError, ModelError
 from saltation.orbits.floquet import eigenvalues, reciprocal, sort_multipliers
+from saltation.orbits.problem import newton
 
 #: an orbit is symmetric when ``|S^-1 x(t0 + T/2) - x0| <= SYMMETRIC_TOL (1 + |x0|)``: orbits are
 #: converged to about 1e-10, and an asymmetric orbit at distance d from a symmetry breaking misses its
@@ -346,29 +347,23 @@ def solve_symmetric_orbit(
     if autonomous:
         x_ref = x.copy()
         f_ref = flow.vector_field(system.initial_mode(x, p, t0), t0, x, p)
-    history: list[float] = []
-    for _ in range(max_iter + 1):
+
+    def equations(u: np.ndarray):
+        x, T = u[:n], (float(u[n]) if autonomous else float(period))
         traj = half_period_trajectory(flow, x, p, t0=t0, period=T, backward=backward, tolerances=tolerances)
         r = S @ traj.x1 - x
         J = S @ traj.monodromy - np.eye(n)
         if autonomous:
             r = np.append(r, f_ref @ (x - x_ref))
             J = np.block([[J, (0.5 * sign * (S @ traj.velocity_end))[:, None]], [f_ref[None, :], np.zeros((1, 1))]])
-        size = float(np.linalg.norm(r))
-        history.append(size)
-        if not np.isfinite(size):
-            break
-        if size <= tol * (1.0 + float(np.linalg.norm(x))):
-            return x, T, split_half_map(S, traj, x, backward=backward)
-        try:
-            du = np.linalg.solve(J, -r)
-        except np.linalg.LinAlgError:
-            break
-        x = x + du[:n]
-        if autonomous:
-            T = T + du[n]
-    raise ConvergenceError(f"symmetric orbit of {system.name!r}: Newton on the half-period map did not converge",
-                           history)
+        return r, J, traj
+
+    u0 = np.append(x, T) if autonomous else x
+    solved = newton(equations, u0, tol=tol, max_iter=max_iter, size=lambda u: float(np.linalg.norm(u[:n])),
+                    what=f"symmetric orbit of {system.name!r} (Newton on the half-period map)")
+    x = solved.u[:n].copy()
+    T = float(solved.u[n]) if autonomous else T
+    return x, T, split_half_map(S, solved.extra, x, backward=backward)
 
 
 def symmetry_breaking_test(gamma: np.ndarray) -> float:

@@ -18,6 +18,7 @@ import numpy as np
 
 from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind, SpecialPointStatus
 from saltation.errors import ConvergenceError, ModelError, SaltationError
+from saltation.orbits.problem import BranchProblem
 from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
 from saltation.orbits.pseudo_equilibria import sliding_weight as pseudo_weight
 from saltation.orbits.shooting import EquilibriumProblem
@@ -387,7 +388,7 @@ def _admissible_side(problem, surface: str, mode: int, sign: float, x: np.ndarra
     return 0.0
 
 
-class BoundaryEquilibriumCurve:
+class BoundaryEquilibriumCurve(BranchProblem):
     """Boundary equilibria in two parameters, in the continuation protocol.
 
     The defining system of a boundary equilibrium, ``f_mode(x, p) = 0`` and ``h(x, p) = 0``, with the first
@@ -416,9 +417,6 @@ class BoundaryEquilibriumCurve:
     #: what a branch of this problem is (:class:`saltation.branches.branch.BranchKind` by value)
     branch_kind = "equilibrium"
 
-    autonomous = True
-    backward = False
-
     def __init__(self, flow, mode, surface: str, parameters=None, *, first: str, second: str):
         self.flow = flow
         self.system = flow.system
@@ -437,33 +435,27 @@ class BoundaryEquilibriumCurve:
     def dimension(self) -> int:
         return self.system.n + 1
 
-    def parameters_at(self, lam: float | None, first: float | None = None) -> np.ndarray:
-        """The parameters with the second parameter at ``lam`` and the first at ``first`` (where given).
+    def parameters_at(self, lam: float | None = None, u: np.ndarray | None = None) -> np.ndarray:
+        """The parameters with the second parameter at ``lam`` and the first read from ``u = (x, lam1)``.
 
         Parameters
         ----------
-        lam : float or None
-        first : float or None
+        lam : float, optional
+            The second parameter.
+        u : ndarray, optional
+            The unknowns (without them the first parameter keeps the problem's value).
 
         Returns
         -------
         ndarray
+            A copy of the parameters.
         """
         p = self.p.copy()
         if lam is not None:
             p[self.lam_index] = lam
-        if first is not None:
-            p[self.first_index] = first
+        if u is not None:
+            p[self.first_index] = float(u[self.system.n])
         return p
-
-    def lam0(self) -> float:
-        """The second parameter's value in the problem's parameters.
-
-        Returns
-        -------
-        float
-        """
-        return float(self.p[self.lam_index])
 
     def evaluate(self, u: np.ndarray, lam: float | None = None, *, need_lam: bool = True):
         """``(f_mode, h)`` at ``u = (x, lam1)`` and their Jacobians.
@@ -484,7 +476,7 @@ class BoundaryEquilibriumCurve:
 
         flow, n = self.flow, self.system.n
         x = np.asarray(u[:n], dtype=float)
-        p = self.parameters_at(lam, float(u[n]))
+        p = self.parameters_at(lam, u)
         hx, _, hp = flow.indicator_gradient(self.surface, 0.0, x, p)
         fp = flow.vector_field_parameters(self.mode, 0.0, x, p)
         r = np.append(flow.vector_field(self.mode, 0.0, x, p), flow.indicator(self.surface, 0.0, x, p))

@@ -288,7 +288,7 @@ class GrazingCurve(_Curve):
         switching surface (the saltation matrices at the corner).
         """
         n = self.system.n
-        p = self.parameters_at(u, lam)
+        p = self.parameters_at(lam, u)
         shot = self._last[0] if self._last is not None and np.array_equal(self._last[0].x0, u[:n]) \
             and np.array_equal(self._last[0].parameters, p) else self.equations(u, lam, need_lam=False)[3]
         disabled = list(self.disabled)
