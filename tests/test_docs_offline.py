@@ -246,7 +246,7 @@ def member_pages() -> list[Path]:
 
 def test_api_pages_written_member_by_member_exist():
     pages = {p.name for p in member_pages()}
-    assert {"continuation.md", "special_points_continuation.md", "shooting.md", "integrate.md"} <= pages
+    assert {"continuation.md", "special_points_continuation.md", "single.md", "integrate.md"} <= pages
 
 
 @pytest.mark.parametrize("page", member_pages(), ids=lambda p: p.name)

@@ -41,7 +41,9 @@ from saltation.orbits.lyapunov import LyapunovExponents, lyapunov_exponents
 from saltation.orbits.pseudo_equilibria import PseudoEquilibrium, find_pseudo_equilibrium
 from saltation.model.symmetry import Symmetry
 from saltation.model.system import Crossing, Mode, PiecewiseSystem, Transition
-from saltation.orbits.shooting import PeriodicOrbit, ShootingProblem, find_periodic_orbit
+from saltation.orbits.records import PeriodicOrbit
+from saltation.orbits.single import ShootingProblem
+from saltation.orbits.start import find_periodic_orbit
 from saltation.apps.sweeps import SweepStart, period_map, sweep
 
 __version__ = "0.1.0"

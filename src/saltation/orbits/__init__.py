@@ -1,7 +1,21 @@
-"""Layer 3, orbits: periodic solutions, their multipliers and one-sided limits.
+"""Layer 3, orbits: periodic solutions, equilibria, their multipliers and one-sided limits.
 
-:mod:`~saltation.orbits.shooting` (the periodic-orbit and equilibrium problems, Newton, the
-everyday :func:`~saltation.orbits.shooting.find_periodic_orbit`), :mod:`~saltation.orbits.floquet`
-(Floquet multipliers from the monodromy matrix) and :mod:`~saltation.orbits.boundary` (the
-one-sided monodromies at a boundary orbit, exact limits).  Depends on the engine and the model.
+Depends on the engine and the model.  Its modules:
+
+- :mod:`~saltation.orbits.problem`: the problem base of every branch (:class:`BranchProblem`), the plain
+  Newton iteration, its accuracy estimate and the bordered solve;
+- :mod:`~saltation.orbits.records`: what a solved point leaves (:class:`PeriodicOrbit`, branch points);
+- :mod:`~saltation.orbits.single`: periodic orbits by single shooting (:class:`ShootingProblem`);
+- :mod:`~saltation.orbits.multiple`: periodic orbits by multiple shooting;
+- :mod:`~saltation.orbits.seam`: the seam rule, an event at both ends of a shot counted once;
+- :mod:`~saltation.orbits.equilibria`: equilibria of one mode;
+- :mod:`~saltation.orbits.pseudo_equilibria`: rest points of a sliding motion;
+- :mod:`~saltation.orbits.start`: start guesses and the everyday :func:`find_periodic_orbit`;
+- :mod:`~saltation.orbits.conditions`: defining conditions attached to an orbit (special points, curves);
+- :mod:`~saltation.orbits.floquet`: Floquet multipliers from the monodromy matrix;
+- :mod:`~saltation.orbits.boundary`: the one-sided monodromies at a boundary orbit, exact limits;
+- :mod:`~saltation.orbits.symmetry`: symmetric orbits by the half-period map;
+- :mod:`~saltation.orbits.lyapunov`: Lyapunov exponents;
+- :mod:`~saltation.orbits.on_surface`: orbits that lie on a switching surface;
+- :mod:`~saltation.orbits.shooting`: the names of release 0.1's shooting module (goes in 0.3.0).
 """

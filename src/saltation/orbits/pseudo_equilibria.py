@@ -19,9 +19,9 @@ import numpy as np
 from saltation.engine.flow import Flow
 from saltation.errors import ModelError
 from saltation.model.system import PiecewiseSystem
-from saltation.orbits.records import BranchPoint, Evaluation
+from saltation.orbits.equilibria import EquilibriumProblem
 from saltation.orbits.problem import newton
-from saltation.orbits.shooting import EquilibriumProblem
+from saltation.orbits.records import BranchPoint, Evaluation
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from saltation.engine.flow import EventKind, Trajectory
+from saltation.engine.flow import EventKind, SwitchingEvent, Trajectory
+from saltation.orbits.floquet import is_stable
 
 
 @dataclass(frozen=True)
@@ -22,6 +23,19 @@ class Evaluation:
     ``bordered_tangent``, where the compiled corrector has solved it, is ``(row, t)`` with
     ``[[J_u, J_lam], [row]] t = e_last`` (``t`` not normalised): the tangent continuation computes next,
     when ``row`` is the tangent it corrected along (:meth:`saltation.branches.corrector.Corrector.tangent`).
+
+    Attributes
+    ----------
+    residual : ndarray
+        ``r(u, lam)``.
+    jac_u : ndarray
+        ``dr/du``.
+    jac_lam : ndarray or None
+        ``dr/dlam`` (None where it was not asked for).
+    trajectory : Trajectory or None
+        The shot behind the residual, where there is one.
+    bordered_tangent : tuple of (ndarray, ndarray) or None
+        ``(row, t)``, see above.
     """
 
     residual: np.ndarray
@@ -132,7 +146,18 @@ SolutionSummary = BranchPoint
 
 def amplitude_measures(traj: Trajectory) -> dict[str, float]:
     """The amplitude measures of an orbit's period, computed in one place: ``amplitude = max |x_1|``,
-    ``half_peak_to_peak = (max x_1 - min x_1) / 2`` and ``excursion = max_i (max x_i - min x_i)``."""
+    ``half_peak_to_peak = (max x_1 - min x_1) / 2`` and ``excursion = max_i (max x_i - min x_i)``.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        One period of the orbit.
+
+    Returns
+    -------
+    dict of str to float
+        ``amplitude``, ``half_peak_to_peak`` and ``excursion``.
+    """
     lo, hi = traj.x_min.tolist(), traj.x_max.tolist()  # plain floats: this runs for every branch point
     return {
         "amplitude": max(abs(hi[0]), abs(lo[0])),
@@ -148,6 +173,16 @@ def orbit_events(traj: Trajectory) -> list:
     event at ``t0``) and ends the period on it: that is one sliding motion cut
     by the section ``t = t0``, counted once (by its arrival at the end), so
     that the sequence of an orbit does not change as its events pass ``t0``.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        One period of the orbit.
+
+    Returns
+    -------
+    list of SwitchingEvent
+        The orbit's cycle of events.
     """
     events = traj.events
     if (events and events[0].kind == EventKind.SLIDING_START and events[0].t == traj.t0 and traj.sliding_at_end
@@ -168,6 +203,16 @@ def event_ids(traj: Trajectory) -> tuple[tuple[int, int, int], ...]:
     it leaves into.  Detectors of non-smooth points compare these.  An orbit without events is
     ``((STAYS_IN_MODE, -1, mode),)``: two such orbits in different modes (a whirl inside its clearance
     and one in contact all round) differ, so that the change between them is located like any other.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        One period of the orbit.
+
+    Returns
+    -------
+    tuple of (int, int, int)
+        One identity per event of the cycle.
     """
     ids = tuple((kind, transition, mode_to) for kind, transition, _, _, mode_to in _orbit_event_rows(traj))
     if ids:
@@ -177,7 +222,18 @@ def event_ids(traj: Trajectory) -> tuple[tuple[int, int, int], ...]:
 
 def event_labels(traj: Trajectory) -> tuple[str, ...]:
     """Readable labels of a trajectory's events (see :func:`orbit_events`): the transition, or the sliding
-    motion started or ended."""
+    motion started or ended.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        One period of the orbit.
+
+    Returns
+    -------
+    tuple of str
+        One label per event of the cycle.
+    """
     sys_ = traj.system
     names, surfaces = sys_.mode_names, sys_.surface_names
     labels = []
@@ -203,5 +259,130 @@ def _orbit_event_rows(traj: Trajectory) -> list[list[int]]:
     return rows
 
 
-__all__ = ["STAYS_IN_MODE", "BranchPoint", "Evaluation", "SolutionSummary", "amplitude_measures", "event_ids", "event_labels",
+@dataclass(frozen=True)
+class PeriodicOrbit:
+    """A periodic solution found by shooting.
+
+    Attributes
+    ----------
+    system_name : str
+        Name of the model.
+    state0 : ndarray, shape (n,)
+        State at ``t0`` on the orbit.
+    period : float
+        The period (a forced orbit's is its forcing period).
+    t0 : float
+        Initial time (a forced orbit's phase of the forcing).
+    backward : bool
+        Whether the orbit was computed in backward time.
+    autonomous : bool
+        Whether the model is autonomous.
+    parameters : ndarray
+        Parameter values.
+    monodromy : ndarray, shape (n, n)
+        Monodromy in the direction of integration.
+    multipliers : ndarray, complex
+        Forward-time Floquet multipliers (``inf`` for an infinitely unstable direction).
+    trajectory : Trajectory
+        One period, with its events.
+    converged : bool
+        Whether Newton converged.
+    iterations : int
+        Newton iterations.
+    residual_norm : float
+        Norm of the last residual.
+    residuals : list of float
+        Newton residual history.
+    trivial_error : float
+        Autonomous orbits: ``|M n - n|`` along the unit velocity ``n`` (see
+        :func:`saltation.orbits.floquet.autonomous_multipliers`), at most
+        :data:`TRIVIAL_MULTIPLIER_ACCURACY`; ``nan`` for forced orbits.  By multiple shooting, the
+        largest ``|Phi_i f(x_i) - f(x_(i+1))| / |f(x_(i+1))|`` over the segments.
+    problem : ShootingProblem or None
+        The shooting problem that found it (its flow, tolerances and section): what
+        :func:`saltation.special_points.continuation.continue_orbit` follows.
+    segments : int
+        The number of shooting segments (1: single shooting).
+    nodes : ndarray, shape (segments, n), or None
+        The segments' initial states (multiple shooting); the first is ``state0``.
+    mode0 : str or None
+        The mode the orbit is in at ``state0``: the one its shooting started in (named by ``mode0`` of
+        :func:`find_periodic_orbit`, or the model's initial-mode rule).  None in records made without it.
+    """
+
+    system_name: str
+    state0: np.ndarray
+    period: float
+    t0: float
+    backward: bool
+    autonomous: bool
+    parameters: np.ndarray
+    monodromy: np.ndarray
+    multipliers: np.ndarray
+    trajectory: Trajectory
+    converged: bool
+    iterations: int
+    residual_norm: float
+    residuals: list[float] = field(default_factory=list)
+    trivial_error: float = float("nan")
+    #: the shooting problem that found it (its flow, tolerances and section): what
+    #: :func:`saltation.special_points.continuation.continue_orbit` follows
+    problem: object | None = field(default=None, repr=False, compare=False)  # a ShootingProblem
+    #: the number of shooting segments (1: single shooting), and their initial states (multiple shooting)
+    segments: int = 1
+    nodes: np.ndarray | None = field(default=None, repr=False)
+    #: the mode at ``state0`` (where the shooting starts)
+    mode0: str | None = None
+
+    @property
+    def amplitude(self) -> float:
+        """``max |x_1|`` over the period (:func:`~saltation.orbits.records.amplitude_measures`)."""
+        return amplitude_measures(self.trajectory)["amplitude"]
+
+    @property
+    def half_peak_to_peak(self) -> float:
+        """``(max x_1 - min x_1) / 2`` over the period (:func:`~saltation.orbits.records.amplitude_measures`)."""
+        return amplitude_measures(self.trajectory)["half_peak_to_peak"]
+
+    @property
+    def backward_multipliers(self) -> np.ndarray:
+        """Eigenvalues of the monodromy in the direction of integration."""
+        return np.linalg.eigvals(self.monodromy)
+
+    @property
+    def stable(self) -> bool:
+        return is_stable(self.multipliers, autonomous=self.autonomous)
+
+    @property
+    def trivial_multiplier_error(self) -> float:
+        """How far the trivial multiplier can be from 1 (autonomous orbits): ``|M n - n|``, an accuracy figure."""
+        return self.trivial_error
+
+    @property
+    def events(self) -> list[SwitchingEvent]:
+        """The events of one period (as :attr:`Trajectory.events`)."""
+        return self.trajectory.events
+
+    @property
+    def event_labels(self) -> tuple[str, ...]:
+        """Readable labels of the orbit's cycle of events (see :func:`event_labels`)."""
+        return event_labels(self.trajectory)
+
+    def _repr_markdown_(self) -> str:
+        """A summary for Jupyter (:mod:`saltation.summary`)."""
+        from saltation.summary import orbit_summary
+
+        return orbit_summary(self)
+
+    def __repr__(self) -> str:
+        state = ", ".join(f"{v:.6g}" for v in np.asarray(self.state0)[:6]) + (", ..." if len(self.state0) > 6 else "")
+        mu = f"{np.max(np.abs(self.multipliers)):.6g}" if len(self.multipliers) else "-"
+        how = ("backward" if self.backward else "forward") + (", autonomous" if self.autonomous else ", forced")
+        mode = f" in {self.mode0!r}" if self.mode0 is not None else ""
+        return (f"PeriodicOrbit({self.system_name!r}, T={self.period:.10g}, x0=[{state}]{mode}, max |mu|={mu}, "
+                f"{'stable' if self.stable else 'unstable'}, {len(self.events)} events, {how}"
+                + ("" if self.converged else ", NOT converged") + ")")
+
+
+__all__ = ["STAYS_IN_MODE", "BranchPoint", "Evaluation", "PeriodicOrbit", "SolutionSummary", "amplitude_measures", "event_ids", "event_labels",
            "orbit_events"]

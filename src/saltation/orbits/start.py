@@ -12,12 +12,16 @@ them with the shipped models' own start states.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from saltation.engine.flow import Flow, Trajectory
-from saltation.errors import SaltationError, StartGuessError
+from saltation.engine.flow import Flow, Tolerances, Trajectory
+from saltation.errors import ModelError, SaltationError, StartGuessError
+from saltation.model.system import PiecewiseSystem
+from saltation.orbits.multiple import MultipleShootingProblem, check_segments
+from saltation.orbits.records import PeriodicOrbit
+from saltation.orbits.single import ShootingProblem
 
 #: Forcing periods of a forced model's transient.
 TRANSIENT_PERIODS = 50
@@ -378,3 +382,139 @@ def starting_guess_and_mode(
     if state is not None:
         return np.asarray(state, dtype=float), period, mode0
     return traj.x1.copy(), period, None if mode0 is None else traj.mode1
+
+
+def find_periodic_orbit(
+    flow: Flow | PiecewiseSystem,
+    state0: Sequence[float] | None = None,
+    *,
+    parameters: Mapping[str, float] | None = None,
+    period: float | None = None,
+    backward: bool = False,
+    t0: float = 0.0,
+    tol: float = 1e-10,
+    max_iter: int = 30,
+    tolerances: Tolerances | None = None,
+    segments: int = 1,
+    transient_length: float | None = None,
+    mode0: str | None = None,
+) -> PeriodicOrbit:
+    """Find one periodic orbit by shooting from a guess.
+
+    Parameters
+    ----------
+    flow : Flow or PiecewiseSystem
+        The flow of the model (a model is given a :class:`Flow` of its own, with its default tolerances).
+    state0 : array_like, optional
+        Guess of the state at ``t0``.  Without one, the guess is the end of a transient from zeros
+        (:func:`saltation.orbits.start.transient`, in the direction of integration).
+    parameters : mapping, optional
+        Parameter overrides.
+    period : float, optional
+        Period guess of an autonomous system; without one, it is read from a transient from
+        ``state0`` (:func:`saltation.orbits.start.estimate_period`).  A forced system's period is its
+        forcing period; a ``period`` given for it must equal that.
+    backward : bool
+        Shoot in backward time.
+    t0 : float
+        Initial time (forced systems: the phase of the forcing; reduced modulo
+        the forcing period before integrating).
+    tol : float
+        Newton tolerance: converged when ``|r| <= tol (1 + |u|)``.
+    max_iter : int
+        Largest number of Newton iterations.
+    tolerances : Tolerances, optional
+        Integration tolerances (the flow's by default).
+    segments : int
+        Shooting segments: 1 is single shooting; ``m > 1`` is multiple shooting
+        (:class:`MultipleShootingProblem`), for strongly unstable orbits, long periods and large
+        models.  ``state0`` is then either one state (the nodes are taken from its trajectory, which
+        on a strongly unstable orbit drifts away within the period) or a guess of every node, shape
+        ``(m, n)``, at ``t0 + i T / m``.  At most :data:`MAX_SEGMENTS`, and ``m n`` at most
+        :data:`MAX_NODE_VALUES` (the Newton matrix of multiple shooting is dense).
+    transient_length : float, optional
+        Length of the transient of an autonomous model, when one is needed
+        (:data:`saltation.orbits.start.TRANSIENT_TIME` by default).
+    mode0 : str, optional
+        The mode the orbit starts in at ``state0``: for a mode that is memory (a latch, a relay with
+        hysteresis, a thermostat), which the state alone does not tell from another mode with the same
+        domain.  ``state0`` must lie in its domain (or on its boundary).  Every shot starts in it (with
+        multiple shooting the first segment; each further one in the mode the one before it ends in),
+        and the orbit must close in it.  Without ``state0`` the transient starts in ``mode0`` and the
+        orbit in the mode the transient ends in.  An autonomous guess moved off the switching surfaces
+        stays in ``mode0`` where the orbit spends a long enough stretch in it.  The orbit records its
+        mode as :attr:`PeriodicOrbit.mode0`.  None (the default): the model's domains give the mode.
+
+    Returns
+    -------
+    PeriodicOrbit
+        With its forward-time multipliers; for autonomous orbits the trivial
+        direction is deflated (:func:`saltation.orbits.floquet.autonomous_multipliers`).
+
+    Raises
+    ------
+    ModelError
+        A ``period`` that contradicts the forcing period, a state of the wrong size, a guess of every
+        node without a period, an invalid parameter or number of segments, a ``mode0`` that is not a
+        mode of the model (the message lists its modes).
+    ConvergenceError
+        Newton did not converge (with its residual history); a :class:`NoOrbitNearGuessError` when,
+        in addition, the flow from an autonomous guess comes to rest.
+    StationaryStateError
+        Shooting converged to a state that does not move: an equilibrium, a
+        pseudo-equilibrium, or a period shrunk to zero.
+    InconsistentResultError
+        An autonomous orbit whose trivial multiplier is not 1 to
+        :data:`TRIVIAL_MULTIPLIER_ACCURACY`.
+    StartGuessError
+        Without a guess: the transient failed, diverged or shows no oscillation.
+    IntegrationError, InitialModeError
+        The shot from the guess itself fails (Newton's later trial steps that fail are shortened); a
+        guess state outside the domain of ``mode0`` (the message names the mode and its conditions).
+    KernelCacheError
+        A model given as such cannot be compiled into the kernel cache.
+
+    References
+    ----------
+    Stoer and Bulirsch, *Introduction to Numerical Analysis*, Springer, section 7.3 (single and
+    multiple shooting).  Leine and Van Campen, "Fold bifurcations in discontinuous systems", eq. (9)
+    (the saltation matrices in the monodromy).
+    """
+    if not isinstance(flow, Flow):  # a model
+        flow = Flow(flow, tolerances=tolerances)
+    segments = check_segments(segments, flow.system.n)  # (before a transient is integrated for a guess)
+    if state0 is not None and np.ndim(state0) == 2 and period is None and flow.system.is_autonomous:
+        raise ModelError(f"a guess of every node of the autonomous model {flow.system.name!r} needs a period guess")
+    prob = ShootingProblem(flow, parameters, backward=backward, t0=t0, tolerances=tolerances, mode0=mode0)
+    if state0 is None or (flow.system.is_autonomous and period is None):
+        state0, period, prob.mode0 = starting_guess_and_mode(
+            flow, prob.p, state0, period, t0=t0, backward=backward, length=transient_length, mode0=prob.mode0)
+    if prob.mode0 is not None:  # the guess (its first node) lies in the mode's domain, or an error says why
+        first = np.asarray(state0, dtype=float)
+        prob.start_mode(first[0] if first.ndim == 2 else first, prob.p)
+    if not prob.autonomous and period is not None:
+        forced = prob.period_of(prob.pack(state0))
+        if not abs(float(period) - forced) <= 1e-12 * forced:
+            raise ModelError(
+                f"model {flow.system.name!r} is forced: its period is the forcing period {forced:.10g} at these "
+                f"parameters, not the period {period!r} given (omit period, or change the forcing parameters)"
+            )
+    guess = np.asarray(state0, dtype=float)
+    if segments == 1 or guess.ndim == 1:
+        if segments == 1:
+            return prob.solve(prob.pack(state0, period), tol=tol, max_iter=max_iter)
+        multiple = MultipleShootingProblem(prob, segments)
+        u0 = prob.start_off_surfaces(prob.pack(state0, period))
+        # the nodes together along the orbit: off the events, and out of its sliding motions where they fit
+        U0 = multiple.start_off_surfaces(multiple.pack(u0), sliding_only=True)
+        return multiple.solve(U0, tol=tol, max_iter=max_iter)
+    multiple = MultipleShootingProblem(prob, segments)
+    if guess.shape != (multiple.segments, flow.system.n):
+        raise ModelError(f"a guess of every node of {segments} segments has shape ({segments}, {flow.system.n}), "
+                         f"got {guess.shape}")
+    prob.pack(guess[0], period)  # checks the period guess of an autonomous model
+    U0 = guess.ravel()
+    return multiple.solve(np.append(U0, float(period)) if prob.autonomous else U0, tol=tol, max_iter=max_iter)
+
+
+# -- multiple shooting ---------------------------------------------------------------------

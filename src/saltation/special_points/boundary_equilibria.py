@@ -12,16 +12,25 @@ one persists as the other (``persistence``); on the same side they meet and vani
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace as _replace
+from dataclasses import dataclass
+from dataclasses import replace as _replace
 
 import numpy as np
 
-from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind, SpecialPointStatus
+from saltation.branches.branch import (
+    Branch,
+    SpecialPoint,
+    SpecialPointKind,
+    SpecialPointStatus,
+)
 from saltation.errors import ConvergenceError, ModelError, SaltationError
+from saltation.orbits.equilibria import EquilibriumProblem
 from saltation.orbits.problem import BranchProblem
-from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
+from saltation.orbits.pseudo_equilibria import (
+    PseudoEquilibriumProblem,
+    find_pseudo_equilibrium,
+)
 from saltation.orbits.pseudo_equilibria import sliding_weight as pseudo_weight
-from saltation.orbits.shooting import EquilibriumProblem
 
 
 def sliding_weight(problem: PseudoEquilibriumProblem, state: np.ndarray, lam: float) -> float:
@@ -261,7 +270,7 @@ def cycle_at_boundary_equilibrium(problem, point: SpecialPoint, span: float) -> 
     systems", International Journal of Bifurcation and Chaos 13 (boundary foci and the cycles they create).
     """
     from saltation.engine.flow import EventKind
-    from saltation.orbits.shooting import find_periodic_orbit
+    from saltation.orbits.start import find_periodic_orbit
 
     flow, system = problem.flow, problem.system
     if system.n != 2:

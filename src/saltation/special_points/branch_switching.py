@@ -19,10 +19,14 @@ from dataclasses import replace
 import numpy as np
 
 from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind
-from saltation.special_points.continuation import ContinuationSettings, Corrector, continue_branch
 from saltation.errors import ConvergenceError, ModelError, SaltationError
-from saltation.orbits.shooting import ShootingProblem
+from saltation.orbits.single import ShootingProblem
 from saltation.orbits.symmetry import symmetric_multipliers
+from saltation.special_points.continuation import (
+    ContinuationSettings,
+    Corrector,
+    continue_branch,
+)
 
 
 def period_doubling_direction(problem: ShootingProblem, point: SpecialPoint) -> np.ndarray:

@@ -15,9 +15,16 @@ import numpy as np
 
 from saltation.branches import continuation as engine
 from saltation.branches.branch import Branch
-from saltation.branches.continuation import ContinuationSettings, Corrector, Solution, canonical_events
+from saltation.branches.continuation import (
+    ContinuationSettings,
+    Corrector,
+    Solution,
+    canonical_events,
+)
 from saltation.errors import ModelError
-from saltation.orbits.shooting import MultipleShootingProblem, PeriodicOrbit, ShootingProblem
+from saltation.orbits.multiple import MultipleShootingProblem
+from saltation.orbits.records import PeriodicOrbit
+from saltation.orbits.single import ShootingProblem
 from saltation.special_points.detection import SpecialPointDetector
 
 

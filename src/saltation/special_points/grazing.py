@@ -34,7 +34,7 @@ from scipy.optimize import brentq
 from saltation.engine.flow import Flow, Trajectory
 from saltation.errors import ConvergenceError, ModelError
 from saltation.orbits.conditions import ConditionedProblem, ReturnTangency, Tangency
-from saltation.orbits.shooting import ShootingProblem
+from saltation.orbits.single import ShootingProblem
 
 
 def location_tolerances(flow: Flow, tolerances=None):

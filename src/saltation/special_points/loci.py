@@ -64,7 +64,7 @@ from saltation.orbits.conditions import (
     Tangency,
 )
 from saltation.orbits.records import BranchPoint
-from saltation.orbits.shooting import ShootingProblem
+from saltation.orbits.single import ShootingProblem
 from saltation.special_points.continuation import (
     Continuation,
     ContinuationSettings,

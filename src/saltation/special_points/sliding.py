@@ -48,7 +48,7 @@ from saltation.orbits.conditions import (
     CubicTangency,
     EventIdentity,
 )
-from saltation.orbits.shooting import ShootingProblem
+from saltation.orbits.single import ShootingProblem
 from saltation.special_points.grazing import location_tolerances
 
 _ARRIVALS = (EventKind.TRANSITION, EventKind.SLIDING_START)
