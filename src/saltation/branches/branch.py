@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import copy
 import enum
 import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from saltation.errors import SaltationError
 from saltation.orbits.floquet import is_stable
 from saltation.orbits.records import BranchPoint
 
@@ -427,3 +429,44 @@ class Branch:
 
 def _reindex(sp: SpecialPoint, index: int) -> SpecialPoint:
     return replace(sp, index=index)
+
+
+def problem_and_point(source, point: SpecialPoint | int, what: str):
+    """The problem and the special point a curve or a branch switch starts from.
+
+    From a :class:`Branch` (``source``), a copy of the problem it was computed with (the branch's own is
+    left as it is) and its special point ``point`` (a :class:`SpecialPoint` or its index in
+    ``special_points``); from a problem, that problem and ``point`` as given (the form of release 0.1, kept).
+
+    Parameters
+    ----------
+    source : Branch or BranchProblem
+        What the user holds.
+    point : SpecialPoint or int
+        The special point, or its index on the branch.
+    what : str
+        What starts there, for the error messages.
+
+    Returns
+    -------
+    tuple of (BranchProblem, SpecialPoint)
+        The problem and the point.
+
+    Raises
+    ------
+    SaltationError
+        If the branch holds no problem (it was read from a file), or the index names no special point.
+    """
+    if not isinstance(source, Branch):
+        if not isinstance(point, SpecialPoint):
+            raise SaltationError(f"{what}: a special point by index needs the branch, not its problem")
+        return source, point
+    if source.problem is None:
+        raise SaltationError(f"{what}: this branch holds no problem (it was read from a file): pass the problem it "
+                             "was computed with, e.g. ShootingProblem(flow, parameters, continuation_parameter=...)")
+    if not isinstance(point, SpecialPoint):
+        count = len(source.special_points)
+        if isinstance(point, bool) or not isinstance(point, (int, np.integer)) or not -count <= point < count:
+            raise SaltationError(f"{what}: the branch has {count} special points; {point!r} is not an index of one")
+        point = source.special_points[int(point)]
+    return copy.copy(source.problem), point

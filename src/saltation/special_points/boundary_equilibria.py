@@ -22,6 +22,7 @@ from saltation.branches.branch import (
     SpecialPoint,
     SpecialPointKind,
     SpecialPointStatus,
+    problem_and_point,
 )
 from saltation.errors import ConvergenceError, ModelError, SaltationError
 from saltation.orbits.equilibria import EquilibriumProblem
@@ -548,10 +549,12 @@ def follow_boundary_equilibrium_curve(
 
     Parameters
     ----------
-    flow : Flow
-        The compiled flow of the model.
-    point : SpecialPoint
-        A located ``boundary_equilibrium`` (its ``touch_mode``, ``touch_surface``, state and parameter).
+    flow : Flow or Branch
+        The compiled flow of the model; or the equilibrium branch the point lies on (its problem gives
+        the flow, and the parameters unless ``parameters`` is given).
+    point : SpecialPoint or int
+        A located ``boundary_equilibrium`` (its ``touch_mode``, ``touch_surface``, state and parameter);
+        from a branch, also its index in ``branch.special_points``.
     first : str
         The parameter of the branch it was found on.
     second : str
@@ -589,6 +592,9 @@ def follow_boundary_equilibrium_curve(
     from saltation.branches.continuation import ContinuationSettings
     from saltation.special_points.loci import Locus, run_curve
 
+    if isinstance(flow, Branch):
+        problem, point = problem_and_point(flow, point, "a boundary-equilibrium curve")
+        flow, parameters = problem.flow, problem.p if parameters is None else parameters
     if point.kind is not SpecialPointKind.BOUNDARY_EQUILIBRIUM:
         raise ModelError(f"a boundary-equilibrium curve starts at a boundary_equilibrium point, got {point.kind.value}")
     values = flow.parameters(parameters)

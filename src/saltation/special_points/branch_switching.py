@@ -18,7 +18,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind
+from saltation.branches.branch import (
+    Branch,
+    SpecialPoint,
+    SpecialPointKind,
+    problem_and_point,
+)
 from saltation.errors import ConvergenceError, ModelError, SaltationError
 from saltation.orbits.single import ShootingProblem
 from saltation.orbits.symmetry import symmetric_multipliers
@@ -84,8 +89,8 @@ def period_doubled_problem(problem: ShootingProblem) -> ShootingProblem:
 
 
 def follow_period_doubled_branch(
-    problem: ShootingProblem,
-    point: SpecialPoint,
+    problem: Branch | ShootingProblem,
+    point: SpecialPoint | int,
     *,
     settings: ContinuationSettings | None = None,
     epsilon: float = 1e-3,
@@ -95,9 +100,11 @@ def follow_period_doubled_branch(
 
     Parameters
     ----------
-    problem : ShootingProblem
+    problem : Branch or ShootingProblem
+        The branch (it holds its problem), or, as in release 0.1, its problem:
         The problem of the period-1 branch (forced; its continuation parameter set).
-    point : SpecialPoint
+    point : SpecialPoint or int
+        The point (from a branch, also its index in ``branch.special_points``):
         A special point of kind ``period_doubling`` on that branch.
     settings : ContinuationSettings, optional
         For the period-2 branch.
@@ -128,6 +135,7 @@ def follow_period_doubled_branch(
     and nonlinear eigenvalue problems", in Rabinowitz (ed.), *Applications of Bifurcation Theory*,
     Academic Press (bordered systems and branch switching).
     """
+    problem, point = problem_and_point(problem, point, "the period-2 branch")
     if point.kind is not SpecialPointKind.PERIOD_DOUBLING:
         raise ModelError(f"branch switching needs a period_doubling point, got {point.kind.value}")
     getattr(problem, "align_section", lambda point: None)(point)  # (the point's state lies at its own section)
@@ -221,8 +229,8 @@ def symmetry_breaking_direction(problem: ShootingProblem, point: SpecialPoint) -
 
 
 def follow_asymmetric_branch(
-    problem: ShootingProblem,
-    point: SpecialPoint,
+    problem: Branch | ShootingProblem,
+    point: SpecialPoint | int,
     *,
     settings: ContinuationSettings | None = None,
     epsilon: float = 1e-3,
@@ -239,9 +247,11 @@ def follow_asymmetric_branch(
 
     Parameters
     ----------
-    problem : ShootingProblem
+    problem : Branch or ShootingProblem
+        The branch (it holds its problem), or, as in release 0.1, its problem:
         The one-period problem of the symmetric branch (its continuation parameter set).
-    point : SpecialPoint
+    point : SpecialPoint or int
+        The point (from a branch, also its index in ``branch.special_points``):
         A special point of kind ``symmetry_breaking`` (or ``discontinuous_symmetry_breaking``: the
         direction is then the eigenvector of the orbit's half-period map on the side of the point's
         state).
@@ -274,6 +284,7 @@ def follow_asymmetric_branch(
     nonlinear eigenvalue problems", in Rabinowitz (ed.), *Applications of Bifurcation Theory*, Academic
     Press (bordered systems and branch switching).
     """
+    problem, point = problem_and_point(problem, point, "the asymmetric branch")
     kinds = (SpecialPointKind.SYMMETRY_BREAKING, SpecialPointKind.DISCONTINUOUS_SYMMETRY_BREAKING)
     if point.kind not in kinds:
         raise ModelError(f"branch switching to asymmetric orbits needs a symmetry_breaking point, got {point.kind.value}")

@@ -51,6 +51,7 @@ from saltation.branches.branch import (
     SpecialPointKind,
     SpecialPointStatus,
     StopReason,
+    problem_and_point,
 )
 from saltation.engine.flow import EventKind, Flow
 from saltation.errors import IntegrationError, ModelError, SaltationError
@@ -383,8 +384,8 @@ def grazed_transitions(
 
 
 def follow_locus(
-    problem: ShootingProblem,
-    point: SpecialPoint,
+    problem: Branch | ShootingProblem,
+    point: SpecialPoint | int,
     second: str,
     bounds: tuple[float, float],
     *,
@@ -395,11 +396,13 @@ def follow_locus(
 
     Parameters
     ----------
-    problem : ShootingProblem
-        The problem of the branch (forced, forward time, its continuation parameter set).
-    point : SpecialPoint
+    problem : Branch or ShootingProblem
+        The branch (it holds its problem), or the problem of the branch (forced, forward time, its
+        continuation parameter set; the form of release 0.1).
+    point : SpecialPoint or int
         A grazing or a non-smooth point (corner) of that branch, a crossing-, switching- or
-        adding-sliding, or a fold or period doubling.
+        adding-sliding, or a fold or period doubling; from a branch, also its index in
+        ``branch.special_points``.
     second : str
         The second parameter.
     bounds : (float, float)
@@ -434,6 +437,7 @@ def follow_locus(
     Nordmark (2002), "Bifurcations of dynamical systems with sliding: derivation of normal-form
     mappings", Physica D 170 (the sliding bifurcations).
     """
+    problem, point = problem_and_point(problem, point, "a two-parameter curve")
     if problem.autonomous or problem.backward or problem.periods != 1:
         raise ModelError("two-parameter curves are implemented for forced models in forward time, over one forcing period")
     getattr(problem, "align_section", lambda point: None)(point)  # (the point's state lies at its own section)
