@@ -1,4 +1,4 @@
-"""The import paths of the flat layout (release 0.1), kept working for one release.
+"""The import paths of the flat layout (release 0.1), kept working until release 0.3.0.
 
 The modules moved into one folder per layer (see the package's docstring).  ``import
 saltation.integrate`` and ``from saltation.shooting import find_periodic_orbit`` still work: a finder
@@ -50,7 +50,7 @@ class _Alias(importlib.abc.Loader):
         self.target = target
 
     def create_module(self, spec):
-        warnings.warn(f"{spec.name} has moved to {self.target}; the old path goes in the next release",
+        warnings.warn(f"{spec.name} has moved to {self.target}; the old path goes in release 0.3.0",
                       DeprecationWarning, stacklevel=2)
         module = importlib.import_module(self.target)
         self.spec = module.__spec__  # the import machinery sets the alias's spec on it: put back below

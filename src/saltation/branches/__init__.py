@@ -1,7 +1,10 @@
 """Layer 4, branches: pseudo-arclength continuation and the branch records.
 
-:mod:`~saltation.branches.continuation` (the engine: predictor, bordered corrector of
-:mod:`~saltation.branches.corrector`, step control; special points are looked for by a detector
-handed in from outside) and :mod:`~saltation.branches.branch` (:class:`Branch`,
-:class:`BranchPoint`, :class:`SpecialPoint`).  Depends on the orbit layer and those above it.
+Depends on the orbit layer and those below it.  Its modules:
+
+- :mod:`~saltation.branches.continuation`: the engine (predictor, step control, the stitching of the
+  two directions); special points are looked for by a detector handed in from outside;
+- :mod:`~saltation.branches.corrector`: the bordered Newton corrector and the tangent;
+- :mod:`~saltation.branches.branch`: :class:`Branch`, :class:`SpecialPoint` and their vocabulary;
+- :mod:`~saltation.branches.check`: the invariants that make a computed branch trustworthy.
 """

@@ -1,9 +1,13 @@
 """Layer 1, the model: piecewise-smooth systems as mathematics.
 
-:mod:`~saltation.model.system` (modes, switching surfaces, transitions and resets, written as sympy
-expressions), :mod:`~saltation.model.nonsmooth` (``sign``, ``Abs``, ... in a field turned into modes and
-surfaces) and :mod:`~saltation.model.regularize` (the smoothed model the paper warns about).  Nothing
-here integrates; every other layer depends on this one.
+Nothing here integrates; every other layer depends on this one.  Its modules:
+
+- :mod:`~saltation.model.system`: modes, switching surfaces, transitions and resets, written as sympy
+  expressions (:class:`PiecewiseSystem`);
+- :mod:`~saltation.model.nonsmooth`: ``sign``, ``Abs``, ... in a field turned into modes and surfaces;
+- :mod:`~saltation.model.regularize`: the smoothed model the paper warns about;
+- :mod:`~saltation.model.symmetry`: a model's symmetry, ``x -> S x`` with a shift of half a period;
+- :mod:`~saltation.model.labels`: how plots write a model's names.
 """
 
 from saltation.model.symmetry import Symmetry

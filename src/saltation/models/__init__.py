@@ -1,7 +1,21 @@
 """Models shipped with saltation, each a short file that reads like its source.
 
 :data:`SHIPPED` holds those the command line names, with what it needs to know of
-each (a summary, where a transient starts), declared in each model's own file.
+each (a summary, where a transient starts), declared in each model's own file
+(:mod:`~saltation.models.shipped`).  The models:
+
+- :mod:`~saltation.models.trilinear`: the trilinear spring of *Fold bifurcations in discontinuous systems*;
+- :mod:`~saltation.models.block_on_belt`: the paper's block on a belt (stick-slip);
+- :mod:`~saltation.models.impact_oscillator`: a forced oscillator against a rigid stop;
+- :mod:`~saltation.models.symmetric_impact_oscillator`: the same between two symmetric stops;
+- :mod:`~saltation.models.bouncing_ball`: a ball on a vibrating table;
+- :mod:`~saltation.models.friction_oscillator`: a forced oscillator with dry friction on a belt;
+- :mod:`~saltation.models.two_mass_stops`: two forced masses between compliant stops;
+- :mod:`~saltation.models.chain`: a chain of masses, a scalable benchmark;
+- :mod:`~saltation.models.relay_feedback`: a third-order relay feedback system;
+- :mod:`~saltation.models.tilted_relay`: a forced relay oscillator with a tilted switching line;
+- :mod:`~saltation.models.sliding_mode`: a planar sliding-mode control system;
+- :mod:`~saltation.models.buck_converter`: the DC-DC buck converter under PWM control.
 """
 
 from importlib import import_module
