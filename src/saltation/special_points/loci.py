@@ -446,30 +446,7 @@ def follow_locus(
     single = getattr(problem, "problem", problem)
     p = problem.parameters_at(point.parameter)
     state = np.asarray(point.state, dtype=float)
-    if point.kind in SLIDING_KINDS:
-        curve = SlidingCurve(problem, p, second, point)
-        classify = False
-    elif point.kind.is_nonsmooth:
-        touched = _touch_of(single, point)
-        if point.kind is SpecialPointKind.GRAZING_SLIDING and touched is not None:
-            # the located orbit touches the sliding region's boundary: its run may slide for a rounding
-            # there, so the transition and instant come from the point itself
-            transition, t_g, others = *touched, []
-        else:
-            try:
-                (transition, t_g), *others = grazed_transitions(single.flow, state, p, t0=single.t0,
-                                                                tolerances=single.tolerances)
-            except SaltationError:
-                if touched is None:
-                    raise
-                transition, t_g, others = *touched, []
-        curve = GrazingCurve(problem, p, problem.lam_name, second, transition, t_g, others=others)
-        classify = True
-    elif point.kind in (SpecialPointKind.FOLD, SpecialPointKind.PERIOD_DOUBLING):
-        curve = MultiplierCurve(problem, p, second, mu=1.0 if point.kind is SpecialPointKind.FOLD else -1.0)
-        classify = False
-    else:
-        raise ModelError(f"no two-parameter continuation for special points of kind {point.kind.value}")
+    curve, classify = _curve_for(problem, single, point, p, second)
     u0 = curve.pack(state)
     settings = settings or ContinuationSettings(bounds=bounds)
     # the curve's own turning points and the multipliers of its orbits are not special points of the curve
@@ -508,27 +485,61 @@ def follow_locus(
         label=f"{point.kind.value} curve", autonomous=problem.autonomous, second_parameter_name=second,
         curve_of=point.kind, stop_reason="; ".join(reasons), state_names=tuple(problem.system.state_names),
     )
+    _mark_codimension_two(locus, zs, joined(kinds_by_run) if classify else None, joined(events_by_run),
+                          curve, single, point.kind)
+    # a corner that ends a run lies beyond its last point: the curve's last (increasing) or first (decreasing)
+    locus.special_points.extend(replace(e, index=(len(zs) - 1 if run == 0 else 0)) for run, e in ends)
+    return locus
+
+
+def _curve_for(problem: ShootingProblem, single: ShootingProblem, point: SpecialPoint, p: np.ndarray,
+               second: str) -> tuple[_Curve, bool]:
+    """The defining system of ``point``'s curve in ``second``, and whether its points' kinds are classified
+    (a corner's curve: the kind of the corner may change along it)."""
+    state = np.asarray(point.state, dtype=float)
+    if point.kind in SLIDING_KINDS:
+        return SlidingCurve(problem, p, second, point), False
+    if point.kind.is_nonsmooth:
+        touched = _touch_of(single, point)
+        if point.kind is SpecialPointKind.GRAZING_SLIDING and touched is not None:
+            # the located orbit touches the sliding region's boundary: its run may slide for a rounding
+            # there, so the transition and instant come from the point itself
+            transition, t_g, others = *touched, []
+        else:
+            try:
+                (transition, t_g), *others = grazed_transitions(single.flow, state, p, t0=single.t0,
+                                                                tolerances=single.tolerances)
+            except SaltationError:
+                if touched is None:
+                    raise
+                transition, t_g, others = *touched, []
+        return GrazingCurve(problem, p, problem.lam_name, second, transition, t_g, others=others), True
+    if point.kind in (SpecialPointKind.FOLD, SpecialPointKind.PERIOD_DOUBLING):
+        return MultiplierCurve(problem, p, second, mu=1.0 if point.kind is SpecialPointKind.FOLD else -1.0), False
+    raise ModelError(f"no two-parameter continuation for special points of kind {point.kind.value}")
+
+
+def _mark_codimension_two(locus: Locus, zs: list, kinds: list | None, events: list, curve: _Curve,
+                          single: ShootingProblem, kind: SpecialPointKind) -> None:
+    """The codimension-two points along a curve: where a corner's kind changes (``kinds``), and where a fold or
+    period-doubling curve's orbits change their event sequence; each between two curve points, at their
+    midpoint."""
     points = locus.values
 
     def label(a: int, sides: tuple[str, str]) -> SpecialPoint:
-        """A codimension-two point between curve points ``a`` and ``a + 1``, at their midpoint."""
         return _codimension_two(sides, 0.5 * (points[a] + points[a + 1]), np.linalg.norm(points[a + 1] - points[a]),
                                 a, locus.points[a], bracket=(float(points[a][0]), float(points[a + 1][0])))
 
-    if classify:
-        locus.kinds = joined(kinds_by_run)
+    if kinds is not None:
+        locus.kinds = kinds
         for a in range(len(zs) - 1):
-            if locus.kinds[a] != locus.kinds[a + 1]:
-                locus.special_points.append(label(a, (locus.kinds[a], locus.kinds[a + 1])))
-    events = joined(events_by_run)
+            if kinds[a] != kinds[a + 1]:
+                locus.special_points.append(label(a, (kinds[a], kinds[a + 1])))
     if isinstance(curve, MultiplierCurve) and len(events) == len(zs):  # (a fold curve follows its orbits' events)
         for a in range(len(zs) - 1):
             if events[a] != events[a + 1]:
                 touch = _touch_kind(single, curve, zs[a] if len(events[a]) <= len(events[a + 1]) else zs[a + 1])
-                locus.special_points.append(label(a, (point.kind.value, touch)))
-    # a corner that ends a run lies beyond its last point: the curve's last (increasing) or first (decreasing)
-    locus.special_points.extend(replace(e, index=(len(zs) - 1 if run == 0 else 0)) for run, e in ends)
-    return locus
+                locus.special_points.append(label(a, (kind.value, touch)))
 
 
 def run_curve(curve, settings: ContinuationSettings, u0: np.ndarray, lam0: float, direction: int,
