@@ -31,15 +31,17 @@ class BranchProblem(abc.ABC):
     An implementation provides, and the continuation engine, the corrector and the special-point layer
     rely on nothing else:
 
-    1. the attributes ``system`` (the model), ``p`` (the parameter values), ``lam_name`` and
-       ``lam_index`` (the continuation parameter, ``None`` and ``-1`` without one);
+    1. the attributes ``system`` (the model), ``flow`` (its compiled flow), ``p`` (the parameter values),
+       ``lam_name`` and ``lam_index`` (the continuation parameter, ``None`` and ``-1`` without one);
     2. :attr:`dimension`, the number of unknowns ``u``;
     3. :meth:`evaluate`, the residual and its Jacobians at ``(u, lam)``;
     4. :meth:`describe`, the record of a solved point for its branch;
     5. optionally :meth:`accept` (called with every accepted point: re-anchor a phase condition, move
        a guess), :meth:`correct` (a compiled corrector), :meth:`rephase` (move the unknowns to another
-       section of the same solution) and the class attributes :attr:`branch_kind`, :attr:`backward`,
-       :attr:`autonomous` and :attr:`can_collapse`.
+       section of the same solution), :attr:`single_shooting` (the single-shooting problem it is, for
+       the one-sided limits and the half-period map) and the class attributes :attr:`branch_kind`,
+       :attr:`backward`, :attr:`autonomous`, :attr:`can_collapse`, :attr:`periods`, :attr:`mode0` and
+       :attr:`tolerances`.
 
     Implementations document only what differs from this contract.
     """
@@ -52,8 +54,15 @@ class BranchProblem(abc.ABC):
     autonomous: bool = True
     #: Whether the branch's orbits may shrink onto an equilibrium (a cycle collapse ends the branch).
     can_collapse: bool = False
+    #: Forced orbits: the number of forcing periods an orbit closes after.
+    periods: int = 1
+    #: The mode the shots start in (None: the model's domains give it).
+    mode0: str | None = None
+    #: Integration tolerances (None: the flow's own).
+    tolerances: object = None
 
     system: object
+    flow: object
     p: np.ndarray
     lam_name: str | None
     lam_index: int
@@ -212,6 +221,13 @@ class BranchProblem(abc.ABC):
         SaltationError
             If the solution cannot be integrated to find a better section.
         """
+        return None
+
+    @property
+    def single_shooting(self):
+        """The problem as single shooting of periodic orbits (a :class:`~saltation.orbits.single.ShootingProblem`),
+        or None for any other kind: the special points that need one shot of the period (one-sided limits,
+        the half-period map) ask for it."""
         return None
 
     @property

@@ -390,6 +390,11 @@ class ShootingProblem(BranchProblem):
         return t_mid
 
     @property
+    def single_shooting(self) -> ShootingProblem:
+        """The problem itself."""
+        return self
+
+    @property
     def can_collapse(self) -> bool:
         """An autonomous orbit may shrink onto an equilibrium; a forced one keeps its period."""
         return self.autonomous
