@@ -17,7 +17,10 @@ a change of the event sequence in :mod:`~saltation.special_points.nonsmooth`.
 
 from __future__ import annotations
 
-from saltation.special_points.classification import SetValuedCrossing, classify_nonsmooth
+from saltation.special_points.classification import (
+    SetValuedCrossing,
+    classify_nonsmooth,
+)
 from saltation.special_points.detector import SpecialPointDetector
 from saltation.special_points.points import (
     grazing_point,
@@ -25,7 +28,12 @@ from saltation.special_points.points import (
     special_point_between,
     unlocated_grazing,
 )
-from saltation.special_points.smooth import _flip_test, _hopf_test, _ns_test, _plus_one_test  # noqa: F401
+from saltation.special_points.smooth import (  # noqa: F401
+    _flip_test,
+    _hopf_test,
+    _ns_test,
+    _plus_one_test,
+)
 from saltation.special_points.symmetric import symmetric_crossing
 
 __all__ = [

@@ -205,7 +205,8 @@ class SpecialPointDetector(DetectionContext):
     def locate_smooth(
         self, a: Solution, b: Solution, index: int, kind: SpecialPointKind, test: Callable[[Solution], float]
     ) -> SpecialPoint | None:
-        """Illinois iteration on a test function along the secant: :func:`~saltation.special_points.smooth.locate_smooth`.
+        """Illinois iteration on a test function along the secant:
+        :func:`~saltation.special_points.smooth.locate_smooth`.
 
         Parameters
         ----------

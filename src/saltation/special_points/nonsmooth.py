@@ -28,7 +28,10 @@ from saltation.errors import SaltationError
 from saltation.orbits.boundary import one_sided_limits, zero_length_segments
 from saltation.orbits.floquet import multipliers_from_monodromy
 from saltation.orbits.shooting import ShootingProblem
-from saltation.special_points.classification import SetValuedCrossing, classify_nonsmooth
+from saltation.special_points.classification import (
+    SetValuedCrossing,
+    classify_nonsmooth,
+)
 from saltation.special_points.context import DetectionContext, _complex_text, _unit
 from saltation.special_points.grazing import grazing_candidates, locate_grazing
 from saltation.special_points.points import (
@@ -39,7 +42,11 @@ from saltation.special_points.points import (
     special_point_between,
     unlocated_grazing,
 )
-from saltation.special_points.symmetric import half_limits, squares_agree, symmetric_crossing
+from saltation.special_points.symmetric import (
+    half_limits,
+    squares_agree,
+    symmetric_crossing,
+)
 
 __all__ = ["bisect_event_change", "nonsmooth_point", "hidden_corner", "past_grazing", "on_surface_end"]
 
@@ -72,7 +79,8 @@ def past_grazing(ctx: DetectionContext, prev: Solution) -> tuple[Solution, Speci
     Raises
     ------
     numpy.linalg.LinAlgError
-        If the fundamental matrix at the instant of tangency is singular (:func:`grazing_point`).
+        If the fundamental matrix at the instant of tangency is singular
+        (:func:`~saltation.special_points.points.grazing_point`).
     """
     prob = ctx.problem
     if not isinstance(prob, ShootingProblem) or prob.periods != 1:
@@ -260,8 +268,8 @@ def _bracket_at_grazing(ctx: DetectionContext, a: Solution, b: Solution, lo: Sol
     between ``lo`` (at the secant's fraction ``sa``) and ``hi`` (at ``sb``), or none.
 
     The grazing orbit ``z*`` is located from the side without the excursion by its defining system
-    (as :func:`grazing_point`); it lies on the branch, so the hyperplane normal to the secant through
-    it is the one at ``s* = (z* - a) . d / |d|^2`` (``d = b - a``).  The points are corrected on the
+    (as :func:`~saltation.special_points.points.grazing_point`); it lies on the branch, so the hyperplane
+    normal to the secant through it is the one at ``s* = (z* - a) . d / |d|^2`` (``d = b - a``).  The points are corrected on the
     hyperplanes at ``s* -+ delta``, ``delta |d|`` a quarter of the location tolerance (nearer, up to
     twice more, where the branch crosses the hyperplanes at a slant and the two land farther apart
     than the tolerance): their event sequences, not the grazing orbit, decide the bracket.  Returns
@@ -466,7 +474,8 @@ def _limits(ctx: DetectionContext, lo: Solution, hi: Solution, far: tuple[Soluti
     how = Limits.EXACT if lim.exact else Limits.NEAREST_SALTATION
     if not lim.exact:
         mu_accuracy += float(np.linalg.norm(traj_w.monodromy - lim.monodromy_with))
-    m_lo, m_hi = (lim.monodromy_without, lim.monodromy_with) if lo_fewer else (lim.monodromy_with, lim.monodromy_without)
+    m_lo, m_hi = ((lim.monodromy_without, lim.monodromy_with) if lo_fewer
+                  else (lim.monodromy_with, lim.monodromy_without))
     return m_lo, m_hi, how, mu_accuracy, without
 
 

@@ -14,17 +14,30 @@ from typing import NamedTuple
 
 import numpy as np
 
-from saltation.branches.branch import Limits, SpecialPoint, SpecialPointKind, SpecialPointStatus
+from saltation.branches.branch import (
+    Limits,
+    SpecialPoint,
+    SpecialPointKind,
+    SpecialPointStatus,
+)
 from saltation.branches.corrector import Solution
 from saltation.engine.flow import EventKind
 from saltation.errors import SaltationError
 from saltation.model.system import PiecewiseSystem
-from saltation.orbits.boundary import corner_saltation_is_bounded, saltation_at_corner, zero_length_segments
+from saltation.orbits.boundary import (
+    corner_saltation_is_bounded,
+    saltation_at_corner,
+    zero_length_segments,
+)
 from saltation.orbits.floquet import multipliers_from_monodromy
 from saltation.orbits.shooting import ShootingProblem
 from saltation.special_points.classification import SetValuedCrossing
 from saltation.special_points.grazing import locate_grazing
-from saltation.special_points.sliding import locate_adding_sliding, locate_tangent_arrival, sliding_change
+from saltation.special_points.sliding import (
+    locate_adding_sliding,
+    locate_tangent_arrival,
+    sliding_change,
+)
 
 __all__ = [
     "special_point_between",

@@ -25,7 +25,13 @@ from saltation.branches.branch import SpecialPoint, SpecialPointKind
 from saltation.branches.corrector import Solution, canonical_events
 from saltation.errors import SaltationError
 from saltation.orbits.shooting import ShootingProblem
-from saltation.special_points.context import DetectionContext, _finite, _nearest, _nontrivial, _unit
+from saltation.special_points.context import (
+    DetectionContext,
+    _finite,
+    _nearest,
+    _nontrivial,
+    _unit,
+)
 from saltation.special_points.nonsmooth import hidden_corner
 from saltation.special_points.points import period_doubling_of_half_point, smooth_point
 from saltation.special_points.symmetric import (
@@ -94,7 +100,7 @@ def _pieces(ctx: DetectionContext, a: Solution, b: Solution, depth: int = 0, *, 
 
 def _smooth_points_of_piece(ctx: DetectionContext, a: Solution, b: Solution, index: int,
                             secant: np.ndarray) -> list[SpecialPoint]:
-    """:meth:`_smooth_points` on one piece of a step (``secant``: the whole step's direction)."""
+    """:func:`smooth_points` on one piece of a step (``secant``: the whole step's direction)."""
     found = []
     # a point's test values are kept for the next pair: both secants point along the branch,
     # so the tangent (fold test) is oriented alike
@@ -114,7 +120,8 @@ def _smooth_points_of_piece(ctx: DetectionContext, a: Solution, b: Solution, ind
     # point), or, for a declared symmetry, a symmetry breaking where a half-period multiplier passes -1
     plus = _remembered("plus_one", lambda s: _plus_one_test(_nontrivial(s, ctx.autonomous)))
     if _crosses(plus(a), plus(b)) and not _crosses(fold(a), fold(b)):
-        g = _remembered("symmetry_breaking", lambda s: symmetry_breaking_value(ctx, s)) if ctx.symmetry is not None else None
+        g = (_remembered("symmetry_breaking", lambda s: symmetry_breaking_value(ctx, s))
+             if ctx.symmetry is not None else None)
         if g is not None and _crosses(g(a), g(b)):
             found.append(locate_symmetry_breaking(ctx, a, b, index))
         else:
@@ -123,7 +130,8 @@ def _smooth_points_of_piece(ctx: DetectionContext, a: Solution, b: Solution, ind
 
 
 def locate_smooth(
-    ctx: DetectionContext, a: Solution, b: Solution, index: int, kind: SpecialPointKind, test: Callable[[Solution], float]
+    ctx: DetectionContext, a: Solution, b: Solution, index: int, kind: SpecialPointKind,
+    test: Callable[[Solution], float],
 ) -> SpecialPoint | None:
     """Illinois iteration on a continuous test function along the secant from ``a`` to ``b``.
 
@@ -311,7 +319,8 @@ def _parameter_error(ctx: DetectionContext, a: Solution, b: Solution, lo: Soluti
     """How far the integration's error can move a multiplier crossing in the parameter: the multipliers'
     matrix error over the rate at which the critical multiplier's modulus crosses 1 across the step
     (0 for a fold, whose test is the tangent, and for equilibria)."""
-    if ctx.equilibrium or kind is SpecialPointKind.FOLD or (target is None and kind is not SpecialPointKind.NEIMARK_SACKER):
+    if (ctx.equilibrium or kind is SpecialPointKind.FOLD
+            or (target is None and kind is not SpecialPointKind.NEIMARK_SACKER)):
         return 0.0
 
     def modulus(s: Solution) -> float:

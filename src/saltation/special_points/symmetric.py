@@ -33,7 +33,11 @@ from saltation.orbits.symmetry import (
 )
 from saltation.special_points.classification import SetValuedCrossing
 from saltation.special_points.context import DetectionContext, _complex_text, _nearest
-from saltation.special_points.points import _sides, symmetry_breaking_point, unlocated_symmetry_breaking
+from saltation.special_points.points import (
+    _sides,
+    symmetry_breaking_point,
+    unlocated_symmetry_breaking,
+)
 
 __all__ = [
     "half_map",
@@ -308,7 +312,8 @@ def _symmetry_lost(ctx: DetectionContext, lo: Solution, hi: Solution) -> str | N
             "orbits are a second branch through this point")
 
 
-def half_limits(ctx: DetectionContext, lo: Solution, hi: Solution, *, exact: bool) -> tuple[np.ndarray, np.ndarray] | None:
+def half_limits(ctx: DetectionContext, lo: Solution, hi: Solution, *,
+                exact: bool) -> tuple[np.ndarray, np.ndarray] | None:
     """The one-sided half-period maps ``(DG on lo's side, DG on hi's side)`` of a symmetric orbit at a
     non-smooth point.
 
@@ -387,7 +392,8 @@ def squares_agree(half: tuple[np.ndarray, np.ndarray], mu_lo: np.ndarray, mu_hi:
             return False
         squares = np.abs(multipliers_from_monodromy(g, backward=backward)) ** 2
         full = np.abs(np.asarray(mu))
-        if np.sum(squares > 1.0 + 1e-6) > np.sum(full > 1.0 - 1e-6) or np.sum(full > 1.0 + 1e-6) > np.sum(squares > 1.0 - 1e-6):
+        if (np.sum(squares > 1.0 + 1e-6) > np.sum(full > 1.0 - 1e-6)
+                or np.sum(full > 1.0 + 1e-6) > np.sum(squares > 1.0 - 1e-6)):
             return False
     return True
 
@@ -411,7 +417,8 @@ def symmetric_crossing(half: SetValuedCrossing) -> SetValuedCrossing:
         return half
     gamma = complex(half.point)
     if abs(gamma.imag) <= 1e-6:
-        kind = SpecialPointKind.DISCONTINUOUS_FOLD if gamma.real > 0 else SpecialPointKind.DISCONTINUOUS_SYMMETRY_BREAKING
+        kind = (SpecialPointKind.DISCONTINUOUS_FOLD if gamma.real > 0
+                else SpecialPointKind.DISCONTINUOUS_SYMMETRY_BREAKING)
     elif abs(gamma.real) <= 1e-6:
         kind = SpecialPointKind.DISCONTINUOUS_FLIP
     else:
