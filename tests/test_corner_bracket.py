@@ -19,7 +19,7 @@ from saltation import Flow
 from saltation.errors import ConvergenceError
 from saltation.models.two_mass_stops import two_mass_stops
 from saltation.orbits.shooting import ShootingProblem
-from saltation.special_points import detection
+from saltation.special_points import detection, nonsmooth, points
 from saltation.special_points.continuation import ContinuationSettings, continue_branch
 from test_gallery_two_mass_stops import F_ONSET_1, free_state0
 
@@ -52,7 +52,8 @@ def onset(monkeypatch, *, grazing_fails: bool):
         def failing(*args, **kwargs):
             raise ConvergenceError("no grazing here (the test's stand-in)", [])
 
-        monkeypatch.setattr(detection, "locate_grazing", failing)
+        for module in (nonsmooth, points):
+            monkeypatch.setattr(module, "locate_grazing", failing)
     problem = ShootingProblem(Flow(two_mass_stops()), {"F": F0}, continuation_parameter="F")
     branch = continue_branch(problem, free_state0(F0), F0, settings=SETTINGS, directions=(1,))
     (sp,) = branch.special_points
@@ -80,13 +81,14 @@ def test_the_bracket_holds_the_closed_form_corner(monkeypatch, grazing_fails):
 
 def test_a_grazing_outside_the_bracket_is_not_used(monkeypatch):
     """A grazing orbit located elsewhere (here: at another parameter) places no point: bisection goes on."""
-    located = detection.locate_grazing
+    located = nonsmooth.locate_grazing
 
     def elsewhere(*args, **kwargs):
         orbit = located(*args, **kwargs)
         return type(orbit)(**{**vars(orbit), "parameter": orbit.parameter + 1.0})
 
-    monkeypatch.setattr(detection, "locate_grazing", elsewhere)
+    for module in (nonsmooth, points):
+        monkeypatch.setattr(module, "locate_grazing", elsewhere)
     sp, spent = onset(monkeypatch, grazing_fails=False)
     assert min(sp.bracket) - 1e-14 <= F_ONSET_1 <= max(sp.bracket) + 1e-14
     assert sp.accuracy <= SETTINGS.locate_tol

@@ -367,7 +367,7 @@ def test_a_symmetry_that_holds_at_some_parameter_values_only():
 def test_a_symmetry_breaking_that_cannot_be_located_is_reported_as_failed(tri_flow, monkeypatch):
     """Where the half-period multiplier changes sign of ``gamma + 1`` between two branch points but Newton on
     the half-period map fails, the point is kept, with status failed and the two points' bracket."""
-    import saltation.special_points.detection as detection
+    import saltation.special_points.symmetric as detection
     from saltation.errors import ConvergenceError
 
     def fails(*args, **kwargs):

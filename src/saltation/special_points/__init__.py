@@ -1,10 +1,22 @@
 """Layer 5, special points: detection, location by defining systems, two-parameter curves.
 
-:mod:`~saltation.special_points.detection` (test functions for smooth bifurcations, changes of the
-event sequence and their set-valued multipliers: the detector the continuation engine is handed),
-:mod:`~saltation.special_points.continuation` (continuation with that detector:
-:func:`continue_orbit`, :func:`continue_branch`), :mod:`~saltation.special_points.grazing` and
-:mod:`~saltation.special_points.sliding` (the defining systems of grazing and of the sliding
-bifurcations), :mod:`~saltation.special_points.loci` (curves of special points in two parameters)
-and :mod:`~saltation.special_points.branch_switching` (the period-2 branch at a period doubling).
+Modules:
+
+* :mod:`~saltation.special_points.detector`: the detector the continuation engine is handed
+  (:class:`SpecialPointDetector`), the sequence of detection at each step;
+* :mod:`~saltation.special_points.context`: what the detector's parts share (its context, multiplier helpers);
+* :mod:`~saltation.special_points.smooth`: test functions of smooth bifurcations, their location on the secant;
+* :mod:`~saltation.special_points.nonsmooth`: bracketing a change of the event sequence, one-sided limits;
+* :mod:`~saltation.special_points.symmetric`: the half-period map of symmetric orbits, symmetry breaking;
+* :mod:`~saltation.special_points.points`: the records of the special points the detector finds;
+* :mod:`~saltation.special_points.classification`: the set-valued multipliers' classification of a corner;
+* :mod:`~saltation.special_points.detection`: the detector's former path, re-exporting its names until 0.3.0;
+* :mod:`~saltation.special_points.continuation`: continuation with that detector (:func:`continue_orbit`,
+  :func:`continue_branch`);
+* :mod:`~saltation.special_points.grazing`: the defining systems of grazing;
+* :mod:`~saltation.special_points.sliding`: the defining systems of the sliding bifurcations;
+* :mod:`~saltation.special_points.boundary_equilibria`: equilibria on a switching surface and their curves;
+* :mod:`~saltation.special_points.loci`: curves of special points in two parameters;
+* :mod:`~saltation.special_points.branch_switching`: the period-2 branch at a period doubling and the
+  asymmetric branches at a symmetry breaking.
 """
