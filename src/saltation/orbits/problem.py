@@ -62,7 +62,8 @@ class BranchProblem(abc.ABC):
     tolerances: object = None
 
     system: object
-    flow: object
+    #: The model's compiled flow.
+    flow: object = None
     p: np.ndarray
     lam_name: str | None
     lam_index: int

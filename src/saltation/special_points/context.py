@@ -19,7 +19,6 @@ from saltation.branches.branch import Branch, BranchKind
 from saltation.branches.corrector import Corrector, Solution
 from saltation.errors import ModelError
 from saltation.model.symmetry import check_symmetry
-from saltation.orbits.shooting import ShootingProblem
 
 __all__ = ["DetectionContext"]
 
@@ -60,7 +59,7 @@ class DetectionContext:
         # the half-period map splits the multipliers of the symmetric orbits of one-period shooting, where the
         # model has its symmetry at the branch's parameters (it may hold at some values only)
         self.symmetry = None
-        if symmetry is not None and isinstance(problem, ShootingProblem) and problem.periods == 1:
+        if symmetry is not None and problem.single_shooting is not None and problem.periods == 1:
             try:
                 check_symmetry(problem.system, symmetry, problem.parameters_at(branch.points[0].parameter
                                                                                if branch.points else None))

@@ -25,7 +25,7 @@ from saltation.errors import ModelError
 from saltation.orbits.multiple import MultipleShootingProblem
 from saltation.orbits.records import PeriodicOrbit
 from saltation.orbits.single import ShootingProblem
-from saltation.special_points.detection import SpecialPointDetector
+from saltation.special_points.detector import SpecialPointDetector
 
 
 class Continuation(engine.Continuation):

@@ -66,12 +66,12 @@ from saltation.orbits.conditions import (
 )
 from saltation.orbits.records import BranchPoint
 from saltation.orbits.single import ShootingProblem
+from saltation.special_points.classification import classify_nonsmooth
 from saltation.special_points.continuation import (
     Continuation,
     ContinuationSettings,
     canonical_events,
 )
-from saltation.special_points.detection import classify_nonsmooth
 from saltation.special_points.grazing import (
     grazing_candidates,
     locate_grazing,

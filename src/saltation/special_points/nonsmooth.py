@@ -27,7 +27,6 @@ from saltation.engine.flow import EventKind
 from saltation.errors import SaltationError
 from saltation.orbits.boundary import one_sided_limits, zero_length_segments
 from saltation.orbits.floquet import multipliers_from_monodromy
-from saltation.orbits.shooting import ShootingProblem
 from saltation.special_points.classification import (
     SetValuedCrossing,
     classify_nonsmooth,
@@ -83,7 +82,7 @@ def past_grazing(ctx: DetectionContext, prev: Solution) -> tuple[Solution, Speci
         (:func:`~saltation.special_points.points.grazing_point`).
     """
     prob = ctx.problem
-    if not isinstance(prob, ShootingProblem) or prob.periods != 1:
+    if not prob.single_shooting is not None or prob.periods != 1:
         return None
     flow, p = prob.flow, prob.parameters_at(prev.lam)
     n = prob.system.n
@@ -163,7 +162,7 @@ def on_surface_end(ctx: DetectionContext, prev: Solution, failed: float) -> Spec
     from saltation.orbits.on_surface import monodromy_in_mode, orbit_on_surface
 
     prob = ctx.problem
-    if ctx.equilibrium or not isinstance(prob, ShootingProblem) or prob.periods != 1 or prob.backward:
+    if ctx.equilibrium or not prob.single_shooting is not None or prob.periods != 1 or prob.backward:
         return None
     good, bad = prev, float(failed)
     sequence = canonical_events(prev.summary.event_ids)
@@ -278,7 +277,7 @@ def _bracket_at_grazing(ctx: DetectionContext, a: Solution, b: Solution, lo: Sol
     location fails, or ``s*`` is outside ``(sa, sb)``.
     """
     prob = ctx.problem
-    if ctx.equilibrium or not isinstance(prob, ShootingProblem) or prob.periods != 1:
+    if ctx.equilibrium or not prob.single_shooting is not None or prob.periods != 1:
         return []
     sides = _sides(lo, hi)
     if sides is None:
@@ -298,7 +297,7 @@ def _bracket_at_grazing(ctx: DetectionContext, a: Solution, b: Solution, lo: Sol
             prob.flow, without.u[:n], without.lam, prob.lam_name, first.transition, 0.5 * (first.t + last.t),
             parameters=prob.parameters_at(without.lam), t0=prob.t0, tolerances=prob.tolerances,
             period=prob.period_of(without.u, without.lam) if prob.autonomous else None, backward=prob.backward,
-            mode0=getattr(prob, "mode0", None),
+            mode0=prob.mode0,
         )
     except SaltationError:
         return []
@@ -437,7 +436,7 @@ def nonsmooth_point(
 
 def _limits(ctx: DetectionContext, lo: Solution, hi: Solution, far: tuple[Solution, Solution] | None):
     """Exact one-sided monodromies ``(M_lo, M_hi, how, accuracy, boundary solution)``, or None."""
-    flow = getattr(ctx.problem, "flow", None)
+    flow = ctx.problem.flow
     sides = _sides(lo, hi)
     if flow is None or sides is None:
         return None
@@ -445,7 +444,7 @@ def _limits(ctx: DetectionContext, lo: Solution, hi: Solution, far: tuple[Soluti
     try:
         lim = one_sided_limits(
             flow, traj_wo, traj_w, ctx.problem.parameters_at(without.lam),
-            tolerances=getattr(ctx.problem, "tolerances", None),
+            tolerances=ctx.problem.tolerances,
         )
     except SaltationError:
         return None

@@ -30,7 +30,6 @@ from saltation.orbits.boundary import (
     zero_length_segments,
 )
 from saltation.orbits.floquet import multipliers_from_monodromy
-from saltation.orbits.shooting import ShootingProblem
 from saltation.special_points.classification import SetValuedCrossing
 from saltation.special_points.grazing import locate_grazing
 from saltation.special_points.sliding import (
@@ -135,9 +134,9 @@ def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -
     di Bernardo, Kowalczyk and Nordmark (2002), "Bifurcations of dynamical systems with sliding:
     derivation of normal-form mappings", Physica D 170.
     """
-    flow = getattr(problem, "flow", None)
+    flow = problem.flow
     sides = _sides(lo, hi)
-    if flow is None or sides is None or problem.backward or getattr(problem, "periods", 1) != 1:
+    if flow is None or sides is None or problem.backward or problem.periods != 1:
         return None
     lo_fewer, without, with_, traj_wo, traj_w = sides
     change = sliding_change(flow, traj_wo, traj_w, problem.parameters_at(with_.lam), problem.parameters_at(without.lam))
@@ -243,7 +242,7 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     and Applications*, Springer.  Nordmark (1991), "Non-periodic motion caused by grazing incidence in
     an impact oscillator", J. Sound Vib. 145 (the square-root singularity of impacts).
     """
-    flow = getattr(problem, "flow", None)
+    flow = problem.flow
     sides = _sides(lo, hi)
     if flow is None or sides is None:
         return None
@@ -258,7 +257,7 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
             flow, without.u[: problem.system.n], without.lam, problem.lam_name, first.transition, first.t,
             parameters=problem.parameters_at(without.lam), t0=problem.t0, tolerances=problem.tolerances,
             period=problem.period_of(without.u, without.lam) if problem.system.is_autonomous else None,
-            backward=problem.backward, periods=getattr(problem, "periods", 1), mode0=getattr(problem, "mode0", None),
+            backward=problem.backward, periods=problem.periods, mode0=problem.mode0,
         )
     except SaltationError:
         return None
@@ -446,7 +445,7 @@ def _autonomous_crossing_limit(problem, orbit, with_: Solution) -> tuple[np.ndar
     estimate is ``|mu(d) - mu(4 d)|``, the size of the square-root term at ``d``.  None when they cannot
     be solved.
     """
-    if not isinstance(problem, ShootingProblem):
+    if not problem.single_shooting is not None:
         return None
     direction = 1.0 if with_.lam >= orbit.parameter else -1.0
     saved = (problem.x_ref, problem.f_ref)  # the branch's phase anchor stays

@@ -24,7 +24,7 @@ import numpy as np
 from saltation.branches.branch import SpecialPoint, SpecialPointKind
 from saltation.branches.corrector import Solution, canonical_events
 from saltation.errors import SaltationError
-from saltation.orbits.shooting import ShootingProblem
+from saltation.orbits.single import ShootingProblem
 from saltation.special_points.context import (
     DetectionContext,
     _finite,
@@ -251,7 +251,7 @@ def _period_doubling_of_half(ctx: DetectionContext, best: Solution, index: int) 
     The point is located by brentq on ``prod(mu + 1)`` of the half-period orbits (Newton at each parameter).
     """
     prob = ctx.problem
-    if ctx.equilibrium or not isinstance(prob, ShootingProblem):
+    if ctx.equilibrium or not prob.single_shooting is not None:
         return None
     n = prob.system.n
     x0 = np.asarray(best.u[:n], dtype=float)
