@@ -20,7 +20,7 @@ import saltation
 
 ROOT = Path(saltation.__file__).parent
 LAYERS = ["model", "engine", "orbits", "branches", "special_points", "output", "apps"]
-FOUNDATION = {"errors", "summary", "_moved"}  # import nothing of the package's layers
+FOUNDATION = {"errors", "summary", "_moved", "kinds"}  # import nothing of the package's layers
 
 
 def _place(module: str) -> str:

@@ -19,7 +19,8 @@ from saltation import _moved
 
 _moved.install()
 
-from saltation.branches.branch import Branch, SpecialPoint, SpecialPointKind
+from saltation.branches.branch import Branch, SpecialPoint
+from saltation.kinds import SpecialPointKind
 from saltation.special_points.continuation import Continuation, ContinuationSettings, continue_branch, continue_orbit
 from saltation.errors import (
     ChatteringError,

@@ -13,6 +13,8 @@ Depends on the engine and the model.  Its modules:
 - :mod:`~saltation.orbits.start`: start guesses and the everyday :func:`find_periodic_orbit`;
 - :mod:`~saltation.orbits.conditions`: defining conditions attached to an orbit (special points, curves);
 - :mod:`~saltation.orbits.floquet`: Floquet multipliers from the monodromy matrix;
+- :mod:`~saltation.orbits.classification`: the set-valued classification of a corner from its one-sided
+  monodromies;
 - :mod:`~saltation.orbits.boundary`: the one-sided monodromies at a boundary orbit, exact limits;
 - :mod:`~saltation.orbits.symmetry`: symmetric orbits by the half-period map;
 - :mod:`~saltation.orbits.lyapunov`: Lyapunov exponents;

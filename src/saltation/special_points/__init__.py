@@ -9,7 +9,6 @@ Modules:
 * :mod:`~saltation.special_points.nonsmooth`: bracketing a change of the event sequence, one-sided limits;
 * :mod:`~saltation.special_points.symmetric`: the half-period map of symmetric orbits, symmetry breaking;
 * :mod:`~saltation.special_points.points`: the records of the special points the detector finds;
-* :mod:`~saltation.special_points.classification`: the set-valued multipliers' classification of a corner;
 * :mod:`~saltation.special_points.detection`: the detector's former path, re-exporting its names until 0.3.0;
 * :mod:`~saltation.special_points.continuation`: continuation with that detector (:func:`continue_orbit`,
   :func:`continue_branch`);

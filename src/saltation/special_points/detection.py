@@ -2,9 +2,9 @@
 
 Every name it defined is re-exported from where it now lives:
 :class:`~saltation.special_points.detector.SpecialPointDetector` (:mod:`~saltation.special_points.detector`),
-the set-valued classification :func:`~saltation.special_points.classification.classify_nonsmooth` and
-:class:`~saltation.special_points.classification.SetValuedCrossing`
-(:mod:`~saltation.special_points.classification`), the records
+the set-valued classification :func:`~saltation.orbits.classification.classify_nonsmooth` and
+:class:`~saltation.orbits.classification.SetValuedCrossing`
+(:mod:`~saltation.orbits.classification`), the records
 :func:`~saltation.special_points.points.special_point_between`,
 :func:`~saltation.special_points.points.grazing_point`,
 :func:`~saltation.special_points.points.unlocated_grazing` and
@@ -17,7 +17,7 @@ a change of the event sequence in :mod:`~saltation.special_points.nonsmooth`.
 
 from __future__ import annotations
 
-from saltation.special_points.classification import (
+from saltation.orbits.classification import (
     SetValuedCrossing,
     classify_nonsmooth,
 )

@@ -66,7 +66,7 @@ from saltation.orbits.conditions import (
 )
 from saltation.orbits.records import BranchPoint
 from saltation.orbits.single import ShootingProblem
-from saltation.special_points.classification import classify_nonsmooth
+from saltation.orbits.classification import classify_nonsmooth
 from saltation.special_points.continuation import (
     Continuation,
     ContinuationSettings,

@@ -6,7 +6,7 @@ surface that one side misses, the grazing orbit is located by its defining syste
 closed around it.  The monodromies on both sides, ``M-`` and ``M+``, are then taken as exact one-sided
 limits where the sides differ by segments of zero length (:mod:`saltation.orbits.boundary`), and the
 point is classified by its set-valued multipliers (:func:`nonsmooth_point`,
-:mod:`~saltation.special_points.classification`).  Two ends of a branch are non-smooth points too: a
+:mod:`~saltation.orbits.classification`).  Two ends of a branch are non-smooth points too: a
 grazing that stops the corrector (:func:`past_grazing`) and an orbit that comes to lie on a switching
 surface all round (:func:`on_surface_end`).
 
@@ -27,7 +27,7 @@ from saltation.engine.flow import EventKind
 from saltation.errors import SaltationError
 from saltation.orbits.boundary import one_sided_limits, zero_length_segments
 from saltation.orbits.floquet import multipliers_from_monodromy
-from saltation.special_points.classification import (
+from saltation.orbits.classification import (
     SetValuedCrossing,
     classify_nonsmooth,
 )

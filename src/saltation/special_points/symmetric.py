@@ -31,7 +31,7 @@ from saltation.orbits.symmetry import (
     split_half_map,
     symmetry_breaking_test,
 )
-from saltation.special_points.classification import SetValuedCrossing
+from saltation.orbits.classification import SetValuedCrossing
 from saltation.special_points.context import DetectionContext, _complex_text, _nearest
 from saltation.special_points.points import (
     _sides,

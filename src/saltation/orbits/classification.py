@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from saltation.branches.branch import SpecialPointKind
+from saltation.kinds import SpecialPointKind
 from saltation.errors import SaltationError
 from saltation.orbits.floquet import eigenvalues, set_valued_multipliers
 
