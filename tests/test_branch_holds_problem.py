@@ -98,7 +98,7 @@ def _probes(path: Path) -> list[str]:
     return found
 
 
-DETECTOR = ["detector", "context", "smooth", "nonsmooth", "symmetric", "points", "classification"]
+DETECTOR = ["detector", "context", "smooth", "nonsmooth", "symmetric", "points"]
 
 
 def test_the_continuation_engine_and_the_detector_ask_the_problem_and_never_probe_it():
