@@ -207,6 +207,9 @@ class ArrivalTangency(Condition):
         SaltationError
             If the orbit no longer arrives there, or arrives tangentially (the arrival's time is then not a
             smooth function of the unknowns).
+        Resplit
+            If the shot is not split before the arrival with no event between them: split ``LEAD`` of
+            the period (of 1 at least) before it.
         """
         flow, p = self.flow, shot.parameters
         n = len(shot.x0)

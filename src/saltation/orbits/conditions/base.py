@@ -17,20 +17,6 @@ import numpy as np
 from saltation.orbits.conditions.shot import Rows, Segments, Shot
 
 
-class Resplit(Exception):
-    """Raised by :meth:`Condition.rows`: the shot must be split again, at the instant ``t``.
-
-    Parameters
-    ----------
-    t : float
-        The instant to split the shot at.
-    """
-
-    def __init__(self, t: float):
-        super().__init__(t)
-        self.t = t
-
-
 class Condition(abc.ABC):
     """One or more equations attached to a periodic orbit (see :mod:`saltation.orbits.conditions`).
 
@@ -199,6 +185,20 @@ class Condition(abc.ABC):
         extra : ndarray, shape (extras,)
             The condition's own unknowns there.
         """
+
+
+class Resplit(Exception):
+    """Raised by :meth:`Condition.rows`: the shot must be split again, at the instant ``t``.
+
+    Parameters
+    ----------
+    t : float
+        The instant to split the shot at.
+    """
+
+    def __init__(self, t: float):
+        super().__init__(t)
+        self.t = t
 
 
 __all__ = ["Condition", "Resplit"]

@@ -17,9 +17,9 @@ import numpy as np
 
 from saltation.engine.flow import Trajectory
 from saltation.errors import ConvergenceError, ModelError
-from saltation.orbits.conditions import segmented
 from saltation.orbits.conditions.base import Condition, Resplit
 from saltation.orbits.conditions.joining import _joined
+from saltation.orbits.conditions.segmented import equations as segmented_equations
 from saltation.orbits.conditions.shot import Located, Piece, Shot
 from saltation.orbits.floquet import is_stable, multipliers_from_monodromy
 from saltation.orbits.problem import BranchProblem, accuracy, newton
@@ -397,7 +397,7 @@ class ConditionedProblem(BranchProblem):
             bordered matrix is singular) or a run fails (an :class:`IntegrationError`).
         """
         if self.segments > 1:
-            r, J, jl, segments, shots = segmented.equations(self, u, lam, need_lam=need_lam)
+            r, J, jl, segments, shots = segmented_equations(self, u, lam, need_lam=need_lam)
             self._segs = segments.trajectories
             self._last = (segments.whole, self._extras(u))
             self._shots = shots

@@ -13,7 +13,6 @@ segment, by ``-Phi(t, t_i) f(t_i, x_i) dt_i``; the rows by one node get that ter
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,11 +22,10 @@ from saltation.orbits.conditions.base import Resplit
 from saltation.orbits.conditions.joining import _joined, join
 from saltation.orbits.conditions.shot import Piece, Rows, Segments, Shot, segment_of
 
-if TYPE_CHECKING:
-    from saltation.orbits.conditions.conditioned import ConditionedProblem
+# The annotations name ConditionedProblem without importing it: its module imports this one.
 
 
-def equations(problem: ConditionedProblem, u: np.ndarray, lam: float | None, *, need_lam: bool = True
+def equations(problem: ConditionedProblem, u: np.ndarray, lam: float | None, *, need_lam: bool = True  # noqa: F821
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, Segments, list[Shot]]:
     """Residual, ``d/du`` and ``d/dlam`` of a conditioned problem with multiple shooting.
 
@@ -82,7 +80,7 @@ def equations(problem: ConditionedProblem, u: np.ndarray, lam: float | None, *, 
     return r, J, jl, segments, [segments.shot(0 if i is None else i) for i, _ in placed]
 
 
-def shoot(problem: ConditionedProblem, U: np.ndarray, T: float, p: np.ndarray, params: Sequence[int],
+def shoot(problem: ConditionedProblem, U: np.ndarray, T: float, p: np.ndarray, params: Sequence[int],  # noqa: F821
           times: np.ndarray, split: float | None) -> tuple[list[list[Trajectory]], Segments]:
     """Every segment, one run per parameter of ``params``, the one that holds ``split`` split there.
 
@@ -149,7 +147,7 @@ def shoot(problem: ConditionedProblem, U: np.ndarray, T: float, p: np.ndarray, p
     return by_column, Segments(whole=whole, nodes=U, times=times, trajectories=first, piece=piece, split=split_seg)
 
 
-def _orbit_rows(problem: ConditionedProblem, segments: Segments, by_column: list[list[Trajectory]],
+def _orbit_rows(problem: ConditionedProblem, segments: Segments, by_column: list[list[Trajectory]],  # noqa: F821
                 params: Sequence[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """The residual and Jacobians with the orbit's rows filled: matching, then the phase condition."""
     n, nodes_n, nb, k = problem.system.n, problem.n_nodes, problem.n_base, len(problem.free)
@@ -172,7 +170,7 @@ def _orbit_rows(problem: ConditionedProblem, segments: Segments, by_column: list
     return r, J, jl
 
 
-def _condition_rows(problem: ConditionedProblem, segments: Segments, params: Sequence[int],
+def _condition_rows(problem: ConditionedProblem, segments: Segments, params: Sequence[int],  # noqa: F821
                     placed: list[tuple[int | None, Rows]], r: np.ndarray, J: np.ndarray, jl: np.ndarray | None
                     ) -> None:
     """Fill the conditions' rows of ``r``, ``J`` and ``jl`` (in place), each by its segment's node or by every node."""

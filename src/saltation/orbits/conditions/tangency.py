@@ -126,6 +126,19 @@ class ReturnTangency(Condition):
     equations read the state at ``t0`` itself (derivatives ``h_x``, ``L_x``, ``h_p``, ``L_p``, exact, no
     integration), and the first fixes the phase: it replaces the phase condition of the autonomous
     orbit, whose period stays an unknown.
+
+    Parameters
+    ----------
+    flow : Flow
+        The flow of the model.
+    transition : int
+        Index of the transition the orbit returns to (its target mode is the stick phase the orbit
+        starts in).
+
+    Raises
+    ------
+    IndexError
+        If ``transition`` is not an index of the model's transitions.
     """
 
     size = 2
