@@ -54,6 +54,14 @@ MODULES = (
     "saltation.orbits.shooting",
     "saltation.orbits.floquet",
     "saltation.orbits.conditions",
+    "saltation.orbits.conditions.shot",
+    "saltation.orbits.conditions.base",
+    "saltation.orbits.conditions.tangency",
+    "saltation.orbits.conditions.arrival",
+    "saltation.orbits.conditions.multiplier",
+    "saltation.orbits.conditions.conditioned",
+    "saltation.orbits.conditions.segmented",
+    "saltation.orbits.conditions.joining",
     "saltation.orbits.start",
     "saltation.special_points.continuation",
     "saltation.special_points.loci",
@@ -101,6 +109,7 @@ RAISES_EXEMPT = {
     "saltation.orbits.floquet.trivial_multiplier_error": "array arithmetic on the given multipliers",
     "saltation.orbits.floquet.is_stable": "array arithmetic on the given multipliers",
     "saltation.orbits.start.period_from_events": "reads the events of a computed trajectory",
+    "saltation.orbits.conditions.shot.segment_of": "arithmetic on the given instant and bounds",
     "saltation.orbits.start.candidate_starts": "builds arrays",
     "saltation.branches.corrector.canonical_events": "rotates a tuple",
     "saltation.special_points.points.special_point_between": "builds a record from two solutions",
@@ -134,11 +143,11 @@ REFERENCES_REQUIRED = (
     "saltation.orbits.single.ShootingProblem",
     "saltation.orbits.multiple.MultipleShootingProblem",
     "saltation.orbits.start.find_periodic_orbit",
-    "saltation.orbits.conditions.ConditionedProblem",
-    "saltation.orbits.conditions.MultiplierCondition",
-    "saltation.orbits.conditions.Tangency",
-    "saltation.orbits.conditions.ArrivalTangency",
-    "saltation.orbits.conditions.CubicTangency",
+    "saltation.orbits.conditions.conditioned.ConditionedProblem",
+    "saltation.orbits.conditions.multiplier.MultiplierCondition",
+    "saltation.orbits.conditions.tangency.Tangency",
+    "saltation.orbits.conditions.arrival.ArrivalTangency",
+    "saltation.orbits.conditions.arrival.CubicTangency",
     "saltation.branches.continuation.Continuation",
     "saltation.branches.continuation.continue_branch",
     "saltation.special_points.continuation.continue_branch",
@@ -299,7 +308,7 @@ def _check_returns(name: str, doc: str, func) -> None:
 def test_the_collection_finds_the_public_api():
     assert "saltation.orbits.start.find_periodic_orbit" in FUNCTIONS
     assert "saltation.engine.flow.Flow.run" in METHODS
-    assert "saltation.orbits.conditions.ConditionedProblem" in CLASSES
+    assert "saltation.orbits.conditions.conditioned.ConditionedProblem" in CLASSES
     assert "saltation.branches.continuation.Detector.check" in METHODS  # a protocol's methods are checked
     assert len(FUNCTIONS) > 60 and len(CLASSES) > 40 and len(METHODS) > 100
 
