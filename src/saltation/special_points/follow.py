@@ -718,7 +718,7 @@ def follow_branch(
         followed.switched = switch_branches(problem, branch, settings=settings)
     if branch.stop_reason is not StopReason.MIN_STEP:
         return followed
-    ended = [sp for sp in branch.special_points if sp.index >= len(branch.points) - 1 and sp.limits is Limits.ON_SURFACE]
+    ended = [sp for sp in branch.special_points if sp.index >= len(branch.points) - 1 and sp.limits == Limits.ON_SURFACE]
     if ended:
         followed.end, followed.ended_at = BranchEnd.ON_SURFACE, ended[0]
     elif through_fold and isinstance(problem, ShootingProblem) and not problem.backward:
