@@ -23,26 +23,27 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
-
 import numpy as np
 from matplotlib.lines import Line2D
 
-from saltation.output import io
-
-from saltation.output import plotting
 from saltation.branches.branch import Branch
-from saltation.engine.precompile import compile_in_parallel
-from saltation.special_points.continuation import ContinuationSettings, continue_branch
-from saltation.special_points.follow import BifurcationDiagram, follow_branch
-from saltation.errors import SaltationError
-from saltation.orbits.floquet import multipliers_from_monodromy
 from saltation.engine.flow import Flow
-from saltation.models import SHIPPED, block_on_belt, trilinear
-from saltation.models.trilinear import linear_response_state
+from saltation.engine.precompile import compile_in_parallel
+from saltation.errors import SaltationError
 from saltation.model.regularize import regularize
 from saltation.model.system import PiecewiseSystem
-from saltation.orbits.shooting import EquilibriumProblem, ShootingProblem, find_periodic_orbit
+from saltation.models import SHIPPED, block_on_belt, trilinear
+from saltation.models.trilinear import linear_response_state
+from saltation.orbits.floquet import multipliers_from_monodromy
+from saltation.orbits.shooting import (
+    EquilibriumProblem,
+    ShootingProblem,
+    find_periodic_orbit,
+)
 from saltation.orbits.start import estimate_period, transient
+from saltation.output import io, plotting
+from saltation.special_points.continuation import ContinuationSettings, continue_branch
+from saltation.special_points.follow import BifurcationDiagram, follow_branch
 
 Progress = Callable[[str, int], None] | None
 
@@ -157,7 +158,7 @@ def block_on_belt_diagram(settings: PaperSettings = PaperSettings(), progress: P
     up = follow_branch(problem, u0, v0, settings=cset, direction=1, progress=counter, switch=False)
     if up.beyond is None:
         raise up.error or SaltationError(
-            f"the stable branch of block_on_belt ended without a discontinuous fold ({up.branch.stop_reason.value})")
+            f"the stable branch of block_on_belt ended without a discontinuous fold ({up.end.value})")
     unstable = up.beyond
     stable = up.branch
     stable.extend(down.branch)
@@ -405,12 +406,11 @@ __all__ = [
     "PaperSettings",
     "block_on_belt_diagram",
     "compute",
+    "linear_response_state",  # of saltation.models.trilinear, re-exported here until release 0.3.0
     "phase_plane",
     "smoothing_study",
     "smoothing_table",
     "special_point_table",
     "trilinear_diagram",
     "write",
-    # moved to saltation.models.trilinear; this path is kept until release 0.3.0
-    "linear_response_state",
 ]

@@ -37,11 +37,20 @@ from saltation.branches.branch import (
 )
 from saltation.engine.flow import EventKind
 from saltation.errors import SaltationError
-from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
+from saltation.orbits.pseudo_equilibria import (
+    PseudoEquilibriumProblem,
+    find_pseudo_equilibrium,
+)
 from saltation.orbits.records import BranchPoint
 from saltation.orbits.shooting import EquilibriumProblem, ShootingProblem
-from saltation.special_points.boundary_equilibria import boundary_equilibria, boundary_equilibria_of_mode
-from saltation.special_points.branch_switching import follow_asymmetric_branch, follow_period_doubled_branch
+from saltation.special_points.boundary_equilibria import (
+    boundary_equilibria,
+    boundary_equilibria_of_mode,
+)
+from saltation.special_points.branch_switching import (
+    follow_asymmetric_branch,
+    follow_period_doubled_branch,
+)
 from saltation.special_points.continuation import (
     Continuation,
     ContinuationSettings,
@@ -742,10 +751,10 @@ def _run(problem, u0: np.ndarray, lam0: float, settings: ContinuationSettings, d
 
 
 __all__ = [
+    "SWITCHES",
     "BifurcationDiagram",
     "BranchEnd",
     "FollowedBranch",
-    "SWITCHES",
     "boundary_equilibria_on",
     "distinct_special_points",
     "find_backward_seed",

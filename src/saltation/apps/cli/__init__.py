@@ -42,17 +42,18 @@ import tempfile  # noqa: F401 (saltation.apps.cli.tempfile: the module whose mks
 import threading
 from collections.abc import Callable, Sequence
 
-import saltation.apps.cli.continue_ as continue_
-import saltation.apps.cli.locus as locus
-import saltation.apps.cli.lyapunov as lyapunov
-import saltation.apps.cli.orbit as orbit
-import saltation.apps.cli.paper as paper
-import saltation.apps.cli.sweep as sweep
+from saltation.apps.cli import continue_, locus, lyapunov, orbit, paper, sweep
 from saltation.apps.cli.continue_ import cmd_continue
 from saltation.apps.cli.errors import PROG, CommandError, UsageError
 from saltation.apps.cli.locus import cmd_locus
 from saltation.apps.cli.lyapunov import cmd_lyapunov
-from saltation.apps.cli.models import MODEL_HELP, build_model, load_model_file, make_flow, model_names
+from saltation.apps.cli.models import (
+    MODEL_HELP,
+    build_model,
+    load_model_file,
+    make_flow,
+    model_names,
+)
 from saltation.apps.cli.options import (
     FORCING_PERIOD_MATCH,
     MIN_PERIOD,
@@ -77,7 +78,12 @@ from saltation.apps.cli.options import (
 )
 from saltation.apps.cli.orbit import cmd_orbit, format_orbit, orbit_to_dict
 from saltation.apps.cli.paper import PAPER_MIN_DS_MAX, cmd_paper
-from saltation.apps.cli.starts import equilibrium_start, estimate_period, periodic_start, transient
+from saltation.apps.cli.starts import (
+    equilibrium_start,
+    estimate_period,
+    periodic_start,
+    transient,
+)
 from saltation.apps.cli.sweep import cmd_sweep, sweep_start
 from saltation.apps.cli.text import multipliers_json
 from saltation.errors import SaltationError
@@ -285,12 +291,53 @@ def _fail(exc: BaseException | str) -> None:
 
 
 __all__ = [
-    "CommandError", "DEBUG_HELP", "FORCING_PERIOD_MATCH", "MIN_PERIOD", "MIN_STEP", "MODE0_HELP", "MODEL_HELP",
-    "PAPER_MIN_DS_MAX", "PERIOD_HELP", "PROG", "SEGMENTS_TYPE", "SHIPPED", "SUBCOMMANDS", "UsageError",
-    "build_model", "build_parser", "check_equilibrium_option", "check_forced_period", "check_grid", "check_mode0",
-    "check_not_set", "check_out_dir", "check_parameter", "check_period", "check_start_field", "check_start_period",
-    "cmd_continue", "cmd_locus", "cmd_lyapunov", "cmd_orbit", "cmd_paper", "cmd_sweep", "equilibrium_start",
-    "estimate_period", "forcing_period_at", "format_orbit", "load_model_file", "main", "make_flow", "model_names",
-    "multipliers_json", "orbit_to_dict", "parse_sets", "parse_vector", "periodic_start", "run", "sweep_start",
-    "transient", "usable_parameters",
+    "DEBUG_HELP",
+    "FORCING_PERIOD_MATCH",
+    "MIN_PERIOD",
+    "MIN_STEP",
+    "MODE0_HELP",
+    "MODEL_HELP",
+    "PAPER_MIN_DS_MAX",
+    "PERIOD_HELP",
+    "PROG",
+    "SEGMENTS_TYPE",
+    "SHIPPED",
+    "SUBCOMMANDS",
+    "CommandError",
+    "UsageError",
+    "build_model",
+    "build_parser",
+    "check_equilibrium_option",
+    "check_forced_period",
+    "check_grid",
+    "check_mode0",
+    "check_not_set",
+    "check_out_dir",
+    "check_parameter",
+    "check_period",
+    "check_start_field",
+    "check_start_period",
+    "cmd_continue",
+    "cmd_locus",
+    "cmd_lyapunov",
+    "cmd_orbit",
+    "cmd_paper",
+    "cmd_sweep",
+    "equilibrium_start",
+    "estimate_period",
+    "forcing_period_at",
+    "format_orbit",
+    "load_model_file",
+    "main",
+    "make_flow",
+    "model_names",
+    "multipliers_json",
+    "orbit_to_dict",
+    "parse_sets",
+    "parse_vector",
+    "periodic_start",
+    "run",
+    "sweep_start",
+    "transient",
+    "usable_parameters",
 ]

@@ -33,7 +33,14 @@ from saltation.apps.cli.options import (
     usable_parameters,
 )
 from saltation.apps.cli.starts import branch_start
-from saltation.apps.cli.text import fmt, paragraph, point_counter, progress_bar, special_points_text
+from saltation.apps.cli.text import (
+    fmt,
+    paragraph,
+    point_counter,
+    progress_bar,
+    special_points_text,
+)
+
 
 def cmd_continue(args: argparse.Namespace) -> int:
     """``saltation continue``: follow one branch of a shipped model and write its data and plot."""
@@ -97,8 +104,7 @@ def _end_note(followed, parameter: str) -> str:
 
 def _write(args: argparse.Namespace, system, branches: list, note: str) -> None:
     """Write the branches, their special points and the diagram into ``--out``, and say what was found."""
-    from saltation.output import io
-    from saltation.output import plotting
+    from saltation.output import io, plotting
     from saltation.special_points.follow import distinct_special_points
 
     out = Path(args.out)

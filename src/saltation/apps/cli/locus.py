@@ -59,7 +59,9 @@ def cmd_locus(args: argparse.Namespace) -> int:
         curve_settings = step_settings(args, (lo2, hi2))
         counter2 = point_counter(update, f"{args.model}: {kind.value} over {args.param2}")
         if args.equilibrium is not None:
-            from saltation.special_points.boundary_equilibria import follow_boundary_equilibrium_curve
+            from saltation.special_points.boundary_equilibria import (
+                follow_boundary_equilibrium_curve,
+            )
 
             loci = [follow_boundary_equilibrium_curve(flow, sp, args.param, args.param2, curve_settings.bounds,
                                                       parameters=overrides, settings=curve_settings, progress=counter2)

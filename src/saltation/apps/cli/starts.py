@@ -60,7 +60,11 @@ def periodic_start(args: argparse.Namespace, flow, overrides: dict[str, float], 
     """The shooting problem over ``--param`` and its first unknowns: a periodic orbit from ``--x0`` (or
     the end of a transient) and ``--period`` (or an estimate), forward or ``--backward``, starting in
     ``--mode0`` where it is given (and then every point of the branch)."""
-    from saltation.orbits.shooting import MultipleShootingProblem, ShootingProblem, find_periodic_orbit
+    from saltation.orbits.shooting import (
+        MultipleShootingProblem,
+        ShootingProblem,
+        find_periodic_orbit,
+    )
 
     system = flow.system
     period = args.period if system.is_autonomous else None  # checked by the caller (check_start_period)
@@ -91,7 +95,10 @@ def equilibrium_start(which: str, flow, overrides: dict, parameter: str, x0, sta
 
     guess = x0 if x0 is not None else np.zeros(flow.system.n)
     if which.startswith("sliding:"):
-        from saltation.orbits.pseudo_equilibria import PseudoEquilibriumProblem, find_pseudo_equilibrium
+        from saltation.orbits.pseudo_equilibria import (
+            PseudoEquilibriumProblem,
+            find_pseudo_equilibrium,
+        )
 
         surface = which.partition(":")[2]
         first = find_pseudo_equilibrium(flow, surface, guess, parameters=flow.parameters(overrides))

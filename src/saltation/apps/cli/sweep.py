@@ -62,8 +62,8 @@ def sweep_start(args: argparse.Namespace, system: PiecewiseSystem):
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``saltation sweep``: a brute-force diagram of a shipped model."""
-    from saltation.output import plotting
     from saltation.apps.sweeps import SweepStart, sweep
+    from saltation.output import plotting
 
     system, overrides, values, values2 = _checked_grid(args)
     x0, rule = sweep_start(args, system)
@@ -172,8 +172,8 @@ def _dask_client(address: str | None):
 
 def _period_map_command(args, system, values, values2, x0, rule, overrides, client) -> int:
     """``saltation sweep ... --param2``: the attractor's period on a grid of two parameters."""
-    from saltation.output import plotting
     from saltation.apps.sweeps import period_map
+    from saltation.output import plotting
 
     max_period = 16 if args.max_period is None else args.max_period
     grid = period_map(
