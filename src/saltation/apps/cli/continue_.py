@@ -7,8 +7,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import saltation.apps.cli.models as models  # noqa: PLR0402 (one place to replace it; importing the package would be a cycle)
 from saltation.apps.cli.errors import UsageError
-from saltation.apps.cli.models import build_model, make_flow
+from saltation.apps.cli.models import build_model
 from saltation.apps.cli.options import (
     add_mode0,
     add_model,
@@ -48,7 +49,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
 
     system, overrides, settings = _checked(args)
     start, stop = float(args.start), float(args.stop)
-    flow = make_flow(system)
+    flow = models.make_flow(system)
     p = flow.parameters(overrides)
     x0 = parse_start(args, flow, p)
     update, close = progress_bar(not args.no_progress)

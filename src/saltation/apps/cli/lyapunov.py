@@ -7,8 +7,9 @@ import argparse
 import json
 import math
 
+import saltation.apps.cli.models as models  # noqa: PLR0402 (one place to replace it; importing the package would be a cycle)
 from saltation.apps.cli.errors import UsageError
-from saltation.apps.cli.models import build_model, make_flow
+from saltation.apps.cli.models import build_model
 from saltation.apps.cli.options import (
     add_json,
     add_model,
@@ -36,7 +37,7 @@ def cmd_lyapunov(args: argparse.Namespace) -> int:
 
     system = build_model(args.model)
     overrides = parse_sets(args.set, system)
-    flow = make_flow(system)
+    flow = models.make_flow(system)
     p = flow.parameters(overrides)
     try:  # a run too short for an accuracy, or too long to finish, is refused before the start's transient
         plan_run(system, p, time=args.time, transient=args.transient, names={"time": "--time", "transient": "--transient"})

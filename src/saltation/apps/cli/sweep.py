@@ -9,8 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
+import saltation.apps.cli.models as models  # noqa: PLR0402 (one place to replace it; importing the package would be a cycle)
 from saltation.apps.cli.errors import UsageError
-from saltation.apps.cli.models import build_model, make_flow
+from saltation.apps.cli.models import build_model
 from saltation.apps.cli.options import (
     add_mode0,
     add_model,
@@ -69,7 +70,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     x0, rule = sweep_start(args, system)
     mode0 = check_mode0(args, system)
     check_out_dir(args.out)
-    flow = make_flow(system)  # compile (or load) here, with the notice, before the workers load it from the cache
+    flow = models.make_flow(system)  # compile (or load) here, with the notice, before the workers load it from the cache
     if args.x0 is not None and isinstance(x0, np.ndarray):
         p = flow.parameters(overrides)
         p[system.parameter_index(args.param)] = values[0]
