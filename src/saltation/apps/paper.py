@@ -23,25 +23,27 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
-
 import numpy as np
 from matplotlib.lines import Line2D
 
-from saltation.output import io
-
-from saltation.output import plotting
 from saltation.branches.branch import Branch
-from saltation.engine.precompile import compile_in_parallel
-from saltation.special_points.continuation import Continuation, ContinuationSettings, continue_branch
-from saltation.apps.diagram import BifurcationDiagram, follow_through_discontinuous_fold
-from saltation.errors import SaltationError
-from saltation.orbits.floquet import multipliers_from_monodromy
 from saltation.engine.flow import Flow
-from saltation.models import SHIPPED, block_on_belt, trilinear
+from saltation.engine.precompile import compile_in_parallel
+from saltation.errors import SaltationError
 from saltation.model.regularize import regularize
 from saltation.model.system import PiecewiseSystem
-from saltation.orbits.shooting import EquilibriumProblem, ShootingProblem, find_periodic_orbit
+from saltation.models import SHIPPED, block_on_belt, trilinear
+from saltation.models.trilinear import linear_response_state
+from saltation.orbits.floquet import multipliers_from_monodromy
+from saltation.orbits.shooting import (
+    EquilibriumProblem,
+    ShootingProblem,
+    find_periodic_orbit,
+)
 from saltation.orbits.start import estimate_period, transient
+from saltation.output import io, plotting
+from saltation.special_points.continuation import ContinuationSettings, continue_branch
+from saltation.special_points.follow import BifurcationDiagram, follow_branch
 
 Progress = Callable[[str, int], None] | None
 
@@ -125,16 +127,6 @@ class PaperResults:
         return records
 
 
-def linear_response_state(params: dict[str, float]) -> np.ndarray:
-    """State at t = 0 of the harmonic response of ``m x'' + c x' + k x = f0 sin(w t)`` (no contact)."""
-    m, c, k, f0, w = (params[n] for n in ("m", "c", "k", "f0", "omega"))
-    # x = a sin(wt) + b cos(wt)
-    det = (k - m * w**2) ** 2 + (c * w) ** 2
-    a = f0 * (k - m * w**2) / det
-    b = -f0 * c * w / det
-    return np.array([b, a * w])
-
-
 def trilinear_diagram(settings: PaperSettings = PaperSettings(), progress: Progress = None) -> Branch:
     """The response curve of Figs. 3 and 4, over ``settings.omega_range``."""
     system = trilinear()
@@ -160,13 +152,14 @@ def block_on_belt_diagram(settings: PaperSettings = PaperSettings(), progress: P
     problem = ShootingProblem(flow, {"v_dr": v0}, continuation_parameter="v_dr")
     u0 = problem.pack(stable0.state0, stable0.period)
     counter = _counter(progress, "block-on-belt")
-    down = Continuation(problem, cset)
-    for point in down.run(u0, v0, direction=-1):
-        counter(point)
-    up = Continuation(problem, cset)
-    for point in up.run(u0, v0, direction=1):
-        counter(point)
-    unstable, fold = follow_through_discontinuous_fold(up, settings=cset, progress=counter)
+    down = follow_branch(problem, u0, v0, settings=cset, direction=-1, progress=counter, switch=False,
+                         through_fold=False)
+    # upward the stable branch ends at the discontinuous fold: the infinitely unstable branch goes on beyond it
+    up = follow_branch(problem, u0, v0, settings=cset, direction=1, progress=counter, switch=False)
+    if up.beyond is None:
+        raise up.error or SaltationError(
+            f"the stable branch of block_on_belt ended without a discontinuous fold ({up.end.value})")
+    unstable = up.beyond
     stable = up.branch
     stable.extend(down.branch)
     stable.stop_reasons.append(down.branch.stop_reason)
@@ -413,6 +406,7 @@ __all__ = [
     "PaperSettings",
     "block_on_belt_diagram",
     "compute",
+    "linear_response_state",  # of saltation.models.trilinear, re-exported here until release 0.3.0
     "phase_plane",
     "smoothing_study",
     "smoothing_table",

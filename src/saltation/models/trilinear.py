@@ -11,6 +11,9 @@ paper, so the transitions list every boundary both ways (backward time).
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping
+
+import numpy as np
 
 from ..model import Crossing, Mode, PiecewiseSystem, Symmetry, Transition
 from .shipped import ShippedModel
@@ -59,6 +62,36 @@ def trilinear(**overrides: float) -> PiecewiseSystem:
         # x -> -x, t -> t + T/2: the supports mirror each other and the forcing changes sign
         symmetry=Symmetry.of_signs([-1, -1]),
     )
+
+
+def linear_response_state(params: Mapping[str, float]) -> np.ndarray:
+    """The state at ``t = 0`` of the harmonic response of the free mode, a closed-form start of shooting.
+
+    Without contact (mode ``free``) the system is ``m x'' + c x' + k x = f0 sin(omega t)``; its periodic
+    response is ``x = a sin(omega t) + b cos(omega t)``.  Below the contact (amplitude under ``x_c``)
+    this is the orbit; above it, a guess near the orbit.
+
+    Parameters
+    ----------
+    params : mapping
+        Values of ``m``, ``c``, ``k``, ``f0`` and ``omega`` (others are ignored).
+
+    Returns
+    -------
+    ndarray, shape (2,)
+        ``(x, x')`` at ``t = 0``: ``(b, a omega)``.
+
+    Raises
+    ------
+    KeyError
+        If one of the five values is missing.
+    """
+    m, c, k, f0, w = (params[n] for n in ("m", "c", "k", "f0", "omega"))
+    # x = a sin(wt) + b cos(wt)
+    det = (k - m * w**2) ** 2 + (c * w) ** 2
+    a = f0 * (k - m * w**2) / det
+    b = -f0 * c * w / det
+    return np.array([b, a * w])
 
 
 SHIPPED = ShippedModel(

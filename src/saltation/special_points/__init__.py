@@ -18,4 +18,6 @@ Modules:
 * :mod:`~saltation.special_points.loci`: curves of special points in two parameters;
 * :mod:`~saltation.special_points.branch_switching`: the period-2 branch at a period doubling and the
   asymmetric branches at a symmetry breaking.
+* :mod:`~saltation.special_points.follow`: a branch as far as it goes: the branches born on it, and the one
+  beyond a discontinuous fold.
 """
