@@ -45,6 +45,8 @@ import saltation
 
 #: Modules whose public functions and classes are checked (with ``saltation.__all__``).
 MODULES = (
+    "saltation.special_points.follow",
+    "saltation.models.trilinear",
     "saltation.orbits.problem",
     "saltation.orbits.single",
     "saltation.orbits.multiple",

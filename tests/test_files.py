@@ -729,7 +729,7 @@ def no_computation(monkeypatch):
     def computed(*args, **kwargs):
         raise AssertionError("computed before checking --out")
 
-    monkeypatch.setattr(cli, "make_flow", computed)
+    monkeypatch.setattr(cli.models, "make_flow", computed)
     monkeypatch.setattr(paper, "compute", computed)
 
 

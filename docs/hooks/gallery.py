@@ -64,7 +64,7 @@ def _two_panels(width: float = 10.0, height: float = 4.0):
 def _records(*branches):
     """The special points of the branches, each once (a period-2 branch starts with the period doubling it
     was born at, which its parent branch holds too)."""
-    from saltation.apps.diagram import distinct_special_points
+    from saltation.special_points.follow import distinct_special_points
 
     return [
         {"kind": sp.kind.value, "parameter": branches[0].parameter_name, "value": float(sp.parameter),

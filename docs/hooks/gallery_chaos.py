@@ -116,7 +116,7 @@ def doubling_branches():
 def _records(branches):
     """The special points of the branches, each once (a period-2 branch starts with the period doubling it
     was born at, which its parent branch holds too)."""
-    from saltation.apps.diagram import distinct_special_points
+    from saltation.special_points.follow import distinct_special_points
 
     name = branches[0].parameter_name if branches else ""
     return [

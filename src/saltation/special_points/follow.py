@@ -37,12 +37,14 @@ from saltation.branches.branch import (
 )
 from saltation.engine.flow import EventKind
 from saltation.errors import SaltationError
+from saltation.orbits.classification import classify_nonsmooth
+from saltation.orbits.equilibria import EquilibriumProblem
 from saltation.orbits.pseudo_equilibria import (
     PseudoEquilibriumProblem,
     find_pseudo_equilibrium,
 )
 from saltation.orbits.records import BranchPoint
-from saltation.orbits.shooting import EquilibriumProblem, ShootingProblem
+from saltation.orbits.single import ShootingProblem
 from saltation.special_points.boundary_equilibria import (
     boundary_equilibria,
     boundary_equilibria_of_mode,
@@ -58,8 +60,8 @@ from saltation.special_points.continuation import (
     Solution,
     canonical_events,
 )
-from saltation.special_points.detection import classify_nonsmooth, special_point_between
 from saltation.special_points.grazing import locate_tangential_return
+from saltation.special_points.points import special_point_between
 
 #: A callback handed each new branch point (a progress bar's counter).
 Progress = Callable[[BranchPoint], None]
@@ -285,7 +287,7 @@ def follow_through_discontinuous_fold(
         If no backward-time orbit can be found near the end of the branch.
     """
     prob_f = forward.problem
-    if not isinstance(prob_f, ShootingProblem) or prob_f.backward:
+    if prob_f.single_shooting is None or prob_f.backward:
         raise SaltationError("follow_through_discontinuous_fold needs a forward-time shooting continuation")
     settings = settings or forward.settings
     end, bad = _branch_end(forward)
@@ -497,7 +499,7 @@ def switch_branches(
         if SpecialPointKind.BOUNDARY_EQUILIBRIUM not in kinds:
             return []
         return _through_boundary_equilibria(problem, branch, settings)
-    if not isinstance(problem, ShootingProblem):
+    if problem.single_shooting is None:
         return []
     others = _asymmetric_branches(problem, branch, settings) if SpecialPointKind.SYMMETRY_BREAKING in kinds else []
     if SpecialPointKind.PERIOD_DOUBLING in kinds and not problem.autonomous:
@@ -730,7 +732,7 @@ def follow_branch(
     ended = [sp for sp in branch.special_points if sp.index >= len(branch.points) - 1 and sp.limits == Limits.ON_SURFACE]
     if ended:
         followed.end, followed.ended_at = BranchEnd.ON_SURFACE, ended[0]
-    elif through_fold and isinstance(problem, ShootingProblem) and not problem.backward:
+    elif through_fold and problem.single_shooting is not None and not problem.backward:
         try:
             followed.beyond, followed.fold = follow_through_discontinuous_fold(cont, settings=settings,
                                                                                 progress=progress)
