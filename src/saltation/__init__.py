@@ -8,8 +8,8 @@ The everyday names are here: define a model (:class:`PiecewiseSystem`,
 points (:class:`Branch`, :class:`SpecialPoint`, :class:`SpecialPointKind`);
 brute-force diagrams with :func:`sweep` and :func:`period_map`.
 
-The package is one folder per layer, each depending only on the ones before it:
-``model`` -> ``engine`` -> ``orbits`` -> ``branches`` -> ``special_points`` -> ``output`` -> ``apps``
+The package is one folder per layer, each depending only on the ones before it: ``model`` ->
+``engine`` -> ``orbits`` -> ``branches`` -> ``special_points`` -> ``sweeps`` -> ``output`` -> ``apps``
 (with ``models``, the shipped models, and ``errors`` and ``summary``, which import nothing of the
 package).  The flat layout's import paths (``saltation.integrate``, ``saltation.shooting``, ...) work
 for one more release, with a ``DeprecationWarning``.
@@ -45,7 +45,7 @@ from saltation.model.system import Crossing, Mode, PiecewiseSystem, Transition
 from saltation.orbits.records import PeriodicOrbit
 from saltation.orbits.single import ShootingProblem
 from saltation.orbits.start import find_periodic_orbit
-from saltation.apps.sweeps import SweepStart, period_map, sweep
+from saltation.sweeps import SweepStart, period_map, sweep
 
 __version__ = "0.1.0"
 

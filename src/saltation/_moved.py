@@ -40,7 +40,6 @@ MOVED = {
     "saltation.io": "saltation.output.io",
     "saltation.cli": "saltation.apps.cli",
     "saltation.paper": "saltation.apps.paper",
-    "saltation.sweeps": "saltation.apps.sweeps",
     "saltation.diagram": "saltation.apps.diagram",
 }
 

@@ -24,6 +24,7 @@ from matplotlib.lines import Line2D
 
 from saltation.branches.branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
 from saltation.model.labels import tex_name
+from saltation.sweeps.sweeps import PeriodMap, SweepResult
 
 __all__ = [
     "CurveStyle",
@@ -37,8 +38,10 @@ __all__ = [
     "new_figure",
     "plot_loci",
     "plot_multipliers",
+    "plot_period_map",
     "plot_phase_plane",
     "plot_response",
+    "plot_sweep",
     "save_figure",
     "save_figures",
 ]
@@ -888,3 +891,125 @@ def plot_loci(loci, *, title: str = "") -> Figure:
         ax.legend(loc="best", fontsize=8)
     ax.set_title(title)
     return fig
+
+
+# ---------------------------------------------------------------------------
+# sweeps and period maps
+# ---------------------------------------------------------------------------
+
+
+def plot_sweep(result: SweepResult, ax: Axes | None = None, *, state: int | str = 0, **style) -> Figure:
+    """Draw a brute-force diagram: the points scattered over the parameter; draws on ``ax`` or on a new Figure (no pyplot state).
+
+    Parameters
+    ----------
+    result : SweepResult
+        The sweep (:func:`saltation.sweeps.sweep`).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on (a new figure by default).
+    state : int or str
+        The state plotted, by index or name.
+    **style
+        Keyword arguments of :meth:`matplotlib.axes.Axes.scatter`, over the defaults (black dots of 2
+        points square).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure drawn on.
+
+    Raises
+    ------
+    ModelError
+        For an unknown state name or an index out of range.
+    """
+    k = result.state_index(state)
+    exponent_ax = None
+    if ax is None and result.largest_exponents is not None:  # the diagram over the largest exponent
+        fig = new_figure((6.4, 6.0))
+        ax, exponent_ax = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
+    elif ax is None:
+        fig = new_figure((6.4, 4.4))
+        ax = fig.add_subplot()
+    else:
+        fig = figure_of(ax)
+    # dots of 2 points square: seen on a page at any density (a point per sample, no edge)
+    kw = {"s": 2.0, "color": "k", "marker": ".", "linewidths": 0, "rasterized": True} | style
+    ax.scatter(result.parameter_points, result.states[:, k], **kw)
+    ax.set_xlabel(result.parameter_name)
+    name = result.state_names[k]
+    if result.section == "poincare":
+        ax.set_ylabel(f"{name} (Poincare section)")
+    else:
+        ax.set_ylabel(f"{name} at maxima of {result.state_names[0]}")
+    ax.set_title(f"{result.model}: brute-force diagram")
+    if exponent_ax is not None:
+        exponent_ax.axhline(0.0, color="0.6", linewidth=0.8)
+        exponent_ax.plot(result.values, result.largest_exponents, color="k", linewidth=1.0, marker=".", markersize=2.5,
+                         gid="largest_exponent")
+        exponent_ax.set_ylabel(r"largest Lyapunov exponent $\lambda_1$")
+        exponent_ax.set_xlabel(result.parameter_name)
+    return fig
+
+
+def plot_period_map(grid: PeriodMap, ax: Axes | None = None) -> Figure:
+    """Draw a period map: one colour per period (1 ... max_period).
+
+    Grey where no period up to ``max_period`` settled within the transient (chaos, a longer period,
+    or a slow transient: the colour bar says "not periodic"); white for failures.
+
+    Parameters
+    ----------
+    grid : PeriodMap
+        The map (:func:`saltation.sweeps.period_map`).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on (a new figure by default).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure drawn on, with its colour bar.
+    """
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    own = ax is None
+    exponent_ax = None
+    if own and grid.largest_exponents is not None:  # the periods above, the largest exponent below
+        fig = new_figure((6.4, 8.4))
+        ax, exponent_ax = fig.subplots(2, 1, sharex=True)
+    elif own:
+        fig = new_figure((6.4, 4.8))
+        ax = fig.add_subplot()
+    else:
+        fig = figure_of(ax)
+    import matplotlib
+
+    base = matplotlib.colormaps["tab20"]
+    colours = ["white", "0.6"] + [base(k % 20) for k in range(grid.max_period)]
+    cmap = ListedColormap(colours)
+    norm = BoundaryNorm(np.arange(-1.5, grid.max_period + 1.5), cmap.N)
+    mesh = ax.pcolormesh(_edges(grid.values), _edges(grid.values2), grid.periods, cmap=cmap, norm=norm)
+    bar = fig.colorbar(mesh, ax=ax, ticks=np.arange(-1, grid.max_period + 1))
+    # "not periodic": no period up to max_period within the transient (chaos, a longer period, or not settled)
+    bar.ax.set_yticklabels(["failed", f"no period <= {grid.max_period}"]
+                           + [str(k) for k in range(1, grid.max_period + 1)])
+    bar.set_label("period of the attractor (forcing periods)")
+    ax.set_xlabel(grid.parameter_name)
+    ax.set_ylabel(grid.parameter2_name)
+    ax.set_title(f"{grid.model}: period of the attractor")
+    if exponent_ax is not None:
+        limit = float(np.nanmax(np.abs(grid.largest_exponents))) if np.isfinite(grid.largest_exponents).any() else 1.0
+        mesh2 = exponent_ax.pcolormesh(_edges(grid.values), _edges(grid.values2), grid.largest_exponents,
+                                       cmap="RdBu_r", vmin=-limit, vmax=limit)
+        fig.colorbar(mesh2, ax=exponent_ax).set_label(r"largest Lyapunov exponent $\lambda_1$ (red: chaos)")
+        exponent_ax.set_xlabel(grid.parameter_name)
+        exponent_ax.set_ylabel(grid.parameter2_name)
+    return fig
+
+
+def _edges(v: np.ndarray) -> np.ndarray:
+    """Cell edges around grid values (midpoints; a single value gets a unit cell)."""
+    if v.size == 1:
+        return np.array([v[0] - 0.5, v[0] + 0.5])
+    mid = 0.5 * (v[1:] + v[:-1])
+    return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
