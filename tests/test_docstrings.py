@@ -126,10 +126,10 @@ RAISES_EXEMPT = {
     "saltation.special_points.grazing.indicator_rate": "evaluates the model at a computed state",
     "saltation.special_points.grazing.growth_exponent": "a least-squares fit of the given numbers",
     "saltation.special_points.sliding.sliding_change": "compares the event sequences of computed trajectories",
-    "saltation.apps.sweeps.attractor_period": "array arithmetic on the given samples",
-    "saltation.output.io.branch_to_dict": "encodes a branch",
+    "saltation.sweeps.sweeps.attractor_period": "array arithmetic on the given samples",
+    "saltation.output.codecs.branch_to_dict": "encodes a branch",
     "saltation.output.io.csv_metadata_path": "builds a path",
-    "saltation.output.io.special_point_record": "encodes a special point",
+    "saltation.output.codecs.special_point_record": "encodes a special point",
     "saltation.special_points.symmetric.symmetric_crossing": "relabels a given classification",
     "saltation.orbits.symmetry.symmetry_breaking_test": "array arithmetic on the given multipliers",
 }

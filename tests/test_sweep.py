@@ -149,7 +149,7 @@ def test_workers_started_by_spawn_load_the_kernels_from_disk(monkeypatch, no_con
     """Where fork is not available, fresh worker processes re-load the compiled kernels from the cache."""
     import multiprocessing
 
-    import saltation.apps.sweeps as sweep_module
+    import saltation.sweeps.parallel as sweep_module
 
     monkeypatch.setattr(sweep_module, "_context", lambda: multiprocessing.get_context("spawn"))
     res = sweep(trilinear(), "omega", NO_CONTACT, periods=5, transient=300, x0=harmonic_state(0.6), workers=2)

@@ -537,6 +537,11 @@ def sweep_to_dict(result: SweepResult) -> dict[str, Any]:
     -------
     dict
         The record :func:`sweep_from_dict` reads.
+
+    Raises
+    ------
+    TypeError, ValueError
+        If a value or state is not a number (the result was not built by :func:`~saltation.sweeps.sweep`).
     """
     return {
         **format_header(SWEEP_FORMAT),
@@ -629,6 +634,11 @@ def period_map_to_dict(grid: PeriodMap) -> dict[str, Any]:
     -------
     dict
         The record :func:`period_map_from_dict` reads.
+
+    Raises
+    ------
+    TypeError, ValueError
+        If a value or period is not a number (the map was not built by :func:`~saltation.sweeps.period_map`).
     """
     return {
         **format_header(PERIOD_MAP_FORMAT),
@@ -727,6 +737,11 @@ def orbit_to_dict(orbit: Any, system: Any) -> dict[str, Any]:
         ``multiplier_magnitudes``, ``stable``, ``events`` (``[surface, time]`` pairs),
         ``event_modes`` (``[mode before, mode after]``), ``converged``, ``iterations``,
         ``residual_norm``, ``segments`` and ``mode0``.
+
+    Raises
+    ------
+    AttributeError, TypeError, ValueError
+        If ``orbit`` lacks a field of a periodic orbit, or a field is not a number.
     """
     mu = np.asarray(orbit.multipliers, dtype=complex)
     return {

@@ -53,8 +53,6 @@ from saltation.branches.branch import Branch, BranchKind, BranchPoint
 from saltation.output import codecs as _codecs
 from saltation.output import files as _files
 from saltation.output.codecs import (
-    Decoder,
-    Encoder,
     _branch_from_dict,
     _check_record,
     _metadata_to_dict,
@@ -68,13 +66,8 @@ from saltation.output.codecs import (
     sweep_to_dict,
 )
 from saltation.output.files import (
-    BRANCH_FORMAT,
     DIAGRAM_FORMAT,
-    FORMAT_NAMES,
-    FORMAT_VERSION,
     ORBIT_FORMAT,
-    PERIOD_MAP_FORMAT,
-    SWEEP_FORMAT,
     FileFormatError,
     PathType,
     T,
@@ -84,34 +77,29 @@ from saltation.output.files import (
     _item,
     _read_json,
     _read_text,
-    check_format,
     format_header,
     write_atomically,
     write_json,
 )
 from saltation.sweeps.sweeps import PeriodMap, SweepResult
 
+# the public names this module held before files.py and codecs.py were split from it (private ones: __getattr__)
+from saltation.output.codecs import Decoder, Encoder  # noqa: F401, E402
+from saltation.output.files import (  # noqa: F401, E402
+    BRANCH_FORMAT,
+    FORMAT_NAMES,
+    FORMAT_VERSION,
+    PERIOD_MAP_FORMAT,
+    SWEEP_FORMAT,
+    check_format,
+)
+
 __all__ = [
-    "BRANCH_FORMAT",
-    "DIAGRAM_FORMAT",
-    "Decoder",
-    "EVENT_SEPARATOR",
-    "Encoder",
-    "FORMAT_NAMES",
-    "FORMAT_VERSION",
     "FileFormatError",
-    "ORBIT_FORMAT",
-    "PERIOD_MAP_FORMAT",
-    "PathType",
-    "SWEEP_FORMAT",
-    "T",
     "UnwritableFieldError",
     "branch_from_dict",
     "branch_to_dict",
-    "check_format",
-    "csv_header",
     "csv_metadata_path",
-    "format_header",
     "load_branch_csv",
     "load_branch_json",
     "load_branch_points_csv",
@@ -120,9 +108,6 @@ __all__ = [
     "load_period_map",
     "load_special_points_json",
     "load_sweep",
-    "orbit_to_dict",
-    "period_map_from_dict",
-    "period_map_to_dict",
     "save_branch_csv",
     "save_branch_json",
     "save_diagram_json",
@@ -131,8 +116,6 @@ __all__ = [
     "save_special_points_json",
     "save_sweep",
     "special_point_record",
-    "sweep_from_dict",
-    "sweep_to_dict",
     "write_atomically",
     "write_json",
 ]
