@@ -45,7 +45,6 @@ __all__ = [
     "FORMAT_NAMES",
     "FORMAT_VERSION",
     "FileFormatError",
-    "ORBIT_FORMAT",
     "PERIOD_MAP_FORMAT",
     "PathType",
     "SWEEP_FORMAT",
@@ -61,7 +60,6 @@ BRANCH_FORMAT = "saltation.branches.branch"
 DIAGRAM_FORMAT = "saltation.apps.diagram"
 SWEEP_FORMAT = "saltation.sweep"
 PERIOD_MAP_FORMAT = "saltation.period_map"
-ORBIT_FORMAT = "saltation.orbit"
 FORMAT_VERSION = 1
 
 #: Every ``"format"`` string the library has ever written, and what it reads it as: ``(format,
@@ -73,7 +71,6 @@ FORMAT_NAMES: dict[str, tuple[str, bool]] = {
     DIAGRAM_FORMAT: (DIAGRAM_FORMAT, True),
     SWEEP_FORMAT: (SWEEP_FORMAT, True),
     PERIOD_MAP_FORMAT: (PERIOD_MAP_FORMAT, True),
-    ORBIT_FORMAT: (ORBIT_FORMAT, True),
     # before the re-layout of the package into folders (2026-11-22 to 2026-11-25)
     "saltation.branch": (BRANCH_FORMAT, True),
     "saltation.diagram": (DIAGRAM_FORMAT, True),

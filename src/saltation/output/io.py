@@ -1,4 +1,4 @@
-"""Saving and loading: branches, diagrams, special points, orbits, sweeps and period maps, as JSON and CSV.
+"""Saving and loading: branches, diagrams, special points, sweeps and period maps, as JSON and CSV.
 
 Formats
 -------
@@ -21,9 +21,8 @@ Special-point records (``special_point_record``, ``save_special_points_json``)
 Sweep JSON and CSV (``save_sweep``), period map JSON (``save_period_map``)
     ``"format": "saltation.sweep"`` and ``"saltation.period_map"``; the CSV of a sweep has one row
     per point: the parameter value, then every state.
-Orbit JSON (``save_orbit_json``)
-    ``"format": "saltation.orbit"``: the record ``saltation orbit --json`` prints
-    (:func:`~saltation.output.codecs.orbit_to_dict`).
+Orbit JSON
+    The record ``saltation orbit --json`` prints (:func:`~saltation.output.codecs.orbit_to_dict`).
 
 Numbers are written at full precision (Python's shortest round-trip ``repr``), so a round
 trip is lossless. JSON has no infinity or NaN: a non-finite real is written as the string
@@ -58,7 +57,6 @@ from saltation.output.codecs import (
     _metadata_to_dict,
     branch_from_dict,
     branch_to_dict,
-    orbit_to_dict,
     period_map_from_dict,
     period_map_to_dict,
     special_point_record,
@@ -67,7 +65,6 @@ from saltation.output.codecs import (
 )
 from saltation.output.files import (
     DIAGRAM_FORMAT,
-    ORBIT_FORMAT,
     FileFormatError,
     PathType,
     T,
@@ -104,14 +101,12 @@ __all__ = [
     "load_branch_json",
     "load_branch_points_csv",
     "load_diagram_json",
-    "load_orbit_json",
     "load_period_map",
     "load_special_points_json",
     "load_sweep",
     "save_branch_csv",
     "save_branch_json",
     "save_diagram_json",
-    "save_orbit_json",
     "save_period_map",
     "save_special_points_json",
     "save_sweep",
@@ -160,22 +155,6 @@ def _diagram_from_dict(d: Any, f: _Fields) -> list[Branch]:
     return [_branch_from_dict(b, f, _item("branches", k)) for k, b in enumerate(items)]
 
 
-def _orbit_from_dict(d: Any, f: _Fields) -> dict[str, Any]:
-    d = _check_format(d, ORBIT_FORMAT, f)
-    for key, decode in (("model", f.string), ("state_names", f.strings), ("t0", f.real), ("period", f.real),
-                        ("autonomous", f.boolean), ("backward", f.boolean), ("amplitude", f.real),
-                        ("half_peak_to_peak", f.real), ("stable", f.boolean), ("converged", f.boolean),
-                        ("iterations", f.integer), ("residual_norm", f.real), ("segments", f.integer),
-                        ("parameters", f.obj), ("multipliers", f.complexes), ("events", f.list),
-                        ("event_modes", f.list)):
-        f.take(d, "", key, decode)
-    n = len(d["state_names"])
-    f.take(d, "", "state0", lambda v, field: f.reals(v, field, n))
-    for name, value in d["parameters"].items():
-        f.real(value, f"parameters.{name}")
-    return d
-
-
 _BRANCH_FILE = _JsonFile(branch_to_dict, lambda d, f: _branch_from_dict(d, f))
 _DIAGRAM_FILE = _JsonFile(lambda branches: {**format_header(DIAGRAM_FORMAT),
                                             "branches": [branch_to_dict(b) for b in branches]}, _diagram_from_dict)
@@ -184,7 +163,6 @@ _SPECIAL_POINTS_FILE = _JsonFile(list, lambda d, f: [_check_record(r, f, f"[{k}]
 _SWEEP_FILE = _JsonFile(sweep_to_dict, lambda d, f: sweep_from_dict(d, source=f.source), bare_constants=True)
 _PERIOD_MAP_FILE = _JsonFile(period_map_to_dict, lambda d, f: period_map_from_dict(d, source=f.source),
                              bare_constants=True)
-_ORBIT_FILE = _JsonFile(lambda pair: {**format_header(ORBIT_FORMAT), **orbit_to_dict(*pair)}, _orbit_from_dict)
 
 
 # ---------------------------------------------------------------------------
@@ -799,57 +777,3 @@ def load_period_map(path: PathType) -> PeriodMap:
         If the file cannot be read.
     """
     return _PERIOD_MAP_FILE.load(path)
-
-
-# ---------------------------------------------------------------------------
-# periodic orbits
-# ---------------------------------------------------------------------------
-
-
-def save_orbit_json(orbit: Any, system: Any, path: PathType) -> Path:
-    """Write a periodic orbit's record (:func:`~saltation.output.codecs.orbit_to_dict`) as JSON, atomically.
-
-    Parameters
-    ----------
-    orbit : PeriodicOrbit
-        The orbit.
-    system : PiecewiseSystem
-        Its model.
-    path : str or path-like
-        The file to write.
-
-    Returns
-    -------
-    Path
-        The file written.
-
-    Raises
-    ------
-    ValueError
-        If a number of the record is not finite (no file is touched).
-    OSError
-        If the file cannot be written (see :func:`write_atomically`).
-    """
-    return _ORBIT_FILE.save((orbit, system), path)
-
-
-def load_orbit_json(path: PathType) -> dict[str, Any]:
-    """Read an orbit's record written by :func:`save_orbit_json` (a plain dict, as written: a
-    :class:`~saltation.orbits.shooting.PeriodicOrbit` needs its flow).
-
-    Parameters
-    ----------
-    path : str or path-like
-
-    Returns
-    -------
-    dict
-
-    Raises
-    ------
-    FileFormatError
-        If the file is not a complete orbit record (naming the file and the field).
-    OSError
-        If the file cannot be read.
-    """
-    return _ORBIT_FILE.load(path)

@@ -899,7 +899,7 @@ def plot_loci(loci, *, title: str = "") -> Figure:
 
 
 def plot_sweep(result: SweepResult, ax: Axes | None = None, *, state: int | str = 0, **style) -> Figure:
-    """Draw a brute-force diagram: the points scattered over the parameter; draws on ``ax`` or on a new Figure (no pyplot state).
+    """Draw a brute-force diagram: the points over the parameter, on ``ax`` or a new Figure (no pyplot state).
 
     Parameters
     ----------
