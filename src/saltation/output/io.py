@@ -81,8 +81,8 @@ from saltation.output.files import (
 from saltation.sweeps.sweeps import PeriodMap, SweepResult
 
 # the public names this module held before files.py and codecs.py were split from it (private ones: __getattr__)
-from saltation.output.codecs import Decoder, Encoder  # noqa: F401, E402
-from saltation.output.files import (  # noqa: F401, E402
+from saltation.output.codecs import Decoder, Encoder  # noqa: F401
+from saltation.output.files import (  # noqa: F401
     BRANCH_FORMAT,
     FORMAT_NAMES,
     FORMAT_VERSION,
