@@ -512,7 +512,7 @@ def _check_record(v: Any, f: _Fields, where: str) -> dict[str, Any]:
     f.take(d, where, "value", lambda x, field: codecs["parameter"][1](f, x, field, {}))
     for key, name, _ in _FLAT_VIEW[1:]:
         dec = _FLAT_CHECKS.get(key) or codecs[name][1]
-        f.take(d, where, key, lambda x, field: dec(f, x, field, {}), None)
+        f.take(d, where, key, lambda x, field, dec=dec: dec(f, x, field, {}), None)
     return d
 
 

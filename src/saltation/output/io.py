@@ -51,7 +51,11 @@ import numpy as np
 from saltation.branches.branch import Branch, BranchKind, BranchPoint
 from saltation.output import codecs as _codecs
 from saltation.output import files as _files
-from saltation.output.codecs import (
+
+# with the names this module held before files.py and codecs.py were split from it (private ones: __getattr__)
+from saltation.output.codecs import (  # noqa: F401
+    Decoder,
+    Encoder,
     _branch_from_dict,
     _check_record,
     _metadata_to_dict,
@@ -63,8 +67,13 @@ from saltation.output.codecs import (
     sweep_from_dict,
     sweep_to_dict,
 )
-from saltation.output.files import (
+from saltation.output.files import (  # noqa: F401
+    BRANCH_FORMAT,
     DIAGRAM_FORMAT,
+    FORMAT_NAMES,
+    FORMAT_VERSION,
+    PERIOD_MAP_FORMAT,
+    SWEEP_FORMAT,
     FileFormatError,
     PathType,
     T,
@@ -74,22 +83,12 @@ from saltation.output.files import (
     _item,
     _read_json,
     _read_text,
+    check_format,
     format_header,
     write_atomically,
     write_json,
 )
 from saltation.sweeps.sweeps import PeriodMap, SweepResult
-
-# the public names this module held before files.py and codecs.py were split from it (private ones: __getattr__)
-from saltation.output.codecs import Decoder, Encoder  # noqa: F401
-from saltation.output.files import (  # noqa: F401
-    BRANCH_FORMAT,
-    FORMAT_NAMES,
-    FORMAT_VERSION,
-    PERIOD_MAP_FORMAT,
-    SWEEP_FORMAT,
-    check_format,
-)
 
 __all__ = [
     "FileFormatError",
