@@ -66,7 +66,7 @@ from saltation import Flow, Tolerances  # noqa: E402
 from saltation.models import block_on_belt, chain, trilinear  # noqa: E402
 from saltation.apps.paper import PaperSettings, block_on_belt_diagram, trilinear_diagram  # noqa: E402
 from saltation.orbits.shooting import find_periodic_orbit  # noqa: E402
-from saltation.apps.sweeps import sweep  # noqa: E402
+from saltation.sweeps import sweep  # noqa: E402
 
 TARGETS = {
     "orbit_ms": 0.3,
@@ -582,7 +582,7 @@ def bench_lyapunov(quick: bool) -> dict:
     plain = min(_time_of(lambda: flow.run(start, 0.0, 1000 * T, p)) for _ in range(3))
     # a Lyapunov map of the impact oscillator's route to chaos (omega, r), 100 x 100 cells on this machine's
     # cores, 200 transient periods and 64 sampled per cell (--quick: 25 x 25, scaled by 16)
-    from saltation.apps.sweeps import period_map
+    from saltation.sweeps import period_map
     from saltation.models import impact_oscillator
 
     size = 25 if quick else 100

@@ -137,7 +137,7 @@ def draw(pmap, sweep, branches=()):
     import numpy as np
     from matplotlib.figure import Figure
 
-    from saltation.apps.sweeps import _edges
+    from saltation.output.plotting import _edges
 
     fig = Figure(figsize=(11.0, 9.0), layout="constrained")
     top, bottom = fig.subfigures(2, 1, height_ratios=(1.0, 1.15))

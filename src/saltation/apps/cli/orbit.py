@@ -30,37 +30,11 @@ from saltation.apps.cli.options import (
     parse_vector,
 )
 from saltation.apps.cli.starts import estimate_period, transient
-from saltation.apps.cli.text import complex_text, fmt, multipliers_json, paragraph
+from saltation.apps.cli.text import complex_text, fmt, paragraph
 from saltation.model.system import PiecewiseSystem
 from saltation.models import SHIPPED
 from saltation.orbits.start import TRANSIENT_PERIODS
-
-
-def orbit_to_dict(orbit, system: PiecewiseSystem) -> dict:
-    """A JSON-ready description of a :class:`~saltation.orbits.shooting.PeriodicOrbit`."""
-    mu = np.asarray(orbit.multipliers, dtype=complex)
-    return {
-        "model": system.name,
-        "parameters": dict(zip(system.parameter_names, map(float, orbit.parameters))),
-        "state_names": list(system.state_names),
-        "state0": [float(v) for v in orbit.state0],
-        "t0": float(orbit.t0),
-        "period": float(orbit.period),
-        "autonomous": bool(orbit.autonomous),
-        "backward": bool(orbit.backward),
-        "amplitude": float(orbit.amplitude),
-        "half_peak_to_peak": float(orbit.half_peak_to_peak),
-        "multipliers": multipliers_json(mu),
-        "multiplier_magnitudes": ["inf" if not np.isfinite(m) else float(abs(m)) for m in mu],
-        "stable": bool(orbit.stable),
-        "events": [[str(e.surface), float(e.t)] for e in orbit.trajectory.events],
-        "event_modes": [[e.mode_from, e.mode_to] for e in orbit.trajectory.events],
-        "converged": bool(orbit.converged),
-        "iterations": int(orbit.iterations),
-        "residual_norm": float(orbit.residual_norm),
-        "segments": int(orbit.segments),
-        "mode0": orbit.mode0,
-    }
+from saltation.output.codecs import orbit_to_dict
 
 
 def format_orbit(orbit, system: PiecewiseSystem) -> str:

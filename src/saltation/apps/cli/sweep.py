@@ -1,5 +1,5 @@
 """``saltation sweep``: a brute-force diagram, or with ``--param2`` a map of the attractor's period, on
-local processes or a Dask cluster (:mod:`saltation.apps.sweeps`)."""
+local processes or a Dask cluster (:mod:`saltation.sweeps`)."""
 
 from __future__ import annotations
 
@@ -42,7 +42,7 @@ def sweep_start(args: argparse.Namespace, system: PiecewiseSystem):
     that function of the value's own parameters, and any other model from zeros.  ``--start`` chooses the
     rule; by default ``own`` with a start function, ``previous`` otherwise.
     """
-    from saltation.apps.sweeps import SweepStart
+    from saltation.sweeps import SweepStart
 
     if args.x0 is not None:
         x0 = parse_vector(args.x0, system)
@@ -63,8 +63,8 @@ def sweep_start(args: argparse.Namespace, system: PiecewiseSystem):
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``saltation sweep``: a brute-force diagram of a shipped model."""
-    from saltation.apps.sweeps import SweepStart, sweep
-    from saltation.output import plotting
+    from saltation.output import io, plotting
+    from saltation.sweeps import SweepStart, sweep
 
     system, overrides, values, values2 = _checked_grid(args)
     x0, rule = sweep_start(args, system)
@@ -90,8 +90,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = out / f"{system.name}_{args.param}_sweep"
-    result.save(stem.with_suffix(".json"))
-    plotting.save_figure(result.plot(), stem)
+    io.save_sweep(result, stem.with_suffix(".json"))
+    plotting.save_figure(plotting.plot_sweep(result), stem)
     kind = "Poincare section points" if not system.is_autonomous else "maxima of x_1"
     how = "its own start" if rule is SweepStart.OWN else "the previous value's final state"
     print(f"{sum(len(result.at(k)) for k in range(args.num))} {kind} at {args.num} values of {args.param} "
@@ -173,8 +173,8 @@ def _dask_client(address: str | None):
 
 def _period_map_command(args, system, values, values2, x0, rule, overrides, client) -> int:
     """``saltation sweep ... --param2``: the attractor's period on a grid of two parameters."""
-    from saltation.apps.sweeps import period_map
-    from saltation.output import plotting
+    from saltation.output import io, plotting
+    from saltation.sweeps import period_map
 
     max_period = 16 if args.max_period is None else args.max_period
     grid = period_map(
@@ -185,8 +185,8 @@ def _period_map_command(args, system, values, values2, x0, rule, overrides, clie
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = out / f"{system.name}_{args.param}_{args.param2}_map"
-    grid.save(stem.with_suffix(".json"))
-    plotting.save_figure(grid.plot(), stem)
+    io.save_period_map(grid, stem.with_suffix(".json"))
+    plotting.save_figure(plotting.plot_period_map(grid), stem)
     found = int((grid.periods > 0).sum())
     print(f"{grid.periods.size} cells ({args.num} x {args.num2}): a period up to {max_period} found in {found}, "
           f"none in {int((grid.periods == 0).sum())}, failed in {int((grid.periods < 0).sum())}; "
