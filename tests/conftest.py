@@ -233,10 +233,10 @@ def unstable_cycle(belt_flow):
     return unstable_orbit(belt_flow)
 
 
-# -- hypothesis profiles (the property suites, e.g. tests/test_degenerate_orbits.py) ------
+# -- hypothesis profiles (the property suites, e.g. tests/orbits/test_degenerate_orbits.py) ------
 # "ci", the default: few examples per property and no deadline (a first call may compile a model),
 # so that each property file runs in well under a minute.  "thorough" draws many more:
-#     HYPOTHESIS_PROFILE=thorough python -m pytest tests/test_degenerate_orbits.py
+#     HYPOTHESIS_PROFILE=thorough python -m pytest tests/orbits/test_degenerate_orbits.py
 try:
     from hypothesis import HealthCheck
     from hypothesis import settings as _hypothesis_settings

@@ -14,7 +14,7 @@ computed from scratch with the library:
   its period doubling, and the period-2 orbit the diagram settles on below them: their period doublings are
   the special points of the page.
 
-The settings are module constants, shared with ``tests/test_gallery_impact_chaos.py``, which recomputes
+The settings are module constants, shared with ``tests/gallery/test_gallery_impact_chaos.py``, which recomputes
 single cells of the same map.  Run ``python docs/hooks/gallery_chaos.py OUT.png`` to compute the figure
 by hand.
 """

@@ -1,4 +1,4 @@
-"""Write ``engine_reference.json``: results of the paper's two models, for tests/test_engine.py.
+"""Write ``engine_reference.json``: results of the paper's two models, for tests/engine/test_engine.py.
 
 The reference was written by the per-model kernels that the shared engine
 replaced (the revision before it, run with ``PYTHONPATH`` pointing at that

@@ -137,7 +137,7 @@ def test_the_symmetry_breaking_test_changes_sign_where_a_real_gamma_passes_minus
 
 
 # -- symmetry breaking where the orbit touches both supports at once ---------------------------------
-#: stiff, lightly damped supports and strong forcing (as in tests/test_continuation.py): the no-contact
+#: stiff, lightly damped supports and strong forcing (as in tests/branches/test_continuation.py): the no-contact
 #: symmetric orbit touches both supports at once, and the branch goes on with asymmetric orbits that
 #: touch one support
 IMPACTING = {"k_f": 25.0, "c": 0.01, "f0": 0.6, "c_f": 0.5}

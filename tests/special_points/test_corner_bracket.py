@@ -6,12 +6,15 @@ it (``SpecialPointDetector._bracket_at_grazing``) instead of bisecting the secan
 tolerance.  The bracket must be the same kind of object either way: two corrected points whose event
 sequences differ, within ``locate_tol`` of each other, around the closed-form corner.
 
-Reference: the onset of contact of the two-mass oscillator with stops (``tests/test_gallery_two_mass_stops.py``):
+Reference: the onset of contact of the two-mass oscillator with stops (``tests/gallery/test_gallery_two_mass_stops.py``):
 the free orbit is the harmonic response, and mass 1 reaches its stop at ``F = d1 / |X1|`` (closed form,
 exact to rounding).
 """
 
 from __future__ import annotations
+
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -21,6 +24,7 @@ from saltation.models.two_mass_stops import two_mass_stops
 from saltation.orbits.shooting import ShootingProblem
 from saltation.special_points import detection, nonsmooth, points
 from saltation.special_points.continuation import ContinuationSettings, continue_branch
+sys.path.insert(0, str(Path(__file__).parents[1] / "gallery"))  # (a sibling folder's closed forms)
 from test_gallery_two_mass_stops import F_ONSET_1, free_state0
 
 F0 = 0.3

@@ -36,7 +36,7 @@ largest one (the monodromy's scale).
 
 Runtime: module-level flows (compiled once per machine, then loaded), the hypothesis profile ``ci``
 of conftest.py (50 examples per property: some 10 s in all);
-``HYPOTHESIS_PROFILE=thorough python -m pytest tests/test_degenerate_orbits.py`` draws 1000 per
+``HYPOTHESIS_PROFILE=thorough python -m pytest tests/orbits/test_degenerate_orbits.py`` draws 1000 per
 property.
 """
 

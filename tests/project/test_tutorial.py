@@ -13,7 +13,7 @@ import scipy.optimize
 
 pytestmark = pytest.mark.slow  # executes the tutorial notebook in a kernel of its own
 
-NOTEBOOK = Path(__file__).parents[1] / "examples" / "tutorial.ipynb"
+NOTEBOOK = Path(__file__).parents[2] / "examples" / "tutorial.ipynb"
 
 
 @pytest.fixture(scope="module")

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 MKDOCS_YML = ROOT / "mkdocs.yml"
 HOOK = ROOT / "docs" / "hooks" / "offline_math.py"
 API = ROOT / "docs" / "api"

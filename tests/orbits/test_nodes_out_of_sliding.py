@@ -18,7 +18,7 @@ import pytest
 
 from saltation import EventKind, Flow, find_periodic_orbit
 
-sys.path[:0] = [str(Path(__file__).parent / "literature" / "models"), str(Path(__file__).parent / "literature")]
+sys.path[:0] = [str(Path(__file__).parents[1] / "literature" / "models"), str(Path(__file__).parents[1] / "literature")]
 
 
 def _sliding_stretches(flow, x0, T, p) -> list[tuple[float, float]]:

@@ -2,11 +2,14 @@
 
 Reference: the ball on a vibrating table, iterated as its closed-form impact map (free flight
 y = y_i + v t - g t^2 / 2 until it meets s(t) = A sin(w t), found by brentq; Newton's restitution law),
-written with numpy and scipy only (tests/test_branch_switching.py). Its period-1 orbits lose stability at
+written with numpy and scipy only (tests/special_points/test_branch_switching.py). Its period-1 orbits lose stability at
 A w^2 / g = sqrt((pi (1 - e) / (1 + e))^2 + (2 (1 + e^2) / (1 + e)^2)^2) (Holmes 1982).
 """
 
 from __future__ import annotations
+
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +19,7 @@ from saltation.models import bouncing_ball, friction_oscillator
 from saltation.models.bouncing_ball import DEFAULTS
 from saltation.apps.sweeps import PeriodMap, attractor_period, period_map, sweep
 
+sys.path.insert(0, str(Path(__file__).parents[1] / "special_points"))  # (a sibling folder's closed forms)
 from test_branch_switching import impact_map  # the closed-form impact map (restitution e an argument)
 
 G, W = DEFAULTS["g"], DEFAULTS["omega"]

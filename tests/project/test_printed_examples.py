@@ -39,7 +39,7 @@ import pytest
 
 pytestmark = pytest.mark.slow  # runs every example of the README and the docs, saltation paper included
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 FILES = ["README.md", "docs/index.md", "docs/theory.md",
          *sorted(str(p.relative_to(ROOT)) for p in (ROOT / "docs" / "user-guide").glob("*.md"))]
 

@@ -19,7 +19,7 @@ from saltation.engine.codegen import (
 from saltation.models import block_on_belt, trilinear
 from saltation.apps.paper import block_on_belt_diagram, trilinear_diagram
 
-REFERENCE = json.loads((Path(__file__).parent / "data" / "engine_reference.json").read_text())
+REFERENCE = json.loads((Path(__file__).parents[1] / "data" / "engine_reference.json").read_text())
 
 
 def _relay(name: str, gain: str) -> PiecewiseSystem:

@@ -367,7 +367,7 @@ def test_branch_stops_when_it_comes_round_a_loop(impacting_branch):
     keys = [(sp.kind, round(sp.parameter, 7), tuple(np.round(sp.state, 6))) for sp in sps]
     assert len(keys) == len(set(keys))
     # the loop's turning point is where it meets the symmetric orbits (with both contacts): a symmetry
-    # breaking seen from its side branch (tests/test_symmetry.py), not a fold
+    # breaking seen from its side branch (tests/orbits/test_symmetry.py), not a fold
     assert {sp.kind for sp in sps} >= {SpecialPointKind.PERIOD_DOUBLING, SpecialPointKind.SYMMETRY_BREAKING}
 
 

@@ -14,7 +14,7 @@ References
   over many periods), and its largest exponent is ``ln|mu_max| / (k T)`` from the Floquet multipliers.  At
   ``omega = 0.66, r = 0.8`` the multipliers are a complex pair, so also in closed form: ``|mu|^2 = det M`` and
   ``det M = exp(-2 zeta T) r^(2N)`` for ``N`` impacts per period (Liouville's formula between impacts, ``det S =
-  r^2`` at each; see tests/test_lyapunov_chaos.py), hence ``ln|mu| / T = -zeta + (N / T) ln r``.
+  r^2`` at each; see tests/orbits/test_lyapunov_chaos.py), hence ``ln|mu| / T = -zeta + (N / T) ln r``.
 * A chaotic cell: the same run continued for 2000 more periods.
 
 Tolerances
@@ -46,7 +46,7 @@ from saltation.models.impact_oscillator import DEFAULTS
 
 pytestmark = pytest.mark.slow  # computes a gallery diagram
 
-HOOK = Path(__file__).parents[1] / "docs" / "hooks" / "gallery_chaos.py"
+HOOK = Path(__file__).parents[2] / "docs" / "hooks" / "gallery_chaos.py"
 
 
 def _load_figure_module():

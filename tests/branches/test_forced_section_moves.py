@@ -25,7 +25,7 @@ from stick_slip_forced import reference_flow, stick_slip
 from saltation import ContinuationSettings, find_periodic_orbit
 from saltation.special_points.continuation import continue_orbit
 
-sys.path.insert(0, str(Path(__file__).parent / "literature"))  # (the corpus's models, for the converter)
+sys.path.insert(0, str(Path(__file__).parents[1] / "literature"))  # (the corpus's models, for the converter)
 
 OMEGA = 0.8
 PERIOD = 2 * math.pi / OMEGA

@@ -26,7 +26,7 @@ from saltation.branches.branch import BranchKind, SpecialPointKind, StopReason
 from saltation.output import io
 from saltation.output.io import FileFormatError
 
-OLD = Path(__file__).parent / "data" / "old_formats"
+OLD = Path(__file__).parents[1] / "data" / "old_formats"
 RELEASES = sorted(p.name for p in OLD.iterdir() if p.is_dir())
 
 
