@@ -14,4 +14,5 @@ Modules:
 * :mod:`~saltation.engine.compiled`: models given as compiled callables.
 * ``_contract``: the layouts and codes shared by the engine, the model functions and Python.
 * ``_kernel_source``: the engine's source template (not imported; codegen writes and compiles it).
+* ``_records``: the named records the engine's step-and-event loop takes its settings and arrays in.
 """

@@ -38,13 +38,27 @@ The integrator (see ``docs/algorithms.md``):
 """
 
 import math
-from collections import namedtuple
 
 import numpy as np
 from numba import njit
 from numba import types as nt
 from numba.core import cgutils
 from numba.extending import intrinsic
+
+from saltation.engine._records import (
+    Affine,
+    Arrays,
+    Flags,
+    Gradients,
+    Log,
+    LoopState,
+    Matrices,
+    Settings,
+    Surfaces,
+    Taylor,
+    Vectors,
+    Work,
+)
 
 # The status codes (STATUS_*), event kinds (EVENT_*), Newton outcomes (SHOOT_*), the layout of the
 # packed results (INFO_*, result_offsets) and of the model tuple (VECTOR_FIELD, ..., MODEL_TYPE) come
@@ -174,26 +188,8 @@ SLIDING_EVENTS_SIGNATURE = (MODEL_TYPE, SURFACE_STEP_TYPE, _B, _I, _VI, _R, _R, 
 SLIDING_EVENTS_TYPE = nt.FunctionType(
     nt.Tuple((_R, _I, _I, _I, _I, _R, _R, _R, _B, _B, _R, _I, _I))(*SLIDING_EVENTS_SIGNATURE))
 
-# The step-and-event loop takes its arrays and settings in named records, built once by integrate_kernel
-# (numba passes a record as a struct of its fields; the names are the loop's local names).
-Settings = namedtuple("Settings", ["exact_affine", "t_end", "p", "var", "pidx", "rtol", "atol", "max_step", "max_events",
-                                   "max_steps", "tr_table", "n_surfaces", "record", "n_err", "direction",
-                                   "sliding_step_cap"])
-Vectors = namedtuple("Vectors", ["y", "ynew", "ytmp", "ysave", "xtmp", "fa", "fb", "fplus", "xplus", "gt", "wvec",
-                                 "psi_tmp", "samples", "chatter_ring", "h_mode", "xmin", "xmax"])
-Matrices = namedtuple("Matrices", ["K", "Ksave", "F", "gx", "gp", "S", "Phi_tmp"])
-Work = namedtuple("Work", ["W", "WJ", "WP", "wv"])  # a field's evaluation (see _field_called)
-Affine = namedtuple("Affine", ["AFF_A", "AFF_B", "AFF_W", "AFF_AP", "AFF_BP"])  # exact flows of affine modes
-Taylor = namedtuple("Taylor", ["TW", "TP", "TC"])  # their series (see _exact_step)
-Gradients = namedtuple("Gradients", ["hx", "hp", "gtmp", "gptmp"])
-Surfaces = namedtuple("Surfaces", ["surf_sign", "surf_old", "surf_res", "slope_old", "surf_new", "slope_new"])
-Flags = namedtuple("Flags", ["watched", "fixed_sign", "no_dip"])
-Arrays = namedtuple("Arrays", ["vectors", "matrices", "work", "affine", "taylor", "gradients", "surfaces", "flags"])
-Log = namedtuple("Log", ["ev", "ev_int", "rec", "rec_F"])  # the event log's floats and integers, the recorded steps
-# the loop's scalar state (slots SF_* and SI_* of the contract), the sliding state and the surfaces' firing bits
-LoopState = namedtuple("LoopState", ["state_f", "state_i", "slide", "fires"])
-
-
+# The step-and-event loop takes its arrays and settings in named records (saltation/engine/_records.py, one
+# class each per process), built once by integrate_kernel.
 def _record_type(cls, *types):
     """The numba type of a record ``cls`` of fields of ``types`` (as numba types one built in compiled code)."""
     return nt.BaseTuple.from_types(types, cls)
