@@ -37,9 +37,8 @@ from saltation.engine.trajectory import (  # noqa: F401 (the private names: impo
     _switching_events,
     unpack_result,
 )
-from saltation.errors import IntegrationError, InitialModeError, ModelError
+from saltation.errors import InitialModeError, IntegrationError, ModelError
 from saltation.model.system import TIME, PiecewiseSystem
-
 
 #: A state outside a named start mode's domain by at most this much (relative to ``1 + max |x_i|``) lies on
 #: its boundary, within rounding (the engine's tolerance for a state that leaves its mode's domain).
