@@ -1,10 +1,18 @@
 """Layer 2, the engine: a model's compiled functions and the event-driven integrator.
 
-:mod:`~saltation.engine.codegen` writes a model's functions and the engine (from the template
-``_kernel_source.py``, with the layouts of ``_contract.py``) and caches them per machine;
-:mod:`~saltation.engine.flow` (:class:`~saltation.engine.flow.Flow`) integrates forward and backward
-in time, event by event, with the fundamental solution matrix jumped by the saltation matrix of
-eq. (9) at every event; :mod:`~saltation.engine.affine` (the exact flow of affine modes),
-:mod:`~saltation.engine.compiled` (models given as compiled callables) and
-:mod:`~saltation.engine.precompile` (compiling several at once).  Depends on the model layer only.
+It integrates forward and backward in time, event by event, with the fundamental solution matrix
+jumped by the saltation matrix of eq. (9) at every event.  Depends on the model layer only.
+
+Modules:
+
+* :mod:`~saltation.engine.flow`: :class:`~saltation.engine.flow.Flow`, integration and the model's functions.
+* :mod:`~saltation.engine.trajectory`: :class:`~saltation.engine.trajectory.Trajectory`, its events, a run's errors.
+* :mod:`~saltation.engine.kernel_newton`: the engine's Newton on periodic orbits, run from a flow.
+* :mod:`~saltation.engine.codegen`: writes a model's functions and the engine, and caches them per machine.
+* :mod:`~saltation.engine.precompile`: compiling several models and engines at once, in parallel.
+* :mod:`~saltation.engine.affine`: the exact flow of affine modes.
+* :mod:`~saltation.engine.compiled`: models given as compiled callables.
+* ``_contract``: the layouts and codes shared by the engine, the model functions and Python.
+* ``_kernel_source``: the engine's source template (not imported; codegen writes and compiles it).
+* ``_records``: the named records the engine's step-and-event loop takes its settings and arrays in.
 """

@@ -64,7 +64,21 @@ SLIDE_RESET_INTO = 4  # (not sliding) the reset of transition INFO_SLIDE + 1 lea
 TIME_UNRESOLVED = 5  # (with STATUS_CHATTERING) events closer than the resolution of the time axis at |t|, not of the motion
 INFO_INITIAL_MODE = 12
 INFO_EVENT_LOG = 13
+# The event log's integer columns, then their number (a row per event, after INFO_EVENT_LOG).
+LOG_KIND, LOG_TRANSITION, LOG_SURFACE, LOG_MODE_FROM, LOG_MODE_TO = range(5)
 EVENT_LOG_INTS = 5
+# The rows of DOP853's dense-output coefficients of a step (a step's coefficients are DENSE_ROWS x n floats).
+DENSE_ROWS = 7
+# The scalar slots of the integrator loop's state (the engine's own: its loop leaves and resumes from them):
+# floats (time, proposed step, drift off the surface of a sliding motion just ended, longest step to an event),
+SF_T, SF_STEP, SF_DRIFT, SF_H_EVENTS = range(4)
+SF_WIDTH = 4
+# and integers (booleans as 0 and 1): mode, events, recorded steps, steps, rejected steps, status, failed mode and
+# surface, a transition pending at once, kind of the last event, the surface of a sliding motion just ended,
+# whether the surfaces' signs need reading, whether the last event jumped, whether at the start.
+(SI_MODE, SI_EVENTS, SI_RECORDS, SI_STEPS, SI_REJECTED, SI_STATUS, SI_FAILED_MODE, SI_FAILED_SURFACE, SI_PENDING,
+ SI_LAST_KIND, SI_AFTER_SLIDING, SI_NEED_SIGNS, SI_LAST_JUMP, SI_AT_START) = range(14)
+SI_WIDTH = 14
 
 
 def result_offsets(n):
@@ -79,6 +93,32 @@ def result_offsets(n):
     velocity = x_max + n
     events = velocity + n
     return x, phi, psi, x_min, x_max, velocity, events
+
+
+def event_row_offsets(n):
+    """Offsets in a row of the event log's floats, for ``n`` states: ``(x-, x+, S, width)``; the event's
+    time comes first, ``S`` is row-major, and ``width = 1 + 2 n + n^2`` floats make a row."""
+    x_minus = 1
+    x_plus = x_minus + n
+    saltation = x_plus + n
+    return x_minus, x_plus, saltation, saltation + n * n
+
+
+def step_record_width(n):
+    """Floats in a recorded step's row, for ``n`` states: start, size, end fraction, start state (its
+    DENSE_ROWS x n dense-output coefficients follow all the rows in the packed result)."""
+    return 3 + n
+
+
+def newton_layout(m_z, m_u, n_history, bordered):
+    """Offsets in the packed result of the engine's Newton (``correct_periodic``): ``(history, jacobian,
+    tangent, size)``.  ``z`` (``m_z`` entries) comes first, then the residual norms (``n_history``), then
+    ``[r | J_u | J_lam]`` row-major (``m_u`` rows of ``m_u + 2``), then the tangent (``m_z`` entries for
+    the ``bordered`` system, none for the period map alone)."""
+    history = m_z
+    jacobian = history + n_history
+    tangent = jacobian + m_u * (m_u + 2)
+    return history, jacobian, tangent, tangent + (m_z if bordered else 0)
 
 
 # The model functions the engine calls, in the order of the model tuple the engine takes (its first

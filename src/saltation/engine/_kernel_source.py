@@ -45,6 +45,21 @@ from numba import types as nt
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from saltation.engine._records import (
+    Affine,
+    Arrays,
+    Flags,
+    Gradients,
+    Log,
+    LoopState,
+    Matrices,
+    Settings,
+    Surfaces,
+    Taylor,
+    Vectors,
+    Work,
+)
+
 # The status codes (STATUS_*), event kinds (EVENT_*), Newton outcomes (SHOOT_*), the layout of the
 # packed results (INFO_*, result_offsets) and of the model tuple (VECTOR_FIELD, ..., MODEL_TYPE) come
 # from saltation/_contract.py, whose text the engine's module starts with; the offsets are compiled
@@ -54,6 +69,7 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         AFFINE_MODES,
         AFFINE_PARTS,
         AFFINE_PARTS_DP,
+        DENSE_ROWS,
         DOMAIN_MARGIN,
         EVENT_LOG_INTS,
         EVENT_SLIDING_END,
@@ -78,23 +94,46 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         INFO_STEPS,
         INITIAL_MODE,
         INTEGRATOR_ROW,
-        SLIDING_EVENTS_ROW,
-        STEPS_ROW,
-        SURFACE_STEP_ROW,
         LIE_DERIVATIVE,
         LIE_DERIVATIVE_DT,
+        LOG_KIND,
+        LOG_MODE_FROM,
+        LOG_MODE_TO,
+        LOG_SURFACE,
+        LOG_TRANSITION,
         MODEL_TYPE,
         RESET_JAC,
         RESET_MAP,
+        SF_DRIFT,
+        SF_H_EVENTS,
+        SF_STEP,
+        SF_T,
+        SF_WIDTH,
         SHOOT_BAD_PERIOD,
         SHOOT_CONVERGED,
         SHOOT_FAILED,
         SHOOT_MAX_ITER,
         SHOOT_SINGULAR,
+        SI_AFTER_SLIDING,
+        SI_AT_START,
+        SI_EVENTS,
+        SI_FAILED_MODE,
+        SI_FAILED_SURFACE,
+        SI_LAST_JUMP,
+        SI_LAST_KIND,
+        SI_MODE,
+        SI_NEED_SIGNS,
+        SI_PENDING,
+        SI_RECORDS,
+        SI_REJECTED,
+        SI_STATUS,
+        SI_STEPS,
+        SI_WIDTH,
         SLIDE_BLOCKED,
         SLIDE_LEAVES_REGION,
         SLIDE_RESET_INTO,
         SLIDE_WIDTH,
+        SLIDING_EVENTS_ROW,
         STATUS_CHATTERING,
         STATUS_MAX_EVENTS,
         STATUS_MAX_STEPS,
@@ -104,14 +143,22 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         STATUS_SLIDING_UNDEFINED,
         STATUS_STEP_TOO_SMALL,
         STATUS_TANGENTIAL,
+        STEPS_ROW,
+        SURFACE_STEP_ROW,
         TIME_UNRESOLVED,
         VECTOR_FIELD,
         VECTOR_FIELD_DP,
         VECTOR_FIELD_JAC,
+        event_row_offsets,
+        newton_layout,
         result_offsets,
+        step_record_width,
     )
     N_STATE = 0  # the state dimension, or 0 (see above): from the engine's header
 result_offsets_c = njit(cache=True, inline="always")(result_offsets)
+event_row_offsets_c = njit(cache=True, inline="always")(event_row_offsets)
+step_record_width_c = njit(cache=True, inline="always")(step_record_width)
+newton_layout_c = njit(cache=True, inline="always")(newton_layout)
 
 # The signatures of the engine's two entry points, compiled when the engine is imported: the model (see
 # ``model_from_addresses``), then the arguments as :mod:`saltation.engine.flow` passes them (C-contiguous
@@ -140,10 +187,23 @@ SLIDING_EVENTS_SIGNATURE = (MODEL_TYPE, SURFACE_STEP_TYPE, _B, _I, _VI, _R, _R, 
                             _M, _V, _V, _V, _V, _V, _V, _V, _V, _V, _R, _T, _VB, _VI, _V, _V, _V, _V, _V, _V, _VB)
 SLIDING_EVENTS_TYPE = nt.FunctionType(
     nt.Tuple((_R, _I, _I, _I, _I, _R, _R, _R, _B, _B, _R, _I, _I))(*SLIDING_EVENTS_SIGNATURE))
-STEPS_SIGNATURE = (MODEL_TYPE, SURFACE_STEP_TYPE, SLIDING_EVENTS_TYPE, _B, _R, _V, _B, _I, _R, _R, _R, _I, _I, _T, _I, _B,
-                   _I, _R, _R, nt.UniTuple(_V, 17), nt.UniTuple(_M, 7), nt.Tuple((_M, _F3, _M, _M)),
-                   nt.Tuple((_F3, _F3, _M, _F3, _F3)), nt.Tuple((_M, _F3, _M)), nt.UniTuple(_V, 4), nt.UniTuple(_V, 6),
-                   nt.UniTuple(_VB, 3), _VI, _VI, nt.Tuple((_M, _T, _M, _F3)), _V, _VI)
+
+# The step-and-event loop takes its arrays and settings in named records (saltation/engine/_records.py, one
+# class each per process), built once by integrate_kernel.
+def _record_type(cls, *types):
+    """The numba type of a record ``cls`` of fields of ``types`` (as numba types one built in compiled code)."""
+    return nt.BaseTuple.from_types(types, cls)
+
+
+SETTINGS_TYPE = _record_type(Settings, _B, _R, _V, _B, _I, _R, _R, _R, _I, _I, _T, _I, _B, _I, _R, _R)
+ARRAYS_TYPE = _record_type(
+    Arrays, _record_type(Vectors, *(_V,) * 17), _record_type(Matrices, *(_M,) * 7),
+    _record_type(Work, _M, _F3, _M, _M), _record_type(Affine, _F3, _F3, _M, _F3, _F3), _record_type(Taylor, _M, _F3, _M),
+    _record_type(Gradients, *(_V,) * 4), _record_type(Surfaces, *(_V,) * 6), _record_type(Flags, *(_VB,) * 3))
+LOG_TYPE = _record_type(Log, _M, _T, _M, _F3)
+LOOP_STATE_TYPE = _record_type(LoopState, _V, _VI, _VI, _VI)
+STEPS_SIGNATURE = (MODEL_TYPE, SURFACE_STEP_TYPE, SLIDING_EVENTS_TYPE, SETTINGS_TYPE, ARRAYS_TYPE, LOG_TYPE,
+                   LOOP_STATE_TYPE)
 STEPS_TYPE = nt.FunctionType(_B(*STEPS_SIGNATURE))
 
 
@@ -926,7 +986,7 @@ def _record_step(rec, rec_F, n_rec, t, h, s_end, x, F):
     rec[n_rec, 2] = s_end
     for i in range(x.shape[0]):
         rec[n_rec, 3 + i] = x[i]
-        for r in range(7):
+        for r in range(DENSE_ROWS):
             rec_F[n_rec, r, i] = F[r, i]
     return n_rec + 1
 
@@ -1666,17 +1726,18 @@ def _log_event(ev, ev_int, n_ev, t_e, kind, transition, surface, mode_from, mode
     """Append an event to the log (rows ``(t, x-, x+, S)`` and ``(kind, transition, surface, mode from,
     mode to)``, as ``_contract.py`` lays them out); the caller has made room for it."""
     n = N_STATE or x_minus.shape[0]
+    o_xm, o_xp, o_s, _ = event_row_offsets_c(n)
     ev[n_ev, 0] = t_e
-    ev_int[n_ev, 0] = kind
-    ev_int[n_ev, 1] = transition
-    ev_int[n_ev, 2] = surface
-    ev_int[n_ev, 3] = mode_from
-    ev_int[n_ev, 4] = mode_to
+    ev_int[n_ev, LOG_KIND] = kind
+    ev_int[n_ev, LOG_TRANSITION] = transition
+    ev_int[n_ev, LOG_SURFACE] = surface
+    ev_int[n_ev, LOG_MODE_FROM] = mode_from
+    ev_int[n_ev, LOG_MODE_TO] = mode_to
     for i in range(n):
-        ev[n_ev, 1 + i] = x_minus[i]
-        ev[n_ev, 1 + n + i] = x_plus[i]
+        ev[n_ev, o_xm + i] = x_minus[i]
+        ev[n_ev, o_xp + i] = x_plus[i]
         for j in range(n):
-            ev[n_ev, 1 + 2 * n + i * n + j] = S[i, j]
+            ev[n_ev, o_s + i * n + j] = S[i, j]
 
 
 @njit(cache=True, inline="always")  # its arrays are the kernel's own: inlined, nothing is passed
@@ -1690,7 +1751,7 @@ def _pack_result(t, y, var, xmin, xmax, K, ev, ev_int, n_ev, rec, rec_F, n_rec, 
     o_x, o_phi, _, o_min, o_max, o_vel, n_out = result_offsets_c(n)
     w_ev = ev.shape[1]
     w_rec = rec.shape[1]
-    out = np.zeros(n_out + n_ev * w_ev + n_rec * (w_rec + 7 * n))
+    out = np.zeros(n_out + n_ev * w_ev + n_rec * (w_rec + DENSE_ROWS * n))
     out[0] = t
     for i in range(n):
         out[o_x + i] = y[i]
@@ -1710,7 +1771,7 @@ def _pack_result(t, y, var, xmin, xmax, K, ev, ev_int, n_ev, rec, rec_F, n_rec, 
             out[at] = rec[r, j]
             at += 1
     for r in range(n_rec):
-        for q in range(7):
+        for q in range(DENSE_ROWS):
             for j in range(n):
                 out[at] = rec_F[r, q, j]
                 at += 1
@@ -1819,6 +1880,18 @@ def _surface_step(model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp
     return True, s1, s2, s_lo, s_dip, known, True
 
 
+@njit(cache=True, inline="always")
+def _crossing_event(sr, which, surface, tr, tr2, cross, s_lo, s_dip):
+    """The candidate event of a crossing of ``surface`` at the fraction ``sr`` of the step: its way in
+    (``which`` 0) or, past a dip's bottom ``s_dip``, its way back (1), where transition ``tr`` fires (and
+    ``tr2``, a sliding motion's other mode's).  Returns the loop's ``best_*`` in their order: ``(s, kind,
+    surface, tr, tr2, sign of the event function, bracket of its root (lo, hi), whether it is a dip's)``,
+    ``cross`` being the new side in the direction of travel."""
+    lo = s_lo if which == 0 else s_dip
+    hi = s_dip if which == 0 else 1.0
+    return sr, KIND_INDICATOR, surface, tr, tr2, -cross, lo, hi, s_dip < 1.0
+
+
 @njit(cache=True, _nrt=False)  # compiled for SLIDING_EVENTS_SIGNATURE only, called through SLIDING_EVENTS_ROW
 def _sliding_events(model, surface_step, exact, mode, slide, t, h, y, ynew, t_new, K, F, xtmp, W, WJ, WP, wv, TC, p, samples, gtmp,
                     gptmp, hx, hp, hs, hsp, xside, direction, tr_table, watched, fires, surf_sign, surf_old, surf_res,
@@ -1857,15 +1930,8 @@ def _sliding_events(model, surface_step, exact, mode, slide, t, h, y, ynew, t_ne
             cross = -sg if which == 0 else sg
             ka, kb = _sliding_match(model, slide, s, cross, t + sr * h, xtmp, p, tr_table, hs, hsp, xside)
             if ka >= 0 or kb >= 0:
-                best_s = sr
-                best_kind = KIND_INDICATOR
-                best_idx = s
-                best_tr = ka
-                best_tr2 = kb
-                best_sgn = -cross
-                best_lo = s_lo if which == 0 else s_dip
-                best_hi = s_dip if which == 0 else 1.0
-                best_dip = s_dip < 1.0
+                best_s, best_kind, best_idx, best_tr, best_tr2, best_sgn, best_lo, best_hi, best_dip = _crossing_event(
+                    sr, which, s, ka, kb, cross, s_lo, s_dip)
                 break
     # a sliding motion is defined where both its modes are: where it leaves the domain of either
     s_out = 2.0
@@ -1903,25 +1969,32 @@ def _needs_extrema(K, xmin):
 # --------------------------------------------------------------------------------------------------
 
 @njit(cache=True, _nrt=False)  # compiled for STEPS_SIGNATURE only, called through its address (STEPS_ROW)
-def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p, var, pidx, rtol, atol, max_step,
-                     max_events, max_steps, tr_table, n_surfaces, record, n_err, direction, sliding_step_cap, vectors,
-                     matrices, work, affine, taylor, gradients, surfaces, flags, slide, fires, log, state_f, state_i):
+def _integrate_steps(model, surface_step, sliding_events, run, arrays, log, loop):
     """The step-and-event loop of :func:`integrate_kernel`, on the arrays it has allocated.
 
-    It resumes from, and leaves, its scalar state in ``state_f`` (t, step, drift, the longest step to an
-    event) and ``state_i`` (see :func:`_loop_state`).  Returns True when it has stopped because the event
-    log or the record of steps is full (it allocates nothing): the caller doubles them and calls again.
+    ``run`` holds the run's settings (a :data:`Settings`), ``arrays`` the work arrays (an :data:`Arrays`),
+    ``log`` the event log and recorded steps.  It resumes from, and leaves, its scalar state in the slots
+    ``SF_*`` and ``SI_*`` of ``loop.state_f`` and ``loop.state_i`` (see :func:`_loop_state`).  Returns True
+    when it has stopped because the event log or the record of steps is full (it allocates nothing): the
+    caller doubles them and calls again.
     """
+    (exact_affine, t_end, p, var, pidx, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces, record,
+     n_err, direction, sliding_step_cap) = run  # (the records' fields have the names they are unpacked into)
     (y, ynew, ytmp, ysave, xtmp, fa, fb, fplus, xplus, gt, wvec, psi_tmp, samples, chatter_ring, h_mode, xmin,
-     xmax) = vectors
-    K, Ksave, F, gx, gp, S, Phi_tmp = matrices
+     xmax) = arrays.vectors
+    K, Ksave, F, gx, gp, S, Phi_tmp = arrays.matrices
+    work = arrays.work
     W, WJ, WP, wv = work
+    affine = arrays.affine
     AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP = affine
+    taylor = arrays.taylor
     TW, TP, TC = taylor
+    gradients = arrays.gradients
     hx, hp, gtmp, gptmp = gradients
-    surf_sign, surf_old, surf_res, slope_old, surf_new, slope_new = surfaces
-    watched, fixed_sign, no_dip = flags
+    surf_sign, surf_old, surf_res, slope_old, surf_new, slope_new = arrays.surfaces
+    watched, fixed_sign, no_dip = arrays.flags
     ev, ev_int, rec, rec_F = log
+    state_f, state_i, slide, fires = loop
     n = N_STATE or xmin.shape[0]
     N = y.shape[0]
     # while sliding: the sliding surface's gradient and a state moved to one of its sides (_sliding_side),
@@ -1934,16 +2007,24 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
     K12 = K[12]
     y_x = y[:n]
     ynew_x = ynew[:n]
-    t = state_f[0]
-    habs = state_f[1]
-    drift = state_f[2]
-    h_events = state_f[3]
-    (mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode, info_surface, pending, last_kind,
-     after_sliding) = (state_i[0], state_i[1], state_i[2], state_i[3], state_i[4], state_i[5], state_i[6], state_i[7],
-                       state_i[8], state_i[9], state_i[10])
-    need_signs = state_i[11] != 0
-    last_jump = state_i[12] != 0
-    at_start = state_i[13] != 0
+    t = state_f[SF_T]
+    habs = state_f[SF_STEP]
+    drift = state_f[SF_DRIFT]
+    h_events = state_f[SF_H_EVENTS]
+    mode = state_i[SI_MODE]
+    n_ev = state_i[SI_EVENTS]
+    n_rec = state_i[SI_RECORDS]
+    n_steps = state_i[SI_STEPS]
+    n_rejected = state_i[SI_REJECTED]
+    status = state_i[SI_STATUS]
+    info_mode = state_i[SI_FAILED_MODE]
+    info_surface = state_i[SI_FAILED_SURFACE]
+    pending = state_i[SI_PENDING]
+    last_kind = state_i[SI_LAST_KIND]
+    after_sliding = state_i[SI_AFTER_SLIDING]
+    need_signs = state_i[SI_NEED_SIGNS] != 0
+    last_jump = state_i[SI_LAST_JUMP] != 0
+    at_start = state_i[SI_AT_START] != 0
     full = False
     while status == STATUS_OK and (t_end - t) * direction > 0.0:
         if n_ev >= ev.shape[0] or (record and n_rec >= rec.shape[0]):
@@ -2072,14 +2153,8 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
                         cross = -sg if which == 0 else sg  # new side in the direction of travel
                         k = _firing_transition(model, mode, s, cross, t + sr * h, xtmp, p, tr_table)
                         if k >= 0:
-                            best_s = sr
-                            best_kind = KIND_INDICATOR
-                            best_idx = s
-                            best_tr = k
-                            best_sgn = -cross
-                            best_lo = s_lo if which == 0 else s_dip
-                            best_hi = s_dip if which == 0 else 1.0
-                            best_dip = s_dip < 1.0
+                            best_s, best_kind, best_idx, best_tr, best_tr2, best_sgn, best_lo, best_hi, best_dip = (
+                                _crossing_event(sr, which, s, k, NONE, cross, s_lo, s_dip))
                             best_known = known and which == 0
                             break
             else:
@@ -2285,33 +2360,33 @@ def _integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p
         else:
             habs = max(abs(h) * (1.0 - s_e), abs(h) * 0.5)
         need_signs = True
-    state_f[0] = t
-    state_f[1] = habs
-    state_f[2] = drift
-    state_f[3] = h_events
-    _loop_state(state_i, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode, info_surface, pending, last_kind,
-                after_sliding, need_signs, last_jump, at_start)
+    _loop_state(state_f, state_i, t, habs, drift, h_events, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode,
+                info_surface, pending, last_kind, after_sliding, need_signs, last_jump, at_start)
     return full
 
 
 @njit(cache=True, _nrt=False)
-def _loop_state(state_i, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode, info_surface, pending, last_kind,
-                after_sliding, need_signs, last_jump, at_start):
-    """The integrator loop's integer state, in ``state_i``'s order (booleans as 0 and 1)."""
-    state_i[0] = mode
-    state_i[1] = n_ev
-    state_i[2] = n_rec
-    state_i[3] = n_steps
-    state_i[4] = n_rejected
-    state_i[5] = status
-    state_i[6] = info_mode
-    state_i[7] = info_surface
-    state_i[8] = pending
-    state_i[9] = last_kind
-    state_i[10] = after_sliding
-    state_i[11] = 1 if need_signs else 0
-    state_i[12] = 1 if last_jump else 0
-    state_i[13] = 1 if at_start else 0
+def _loop_state(state_f, state_i, t, habs, drift, h_events, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode,
+                info_surface, pending, last_kind, after_sliding, need_signs, last_jump, at_start):
+    """Leave the integrator loop's scalar state in its slots (``SF_*``, ``SI_*``; booleans as 0 and 1)."""
+    state_f[SF_T] = t
+    state_f[SF_STEP] = habs
+    state_f[SF_DRIFT] = drift
+    state_f[SF_H_EVENTS] = h_events
+    state_i[SI_MODE] = mode
+    state_i[SI_EVENTS] = n_ev
+    state_i[SI_RECORDS] = n_rec
+    state_i[SI_STEPS] = n_steps
+    state_i[SI_REJECTED] = n_rejected
+    state_i[SI_STATUS] = status
+    state_i[SI_FAILED_MODE] = info_mode
+    state_i[SI_FAILED_SURFACE] = info_surface
+    state_i[SI_PENDING] = pending
+    state_i[SI_LAST_KIND] = last_kind
+    state_i[SI_AFTER_SLIDING] = after_sliding
+    state_i[SI_NEED_SIGNS] = 1 if need_signs else 0
+    state_i[SI_LAST_JUMP] = 1 if last_jump else 0
+    state_i[SI_AT_START] = 1 if at_start else 0
 
 
 @njit(cache=True, nogil=True)  # compiled for INTEGRATE_SIGNATURE only, by saltation.engine.codegen.load_engine
@@ -2337,7 +2412,7 @@ def integrate_kernel(
     np1 = max(npar, 1)
     n_float = (36 + MAX_TAYLOR + 4) * N + 21 * n + 10 * n * n + 14 * n + 4 * np1 + 3 * n * np1
     n_float += n_modes * (2 * n * n + 6 * n + 5) + (np1 * (n * n + 3 * n + 2) if exact_affine else 0)
-    n_float += 6 * n_surfaces + SLIDING_EXIT_SAMPLES + 1 + CHATTER_WINDOW + 4
+    n_float += 6 * n_surfaces + SLIDING_EXIT_SAMPLES + 1 + CHATTER_WINDOW + SF_WIDTH
     floats = np.zeros(n_float)
     at = 0
     y = floats[at:at + N]
@@ -2423,9 +2498,9 @@ def integrate_kernel(
     at += SLIDING_EXIT_SAMPLES + 1
     chatter_ring = floats[at:at + CHATTER_WINDOW]
     at += CHATTER_WINDOW
-    state_f = floats[at:at + 4]
+    state_f = floats[at:at + SF_WIDTH]
 
-    ints = np.zeros(6 + n_surfaces + 14, dtype=np.int64)
+    ints = np.zeros(6 + n_surfaces + SI_WIDTH, dtype=np.int64)
     slide = ints[:6]  # active, mode_a, mode_b, surface, crossing, time direction
     fires = ints[6:6 + n_surfaces]  # new signs with a transition: 1 for -1, 2 for +1, 3 both
     state_i = ints[6 + n_surfaces:]
@@ -2449,13 +2524,13 @@ def integrate_kernel(
 
     # event log
     ev_cap = 16
-    ev = np.zeros((ev_cap, 1 + 2 * n + n * n))  # t, x-, x+, S (row-major)
-    ev_int = np.zeros((ev_cap, 5), dtype=np.int64)  # kind, transition, surface, mode_from, mode_to
+    ev = np.zeros((ev_cap, event_row_offsets_c(n)[3]))  # t, x-, x+, S (row-major)
+    ev_int = np.zeros((ev_cap, EVENT_LOG_INTS), dtype=np.int64)  # kind, transition, surface, mode_from, mode_to
     n_ev = np.int64(0)  # typed, not literal: literal ints specialise (and compile) callees again
 
     rec_cap = 64 if record else 1
-    rec = np.zeros((rec_cap, 3 + n))  # start, size, end fraction, start state
-    rec_F = np.zeros((rec_cap, 7, n))
+    rec = np.zeros((rec_cap, step_record_width_c(n)))  # start, size, end fraction, start state
+    rec_F = np.zeros((rec_cap, DENSE_ROWS, n))
     n_rec = np.int64(0)
 
     for i in range(n):
@@ -2508,11 +2583,6 @@ def integrate_kernel(
     sliding_step_cap = model[FORCING_PERIOD](p) / 8.0
     h_events = 0.0  # the longest step that ended at an event: the time scale of the motion, for a message
 
-    # the tuples the loop takes its arrays in
-    work = (W, WJ, WP, wv)
-    affine = (AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP)
-    taylor = (TW, TP, TC)
-    gradients = (hx, hp, gtmp, gptmp)
     t_far = max(abs(t0), abs(t_end))
     if tspan > 0.0 and 100.0 * EPS * t_far > tspan and EPS * t_far > 1e-9:
         # far from t = 0 (a rounding unit of t above 1e-9), a span of less than a hundred of them: the time
@@ -2522,38 +2592,36 @@ def integrate_kernel(
     # The loop runs in a function compiled without reference counting: every array this function passes
     # to a call is otherwise counted up and down around it (two atomic operations), which cost more than
     # a short step's work.  It allocates nothing: when a log is full it returns, and resumes once doubled.
-    vectors = (y, ynew, ytmp, ysave, xtmp, fa, fb, fplus, xplus, gt, wvec, psi_tmp, samples, chatter_ring, h_mode, xmin,
-               xmax)
-    matrices = (K, Ksave, F, gx, gp, S, Phi_tmp)
-    surfaces = (surf_sign, surf_old, surf_res, slope_old, surf_new, slope_new)
-    flags = (watched, fixed_sign, no_dip)
-    state_f[0] = t
-    state_f[1] = habs
-    state_f[2] = drift
-    state_f[3] = h_events
-    _loop_state(state_i, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode, info_surface, pending, last_kind,
-                after_sliding, need_signs, last_jump, at_start)
+    run = Settings(exact_affine, t_end, p, var, pidx, rtol, atol, max_step, max_events, max_steps, tr_table, n_surfaces,
+                   record, n_err, direction, sliding_step_cap)
+    arrays = Arrays(
+        Vectors(y, ynew, ytmp, ysave, xtmp, fa, fb, fplus, xplus, gt, wvec, psi_tmp, samples, chatter_ring, h_mode, xmin,
+                xmax),
+        Matrices(K, Ksave, F, gx, gp, S, Phi_tmp), Work(W, WJ, WP, wv), Affine(AFF_A, AFF_B, AFF_W, AFF_AP, AFF_BP),
+        Taylor(TW, TP, TC), Gradients(hx, hp, gtmp, gptmp),
+        Surfaces(surf_sign, surf_old, surf_res, slope_old, surf_new, slope_new), Flags(watched, fixed_sign, no_dip))
+    loop = LoopState(state_f, state_i, slide, fires)
+    _loop_state(state_f, state_i, t, habs, drift, h_events, mode, n_ev, n_rec, n_steps, n_rejected, status, info_mode,
+                info_surface, pending, last_kind, after_sliding, need_signs, last_jump, at_start)
     surface_step = _function_at(SURFACE_STEP_TYPE, addresses[SURFACE_STEP_ROW, 0], addresses[SURFACE_STEP_ROW, 1])
     sliding_events = _function_at(SLIDING_EVENTS_TYPE, addresses[SLIDING_EVENTS_ROW, 0], addresses[SLIDING_EVENTS_ROW, 1])
     integrate_steps = _function_at(STEPS_TYPE, addresses[STEPS_ROW, 0], addresses[STEPS_ROW, 1])
-    while integrate_steps(model, surface_step, sliding_events, exact_affine, t_end, p, var, pidx, rtol, atol, max_step, max_events, max_steps, tr_table,
-                           n_surfaces, record, n_err, direction, sliding_step_cap, vectors, matrices, work, affine, taylor,
-                           gradients, surfaces, flags, slide, fires, (ev, ev_int, rec, rec_F), state_f, state_i):
-        if state_i[1] >= ev.shape[0]:
+    while integrate_steps(model, surface_step, sliding_events, run, arrays, Log(ev, ev_int, rec, rec_F), loop):
+        if state_i[SI_EVENTS] >= ev.shape[0]:
             ev = _resized_rows(ev, 2 * ev.shape[0])
             ev_int = _resized_rows(ev_int, 2 * ev_int.shape[0])
-        if record and state_i[2] >= rec.shape[0]:
+        if record and state_i[SI_RECORDS] >= rec.shape[0]:
             rec = _resized_rows(rec, 2 * rec.shape[0])
             rec_F = _resized_steps(rec_F, 2 * rec_F.shape[0])
-    t = state_f[0]
-    mode = state_i[0]
-    n_ev = state_i[1]
-    n_rec = state_i[2]
-    n_steps = state_i[3]
-    n_rejected = state_i[4]
-    status = state_i[5]
-    info_mode = state_i[6]
-    info_surface = state_i[7]
+    t = state_f[SF_T]
+    mode = state_i[SI_MODE]
+    n_ev = state_i[SI_EVENTS]
+    n_rec = state_i[SI_RECORDS]
+    n_steps = state_i[SI_STEPS]
+    n_rejected = state_i[SI_REJECTED]
+    status = state_i[SI_STATUS]
+    info_mode = state_i[SI_FAILED_MODE]
+    info_surface = state_i[SI_FAILED_SURFACE]
 
     return _pack_result(t, y, var, xmin, xmax, K, ev, ev_int, n_ev, rec, rec_F, n_rec, status, info_mode, info_surface,
                         n_steps, n_rejected, mode, slide, mode0)
@@ -2657,18 +2725,19 @@ def _newton_result(code, it, z, history, n_history, jac, tangent, res):
     """``correct_periodic``'s result: ``(code, iterations, [z | residual history | jac | tangent], ints,
     floats)``, the last two the kernel result at ``z`` (each returned array costs a conversion)."""
     m = z.shape[0]
-    packed = np.empty(m + n_history + jac.size + tangent.shape[0])
+    o_history, o_jac, o_tangent, size = newton_layout_c(m, jac.shape[0], n_history, tangent.shape[0] > 0)
+    packed = np.empty(size)
     for i in range(m):
         packed[i] = z[i]
     for i in range(n_history):
-        packed[m + i] = history[i]
-    at = m + n_history
+        packed[o_history + i] = history[i]
+    at = o_jac
     for i in range(jac.shape[0]):
         for j in range(jac.shape[1]):
             packed[at] = jac[i, j]
             at += 1
     for i in range(tangent.shape[0]):
-        packed[at + i] = tangent[i]
+        packed[o_tangent + i] = tangent[i]
     return code, it, packed, res[0], res[1]
 
 

@@ -7,16 +7,15 @@ the thin typed driver around it.
 
 from __future__ import annotations
 
-import enum
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
-from typing import NamedTuple
 
 import numpy as np
 
 from saltation.engine import _contract as kc
+from saltation.engine import kernel_newton
 from saltation.engine.codegen import (
     is_engine_compiled,
     load_engine,
@@ -24,319 +23,28 @@ from saltation.engine.codegen import (
     model_addresses,
     transition_table,
 )
-from saltation.errors import (
-    ChatteringError,
-    InitialModeError,
-    IntegrationError,
-    ModelError,
-    NonFiniteError,
-    SlidingError,
-    StepSizeError,
+from saltation.engine.kernel_newton import CompiledNewton, _c_array, _newton_unpack  # noqa: F401 (see __all__)
+from saltation.engine.trajectory import (  # noqa: F401 (the private names: imported from here until 0.3.0)
+    _STATUS_OK,
+    EventKind,
+    Status,
+    SwitchingEvent,
+    Trajectory,
+    _dense_eval,
+    _dense_values,
+    _error,
+    _steps,
+    _switching_events,
+    unpack_result,
 )
+from saltation.errors import InitialModeError, IntegrationError, ModelError
 from saltation.model.system import TIME, PiecewiseSystem
-
-
-class Status(enum.IntEnum):
-    """Outcome of an integration (the kernel's status codes, :mod:`saltation.engine._contract`)."""
-
-    OK = kc.STATUS_OK
-    MAX_EVENTS = kc.STATUS_MAX_EVENTS
-    CHATTERING = kc.STATUS_CHATTERING
-    STEP_TOO_SMALL = kc.STATUS_STEP_TOO_SMALL
-    NON_FINITE = kc.STATUS_NON_FINITE
-    SLIDING_UNDEFINED = kc.STATUS_SLIDING_UNDEFINED
-    MAX_STEPS = kc.STATUS_MAX_STEPS
-    TANGENTIAL = kc.STATUS_TANGENTIAL
-    OUTSIDE_DOMAIN = kc.STATUS_OUTSIDE_DOMAIN
-
-
-# Status.OK as a plain int (an enum member costs a class attribute lookup per integration)
-_STATUS_OK = kc.STATUS_OK
 
 #: A state outside a named start mode's domain by at most this much (relative to ``1 + max |x_i|``) lies on
 #: its boundary, within rounding (the engine's tolerance for a state that leaves its mode's domain).
 DOMAIN_ROUNDING = 1e-8
 #: the steps per forcing period, at least, of a forced model with a surface that moves with time (Flow)
 TIME_SURFACE_STEPS = 16
-
-
-@dataclass(frozen=True)
-class CompiledNewton:
-    """The outcome of the kernel's Newton loop (:meth:`Flow.compiled_newton`).
-
-    Attributes
-    ----------
-    code : int
-        ``SHOOT_*`` of :mod:`saltation.engine._contract` (``converged``, ``bad_period``...).
-    iterations : int
-    z : ndarray
-        The last iterate.
-    history : list of float
-        Residual norms.
-    jacobian : ndarray
-        ``[r | J_u | J_lam]`` at ``z`` (rows of the periodicity and phase conditions).
-    shot : tuple
-        The kernel's packed result of the shot from ``z`` (read by :meth:`Flow.shot_trajectory`).
-    tangent : ndarray or None
-        The bordered system only: ``t`` with ``[[J_u, J_lam], [normal]] t = e_last`` at the converged ``z``,
-        not normalised (the next tangent of pseudo-arclength continuation, whose ``normal`` is the last
-        tangent); None for the period map alone, or where the matrix is singular or Newton has not converged.
-    """
-
-    code: int
-    iterations: int
-    z: np.ndarray
-    history: list[float]
-    jacobian: np.ndarray
-    shot: tuple = field(repr=False)
-    tangent: np.ndarray | None = field(default=None, repr=False)
-
-    @property
-    def converged(self) -> bool:
-        return self.code == kc.SHOOT_CONVERGED
-
-    @property
-    def unsupported(self) -> bool:
-        """A period that is not positive, or a singular Newton matrix: iterate in Python for the reason."""
-        return self.code in (kc.SHOOT_BAD_PERIOD, kc.SHOOT_SINGULAR)
-
-
-class EventKind(enum.IntEnum):
-    """What happened at a switching event (the kernel's event kinds, :mod:`saltation.engine._contract`)."""
-
-    TRANSITION = kc.EVENT_TRANSITION
-    SLIDING_START = kc.EVENT_SLIDING_START
-    SLIDING_END = kc.EVENT_SLIDING_END
-
-
-class SwitchingEvent(NamedTuple):
-    """One switching event of a trajectory.
-
-    Attributes
-    ----------
-    t : float
-        Event time.
-    kind : EventKind
-        A transition, the start of a sliding motion, or its end.
-    transition : int
-        Index of the transition that fired (-1 for the end of sliding).
-    surface : str
-        Name of the switching surface.
-    mode_from, mode_to : str
-        Modes before and after (for the start of sliding, ``mode_to`` is the
-        mode on the far side of the surface).
-    x_minus, x_plus : ndarray, shape (n,)
-        State just before and just after the event (they differ for resets).
-    saltation : ndarray, shape (n, n)
-        Saltation matrix ``S`` with ``Phi(t+) = S Phi(t-)`` (eq. 8).
-    """
-
-    t: float
-    kind: EventKind
-    transition: int
-    surface: str
-    mode_from: str
-    mode_to: str
-    x_minus: np.ndarray
-    x_plus: np.ndarray
-    saltation: np.ndarray
-
-    @property
-    def signature(self) -> tuple[int, int, str]:
-        """What identifies the event in an orbit's event sequence."""
-        return (int(self.kind), self.transition, self.surface)
-
-    def __repr__(self) -> str:
-        which = f"transition {self.transition}" if self.transition >= 0 else "end of sliding"
-        return (f"SwitchingEvent(t={self.t:.12g}, {self.kind.name.lower()}, {which}: {self.mode_from} -> {self.mode_to} "
-                f"on {self.surface})")
-
-
-@dataclass(frozen=True)
-class Trajectory:
-    """Result of :func:`simulate`.
-
-    Attributes
-    ----------
-    system : PiecewiseSystem
-        The model.
-    t0, t1 : float
-        Start and end time (``t1 < t0`` in backward time).
-    x0, x1 : ndarray, shape (n,)
-        Initial and final state.
-    mode0, mode1 : str
-        Initial and final mode.
-    event_log : tuple of ndarray
-        The kernel's event log (times, integer columns, x-, x+, S); read it as
-        :attr:`events`.
-    monodromy : ndarray, shape (n, n) or None
-        Fundamental solution matrix ``Phi(t1, t0)`` with every saltation
-        matrix applied, when ``variational=True``.
-    parameter_sensitivity : ndarray, shape (n,) or None
-        ``d x(t1) / d p_k`` for the requested parameter ``k``.
-    x_min, x_max : ndarray, shape (n,)
-        Extremes of every state over the trajectory (from the dense output).
-    sliding_at_end : bool
-        Whether the trajectory ends on a sliding motion.
-    velocity_end : ndarray, shape (n,)
-        The vector field at the end: the final mode's, or Filippov's sliding
-        field when the trajectory ends on a sliding motion.
-    n_steps, n_rejected : int
-        Accepted and rejected steps.
-    """
-
-    system: PiecewiseSystem
-    t0: float
-    t1: float
-    x0: np.ndarray
-    x1: np.ndarray
-    mode0: str
-    mode1: str
-    event_log: tuple[np.ndarray, ...] = field(repr=False)
-    monodromy: np.ndarray | None
-    parameter_sensitivity: np.ndarray | None
-    x_min: np.ndarray
-    x_max: np.ndarray
-    sliding_at_end: bool
-    velocity_end: np.ndarray
-    n_steps: int
-    n_rejected: int
-    _steps: tuple[np.ndarray, ...] | None = field(default=None, repr=False)
-
-    @cached_property
-    def events(self) -> list[SwitchingEvent]:
-        """The switching events, in the order met."""
-        return _switching_events(self.system, self.event_log)
-
-    def __repr__(self) -> str:
-        x1 = ", ".join(f"{v:.6g}" for v in np.asarray(self.x1)[:6]) + (", ..." if len(self.x1) > 6 else "")
-        modes = self.modes
-        path = " -> ".join(modes[:5]) + (f" -> ... ({len(modes)} modes)" if len(modes) > 5 else "")
-        return (f"Trajectory({self.system.name!r}, t {self.t0:.8g} .. {self.t1:.8g}, {len(self.events)} events, "
-                f"{path}, x1=[{x1}]" + (", with monodromy" if self.monodromy is not None else "") + ")")
-
-    @property
-    def event_sequence(self) -> tuple[tuple[int, int, str], ...]:
-        """The orbit's sequence of events (kind, transition, surface)."""
-        return tuple(e.signature for e in self.events)
-
-    @property
-    def modes(self) -> list[str]:
-        """Sequence of modes visited (sliding motions named ``a|b``)."""
-        seq = [self.mode0]
-        for e in self.events:
-            seq.append(f"{e.mode_from}|{e.mode_to}" if e.kind == EventKind.SLIDING_START else e.mode_to)
-        return seq
-
-    @property
-    def dense_steps(self) -> tuple[np.ndarray, ...]:
-        """The recorded steps: start times, sizes, end fractions, start states, coefficients.
-
-        Each step ``k`` covers ``t_old[k] + s h[k]`` for ``s`` in ``[0, s_end[k]]``
-        (``s_end < 1`` for a step cut short by an event).
-
-        Raises
-        ------
-        ValueError
-            If the trajectory was computed without ``dense=True``.
-        """
-        if self._steps is None:
-            raise ValueError("this trajectory was computed without dense=True")
-        return tuple(np.asarray(a) for a in self._steps)
-
-    def at(self, times: Sequence[float] | np.ndarray) -> np.ndarray:
-        """States at the given times (inside the time span) from the dense output.
-
-        At an event time the state before the event is returned.
-
-        Parameters
-        ----------
-        times : array_like, shape (m,)
-            Times inside the span from :attr:`t0` to :attr:`t1`.
-
-        Returns
-        -------
-        ndarray, shape (m, n)
-            The state at each time, from DOP853's continuous extension of the step that covers it.
-
-        Raises
-        ------
-        ValueError
-            If the trajectory was computed without ``dense=True``.
-        """
-        _, _, _, y0, F = self.dense_steps
-        times = np.asarray(times, dtype=float).reshape(-1)
-        if y0.shape[0] == 0:
-            return np.repeat(self.x1[None, :], len(times), axis=0)
-        k, s = self.locate(times)
-        return dense_evaluate(F[k], y0[k], s)
-
-    def locate(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For each time, the index of the recorded step that covers it and the fraction within it.
-
-        Parameters
-        ----------
-        times : ndarray, shape (m,)
-            Times inside the span of the trajectory.
-
-        Returns
-        -------
-        k : ndarray of int, shape (m,)
-            Index of the recorded step (:attr:`dense_steps`) that covers each time.
-        s : ndarray, shape (m,)
-            Fraction of that step, in ``[0, s_end[k]]``.
-
-        Raises
-        ------
-        ValueError
-            If the trajectory was computed without ``dense=True``.
-        """
-        t_old, h, s_end, _, _ = self.dense_steps
-        times = np.asarray(times, dtype=float)
-        forward = h[0] > 0 if h.size else True
-        key, starts = (times, t_old) if forward else (-times, -t_old)
-        k = np.clip(np.searchsorted(starts, key, side="right") - 1, 0, len(t_old) - 1)
-        s = np.clip((times - t_old[k]) / h[k], 0.0, s_end[k])
-        return k, s
-
-    def sample(self, num_per_step: int = 8) -> tuple[np.ndarray, np.ndarray]:
-        """Dense states along the trajectory.
-
-        Parameters
-        ----------
-        num_per_step : int
-            Number of intervals each recorded step is cut into (``num_per_step + 1`` points per step, the
-            step's ends included).
-
-        Returns
-        -------
-        t : ndarray, shape (m,)
-            Times, in the direction of integration.
-        x : ndarray, shape (m, n)
-            States at those times (the initial state alone for a trajectory without steps).
-
-        Raises
-        ------
-        ValueError
-            If the trajectory was computed without ``dense=True``.
-        """
-        t_old, h, s_end, y0, F = self.dense_steps
-        ts = []
-        xs = []
-        s = np.linspace(0.0, 1.0, num_per_step + 1)
-        for k in range(len(t_old)):
-            sk = s * s_end[k]
-            ts.append(t_old[k] + sk * h[k])
-            xs.append(_dense_eval(F[k], y0[k], sk))
-        if not ts:
-            return np.array([self.t0]), self.x0[None, :]
-        return np.concatenate(ts), np.concatenate(xs)
-
-
-def _dense_eval(F: np.ndarray, y0: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Evaluate DOP853's continuous extension of one step at fractions ``s`` (vectorised)."""
-    s = np.asarray(s, dtype=float)
-    return dense_evaluate(np.broadcast_to(F, (len(s),) + F.shape), np.broadcast_to(y0, (len(s),) + y0.shape), s)
 
 
 def dense_evaluate(F: np.ndarray, y0: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -361,11 +69,7 @@ def dense_evaluate(F: np.ndarray, y0: np.ndarray, s: np.ndarray) -> np.ndarray:
     Hairer, Norsett and Wanner (1993), *Solving Ordinary Differential Equations I: Nonstiff Problems*,
     2nd ed., Springer, section II.6 (dense output of DOP853).
     """
-    out = np.zeros(y0.shape)
-    for j in range(7):
-        out += F[:, 6 - j, :]
-        out *= (s if j % 2 == 0 else 1.0 - s)[:, None]
-    return out + y0
+    return _dense_values(F, y0, s)
 
 
 @dataclass(frozen=True)
@@ -599,19 +303,91 @@ class Flow:
             "has no domain, or shares it with another mode)"
         )
 
+    # The model's compiled functions, one method each: the mode, surface or transition by index or name, then
+    # (t, x, p), as the engine calls them (saltation.engine._contract.MODEL_SIGNATURES), into fresh arrays.
+
+    def _call(self, function: int, index: int, t: float, x: Sequence[float], p: np.ndarray, *out: np.ndarray):
+        """The model's compiled ``function`` (its row in the contract's model tuple) at ``(index, t, x, p)``,
+        writing into ``out``."""
+        return self._model[function](index, float(t), _c_array(x), _c_array(p), *out)
+
+    def _surface(self, surface: int | str) -> int:
+        return int(surface) if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
+
+    def _parameter_buffer(self) -> np.ndarray:
+        return np.zeros(max(self.system.n_params, 1))  # (a model without parameters still takes one entry)
+
+    def vector_field(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
+        """The vector field ``f(t, x, p)`` of a mode.
+
+        Parameters
+        ----------
+        mode : int or str
+            Index or name of the mode.
+        t, x, p : float, array_like of shape (n,), ndarray of shape (n_params,)
+            Time, state and parameter values.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The mode's field at ``(t, x)``.
+
+        Raises
+        ------
+        ModelError
+            If ``mode`` names no mode of the model.
+        """
+        f = np.zeros(self.system.n)
+        self._call(kc.VECTOR_FIELD, self.system.mode_index(mode), t, x, p, f)
+        return f
+
+    def vector_field_jacobian(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
+        """The Jacobian ``f_x`` of a mode's vector field (arguments and errors as :meth:`vector_field`).
+
+        Parameters
+        ----------
+        mode : int or str
+            Index or name of the mode.
+        t, x, p : float, array_like of shape (n,), ndarray of shape (n_params,)
+            Time, state and parameter values.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            ``f_x`` at ``(t, x)``.
+        """
+        J = np.zeros((self.system.n, self.system.n))
+        self._call(kc.VECTOR_FIELD_JAC, self.system.mode_index(mode), t, x, p, J)
+        return J
+
+    def vector_field_parameters(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
+        """The parameter derivative ``f_p`` of a mode's vector field (arguments and errors as :meth:`vector_field`).
+
+        Parameters
+        ----------
+        mode : int or str
+            Index or name of the mode.
+        t, x, p : float, array_like of shape (n,), ndarray of shape (n_params,)
+            Time, state and parameter values.
+
+        Returns
+        -------
+        ndarray, shape (n, n_params)
+            ``f_p`` at ``(t, x)``.
+        """
+        fp = np.zeros((self.system.n, max(self.system.n_params, 1)))
+        self._call(kc.VECTOR_FIELD_DP, self.system.mode_index(mode), t, x, p, fp)
+        return fp[:, : self.system.n_params]
+
     def indicator(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> float:
-        """The indicator ``h(t, x, p)`` of a switching surface (by index or name).
+        """The indicator ``h(t, x, p)`` of a switching surface.
 
         Parameters
         ----------
         surface : int or str
             Index or name of the surface.
-        t : float
-            Time.
-        x : array_like, shape (n,)
-            State.
-        p : ndarray, shape (n_params,)
-            Parameter values.
+        t, x, p : float, array_like of shape (n,), ndarray of shape (n_params,)
+            Time, state and parameter values.
 
         Returns
         -------
@@ -623,8 +399,88 @@ class Flow:
         ModelError
             If ``surface`` names no surface of the model.
         """
-        s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
-        return float(self._model[kc.INDICATOR](int(s), float(t), _c_array(x), _c_array(p)))
+        return float(self._call(kc.INDICATOR, self._surface(surface), t, x, p))
+
+    def indicator_gradient(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+        """The derivatives ``(h_x, h_t, h_p)`` of a switching surface's indicator (arguments and errors as
+        :meth:`indicator`).
+
+        Parameters
+        ----------
+        surface : int or str
+            Index or name of the surface.
+        t, x, p : float, array_like of shape (n,), ndarray of shape (n_params,)
+            Time, state and parameter values.
+
+        Returns
+        -------
+        h_x : ndarray, shape (n,)
+            Gradient in the state.
+        h_t : float
+            Derivative in time (non-zero for a moving surface).
+        h_p : ndarray, shape (n_params,)
+            Gradient in the parameters.
+        """
+        hx, hp = np.zeros(self.system.n), self._parameter_buffer()
+        ht = self._call(kc.INDICATOR_GRAD, self._surface(surface), t, x, p, hx, hp)
+        return hx, float(ht), hp[: self.system.n_params]
+
+    def lie_derivative(
+        self, mode: int | str, surface: int | str, t: float, x: Sequence[float], p: np.ndarray
+    ) -> tuple[float, np.ndarray, np.ndarray, float]:
+        """The Lie derivative ``L = h_x f + h_t`` of a surface along a mode's field, with ``L_x``, ``L_p`` and ``L_t``.
+
+        ``L`` is the speed at which the mode's flow crosses the surface: the denominator of the saltation
+        matrix, eq. (9) of *Fold bifurcations in discontinuous systems*, zero at a tangency.
+
+        Parameters
+        ----------
+        mode : int or str
+            Index or name of the mode.
+        surface : int or str
+            Index or name of the surface.
+        t, x, p : float, array_like of shape (n,), ndarray of shape (n_params,)
+            Time, state and parameter values.
+
+        Returns
+        -------
+        L : float
+            The Lie derivative at ``(t, x)``.
+        L_x : ndarray, shape (n,)
+            Its gradient in the state.
+        L_p : ndarray, shape (n_params,)
+            Its gradient in the parameters.
+        L_t : float
+            Its derivative in time.
+
+        Raises
+        ------
+        ModelError
+            If ``mode`` or ``surface`` names no mode or surface of the model.
+        """
+        m, k = self.system.mode_index(mode), self._surface(surface)
+        gx, gp = np.zeros(self.system.n), self._parameter_buffer()
+        x, p = _c_array(np.array(x, dtype=float)), _c_array(p)
+        value = float(self._model[kc.LIE_DERIVATIVE](m, k, float(t), x, p, gx, gp))
+        rate_t = float(self._model[kc.LIE_DERIVATIVE_DT](m, k, float(t), x, p))
+        return value, gx, gp[: self.system.n_params], rate_t
+
+    def guard_holds(self, transition: int, t: float, x: Sequence[float], p: np.ndarray) -> bool:
+        """Whether every condition of a transition's guard holds at ``(t, x)``.
+
+        Parameters
+        ----------
+        transition : int
+            Index of the transition.
+        t, x, p : float, array_like of shape (n,), ndarray of shape (n_params,)
+            Time, state and parameter values.
+
+        Returns
+        -------
+        bool
+            True when the guard holds (always, for a transition without a guard).
+        """
+        return bool(self._call(kc.GUARD, int(transition), t, x, p))
 
     def integration_error(self, traj: Trajectory, tolerances: Tolerances | None = None) -> float:
         """An estimate of the global error of a trajectory's end state.
@@ -653,90 +509,6 @@ class Flow:
         if tol.exact_affine and not sliding and all(affine[self.system.mode_index(m)] for m in visited):
             return 1e-14 * (1.0 + float(np.abs(traj.x1).max()))
         return tol.rtol * (1.0 + float(np.abs(traj.x1).max())) * (1 + len(traj.events))
-
-    def vector_field(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
-        """The vector field ``f(t, x, p)`` of a mode.
-
-        Parameters
-        ----------
-        mode : int or str
-            Index or name of the mode.
-        t : float
-            Time.
-        x : array_like, shape (n,)
-            State.
-        p : ndarray, shape (n_params,)
-            Parameter values.
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            The mode's field at ``(t, x)``.
-
-        Raises
-        ------
-        ModelError
-            If ``mode`` names no mode of the model.
-        """
-        f = np.zeros(self.system.n)
-        self._model[kc.VECTOR_FIELD](self.system.mode_index(mode), float(t), _c_array(x), _c_array(p), f)
-        return f
-
-    def vector_field_jacobian(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
-        """The Jacobian ``f_x`` of a mode's vector field.
-
-        Parameters
-        ----------
-        mode : int or str
-            Index or name of the mode.
-        t : float
-            Time.
-        x : array_like, shape (n,)
-            State.
-        p : ndarray, shape (n_params,)
-            Parameter values.
-
-        Returns
-        -------
-        ndarray, shape (n, n)
-            ``f_x`` at ``(t, x)``.
-
-        Raises
-        ------
-        ModelError
-            If ``mode`` names no mode of the model.
-        """
-        J = np.zeros((self.system.n, self.system.n))
-        self._model[kc.VECTOR_FIELD_JAC](self.system.mode_index(mode), float(t), _c_array(x), _c_array(p), J)
-        return J
-
-    def vector_field_parameters(self, mode: int | str, t: float, x: Sequence[float], p: np.ndarray) -> np.ndarray:
-        """The parameter derivative ``f_p`` of a mode's vector field.
-
-        Parameters
-        ----------
-        mode : int or str
-            Index or name of the mode.
-        t : float
-            Time.
-        x : array_like, shape (n,)
-            State.
-        p : ndarray, shape (n_params,)
-            Parameter values.
-
-        Returns
-        -------
-        ndarray, shape (n, n_params)
-            ``f_p`` at ``(t, x)``.
-
-        Raises
-        ------
-        ModelError
-            If ``mode`` names no mode of the model.
-        """
-        fp = np.zeros((self.system.n, max(self.system.n_params, 1)))
-        self._model[kc.VECTOR_FIELD_DP](self.system.mode_index(mode), float(t), _c_array(x), _c_array(p), fp)
-        return fp[:, : self.system.n_params]
 
     def _check_bands(self, x0: np.ndarray, t0: float, p: np.ndarray) -> None:
         """Refuse a band between two parallel surfaces (:attr:`~saltation.model.system.PiecewiseSystem.parallel_surfaces`)
@@ -774,107 +546,6 @@ class Flow:
         if len(cache["checked"]) > 1024:
             cache["checked"].clear()
         cache["checked"].add(key)
-
-    def indicator_gradient(self, surface: int | str, t: float, x: Sequence[float], p: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
-        """The derivatives ``(h_x, h_t, h_p)`` of a switching surface's indicator at ``(t, x)``.
-
-        Parameters
-        ----------
-        surface : int or str
-            Index or name of the surface.
-        t : float
-            Time.
-        x : array_like, shape (n,)
-            State.
-        p : ndarray, shape (n_params,)
-            Parameter values.
-
-        Returns
-        -------
-        h_x : ndarray, shape (n,)
-            Gradient in the state.
-        h_t : float
-            Derivative in time (non-zero for a moving surface).
-        h_p : ndarray, shape (n_params,)
-            Gradient in the parameters.
-
-        Raises
-        ------
-        ModelError
-            If ``surface`` names no surface of the model.
-        """
-        s = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
-        hx = np.zeros(self.system.n)
-        hp = np.zeros(max(self.system.n_params, 1))
-        ht = self._model[kc.INDICATOR_GRAD](int(s), float(t), _c_array(x), _c_array(p), hx, hp)
-        return hx, float(ht), hp[: self.system.n_params]
-
-    def lie_derivative(
-        self, mode: int | str, surface: int | str, t: float, x: Sequence[float], p: np.ndarray
-    ) -> tuple[float, np.ndarray, np.ndarray, float]:
-        """The Lie derivative ``L = h_x f + h_t`` of a surface along a mode's field, with ``L_x``, ``L_p`` and ``L_t``.
-
-        ``L`` is the speed at which the mode's flow crosses the surface: the denominator of the saltation
-        matrix, eq. (9) of *Fold bifurcations in discontinuous systems*, zero at a tangency.
-
-        Parameters
-        ----------
-        mode : int or str
-            Index or name of the mode.
-        surface : int or str
-            Index or name of the surface.
-        t : float
-            Time.
-        x : array_like, shape (n,)
-            State.
-        p : ndarray, shape (n_params,)
-            Parameter values.
-
-        Returns
-        -------
-        L : float
-            The Lie derivative at ``(t, x)``.
-        L_x : ndarray, shape (n,)
-            Its gradient in the state.
-        L_p : ndarray, shape (n_params,)
-            Its gradient in the parameters.
-        L_t : float
-            Its derivative in time.
-
-        Raises
-        ------
-        ModelError
-            If ``mode`` or ``surface`` names no mode or surface of the model.
-        """
-        m = self.system.mode_index(mode)
-        k = surface if isinstance(surface, (int, np.integer)) else self.system.surface_index(surface)
-        gx = np.zeros(self.system.n)
-        gp = np.zeros(max(self.system.n_params, 1))
-        x, p = _c_array(np.array(x, dtype=float)), _c_array(p)
-        value = float(self._model[kc.LIE_DERIVATIVE](m, int(k), float(t), x, p, gx, gp))
-        rate_t = float(self._model[kc.LIE_DERIVATIVE_DT](m, int(k), float(t), x, p))
-        return value, gx, gp[: self.system.n_params], rate_t
-
-    def guard_holds(self, transition: int, t: float, x: Sequence[float], p: np.ndarray) -> bool:
-        """Whether every condition of a transition's guard holds at ``(t, x)``.
-
-        Parameters
-        ----------
-        transition : int
-            Index of the transition.
-        t : float
-            Time.
-        x : array_like, shape (n,)
-            State.
-        p : ndarray, shape (n_params,)
-            Parameter values.
-
-        Returns
-        -------
-        bool
-            True when the guard holds (always, for a transition without a guard).
-        """
-        return bool(self._model[kc.GUARD](int(transition), float(t), _c_array(x), _c_array(p)))
 
     def transition_jump(
         self, transition: int, t: float, x: Sequence[float], p: np.ndarray
@@ -1071,7 +742,8 @@ class Flow:
         span: float, phase: tuple[np.ndarray, np.ndarray] | None, tol: float, max_iter: int, max_correction: float,
         damped: bool, tolerances: Tolerances | None = None,
     ) -> CompiledNewton | None:
-        """Run the kernel's Newton loop on periodic orbits (no return to Python per shot).
+        """Run the kernel's Newton loop on periodic orbits (no return to Python per shot):
+        :func:`saltation.engine.kernel_newton.compiled_newton` on this flow.
 
         The loop is compiled with the integrator it calls; what it solves is
         the shooting layer's business (:mod:`saltation.orbits.shooting`): the period
@@ -1117,24 +789,13 @@ class Flow:
             The loop's outcome (its ``code`` says whether it converged, and why not), or None when the
             kernel cannot run the problem (a forcing period given as a Python callable).
         """
-        if span == 0.0 and phase is None and not isinstance(self.system, PiecewiseSystem):
-            return None  # the forcing period is a Python callable
-        steps, limits, flags = self._kernel_tolerances(tolerances or self.tolerances, _c_array(p))
-        x_ref, f_ref = (_c_array(a) for a in phase) if phase is not None else (self._zeros, self._zeros)
-        z0 = _c_array(z0)
-        code, it, packed, *out = self._engine.correct_periodic(
-            self._addresses, self._affine_modes, z0, self._zeros if normal is None else _c_array(normal), float(t0), float(sign),
-            bool(phase is not None), int(lam_index), float(span), _c_array(p), x_ref, f_ref,
-            float(tol), int(max_iter), float(max_correction), bool(damped), *steps, *limits, self._table,
-            self._n_surfaces, self._identity, self._zeros, *flags,
-        )
-        m_u = len(z0) - (0 if normal is None else 1)
-        z, history, jac, tangent = _newton_unpack(packed, len(z0), m_u)
-        return CompiledNewton(code=int(code), iterations=int(it), z=z, history=history.tolist(), jacobian=jac,
-                              shot=out, tangent=tangent if tangent.size and tangent.any() else None)
+        return kernel_newton.compiled_newton(
+            self, z0, normal, p, t0=t0, sign=sign, lam_index=lam_index, span=span, phase=phase, tol=tol,
+            max_iter=max_iter, max_correction=max_correction, damped=damped, tolerances=tolerances)
 
     def shot_trajectory(self, result: CompiledNewton, x0: np.ndarray, t0: float, p: np.ndarray, sensitivity: int) -> Trajectory:
-        """The trajectory of the last shot of :meth:`compiled_newton`.
+        """The trajectory of the last shot of :meth:`compiled_newton`
+        (:func:`saltation.engine.kernel_newton.shot_trajectory`).
 
         Parameters
         ----------
@@ -1162,173 +823,10 @@ class Flow:
         InitialModeError
             If the shot failed and ``x0`` lies in no mode's domain.
         """
-        ok = int(result.shot[0][kc.INFO_STATUS]) == _STATUS_OK
-        # the shot's initial mode; after a failure the rule itself, which raises for a state in no mode
-        m0 = int(result.shot[0][kc.INFO_INITIAL_MODE]) if ok else self.initial_mode(x0, p, t0)
-        return self._unpack(result.shot, x0, float(t0), m0, True, sensitivity, False)
+        return kernel_newton.shot_trajectory(self, result, x0, t0, p, sensitivity)
 
     def _unpack(self, out, x0, t0, m0, variational, sensitivity, dense) -> Trajectory:
-        sys_ = self.system
-        n = sys_.n
-        info, res = out  # the kernel's two packed arrays, laid out as saltation.engine._contract says
-        o_x, o_phi, o_psi, o_min, o_max, o_vel, n_out = self._offsets
-        n_ev, w_ev = int(info[kc.INFO_EVENTS]), 1 + 2 * n + n * n
-        ev_int = info[kc.INFO_EVENT_LOG :].reshape(n_ev, kc.EVENT_LOG_INTS)
-        ev = res[n_out : n_out + n_ev * w_ev].reshape(n_ev, w_ev)
-        t = res[0]
-        x = res[o_x : o_x + n]
-        Phi = res[o_phi : o_phi + n * n].reshape(n, n)
-        psi = res[o_psi : o_psi + n]
-        xmin = res[o_min : o_min + n]
-        xmax = res[o_max : o_max + n]
-        velocity = res[o_vel : o_vel + n]
-        event_log = (ev[:, 0], ev_int, ev[:, 1 : 1 + n], ev[:, 1 + n : 1 + 2 * n], ev[:, 1 + 2 * n :].reshape(-1, n, n))
-        names = sys_.mode_names
-        if info[kc.INFO_STATUS] != _STATUS_OK:
-            raise _error(Status(int(info[kc.INFO_STATUS])), sys_, info, float(t), x, _switching_events(sys_, event_log))
-        return Trajectory(
-            system=sys_,
-            t0=t0,
-            t1=float(t),
-            x0=x0,
-            x1=x,
-            mode0=names[m0],
-            mode1=names[int(info[kc.INFO_FINAL_MODE])],
-            event_log=event_log,
-            monodromy=Phi if variational else None,
-            parameter_sensitivity=psi if (variational and sensitivity >= 0) else None,
-            x_min=xmin,
-            x_max=xmax,
-            sliding_at_end=bool(info[kc.INFO_SLIDE]),
-            velocity_end=velocity,
-            n_steps=int(info[kc.INFO_STEPS]),
-            n_rejected=int(info[kc.INFO_REJECTED]),
-            _steps=_steps(res[n_out + n_ev * w_ev :], n) if dense else None,
-        )
-
-
-def _c_array(a) -> np.ndarray:
-    """``a`` as the engine and the model functions take arrays (their signatures are fixed): float64,
-    C-contiguous and writeable, copied only when it is not already."""
-    if type(a) is np.ndarray and a.dtype == np.float64 and a.flags.c_contiguous and a.flags.writeable:
-        return a  # the common case, without np.require's general checks (a few microseconds a call)
-    return np.require(a, dtype=np.float64, requirements=("C", "W"))
-
-
-def _newton_unpack(packed: np.ndarray, m_z: int, m_u: int) -> tuple[np.ndarray, ...]:
-    """The kernel Newton's packed result: ``z``, the residual history, ``[r | J_u | J_lam]`` (``m_u`` rows)
-    and the bordered system's tangent direction (``m_z`` entries, none for the period map alone)."""
-    n_tan = m_z if m_z > m_u else 0
-    end = packed.size - n_tan
-    n_jac = m_u * (m_u + 2)
-    return (packed[:m_z], packed[m_z : end - n_jac], packed[end - n_jac : end].reshape(m_u, m_u + 2),
-            packed[end:])
-
-
-def _steps(packed: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
-    """The kernel's record of steps: starts, sizes, end fractions, start states, dense-output coefficients."""
-    w_rec = 3 + n
-    n_rec = packed.size // (w_rec + 7 * n)
-    rec = packed[: n_rec * w_rec].reshape(n_rec, w_rec)
-    return rec[:, 0], rec[:, 1], rec[:, 2], rec[:, 3:], packed[n_rec * w_rec :].reshape(n_rec, 7, n)
-
-
-def _switching_events(system: PiecewiseSystem, event_log: tuple[np.ndarray, ...]) -> list[SwitchingEvent]:
-    """The kernel's event log as :class:`SwitchingEvent` records."""
-    ev_t, ev_int, ev_xm, ev_xp, ev_S = event_log
-    names, surfaces = system.mode_names, system.surface_names
-    return [
-        SwitchingEvent(
-            t=float(ev_t[k]),
-            kind=EventKind(int(ev_int[k, 0])),
-            transition=int(ev_int[k, 1]),
-            surface=surfaces[int(ev_int[k, 2])],
-            mode_from=names[int(ev_int[k, 3])],
-            mode_to=names[int(ev_int[k, 4])],
-            x_minus=ev_xm[k],
-            x_plus=ev_xp[k],
-            saltation=ev_S[k],
-        )
-        for k in range(len(ev_t))
-    ]
-
-
-def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, x: np.ndarray, events) -> IntegrationError:
-    m, k = int(info[kc.INFO_FAILED_MODE]), int(info[kc.INFO_FAILED_SURFACE])
-    mode = system.mode_names[m] if m >= 0 else "?"
-    surface = system.surface_names[k] if k >= 0 else "?"
-    where = f"at t = {t:.12g}, x = {np.array2string(np.asarray(x), precision=6)}, in mode {mode!r}"
-    if status == Status.CHATTERING and int(info[kc.INFO_SLIDE]) == kc.TIME_UNRESOLVED:
-        return IntegrationError(
-            f"the time axis cannot resolve the motion {where}: switching events on surface {surface!r} closer than a "
-            f"few rounding units of t (ulp(t) = {np.spacing(abs(t)):.3g}); integrate from a smaller t0 (shift the time "
-            "origin by a multiple of the forcing period)"
-        )
-    if status == Status.CHATTERING:
-        recent = ", ".join(f"{e.surface}@{e.t:.6g}" for e in events[-5:])
-        return ChatteringError(
-            f"chattering {where}: many switching events on surface {surface!r} in a vanishing time interval "
-            f"(last events: {recent}); the model may need a sliding mode or a different transition"
-        )
-    if status == Status.MAX_EVENTS:
-        return ChatteringError(f"more switching events than max_events {where} (last surface {surface!r})")
-    if status == Status.STEP_TOO_SMALL:
-        hint = ""
-        if np.spacing(abs(t)) > 1e-9 or k >= 0:  # far from t = 0, or at an event on surface k
-            hint = (f": the time axis cannot resolve the motion at this t (ulp(t) = {np.spacing(abs(t)):.3g}); integrate "
-                    "from a smaller t0 (shift the time origin by a multiple of the forcing period)")
-        return StepSizeError(f"step size fell below floating-point resolution {where}{hint}")
-    if status == Status.NON_FINITE:
-        return NonFiniteError(f"the vector field of mode {mode!r} returned NaN or infinity {where}")
-    if status == Status.SLIDING_UNDEFINED:
-        cause = int(info[kc.INFO_SLIDE])
-        if cause == kc.SLIDE_RESET_INTO:
-            k_tr = int(info[kc.INFO_SLIDE + 1])
-            tr = system.transitions[k_tr]
-            return SlidingError(
-                f"the reset of transition {k_tr} ({tr.source} -> {tr.target} on surface {surface!r}) leaves the state "
-                f"on the surface {where}, and the field of mode {tr.target!r} pushes it back across (an impact with "
-                "restitution 0 or below, or a state at rest on the surface): sliding with a reset map is not defined; "
-                "the model needs a sticking mode"
-            )
-        if cause not in (kc.SLIDE_LEAVES_REGION, kc.SLIDE_BLOCKED):
-            return SlidingError(
-                f"sliding on surface {surface!r} {where} is required (the target field pushes back into the surface) "
-                "but is not defined: the transition has a reset map or both fields are tangent"
-            )
-        # a sliding motion that cannot go on: its modes and surface are kept in the sliding state
-        a, b = (system.mode_names[int(info[kc.INFO_SLIDE + j])] for j in (1, 2))
-        own = int(info[kc.INFO_SLIDE + 3])
-        motion = f"the sliding motion on surface {system.surface_names[own]!r} ({a}|{b})"
-        at = f"at t = {t:.12g}, x = {np.array2string(np.asarray(x), precision=6)}"
-        if cause == kc.SLIDE_LEAVES_REGION:
-            across = f"across surface {surface!r}" if k != own else "where no other switching surface lies"
-            return SlidingError(
-                f"{motion} leaves the domain of mode {mode!r} {across} {at}, and no transition out of {a!r} or {b!r} "
-                "holds there: the model does not say how the motion goes on (a sliding motion is defined only where "
-                "both its modes are)"
-            )
-        if m >= 0:
-            return SlidingError(
-                f"{motion} meets surface {surface!r} {at}, where a transition leads into mode {mode!r}, whose field "
-                f"pushes back across {surface!r}: that would be sliding on two surfaces at once, which is not supported"
-            )
-        return SlidingError(
-            f"{motion} meets surface {surface!r} {at}, where the transitions out of {a!r} and {b!r} lead into two "
-            f"modes whose fields both leave surface {system.surface_names[own]!r}: the motion beyond is not unique"
-        )
-    if status == Status.TANGENTIAL:
-        return IntegrationError(f"switching event exactly tangent to surface {surface!r} {where}: the saltation matrix is undefined")
-    if status == Status.MAX_STEPS:
-        return IntegrationError(f"more steps than max_steps {where}")
-    if status == Status.OUTSIDE_DOMAIN:
-        last = events[-1] if events else None
-        after = f"after {last.mode_from!r} -> {last.mode_to!r} on surface {last.surface!r} " if last else ""
-        return ModelError(
-            f"the state {after}lies outside the domain of mode {mode!r} {where}, by more than rounding, and no "
-            "transition out of that mode holds there: the model's domains and transitions disagree"
-        )
-    return IntegrationError(f"integration failed with status {status.name} {where}")
+        return unpack_result(self.system, out, x0, t0, m0, variational, sensitivity, dense, self._offsets)
 
 
 def simulate(
@@ -1394,3 +892,9 @@ def simulate(
     """
     flow = Flow(system, tolerances)
     return flow.run(x0, t_span[0], t_span[1], flow.parameters(parameters), mode0=mode0, variational=variational, dense=dense)
+
+
+# Names re-exported from the modules they moved to (saltation.engine.trajectory, saltation.engine.kernel_newton):
+# importable from here until 0.3.0.
+__all__ = ["CompiledNewton", "EventKind", "Flow", "Status", "SwitchingEvent", "Tolerances", "Trajectory", "dense_evaluate",
+           "simulate"]

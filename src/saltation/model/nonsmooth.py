@@ -101,8 +101,19 @@ def expand_nonsmooth(
         if isinstance(field, (str, sp.Basic)) or not isinstance(field, Sequence):
             return list(modes), dict(surfaces), list(transitions), Expansion({}, {})  # reported later
         parsed.append([parse(e, f"mode {m.name!r}, field component {i}") for i, e in enumerate(field)])
+    switches = _switches(modes, parsed, set(surfaces), states)
+    if not switches:
+        return list(modes), dict(surfaces), list(transitions), Expansion({}, {})
+    new_modes, origin, parts = _split_modes(modes, parsed, switches, Mode)
+    new_transitions = _split_transitions(transitions, parts, switches, Transition, Crossing)
+    new_surfaces = dict(surfaces) | {name: g for g, name in switches.items()}
+    return new_modes, new_surfaces, new_transitions, Expansion({name: g for g, name in switches.items()}, origin)
+
+
+def _switches(modes: Sequence, parsed: list[list[sp.Expr]], names: set, states: set) -> dict[sp.Expr, str]:
+    """The arguments whose signs switch the fields' non-smooth functions, each with the name of its new
+    surface (a name not among ``names``); an argument and its negative are one surface."""
     switches: dict[sp.Expr, str] = {}
-    names = set(surfaces)
     for m, field in zip(modes, parsed):
         for i, e in enumerate(field):
             for f in e.atoms(*EXPANDED):
@@ -118,20 +129,30 @@ def expand_nonsmooth(
                     name += "_"
                 names.add(name)
                 switches[g] = name
-    if not switches:
-        return list(modes), dict(surfaces), list(transitions), Expansion({}, {})
+    return switches
 
-    def argument_of(f):
-        g = _switch_argument(f)
-        return (g, 1) if g in switches else (-g, -1)
 
-    def expanded(f) -> bool:
-        g = _switch_argument(f)
-        return g in switches or -g in switches
+def _argument_of(f: sp.Basic, switches: dict[sp.Expr, str]) -> tuple[sp.Expr, int]:
+    """The switching argument of ``f`` as it is named in ``switches``, and the sign that relates them."""
+    g = _switch_argument(f)
+    return (g, 1) if g in switches else (-g, -1)
 
+
+def _expanded(f: sp.Basic, switches: dict[sp.Expr, str]) -> bool:
+    """Whether ``f`` switches on one of the generated surfaces."""
+    g = _switch_argument(f)
+    return g in switches or -g in switches
+
+
+def _split_modes(modes: Sequence, parsed: list[list[sp.Expr]], switches: dict[sp.Expr, str], Mode) -> tuple[list, dict, dict]:
+    """Each mode whose field switches, split into one mode per sign pattern of its arguments.
+
+    Returns the modes, where each generated one came from (its mode and the signs), and each mode's
+    parts as ``(name, pattern)`` (a mode that does not switch is its own part, with no pattern)."""
     new_modes, origin, parts = [], {}, {}
     for m, field in zip(modes, parsed):
-        uses = sorted({argument_of(f)[0] for e in field for f in e.atoms(*EXPANDED) if expanded(f)}, key=str)
+        uses = sorted({_argument_of(f, switches)[0] for e in field for f in e.atoms(*EXPANDED) if _expanded(f, switches)},
+                      key=str)
         if not uses:
             new_modes.append(m)
             parts[m.name] = [(m.name, {})]
@@ -143,18 +164,23 @@ def expand_nonsmooth(
             name = f"{m.name}[{label}]"
 
             def side(f, pattern=pattern):
-                g, flip = argument_of(f)
+                g, flip = _argument_of(f, switches)
                 return _on_side(f, pattern[g] * flip)
 
-            new_field = [e.replace(lambda a: isinstance(a, EXPANDED) and expanded(a), side) for e in field]
+            new_field = [e.replace(lambda a: isinstance(a, EXPANDED) and _expanded(a, switches), side) for e in field]
             domain = list(m.domain) + [sp.StrictGreaterThan(g, 0) if s > 0 else sp.LessThan(g, 0)
                                        for g, s in pattern.items()]
             new_modes.append(Mode(name, new_field, domain=domain))
             origin[name] = (m.name, {switches[g]: s for g, s in pattern.items()})
             parts[m.name].append((name, pattern))
+    return new_modes, origin, parts
 
+
+def _split_transitions(transitions: Sequence, parts: dict, switches: dict[sp.Expr, str], Transition, Crossing) -> list:
+    """The transitions between the parts of a mode (across each generated surface, both ways), then the
+    model's own, from each part of its source to each part of its target that the event can reach."""
     new_transitions = []
-    for subs in parts.values():  # across each generated surface, both ways
+    for subs in parts.values():
         for (a, pa), (b, pb) in itertools.combinations(subs, 2):
             differ = [g for g in pa if pa[g] != pb[g]]
             if len(differ) != 1:
@@ -180,5 +206,4 @@ def expand_nonsmooth(
                 if extra and isinstance(guard, list):
                     guard = guard + extra
                 new_transitions.append(Transition(src, tr.surface, tr.direction, dst, reset=tr.reset, guard=guard))
-    new_surfaces = dict(surfaces) | {name: g for g, name in switches.items()}
-    return new_modes, new_surfaces, new_transitions, Expansion({name: g for g, name in switches.items()}, origin)
+    return new_transitions

@@ -496,6 +496,31 @@ class PiecewiseSystem(NamedParts):
         units: Mapping[str, str] | None = None,
         symmetry: Symmetry | None = None,
     ):
+        self._read_names(name, states, parameters, labels, units)
+        modes, surfaces, transitions = self._read_modes(modes, surfaces, transitions)
+        self._read_surfaces(surfaces, period)
+        self._read_transitions(transitions)
+        if period is None:
+            self.period_expr: sp.Expr | None = None
+        else:
+            self.period_expr = _sympify(period, self._symbols, "forcing period")
+            if self.period_expr.free_symbols & (set(self.x) | {TIME}):
+                raise ModelError("the forcing period may depend on parameters only")
+            _check_compilable(self.period_expr, list(self.p), "forcing period", smooth=True)
+        if self.period_expr is None and any(TIME in f.free_symbols for f in self.fields):
+            raise ModelError("a vector field depends on time t but no forcing period is given (period=...)")
+        self.check_parameters(np.array([self.defaults[k] for k in self.parameter_names]))
+        if symmetry is not None and not isinstance(symmetry, Symmetry):
+            raise ModelError(f"symmetry must be a Symmetry(...), got {symmetry!r}")
+        #: the declared symmetry (None without one)
+        self.symmetry: Symmetry | None = symmetry
+        #: how the symmetry permutes modes and surfaces (None without one)
+        self.symmetry_map: SymmetryMap | None = None if symmetry is None else check_symmetry(self, symmetry)
+
+    # -- construction steps (in __init__'s order: an error names the first thing wrong) ------
+    def _read_names(self, name: str, states: Sequence[str], parameters: Mapping[str, float],
+                    labels: Mapping[str, str] | None, units: Mapping[str, str] | None) -> None:
+        """The model's, states' and parameters' names, the defaults, labels, units and symbols."""
         if not isinstance(name, str) or not name.replace("_", "").isalnum():
             raise ModelError(f"model name {name!r} must be a string of letters and digits (underscores allowed)")
         self.name = name
@@ -528,6 +553,9 @@ class PiecewiseSystem(NamedParts):
         self.t = TIME
         self._symbols = {s.name: s for s in list(self.x) + list(self.p)} | {"t": TIME}
 
+    def _read_modes(self, modes: Sequence[Mode], surfaces: Mapping[str, Expr], transitions: Sequence[Transition]):
+        """The modes, with the pieces of fields with sign, Abs, Min, Max... expanded into modes, surfaces and
+        transitions (:mod:`saltation.model.nonsmooth`): returns the surfaces and transitions with theirs."""
         if isinstance(modes, (str, Mode)) or not isinstance(modes, Sequence) or not modes:
             raise ModelError("a model needs a list of at least one Mode")
         for m in modes:
@@ -550,7 +578,10 @@ class PiecewiseSystem(NamedParts):
         self.domains: tuple[tuple[Condition, ...], ...] = tuple(
             _conditions(m.domain, self._symbols, f"domain of mode {m.name!r}") for m in modes
         )
+        return modes, surfaces, transitions
 
+    def _read_surfaces(self, surfaces: Mapping[str, Expr], period: Expr | None) -> None:
+        """The switching surfaces' names and indicators (a moving surface needs a forcing ``period``)."""
         if not isinstance(surfaces, Mapping):
             raise ModelError(f"surfaces must be a mapping of names to indicators, got {type(surfaces).__name__}")
         for sname in surfaces:
@@ -576,51 +607,41 @@ class PiecewiseSystem(NamedParts):
                     "forced model"
                 )
 
+    def _read_transitions(self, transitions: Sequence[Transition]) -> None:
+        """The transitions, with their resets and guards."""
         if isinstance(transitions, (str, Transition)) or not isinstance(transitions, Sequence):
             raise ModelError(f"transitions must be a list of Transition(...) objects, got {transitions!r}")
         self.transitions: tuple[Transition, ...] = tuple(transitions)
         self.resets: list[sp.Matrix | None] = []
         self.guards: list[tuple[Condition, ...]] = []
         for k, tr in enumerate(self.transitions):
-            if not isinstance(tr, Transition):
-                raise ModelError(f"transition {k}: expected a Transition(...), got {tr!r}")
-            where = f"transition {k} ({tr.source} -> {tr.target})"
-            for role, mname in (("source", tr.source), ("target", tr.target)):
-                if mname not in self.mode_names:
-                    raise ModelError(f"{where}: {role} mode {mname!r} does not exist; modes are {list(self.mode_names)}")
-            if tr.surface not in self.surface_names:
-                raise ModelError(f"{where}: surface {tr.surface!r} does not exist; surfaces are {list(self.surface_names)}")
-            direction = tr.direction
-            if isinstance(direction, bool) or not isinstance(direction, (int, np.integer)) or direction not in (1, -1, 0):
-                raise ModelError(f"{where}: direction must be a Crossing (RISING +1, FALLING -1 or EITHER 0), "
-                                 f"got {direction!r}")
-            if tr.reset is None:
-                self.resets.append(None)
-            else:
-                if isinstance(tr.reset, (str, sp.Basic)) or not isinstance(tr.reset, Sequence):
-                    raise ModelError(f"{where}: a reset map is a list of expressions, one per state, got {tr.reset!r}")
-                if len(tr.reset) != self.n:
-                    raise ModelError(f"{where}: reset map has {len(tr.reset)} components, the model has {self.n} states")
-                self.resets.append(self._per_state(tr.reset, lambda i, where=where: f"{where} reset component {i} "
-                                                                                     f"({self.state_names[i]}+)"))
-            self.guards.append(_conditions(tr.guard, self._symbols, f"{where} guard"))
+            reset, guard = self._read_transition(k, tr)
+            self.resets.append(reset)
+            self.guards.append(guard)
 
-        if period is None:
-            self.period_expr: sp.Expr | None = None
+    def _read_transition(self, k: int, tr: Transition) -> tuple[sp.Matrix | None, tuple[Condition, ...]]:
+        """Transition ``k`` checked against the modes and surfaces: its reset map (None without one) and guard."""
+        if not isinstance(tr, Transition):
+            raise ModelError(f"transition {k}: expected a Transition(...), got {tr!r}")
+        where = f"transition {k} ({tr.source} -> {tr.target})"
+        for role, mname in (("source", tr.source), ("target", tr.target)):
+            if mname not in self.mode_names:
+                raise ModelError(f"{where}: {role} mode {mname!r} does not exist; modes are {list(self.mode_names)}")
+        if tr.surface not in self.surface_names:
+            raise ModelError(f"{where}: surface {tr.surface!r} does not exist; surfaces are {list(self.surface_names)}")
+        direction = tr.direction
+        if isinstance(direction, bool) or not isinstance(direction, (int, np.integer)) or direction not in (1, -1, 0):
+            raise ModelError(f"{where}: direction must be a Crossing (RISING +1, FALLING -1 or EITHER 0), "
+                             f"got {direction!r}")
+        if tr.reset is None:
+            reset = None
         else:
-            self.period_expr = _sympify(period, self._symbols, "forcing period")
-            if self.period_expr.free_symbols & (set(self.x) | {TIME}):
-                raise ModelError("the forcing period may depend on parameters only")
-            _check_compilable(self.period_expr, list(self.p), "forcing period", smooth=True)
-        if self.period_expr is None and any(TIME in f.free_symbols for f in self.fields):
-            raise ModelError("a vector field depends on time t but no forcing period is given (period=...)")
-        self.check_parameters(np.array([self.defaults[k] for k in self.parameter_names]))
-        if symmetry is not None and not isinstance(symmetry, Symmetry):
-            raise ModelError(f"symmetry must be a Symmetry(...), got {symmetry!r}")
-        #: the declared symmetry (None without one)
-        self.symmetry: Symmetry | None = symmetry
-        #: how the symmetry permutes modes and surfaces (None without one)
-        self.symmetry_map: SymmetryMap | None = None if symmetry is None else check_symmetry(self, symmetry)
+            if isinstance(tr.reset, (str, sp.Basic)) or not isinstance(tr.reset, Sequence):
+                raise ModelError(f"{where}: a reset map is a list of expressions, one per state, got {tr.reset!r}")
+            if len(tr.reset) != self.n:
+                raise ModelError(f"{where}: reset map has {len(tr.reset)} components, the model has {self.n} states")
+            reset = self._per_state(tr.reset, lambda i: f"{where} reset component {i} ({self.state_names[i]}+)")
+        return reset, _conditions(tr.guard, self._symbols, f"{where} guard")
 
     # -- construction helpers ---------------------------------------------------------------
     def _expressions(self):
