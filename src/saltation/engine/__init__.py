@@ -12,7 +12,7 @@ Modules:
 * :mod:`~saltation.engine.precompile`: compiling several models and engines at once, in parallel.
 * :mod:`~saltation.engine.affine`: the exact flow of affine modes.
 * :mod:`~saltation.engine.compiled`: models given as compiled callables.
-* ``_contract``: the layouts and codes shared by the engine, the model functions and Python.
-* ``_kernel_source``: the engine's source template (not imported; codegen writes and compiles it).
-* ``_records``: the named records the engine's step-and-event loop takes its settings and arrays in.
+* ``saltation.engine._contract``: the layouts and codes shared by the engine, the model functions and Python.
+* ``saltation.engine._kernel_source``: the engine's source template (not imported; codegen writes and compiles it).
+* ``saltation.engine._records``: the named records the engine's step-and-event loop takes its settings and arrays in.
 """

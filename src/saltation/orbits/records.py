@@ -251,9 +251,8 @@ def _orbit_event_rows(traj: Trajectory) -> list[list[int]]:
     """:func:`orbit_events` as rows ``(kind, transition, surface, mode from, mode to)`` of the
     trajectory's event log (plain integers, without building the events: this runs for every branch
     point)."""
-    ev_t, ev_int = traj.event_log[0], traj.event_log[1]
-    rows = ev_int.tolist()
-    if (rows and rows[0][0] == EventKind.SLIDING_START and float(ev_t[0]) == traj.t0 and traj.sliding_at_end
+    rows = traj.event_rows()
+    if (rows and rows[0][0] == EventKind.SLIDING_START and traj.first_logged.t == traj.t0 and traj.sliding_at_end
             and any(r[0] == EventKind.SLIDING_START and r[2] == rows[0][2] for r in rows[1:])):
         return rows[1:]
     return rows

@@ -19,6 +19,7 @@ from saltation.engine.flow import (
     EventKind,
     Trajectory,
 )
+from saltation.engine.trajectory import log_with_event
 from saltation.errors import (
     InconsistentResultError,
 )
@@ -77,40 +78,41 @@ def close_period(problem, traj: Trajectory, p: np.ndarray, sensitivity: int = -1
     sys_ = problem.system
     if traj.monodromy is None:
         return traj
-    ev_t, ev_int = traj.event_log[0], traj.event_log[1]  # the kernel's log: read without building records
-    if len(ev_t) >= 2:
+    if traj.n_events >= 2:
+        # the first, second and last events as the engine logged them (plain integers, no records)
+        first, last = traj.logged(0), traj.logged(-1)
         delta = 1e-7 * max(1.0, abs(traj.t1 - traj.t0))
-        first_kind, last_kind = int(ev_int[0, 0]), int(ev_int[-1, 0])
         # (or the last event, a sliding motion's end, enters the mode the first has entered)
-        if (first_kind == _TRANSITION and last_kind in (_TRANSITION, _SLIDING_END)
-                and ev_int[0, 4] == ev_int[-1, 4] and (last_kind != _TRANSITION or ev_int[0, 1] == ev_int[-1, 1])
-                and abs(ev_t[0] - traj.t0) <= delta and abs(traj.t1 - ev_t[-1]) <= delta):
-            first = traj.events[0]
+        if (first.kind == _TRANSITION and last.kind in (_TRANSITION, _SLIDING_END)
+                and first.mode_to == last.mode_to and (last.kind != _TRANSITION or first.transition == last.transition)
+                and abs(first.t - traj.t0) <= delta and abs(traj.t1 - last.t) <= delta):
             if sys_.resets[first.transition] is not None:
                 raise InconsistentResultError(
                     f"transition {sys_.transitions[first.transition].label!r} (a reset) happens at the start and at "
                     f"the end of the shooting interval of {sys_.name!r}, at t = {traj.t0:.12g}: the state there is "
                     "ambiguous (before or after the reset); shoot from another t0"
                 )
-            traj = problem.flow.run(traj.x0, traj.t0, traj.t1, p, mode0=first.mode_to, variational=True,
-                                 sensitivity=sensitivity, tolerances=problem.tolerances,
-                                 disabled=disabled)  # then as below
-        elif (len(ev_t) >= 3 and first_kind == _SLIDING_START and ev_int[1, 0] == _SLIDING_END
-              and last_kind == _SLIDING_END and ev_int[1, 4] == ev_int[-1, 4]
-              and abs(ev_t[0] - traj.t0) <= delta and abs(ev_t[1] - traj.t0) <= delta
-              and abs(traj.t1 - ev_t[-1]) <= delta):
-            # a sliding motion ends at the seam (logged at t0 + T) and is met again at t0, with no length:
-            # a state on the sliding region's edge starts there a sliding motion that ends at once.  That
-            # pair is dropped from the log; its matrices (the projection onto the surface, and the
-            # identity of the exit) stay in the monodromy matrix M, whose range lies in the surface's
-            # tangent space after the sliding motion, so that they leave its multipliers as they are; the
-            # shot starts in the mode that sliding motion leaves into
-            traj = replace(traj, mode0=traj.events[1].mode_to, event_log=tuple(column[2:] for column in traj.event_log))
+            traj = problem.flow.run(traj.x0, traj.t0, traj.t1, p, mode0=sys_.mode_names[first.mode_to], variational=True,
+                                    sensitivity=sensitivity, tolerances=problem.tolerances,
+                                    disabled=disabled)  # then as below
+        elif traj.n_events >= 3:
+            second = traj.logged(1)
+            if (first.kind == _SLIDING_START and second.kind == _SLIDING_END and last.kind == _SLIDING_END
+                    and second.mode_to == last.mode_to and abs(first.t - traj.t0) <= delta
+                    and abs(second.t - traj.t0) <= delta and abs(traj.t1 - last.t) <= delta):
+                # a sliding motion ends at the seam (logged at t0 + T) and is met again at t0, with no length:
+                # a state on the sliding region's edge starts there a sliding motion that ends at once.  That
+                # pair is dropped from the log; its matrices (the projection onto the surface, and the
+                # identity of the exit) stay in the monodromy matrix M, whose range lies in the surface's
+                # tangent space after the sliding motion, so that they leave its multipliers as they are; the
+                # shot starts in the mode that sliding motion leaves into
+                traj = replace(traj, mode0=sys_.mode_names[second.mode_to],
+                               event_log=tuple(column[2:] for column in traj.event_log))
     if traj.sliding_at_end:
         return leave_sliding_at_the_end(problem, traj, p, sensitivity)
     if traj.mode1 == traj.mode0:
         return traj
-    if traj.events and traj.events[0].t == traj.t0:
+    if traj.n_events and traj.first_logged.t == traj.t0:
         return traj  # the start fired its own event: the shot starts after it
     flow, t1, x1 = problem.flow, traj.t1, traj.x1
     scale = 1.0 + float(np.abs(x1).max())
@@ -126,7 +128,7 @@ def close_period(problem, traj: Trajectory, p: np.ndarray, sensitivity: int = -1
         psi = traj.parameter_sensitivity
         if psi is not None and sensitivity >= 0:
             psi = S @ psi + dp[:, sensitivity]
-        log = _logged(traj, EventKind.TRANSITION, k, tr.surface, tr.source, tr.target, x1, x_plus, S)
+        log = log_with_event(traj, EventKind.TRANSITION, k, tr.surface, tr.source, tr.target, x1, x_plus, S)
         return replace(
             traj, x1=x_plus, mode1=tr.target, event_log=log, monodromy=S @ traj.monodromy,
             parameter_sensitivity=psi, velocity_end=flow.vector_field(tr.target, t1, x_plus, p),
@@ -179,20 +181,9 @@ def leave_sliding_at_the_end(problem, traj: Trajectory, p: np.ndarray, sensitivi
     if psi is not None and sensitivity >= 0:
         psi = S @ psi + w * L_p[sensitivity] / den
     other = last.mode_to if traj.mode0 == last.mode_from else last.mode_from
-    log = _logged(traj, EventKind.SLIDING_END, -1, last.surface, other, traj.mode0, x1, x1, S)
+    log = log_with_event(traj, EventKind.SLIDING_END, -1, last.surface, other, traj.mode0, x1, x1, S)
     return replace(traj, mode1=traj.mode0, event_log=log, monodromy=S @ traj.monodromy, sliding_at_end=False,
                    parameter_sensitivity=psi, velocity_end=f_out)
-
-
-def _logged(traj: Trajectory, kind: EventKind, transition: int, surface: str, mode_from: str, mode_to: str,
-            x_minus: np.ndarray, x_plus: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The trajectory's event log with one more event at its end (the kernel's layout)."""
-    sys_ = traj.system
-    ev_t, ev_int, ev_xm, ev_xp, ev_S = traj.event_log
-    row = np.array([[int(kind), transition, sys_.surface_index(surface), sys_.mode_index(mode_from),
-                     sys_.mode_index(mode_to)]], dtype=ev_int.dtype)
-    return (np.append(ev_t, traj.t1), np.vstack([ev_int, row]), np.vstack([ev_xm, x_minus[None, :]]),
-            np.vstack([ev_xp, x_plus[None, :]]), np.concatenate([ev_S, S[None, :, :]]))
 
 
 
