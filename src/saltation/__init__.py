@@ -20,8 +20,15 @@ from saltation import _moved
 _moved.install()
 
 from saltation.branches.branch import Branch, SpecialPoint
-from saltation.kinds import SpecialPointKind
-from saltation.special_points.continuation import Continuation, ContinuationSettings, continue_branch, continue_orbit
+from saltation.engine.flow import (
+    EventKind,
+    Flow,
+    Status,
+    SwitchingEvent,
+    Tolerances,
+    Trajectory,
+    simulate,
+)
 from saltation.errors import (
     ChatteringError,
     ConvergenceError,
@@ -29,22 +36,31 @@ from saltation.errors import (
     InitialModeError,
     IntegrationError,
     ModelError,
-    NoOrbitNearGuessError,
     NonFiniteError,
+    NoOrbitNearGuessError,
     SaltationError,
     SlidingError,
     StartGuessError,
     StationaryStateError,
     StepSizeError,
 )
-from saltation.engine.flow import EventKind, Flow, Status, SwitchingEvent, Tolerances, Trajectory, simulate
-from saltation.orbits.lyapunov import LyapunovExponents, lyapunov_exponents
-from saltation.orbits.pseudo_equilibria import PseudoEquilibrium, find_pseudo_equilibrium
+from saltation.kinds import SpecialPointKind
 from saltation.model.symmetry import Symmetry
 from saltation.model.system import Crossing, Mode, PiecewiseSystem, Transition
+from saltation.orbits.lyapunov import LyapunovExponents, lyapunov_exponents
+from saltation.orbits.pseudo_equilibria import (
+    PseudoEquilibrium,
+    find_pseudo_equilibrium,
+)
 from saltation.orbits.records import PeriodicOrbit
 from saltation.orbits.single import ShootingProblem
 from saltation.orbits.start import find_periodic_orbit
+from saltation.special_points.continuation import (
+    Continuation,
+    ContinuationSettings,
+    continue_branch,
+    continue_orbit,
+)
 from saltation.sweeps import SweepStart, period_map, sweep
 
 __version__ = "0.1.0"

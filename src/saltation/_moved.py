@@ -71,3 +71,34 @@ def install() -> None:
     """Put the finder on ``sys.meta_path`` (once)."""
     if not any(isinstance(f, _MovedFinder) for f in sys.meta_path):
         sys.meta_path.append(_MovedFinder())
+
+
+def forward_names(module: str, homes: tuple[str, ...]):
+    """A module ``__getattr__`` for the names a release-0.1 module held at its top level and no longer
+    defines or imports: each is looked up in the modules that hold it now (``homes``, in order), and
+    returned with a ``DeprecationWarning`` naming its home (the old place goes in release 0.3.0).
+
+    Parameters
+    ----------
+    module : str
+        The module's name (its ``__name__``).
+    homes : tuple of str
+        The modules to look in, of the same layer or below.
+
+    Returns
+    -------
+    callable
+        ``__getattr__(name)``, which raises ``AttributeError`` for a name none of them holds.
+    """
+
+    def __getattr__(name: str):
+        if not name.startswith("_"):
+            for home in homes:
+                found = importlib.import_module(home)
+                if hasattr(found, name):
+                    warnings.warn(f"{module}.{name} lives in {home}; the old place goes in release 0.3.0",
+                                  DeprecationWarning, stacklevel=2)
+                    return getattr(found, name)
+        raise AttributeError(f"module {module!r} has no attribute {name!r}")
+
+    return __getattr__

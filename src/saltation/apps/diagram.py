@@ -7,6 +7,7 @@ path until release 0.3.0, which removes it.
 
 from __future__ import annotations
 
+from saltation._moved import forward_names
 from saltation.special_points.follow import (
     BifurcationDiagram,
     distinct_special_points,
@@ -22,3 +23,7 @@ __all__ = [
     "follow_through_discontinuous_fold",
     "locate_branch_end",
 ]
+
+
+# names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
+__getattr__ = forward_names(__name__, ('saltation.special_points.follow', 'saltation.special_points.points', 'saltation.special_points.grazing', 'saltation.orbits.classification', 'saltation.orbits.single', 'saltation.branches.branch', 'saltation.branches.continuation', 'saltation.engine.flow', 'saltation.errors'))

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.lines import Line2D
 
+from saltation._moved import forward_names
 from saltation.branches.branch import Branch
 from saltation.engine.flow import Flow
 from saltation.engine.precompile import compile_in_parallel
@@ -414,3 +415,7 @@ __all__ = [
     "trilinear_diagram",
     "write",
 ]
+
+
+# names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
+__getattr__ = forward_names(__name__, ('saltation.special_points.follow', 'saltation.branches.continuation'))

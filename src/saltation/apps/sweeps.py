@@ -8,6 +8,7 @@ of sweeps and maps are :mod:`saltation.output.io`'s, their figures :mod:`saltati
 import importlib
 from typing import Any
 
+from saltation._moved import forward_names
 from saltation.sweeps.sweeps import (
     PeriodMap,
     StartState,
@@ -31,4 +32,10 @@ def __getattr__(name: str) -> Any:
             module = importlib.import_module(home)
             if hasattr(module, name):
                 return getattr(module, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return _public(name)
+
+
+#: the public names it held in release 0.1 and no longer imports (until 0.3.0)
+_public = forward_names(__name__, ("saltation.sweeps.sweeps", "saltation.sweeps.parallel", "saltation.output.files",
+                                          "saltation.output.io", "saltation.engine.flow", "saltation.errors",
+                                          "saltation.model.system"))

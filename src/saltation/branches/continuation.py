@@ -31,7 +31,15 @@ from typing import Protocol
 
 import numpy as np
 
-from saltation.branches.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind, StopReason
+from saltation._moved import forward_names
+from saltation.branches.branch import (
+    Branch,
+    BranchKind,
+    BranchPoint,
+    SpecialPoint,
+    SpecialPointKind,
+    StopReason,
+)
 from saltation.branches.corrector import Corrector, Solution, canonical_events
 from saltation.errors import SaltationError
 from saltation.orbits.problem import BranchProblem
@@ -643,3 +651,7 @@ __all__ = [
     "Continuation", "ContinuationSettings", "Corrector", "Detector", "DetectorFactory", "Solution", "canonical_events",
     "continue_branch", "run_both_ways",
 ]
+
+
+# names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
+__getattr__ = forward_names(__name__, ('saltation.orbits.single',))

@@ -14,6 +14,7 @@ from functools import cached_property
 
 import numpy as np
 
+from saltation._moved import forward_names
 from saltation.engine import _contract as kc
 from saltation.engine import kernel_newton
 from saltation.engine.codegen import (
@@ -898,3 +899,7 @@ def simulate(
 # importable from here until 0.3.0.
 __all__ = ["CompiledNewton", "EventKind", "Flow", "Status", "SwitchingEvent", "Tolerances", "Trajectory", "dense_evaluate",
            "simulate"]
+
+
+# names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
+__getattr__ = forward_names(__name__, ('saltation.errors',))

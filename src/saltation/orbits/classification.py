@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from saltation.kinds import SpecialPointKind
 from saltation.errors import SaltationError
+from saltation.kinds import SpecialPointKind
 from saltation.orbits.floquet import eigenvalues, set_valued_multipliers
 
 __all__ = ["SetValuedCrossing", "classify_nonsmooth"]

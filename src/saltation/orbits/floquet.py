@@ -395,7 +395,10 @@ def product_eigenvalues(factors: Sequence[np.ndarray]) -> np.ndarray:
         return np.array([complex(np.prod([a[0, 0] for a in mats]))])
     if len(mats) == 1:
         return np.linalg.eigvals(mats[0]).astype(complex)
-    from slycot import mb03vd, mb03wd  # SLICOT: the reduction to periodic Hessenberg form, then the QZ-like sweep
+    from slycot import (  # SLICOT: the reduction to periodic Hessenberg form, then the QZ-like sweep
+        mb03vd,
+        mb03wd,
+    )
 
     p = len(mats)
     # SLICOT's convention is H = H_1 H_2 ... H_p: the factor acting last comes first

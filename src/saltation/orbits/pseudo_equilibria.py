@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from saltation._moved import forward_names
 from saltation.engine.flow import Flow
 from saltation.errors import ModelError
 from saltation.model.system import PiecewiseSystem
@@ -385,3 +386,7 @@ class PseudoEquilibriumProblem(EquilibriumProblem):
 
 
 __all__ = ["PseudoEquilibrium", "PseudoEquilibriumProblem", "find_pseudo_equilibrium", "sliding_weight"]
+
+
+# names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
+__getattr__ = forward_names(__name__, ('saltation.errors',))

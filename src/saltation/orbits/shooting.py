@@ -7,10 +7,21 @@ rule), :mod:`~saltation.orbits.single` (:class:`ShootingProblem`), :mod:`~saltat
 and :mod:`~saltation.orbits.start` (:func:`find_periodic_orbit`).  Import from those.
 """
 
+from saltation._moved import forward_names
 from saltation.orbits.equilibria import Equilibrium, EquilibriumProblem
-from saltation.orbits.multiple import MAX_NODE_VALUES, MAX_SEGMENTS, MultipleShootingProblem, check_segments
+from saltation.orbits.multiple import (
+    MAX_NODE_VALUES,
+    MAX_SEGMENTS,
+    MultipleShootingProblem,
+    check_segments,
+)
 from saltation.orbits.problem import BranchProblem, newton
-from saltation.orbits.records import BranchPoint, Evaluation, PeriodicOrbit, SolutionSummary
+from saltation.orbits.records import (
+    BranchPoint,
+    Evaluation,
+    PeriodicOrbit,
+    SolutionSummary,
+)
 from saltation.orbits.single import (
     PERIOD_GROWTH,
     SEAM_MARGIN,
@@ -28,3 +39,7 @@ __all__ = [
     "MultipleShootingProblem", "PeriodicOrbit", "ShootingProblem", "SolutionSummary", "check_segments",
     "find_periodic_orbit", "newton", "stationary_floor",
 ]
+
+
+# names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
+__getattr__ = forward_names(__name__, ('saltation.orbits.records', 'saltation.orbits.conditions', 'saltation.orbits.floquet', 'saltation.orbits.start', 'saltation.engine.flow', 'saltation.errors', 'saltation.model.system'))

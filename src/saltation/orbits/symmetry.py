@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from saltation._moved import forward_names
 from saltation.errors import InconsistentResultError, ModelError
 from saltation.orbits.floquet import eigenvalues, reciprocal, sort_multipliers
 from saltation.orbits.problem import newton
@@ -388,3 +389,7 @@ __all__ = [
     "CONSISTENCY_TOL", "SYMMETRIC_TOL", "SymmetricMultipliers", "half_period_trajectory", "split_half_map",
     "solve_symmetric_orbit", "split_multipliers", "symmetric_multipliers", "symmetry_breaking_test", "symmetry_matrix",
 ]
+
+
+# names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
+__getattr__ = forward_names(__name__, ('saltation.errors',))

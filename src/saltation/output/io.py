@@ -48,11 +48,11 @@ from typing import Any
 
 import numpy as np
 
+# with the names this module held before files.py and codecs.py were split from it (private ones: __getattr__)
+from saltation._moved import forward_names
 from saltation.branches.branch import Branch, BranchKind, BranchPoint
 from saltation.output import codecs as _codecs
 from saltation.output import files as _files
-
-# with the names this module held before files.py and codecs.py were split from it (private ones: __getattr__)
 from saltation.output.codecs import (  # noqa: F401
     Decoder,
     Encoder,
@@ -123,7 +123,11 @@ def __getattr__(name: str) -> Any:
     for module in (_files, _codecs):
         if name.startswith("_") and not name.startswith("__") and hasattr(module, name):
             return getattr(module, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return _public(name)
+
+
+#: the public names it held in release 0.1 and no longer imports (until 0.3.0)
+_public = forward_names(__name__, ("saltation.branches.branch", "saltation.kinds", "saltation.errors"))
 
 
 # ---------------------------------------------------------------------------

@@ -9,9 +9,8 @@ figure. :func:`save_figure` writes a PNG and a PDF.
 
 from __future__ import annotations
 
-import math
-
 import enum
+import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from os import PathLike

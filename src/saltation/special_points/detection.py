@@ -17,6 +17,7 @@ a change of the event sequence in :mod:`~saltation.special_points.nonsmooth`.
 
 from __future__ import annotations
 
+from saltation._moved import forward_names
 from saltation.orbits.classification import (
     SetValuedCrossing,
     classify_nonsmooth,
@@ -46,3 +47,7 @@ __all__ = [
     "sliding_bifurcation_point",
     "symmetric_crossing",
 ]
+
+
+# names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
+__getattr__ = forward_names(__name__, ('saltation.special_points.detector', 'saltation.special_points.nonsmooth', 'saltation.special_points.smooth', 'saltation.special_points.symmetric', 'saltation.special_points.points', 'saltation.special_points.context', 'saltation.special_points.grazing', 'saltation.special_points.sliding', 'saltation.orbits.symmetry', 'saltation.orbits.floquet', 'saltation.orbits.boundary', 'saltation.orbits.single', 'saltation.model.symmetry', 'saltation.branches.branch', 'saltation.branches.continuation', 'saltation.engine.flow', 'saltation.errors', 'saltation.model.system'))

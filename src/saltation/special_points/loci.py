@@ -56,6 +56,7 @@ from saltation.branches.branch import (
 from saltation.engine.flow import EventKind, Flow
 from saltation.errors import IntegrationError, ModelError, SaltationError
 from saltation.orbits.boundary import corner_saltation_is_bounded, saltation_at_corner
+from saltation.orbits.classification import classify_nonsmooth
 from saltation.orbits.conditions import (
     ArrivalTangency,
     ConditionedProblem,
@@ -66,7 +67,6 @@ from saltation.orbits.conditions import (
 )
 from saltation.orbits.records import BranchPoint
 from saltation.orbits.single import ShootingProblem
-from saltation.orbits.classification import classify_nonsmooth
 from saltation.special_points.continuation import (
     Continuation,
     ContinuationSettings,

@@ -26,11 +26,11 @@ from saltation.branches.corrector import Solution, canonical_events
 from saltation.engine.flow import EventKind
 from saltation.errors import SaltationError
 from saltation.orbits.boundary import one_sided_limits, zero_length_segments
-from saltation.orbits.floquet import multipliers_from_monodromy
 from saltation.orbits.classification import (
     SetValuedCrossing,
     classify_nonsmooth,
 )
+from saltation.orbits.floquet import multipliers_from_monodromy
 from saltation.special_points.context import DetectionContext, _complex_text, _unit
 from saltation.special_points.grazing import grazing_candidates, locate_grazing
 from saltation.special_points.points import (

@@ -29,8 +29,8 @@ from saltation.orbits.boundary import (
     saltation_at_corner,
     zero_length_segments,
 )
-from saltation.orbits.floquet import multipliers_from_monodromy
 from saltation.orbits.classification import SetValuedCrossing
+from saltation.orbits.floquet import multipliers_from_monodromy
 from saltation.special_points.grazing import locate_grazing
 from saltation.special_points.sliding import (
     locate_adding_sliding,

@@ -23,6 +23,7 @@ from saltation.branches.branch import SpecialPoint, SpecialPointKind
 from saltation.branches.corrector import Solution
 from saltation.errors import IntegrationError, SaltationError
 from saltation.orbits.boundary import one_sided_limits
+from saltation.orbits.classification import SetValuedCrossing
 from saltation.orbits.floquet import multipliers_from_monodromy
 from saltation.orbits.symmetry import (
     SymmetricMultipliers,
@@ -31,7 +32,6 @@ from saltation.orbits.symmetry import (
     split_half_map,
     symmetry_breaking_test,
 )
-from saltation.orbits.classification import SetValuedCrossing
 from saltation.special_points.context import DetectionContext, _complex_text, _nearest
 from saltation.special_points.points import (
     _sides,

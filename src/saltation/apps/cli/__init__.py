@@ -42,6 +42,7 @@ import tempfile  # noqa: F401 (saltation.apps.cli.tempfile: the module whose mks
 import threading
 from collections.abc import Callable, Sequence
 
+from saltation._moved import forward_names
 from saltation.apps.cli import continue_, locus, lyapunov, orbit, paper, sweep
 from saltation.apps.cli.continue_ import cmd_continue
 from saltation.apps.cli.errors import PROG, CommandError, UsageError
@@ -341,3 +342,7 @@ __all__ = [
     "transient",
     "usable_parameters",
 ]
+
+
+# names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
+__getattr__ = forward_names(__name__, ('saltation.orbits.multiple', 'saltation.orbits.start', 'saltation.errors', 'saltation.model.system'))

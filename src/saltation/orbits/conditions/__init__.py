@@ -44,6 +44,7 @@ Its modules:
 - :mod:`~saltation.orbits.conditions.joining`: consecutive trajectories as one (:func:`join`).
 """
 
+from saltation._moved import forward_names
 from saltation.orbits.conditions.arrival import (
     ArrivalTangency,
     CubicTangency,
@@ -61,3 +62,7 @@ __all__ = [
     "ArrivalTangency", "Condition", "ConditionedProblem", "CubicTangency", "EventIdentity", "Located",
     "MultiplierCondition", "Piece", "ReturnTangency", "Rows", "Shot", "Tangency", "join",
 ]
+
+
+# names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
+__getattr__ = forward_names(__name__, ('saltation.orbits.records', 'saltation.orbits.floquet', 'saltation.engine.flow', 'saltation.errors'))
