@@ -116,6 +116,7 @@ class StopReason(enum.Enum):
     CLOSED_LOOP = "the branch closed on itself"
     USER = "stopped by the user"
     CYCLE_COLLAPSE = "the cycle collapsed onto an equilibrium"
+    ERROR = "stopped by an error (the branch's stop_detail gives it)"
 
 
 class BranchKind(enum.Enum):

@@ -371,6 +371,13 @@ def test_files_of_the_previous_version_still_read(tmp_path):
     assert (sp.kind, sp.bracket, sp.crossing_point, sp.monodromy_plus) == (
         SpecialPointKind.DISCONTINUOUS_FOLD, (0.6, 0.65), 1 + 0j, None)
     assert np.array_equal(sp.multipliers_plus, [INF, 1 + 0j])
+    # version 1 wrote the parts' fields flat: they read into the parts (no touch: its surface was empty)
+    assert sp.touch is None and sp.one_sided is not None and sp.one_sided.crossing_q == 0.5
+    assert np.array_equal(sp.one_sided.monodromy_minus, [[1.0, 0.5], [0.0, 0.5]])
+    # and are written back at version 2, nested, to read as the same point
+    again = io.branch_from_dict(io.branch_to_dict(branch))
+    assert io.branch_to_dict(branch)["version"] == 2
+    assert_same(branch, again)
     # the same branch as JSON (its points written into the side file's object) reads as well
     d = json.loads(OLD_META)
     d["points"] = [io._point_to_dict(p) for p in expected]
@@ -493,15 +500,18 @@ BRANCH_EDITS = [
     (_set("special_points", 0, "kind", "foldd"), "special_points[0].kind", 'got "foldd"'),
     (_set("special_points", 1, "bracket", [1.0]), "special_points[1].bracket", "expected 2 entries, got 1"),
     (_set("special_points", 1, "index", "4"), "special_points[1].index", "expected an integer"),
-    (_set("special_points", 1, "monodromy_minus", [[1.0, 2.0], [3.0]]), "special_points[1].monodromy_minus[1]",
-     "expected 2 entries, got 1"),
-    (_set("special_points", 1, "monodromy_plus", np.eye(3).tolist()), "special_points[1].monodromy_plus",
-     "expected a 2 x 2 matrix (the state has 2 components), got 3 x 3"),
-    (_set("special_points", 1, "crossing_point", [1.0]), "special_points[1].crossing_point", "expected a complex"),
+    (_set("special_points", 1, "one_sided", "monodromy_minus", [[1.0, 2.0], [3.0]]),
+     "special_points[1].one_sided.monodromy_minus[1]", "expected 2 entries, got 1"),
+    (_set("special_points", 1, "one_sided", "monodromy_plus", np.eye(3).tolist()),
+     "special_points[1].one_sided.monodromy_plus", "expected a 2 x 2 matrix (the state has 2 components), got 3 x 3"),
+    (_set("special_points", 1, "one_sided", "crossing_point", [1.0]), "special_points[1].one_sided.crossing_point",
+     "expected a complex"),
+    (_set("special_points", 1, "one_sided", 3), "special_points[1].one_sided", "expected an object"),
+    (_set("special_points", 1, "touch", {"mode": "m"}), "special_points[1].touch.surface", "missing"),
     (_set("special_points", 2, "note", None), "special_points[2].note", "expected a string, got null"),
     (_set("format", "saltation.apps.diagram"), "format", "expected format 'saltation.branches.branch', found \"saltation.apps.diagram\""),
     (_del("format"), "format", "missing: not a saltation.branches.branch file"),
-    (_set("version", 2), "version", "unsupported saltation.branches.branch version 2 (this library reads 1)"),
+    (_set("version", 3), "version", "unsupported saltation.branches.branch version 3 (this library reads 1 and 2)"),
 ]
 
 

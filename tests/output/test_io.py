@@ -13,9 +13,11 @@ from saltation.branches.branch import (
     Branch,
     BranchKind,
     BranchPoint,
+    OneSided,
     SpecialPoint,
     SpecialPointKind,
     StopReason,
+    Touch,
 )
 from saltation.output.io import (
     csv_metadata_path,
@@ -74,14 +76,18 @@ def discontinuous_fold() -> SpecialPoint:
         state=np.array([2.0, 0.5]),
         period=4.1,
         amplitude=2.0,
-        multipliers_minus=np.array([1.0 + 0j, 0.0 + 0j]),
-        multipliers_plus=np.array([INF, 1.0 + 0j]),
-        monodromy_minus=np.array([[1.0, 0.25], [0.0, 0.0]]),
-        monodromy_plus=np.array([[1.0, 0.0], [np.inf, 1.0]]),
-        crossing_q=0.5,
-        crossing_point=1.0 + 0.0j,
-        event_labels_minus=("slip -[stick+]-> stick",),
-        event_labels_plus=("slip -[stick+]-> stick", "stick -[slip-]-> slip"),
+        one_sided=OneSided(
+            multipliers_minus=np.array([1.0 + 0j, 0.0 + 0j]),
+            multipliers_plus=np.array([INF, 1.0 + 0j]),
+            monodromy_minus=np.array([[1.0, 0.25], [0.0, 0.0]]),
+            monodromy_plus=np.array([[1.0, 0.0], [np.inf, 1.0]]),
+            crossing_q=0.5,
+            crossing_point=1.0 + 0.0j,
+            event_labels_minus=("slip -[stick+]-> stick",),
+            event_labels_plus=("slip -[stick+]-> stick", "stick -[slip-]-> slip"),
+            event_ids_minus=((1, 0, 1),),
+            event_ids_plus=((1, 0, 1), (1, 1, 0)),
+        ),
         note="set-valued multiplier crosses at +1",
     )
 
@@ -179,6 +185,10 @@ def assert_special_points_equal(s: SpecialPoint, t: SpecialPoint) -> None:
         assert _same_array(getattr(s, name), getattr(t, name)), name
     assert s.crossing_point == t.crossing_point
     assert s.event_labels_minus == t.event_labels_minus and s.event_labels_plus == t.event_labels_plus
+    assert (s.one_sided is None) == (t.one_sided is None) and (s.touch is None) == (t.touch is None)
+    assert (s.touch_surface, s.touch_mode) == (t.touch_surface, t.touch_mode) and _same_float(s.touch_time, t.touch_time)
+    assert (s.limits, s.growth_exponents, s.event_ids_minus, s.event_ids_plus, s.event_ids) == (
+        t.limits, t.growth_exponents, t.event_ids_minus, t.event_ids_plus, t.event_ids)
     assert s.note == t.note
 
 
@@ -214,7 +224,7 @@ def test_branch_json_is_strict_json_with_inf_as_string(tmp_path):
     assert last["multipliers"] == ["inf", [1.0, 0.0]]
     assert (d["stop_reason"], d["stop_reasons"]) == ("min_step", ["parameter_bound", None])
     assert d["special_points"][2]["period"] == "nan"
-    assert d["special_points"][1]["monodromy_plus"] == [[1.0, 0.0], ["inf", 1.0]]
+    assert d["special_points"][1]["one_sided"]["monodromy_plus"] == [[1.0, 0.0], ["inf", 1.0]]
 
 
 def test_branch_json_round_trip_of_equilibrium_branch(tmp_path):
@@ -414,6 +424,10 @@ def test_every_dataclass_field_is_written(tmp_path):
     assert {f.name for f in fields(Branch)} <= set(d)
     assert {f.name for f in fields(BranchPoint)} == set(d["points"][0])
     assert {f.name for f in fields(SpecialPoint)} == set(d["special_points"][0])
+    sided = next(sp for sp in d["special_points"] if sp["one_sided"] is not None)
+    assert {f.name for f in fields(OneSided)} == set(sided["one_sided"])
+    touched = next(sp for sp in d["special_points"] if sp["touch"] is not None)
+    assert {f.name for f in fields(Touch)} == set(touched["touch"])
 
 
 def test_a_field_without_a_codec_stops_the_import():

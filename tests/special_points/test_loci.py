@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import json
+from dataclasses import fields
 
 import numpy as np
 import pytest
 
 from saltation import Flow
 from saltation.apps import cli
-from saltation.branches.branch import Branch, SpecialPointKind, SpecialPointStatus
+from saltation.branches.branch import Branch, SpecialPointKind, SpecialPointStatus, StopReason
 from saltation.special_points.continuation import ContinuationSettings, continue_branch
 from saltation.engine.flow import Tolerances
 from saltation.special_points.loci import follow_locus
@@ -20,6 +21,7 @@ from saltation.apps.paper import linear_response_state
 from saltation.orbits.shooting import ShootingProblem
 
 M, C, K, XC = (TRI[k] for k in ("m", "c", "k", "x_c"))
+BRANCH_FIELDS = {f.name for f in fields(Branch)}
 F0_RANGE = (0.05, 0.4)
 
 
@@ -44,7 +46,8 @@ def test_corner_curves_against_closed_form(trilinear_loci):
         assert len(w) > 50
         # the defining system is solved to 1e-10 in the residual; the closed form is exact
         np.testing.assert_allclose(f0, XC * np.sqrt((K - M * w**2) ** 2 + (C * w) ** 2), rtol=0, atol=1e-9)
-        assert "reached a parameter bound" in locus.stop_reason
+        assert StopReason.PARAMETER_BOUND in (locus.stop_reason, *locus.stop_reasons)
+        assert "reached a parameter bound" in locus.stop_detail
         assert f0.min() == pytest.approx(F0_RANGE[0]) or f0.max() == pytest.approx(F0_RANGE[1])
 
 
@@ -81,7 +84,8 @@ def test_the_fold_curve_is_born_at_a_corner(trilinear_loci):
     births = [c for c in corner.special_points if set(c.sides) == {"nonsmooth_no_crossing", "discontinuous_fold"}]
     assert births
     fold = loci[SpecialPointKind.FOLD]
-    assert "the corrector failed" in fold.stop_reason  # the fold curve ends: it does not go on past the corner
+    # the fold curve ends: it does not go on past the corner
+    assert StopReason.MIN_STEP in (fold.stop_reason, *fold.stop_reasons) and "the corrector failed" in fold.stop_detail
     # on the fold curve itself: its end is labelled where it meets the corner curve (the corner located at
     # the f0 of the curve point whose orbit comes nearest to touching), within the stated accuracy of that
     # point, which is an end of the curve (near the corner the curve turns back in f0: its end is not its
@@ -115,7 +119,31 @@ def test_grazing_curve_of_the_impact_oscillator_against_closed_form():
     s, omega = locus.values.T
     np.testing.assert_allclose(s, 1 / np.sqrt((1 - omega**2) ** 2 + (2 * zeta * omega) ** 2), rtol=0, atol=1e-9)
     assert omega.min() == pytest.approx(0.6) and omega.max() == pytest.approx(0.95)
-    assert set(locus.kinds) == {"grazing"}  # an impact: unbounded all along, no codimension-two point
+    assert set(locus.curve_kinds) == {SpecialPointKind.GRAZING}  # an impact: unbounded all along, no codimension-two point
+
+
+def test_a_curve_is_a_branch_written_and_read_as_one(trilinear_loci, tmp_path):
+    """A curve is a Branch (its kinds a column, its stops per direction): it round-trips through a branch file,
+    and the release-0.1 views (``kinds``, ``record()``) still answer, with a warning."""
+    from saltation.output.codecs import locus_record
+    from saltation.output.io import load_branch_json, save_branch_json
+
+    _, loci = trilinear_loci
+    corner = loci[SpecialPointKind.DISCONTINUOUS_FOLD]
+    assert type(corner).__mro__[1] is Branch and not any(f.name not in BRANCH_FIELDS for f in fields(corner))
+    assert corner.curve_of is SpecialPointKind.DISCONTINUOUS_FOLD
+    assert all(isinstance(k, SpecialPointKind) for k in corner.curve_kinds)
+    assert [c.sides for c in corner.special_points] == [
+        (a.value, b.value) for a, b in zip(corner.curve_kinds, corner.curve_kinds[1:]) if a is not b]
+    again = load_branch_json(save_branch_json(corner, tmp_path / "curve.json"))
+    assert again.curve_kinds == corner.curve_kinds and again.curve_of is corner.curve_of
+    assert (again.stop_reason, again.stop_reasons, again.stop_detail) == (
+        corner.stop_reason, corner.stop_reasons, corner.stop_detail)
+    np.testing.assert_array_equal(again.second_parameter, corner.second_parameter)
+    with pytest.warns(DeprecationWarning, match="Branch.curve_kinds"):
+        assert corner.kinds == [k.value for k in corner.curve_kinds]
+    with pytest.warns(DeprecationWarning, match="locus_record"):
+        assert corner.record() == locus_record(corner)
 
 
 def test_locus_command_line_contract(tmp_path, capsys):

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import copy
+import inspect
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -22,8 +23,105 @@ from saltation.orbits.records import BranchPoint
 
 
 @dataclass(frozen=True)
+class OneSided:
+    """The two sides of a non-smooth special point: what the orbit is just before and just after it.
+
+    At a discontinuity-induced point the orbit's monodromy jumps (the saltation matrices of eq. (9) of
+    the event that appears or vanishes), so the point has two one-sided monodromies ``M-`` and ``M+``
+    and the set-valued multipliers ``eig((1 - q) M- + q M+)``, ``q`` in [0, 1] (eq. (45)).
+
+    Attributes
+    ----------
+    multipliers_minus, multipliers_plus : ndarray or None
+        The one-sided multipliers (eigenvalues of ``M-`` and ``M+``; ``inf`` where they grow without
+        bound towards the point).
+    monodromy_minus, monodromy_plus : ndarray or None
+        The one-sided monodromy matrices (forward time where finite).
+    event_labels_minus, event_labels_plus : tuple of str
+        The event sequences on either side, by label.
+    event_ids_minus, event_ids_plus : tuple of (int, int, int)
+        The same sequences by identity, ``(kind, transition, mode entered)`` each
+        (:func:`saltation.orbits.records.event_ids`; empty in files written before 2026-12-05).
+    limits : Limits
+        How the one-sided multipliers were obtained (a string enum: ``limits == "exact"`` holds).
+    growth_exponents : tuple of float
+        With ``limits`` EXTRAPOLATED: the fitted exponents ``a`` of ``|mu| ~ d^a`` of the multipliers
+        that grow without bound towards the point (reported as ``inf``).
+    crossing_q : float or None
+        Where the set-valued multipliers cross the unit circle.
+    crossing_point : complex or None
+        The multiplier on the unit circle at ``crossing_q``.
+
+    Raises
+    ------
+    ValueError
+        If ``limits`` is given as a name that is not one of its values.
+    """
+
+    multipliers_minus: np.ndarray | None = None
+    multipliers_plus: np.ndarray | None = None
+    monodromy_minus: np.ndarray | None = None
+    monodromy_plus: np.ndarray | None = None
+    event_labels_minus: tuple[str, ...] = ()
+    event_labels_plus: tuple[str, ...] = ()
+    event_ids_minus: tuple[tuple[int, int, int], ...] = ()
+    event_ids_plus: tuple[tuple[int, int, int], ...] = ()
+    limits: Limits = Limits.NONE
+    growth_exponents: tuple[float, ...] = ()
+    crossing_q: float | None = None
+    crossing_point: complex | None = None
+
+    def __post_init__(self):
+        # names as files and older callers give them
+        if not isinstance(self.limits, Limits):
+            limits, exponents = Limits.parse(str(self.limits))
+            object.__setattr__(self, "limits", limits)
+            if exponents and not self.growth_exponents:
+                object.__setattr__(self, "growth_exponents", exponents)
+        object.__setattr__(self, "growth_exponents", tuple(float(a) for a in self.growth_exponents))
+        for name in ("event_labels_minus", "event_labels_plus"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+        for name in ("event_ids_minus", "event_ids_plus"):
+            object.__setattr__(self, name, tuple(tuple(int(i) for i in e) for e in getattr(self, name)))
+
+
+@dataclass(frozen=True)
+class Touch:
+    """Where the orbit of a special point meets a switching surface without crossing it.
+
+    At a grazing, a sliding bifurcation or a boundary equilibrium: the surface, the mode whose field is
+    tangent to it there, and the instant.
+
+    Attributes
+    ----------
+    surface : str
+        The surface touched.
+    mode : str
+        The mode whose field is tangent to it there (empty when unknown).
+    time : float
+        The instant of the touch (``nan`` for an equilibrium, or when unknown).
+    """
+
+    surface: str
+    mode: str = ""
+    time: float = float("nan")
+
+
+#: The flat names of the parts' fields (keyword arguments of :class:`SpecialPoint` and its properties).
+_ONE_SIDED_NAMES = tuple(f.name for f in fields(OneSided))
+_TOUCH_NAMES = {"touch_surface": "surface", "touch_mode": "mode", "touch_time": "time"}
+
+
+@dataclass(frozen=True)
 class SpecialPoint:
-    """A located special point of a branch.
+    """A located special point of a branch: a thin core and two optional typed parts.
+
+    The core says what the point is, where, how precisely and on which orbit; :class:`OneSided` holds
+    the two sides of a non-smooth point and :class:`Touch` the touch of a surface.  The parts' fields
+    read as flat properties (``sp.multipliers_minus`` is ``sp.one_sided.multipliers_minus``, ``None``
+    or empty without the part; ``sp.touch_surface`` is ``sp.touch.surface``), and the constructor takes
+    them as flat keyword arguments too (``SpecialPoint(..., multipliers_minus=mu, touch_surface="h")``
+    fills the parts).
 
     Attributes
     ----------
@@ -41,34 +139,16 @@ class SpecialPoint:
         The solution at the special point.
     multipliers : ndarray or None
         Multipliers at a smooth special point.
-    multipliers_minus, multipliers_plus : ndarray or None
-        One-sided multipliers at a non-smooth point (eigenvalues of M- and M+).
-    monodromy_minus, monodromy_plus : ndarray or None
-        One-sided monodromy matrices (forward time where finite).
-    crossing_q : float or None
-        Where the set-valued multipliers ``eig((1-q) M- + q M+)`` cross the unit circle.
-    crossing_point : complex or None
-        The multiplier on the unit circle at ``crossing_q``.
-    event_labels_minus, event_labels_plus : tuple of str
-        Event sequences (labels) on either side.
-    multipliers_accuracy : float
-        How well the multipliers (one-sided or not) are known: an estimate of
-        the error of their matrices (``nan`` when unknown).
-    limits : Limits
-        How the one-sided multipliers were obtained (a string enum: ``sp.limits == "exact"`` holds).
-    growth_exponents : tuple of float
-        With ``limits`` EXTRAPOLATED: the fitted exponents ``a`` of ``|mu| ~ d^a`` of the multipliers
-        that grow without bound towards the point (reported as ``inf``).
-    status : SpecialPointStatus
-        Located by its defining system, bracketed between two solutions, or failed.
+    event_ids : tuple of (int, int, int)
+        The event sequence of the point's orbit by identity (smooth points; a non-smooth point has
+        the two sides' in ``one_sided``).
     note : str
         A sentence on how it was found or classified.
-    touch_surface, touch_mode : str
-        Where the orbit meets a switching surface at a grazing or a sliding
-        bifurcation: the surface, and the mode whose field is tangent to it
-        there (empty otherwise).
-    touch_time : float
-        The instant of that touch (``nan`` otherwise).
+    multipliers_accuracy : float
+        How well the multipliers (one-sided or not) are known: an estimate of the error of their
+        matrices (``nan`` when unknown).
+    status : SpecialPointStatus
+        Located by its defining system, bracketed between two solutions, or failed.
     second_parameter : float
         On a two-parameter curve: the second parameter's value at the point (``parameter`` is the
         first's; ``nan`` on a one-parameter branch).
@@ -81,11 +161,17 @@ class SpecialPoint:
     t0 : float
         The time at which the orbit passes ``state`` (a forced orbit's section, as for
         :attr:`BranchPoint.t0`); 0 for autonomous orbits and equilibria.
+    one_sided : OneSided or None
+        The two sides of a non-smooth point (None at a smooth one).
+    touch : Touch or None
+        Where the orbit touches a surface (grazing, sliding bifurcations, boundary equilibria).
 
     Raises
     ------
     ValueError
-        If ``limits`` or ``status`` is given as a name that is not one of theirs.
+        If ``status`` is given as a name that is not one of its values.
+    TypeError
+        If a keyword argument is neither a field nor a flat name of a part's field.
     """
 
     kind: SpecialPointKind
@@ -97,37 +183,41 @@ class SpecialPoint:
     period: float
     amplitude: float
     multipliers: np.ndarray | None = None
-    multipliers_minus: np.ndarray | None = None
-    multipliers_plus: np.ndarray | None = None
-    monodromy_minus: np.ndarray | None = None
-    monodromy_plus: np.ndarray | None = None
-    crossing_q: float | None = None
-    crossing_point: complex | None = None
-    event_labels_minus: tuple[str, ...] = ()
-    event_labels_plus: tuple[str, ...] = ()
+    event_ids: tuple[tuple[int, int, int], ...] = ()
     note: str = ""
     multipliers_accuracy: float = float("nan")
-    limits: Limits = Limits.NONE
-    touch_surface: str = ""
-    touch_mode: str = ""
-    touch_time: float = float("nan")
-    growth_exponents: tuple[float, ...] = ()
     status: SpecialPointStatus = SpecialPointStatus.BRACKETED
     second_parameter: float = float("nan")
     sides: tuple[str, ...] = ()
     classification: str = ""
     t0: float = 0.0
+    one_sided: OneSided | None = None
+    touch: Touch | None = None
 
     def __post_init__(self):
-        # names as files and older callers give them
-        if not isinstance(self.limits, Limits):
-            limits, exponents = Limits.parse(str(self.limits))
-            object.__setattr__(self, "limits", limits)
-            if exponents and not self.growth_exponents:
-                object.__setattr__(self, "growth_exponents", exponents)
         if not isinstance(self.status, SpecialPointStatus):
             object.__setattr__(self, "status", SpecialPointStatus(self.status))
-        object.__setattr__(self, "growth_exponents", tuple(float(a) for a in self.growth_exponents))
+        object.__setattr__(self, "event_ids", tuple(tuple(int(i) for i in e) for e in self.event_ids))
+
+    # the parts' fields, flat
+    multipliers_minus = property(lambda self: self._side("multipliers_minus"))
+    multipliers_plus = property(lambda self: self._side("multipliers_plus"))
+    monodromy_minus = property(lambda self: self._side("monodromy_minus"))
+    monodromy_plus = property(lambda self: self._side("monodromy_plus"))
+    event_labels_minus = property(lambda self: self._side("event_labels_minus"))
+    event_labels_plus = property(lambda self: self._side("event_labels_plus"))
+    event_ids_minus = property(lambda self: self._side("event_ids_minus"))
+    event_ids_plus = property(lambda self: self._side("event_ids_plus"))
+    limits = property(lambda self: self._side("limits"))
+    growth_exponents = property(lambda self: self._side("growth_exponents"))
+    crossing_q = property(lambda self: self._side("crossing_q"))
+    crossing_point = property(lambda self: self._side("crossing_point"))
+    touch_surface = property(lambda self: self.touch.surface if self.touch is not None else "")
+    touch_mode = property(lambda self: self.touch.mode if self.touch is not None else "")
+    touch_time = property(lambda self: self.touch.time if self.touch is not None else float("nan"))
+
+    def _side(self, name: str):
+        return getattr(self.one_sided if self.one_sided is not None else _NO_SIDES, name)
 
     def _repr_markdown_(self) -> str:
         """A summary for Jupyter (:mod:`saltation.summary`)."""
@@ -141,6 +231,30 @@ class SpecialPoint:
             where += f", {self.second_parameter:.10g}"
         sides = f" {self.sides[0]} -> {self.sides[1]}" if self.sides else ""
         return f"SpecialPoint({self.kind.value}{sides} at {where}, located to {self.accuracy:.1e}, {self.status.value})"
+
+
+_NO_SIDES = OneSided()
+_init_fields = SpecialPoint.__init__
+
+
+def _init_with_flat_names(self, *args, **kwargs) -> None:
+    """The dataclass's ``__init__``, with the parts' fields also taken by their flat names."""
+    sided = {name: kwargs.pop(name) for name in _ONE_SIDED_NAMES if name in kwargs}
+    touched = {_TOUCH_NAMES[name]: kwargs.pop(name) for name in tuple(_TOUCH_NAMES) if name in kwargs}
+    if sided:
+        kwargs["one_sided"] = replace(kwargs.get("one_sided") or _NO_SIDES, **sided)
+    if touched:
+        touch = kwargs.get("touch")
+        if touch is None:
+            touch = Touch(**{"surface": "", **touched})
+        else:
+            touch = replace(touch, **touched)
+        kwargs["touch"] = touch if touch.surface else None
+    _init_fields(self, *args, **kwargs)
+
+
+_init_with_flat_names.__signature__ = inspect.signature(_init_fields)  # type: ignore[attr-defined]
+SpecialPoint.__init__ = _init_with_flat_names  # type: ignore[method-assign]
 
 
 @dataclass
@@ -244,6 +358,12 @@ class Branch:
     def second_parameter(self) -> np.ndarray:
         """The second parameter's column on a two-parameter curve (``nan`` on a one-parameter branch)."""
         return np.array([p.second_parameter for p in self.points])
+
+    @property
+    def curve_kinds(self) -> list[SpecialPointKind | None]:
+        """On a two-parameter curve of non-smooth points: the kind of the point at each curve point
+        (:attr:`BranchPoint.curve_kind`; None elsewhere)."""
+        return [p.curve_kind for p in self.points]
 
     @property
     def amplitude(self) -> np.ndarray:

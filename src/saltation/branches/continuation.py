@@ -533,11 +533,12 @@ class Continuation:
 
 
 def _same_special_point(a, b, rtol: float = 1e-6) -> bool:
-    """The same special point located twice: kind, sides, parameter and state agree."""
+    """The same special point located twice: kind, event sequences by identity (the orbit's, or the two
+    sides'), parameter and state agree."""
     return (
         a.kind is b.kind
-        and a.event_labels_minus == b.event_labels_minus
-        and a.event_labels_plus == b.event_labels_plus
+        and a.event_ids == b.event_ids
+        and (a.event_ids_minus, a.event_ids_plus) == (b.event_ids_minus, b.event_ids_plus)
         and abs(a.parameter - b.parameter) <= rtol * (1.0 + abs(b.parameter))
         and float(np.linalg.norm(np.asarray(a.state) - np.asarray(b.state))) <= rtol * (1.0 + float(np.linalg.norm(b.state)))
     )

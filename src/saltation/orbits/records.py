@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from saltation.engine.flow import EventKind, SwitchingEvent, Trajectory
+from saltation.kinds import SpecialPointKind
 from saltation.orbits.floquet import is_stable
 
 
@@ -89,6 +90,9 @@ class BranchPoint:
         The time at which the orbit passes ``state``: a forced orbit's section, which a branch moves off an
         event where one reaches it (:meth:`~saltation.orbits.shooting.ShootingProblem.move_section`); 0 for
         autonomous orbits and equilibria, and in files written before it was recorded.
+    curve_kind : SpecialPointKind or None
+        On a two-parameter curve of non-smooth points: the kind of the special point this curve point
+        is, classified from its one-sided limits (it may change along the curve); None elsewhere.
     """
 
     parameter: float
@@ -108,6 +112,7 @@ class BranchPoint:
     second_parameter: float = float("nan")
     mode0: str | None = None
     t0: float = 0.0
+    curve_kind: SpecialPointKind | None = None
 
     def recorded(self, parameter: float, step: float, iterations: int) -> BranchPoint:
         """This point as a branch records it: with its parameter, the step that led to it and the corrector's

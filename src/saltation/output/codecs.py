@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections import ChainMap
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -28,10 +29,12 @@ from saltation.branches.branch import (
     Branch,
     BranchKind,
     BranchPoint,
+    OneSided,
     SpecialPoint,
     SpecialPointKind,
     SpecialPointStatus,
     StopReason,
+    Touch,
 )
 from saltation.output.files import (
     BRANCH_FORMAT,
@@ -52,6 +55,8 @@ __all__ = [
     "Encoder",
     "branch_from_dict",
     "branch_to_dict",
+    "codimension_two_record",
+    "locus_record",
     "orbit_to_dict",
     "period_map_from_dict",
     "period_map_to_dict",
@@ -248,17 +253,19 @@ class _Codec:
                                            f"{exc})") from None
         return out
 
-    def decode(self, f: _Fields, v: Any, where: str, **given: Any) -> Any:
-        """The record from its object ``v`` (the field path ``where``); ``given`` are the skipped fields."""
+    def decode(self, f: _Fields, v: Any, where: str, *, outer: Mapping[str, Any] | None = None, **given: Any) -> Any:
+        """The record from its object ``v`` (the field path ``where``); ``given`` are the skipped fields, and
+        ``outer`` the fields decoded so far of the record this one is a part of."""
         d = f.obj(v, where)
         done: dict[str, Any] = {}
+        seen = ChainMap(done, dict(outer or {}))
         for name, _, dec, required in self.fields:
             key = name if name in d or self.old_names.get(name) not in d else self.old_names[name]
             if key not in d:
                 if required:
                     f.fail(_sub(where, name), "missing")
                 continue  # the dataclass default: a file written before the field existed
-            done[name] = dec(f, d[key], _sub(where, key), done)
+            done[name] = dec(f, d[key], _sub(where, key), seen)
         return self.cls(**done, **given)
 
 
@@ -271,9 +278,36 @@ _POINT_CODEC = _Codec(
         "iterations": (int, _dec("integer", minimum=0)),
         "monodromy": _SQUARE,
         "event_ids": _EVENT_IDS,
+        "curve_kind": (lambda k: None if k is None else k.value, _nullable(_choice(_KINDS))),
     },
     old_names={"event_labels": "events"},  # "events": files before 2026-11-24
 )
+
+_ONE_SIDED_CODEC = _Codec(
+    OneSided,
+    {
+        "multipliers_minus": _COMPLEX_ARRAY,
+        "multipliers_plus": _COMPLEX_ARRAY,
+        "monodromy_minus": _SQUARE,
+        "monodromy_plus": _SQUARE,
+        "event_ids_minus": _EVENT_IDS,
+        "event_ids_plus": _EVENT_IDS,
+        # written by name; read as a string, which OneSided parses (with the exponents files before
+        # 2026-11-25 wrote into it)
+        "limits": (lambda e: e.value, _dec("string")),
+    },
+    old_names={"event_labels_minus": "events_minus", "event_labels_plus": "events_plus"},
+)
+
+_TOUCH_CODEC = _Codec(Touch, {})
+
+
+def _part(codec: _Codec) -> tuple[Encoder, Decoder]:
+    """The codec of an optional part of a record (``null`` when absent); its decoders see the record's
+    fields decoded so far (a one-sided monodromy is as large as the point's state)."""
+    return (lambda part: None if part is None else codec.encode(part),
+            _nullable(lambda f, v, field, done: codec.decode(f, v, field, outer=done)))
+
 
 _SPECIAL_POINT_CODEC = _Codec(
     SpecialPoint,
@@ -282,18 +316,33 @@ _SPECIAL_POINT_CODEC = _Codec(
         "bracket": (lambda b: [_enc_float(x) for x in b], _as_tuple(_dec("reals", length=2))),
         "state": _REAL_ARRAY,
         "multipliers": _COMPLEX_ARRAY,
-        "multipliers_minus": _COMPLEX_ARRAY,
-        "multipliers_plus": _COMPLEX_ARRAY,
-        "monodromy_minus": _SQUARE,
-        "monodromy_plus": _SQUARE,
-        # written by name; read as a string, which SpecialPoint parses (with the exponents files before
-        # 2026-11-25 wrote into it)
-        "limits": (lambda e: e.value, _dec("string")),
+        "event_ids": _EVENT_IDS,
         # files before 2026-11-25 do not say: the dataclass default, the weaker claim (within its bracket)
         "status": _enum(SpecialPointStatus),
+        "one_sided": _part(_ONE_SIDED_CODEC),
+        "touch": _part(_TOUCH_CODEC),
     },
-    old_names={"event_labels_minus": "events_minus", "event_labels_plus": "events_plus"},
 )
+
+#: The keys of a version-1 special point (flat) that belong to its parts, with their part's field names.
+_FLAT_ONE_SIDED = {name: name for name in ("multipliers_minus", "multipliers_plus", "monodromy_minus",
+                                           "monodromy_plus", "event_labels_minus", "event_labels_plus",
+                                           "events_minus", "events_plus", "limits", "growth_exponents",
+                                           "crossing_q", "crossing_point")}
+_FLAT_TOUCH = {"touch_surface": "surface", "touch_mode": "mode", "touch_time": "time"}
+#: values a version-1 file writes for a field it has nothing for
+_NOTHING = (None, [], "", "none", "nan")
+
+
+def _nested_parts(d: dict[str, Any]) -> dict[str, Any]:
+    """A special point of a version-1 file (the parts' fields flat beside the core's) in the layout of
+    version 2: the flat keys that say something gathered into ``one_sided`` and ``touch``."""
+    core = {k: v for k, v in d.items() if k not in _FLAT_ONE_SIDED and k not in _FLAT_TOUCH}
+    sided = {_FLAT_ONE_SIDED[k]: v for k, v in d.items() if k in _FLAT_ONE_SIDED and v not in _NOTHING}
+    touched = {_FLAT_TOUCH[k]: v for k, v in d.items() if k in _FLAT_TOUCH}
+    core["one_sided"] = sided or None
+    core["touch"] = touched if touched.get("surface") else None
+    return core
 
 
 def _point_to_dict(p: BranchPoint) -> dict[str, Any]:
@@ -320,7 +369,10 @@ def _special_point_to_dict(sp: SpecialPoint) -> dict[str, Any]:
 
 
 def _special_point_from_dict(v: Any, f: _Fields, where: str) -> SpecialPoint:
-    return _SPECIAL_POINT_CODEC.decode(f, v, where)
+    d = f.obj(v, where)
+    if "one_sided" not in d:  # version 1 (before 2026-12-05): the parts' fields flat beside the core's
+        d = _nested_parts(d)
+    return _SPECIAL_POINT_CODEC.decode(f, d, where)
 
 
 def _enc_stop(reason: StopReason | None) -> str | None:
@@ -463,6 +515,21 @@ _FLAT_VIEW: tuple[tuple[str, str, str], ...] = (
     ("classification", "classification", "classified"),
 )
 
+#: The codec of every field and part's field by its flat name.
+_FLAT_CODECS: dict[str, tuple[Encoder, Decoder]] = {
+    **_SPECIAL_POINT_CODEC.codecs, **_ONE_SIDED_CODEC.codecs,
+    **{"touch_" + name: codec for name, codec in _TOUCH_CODEC.codecs.items()},
+}
+
+
+def _flat(sp: SpecialPoint) -> dict[str, Any]:
+    """The special point's codec with its parts' fields flat (an absent part's fields at their defaults)."""
+    full = _special_point_to_dict(sp)
+    sided = full.pop("one_sided") or _ONE_SIDED_CODEC.encode(OneSided())
+    touched = full.pop("touch") or _TOUCH_CODEC.encode(Touch(""))
+    return {**full, **sided, **{"touch_" + name: value for name, value in touched.items()}}
+
+
 #: Decoders of the flat record that check more than the special point's codec.
 _FLAT_CHECKS: dict[str, Decoder] = {
     "classification": _choice({"persistence": "persistence", "nonsmooth_fold": "nonsmooth_fold"}),
@@ -497,7 +564,7 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
         the surface, and whose field is tangent there). Multipliers are ``[re, im]`` pairs, an
         infinite one the string ``"inf"``; absent values are ``null``.
     """
-    full = _special_point_to_dict(sp)
+    full = _flat(sp)
     return {"model": model, "kind": full["kind"], "parameter": parameter,
             **{key: full[name] for key, name, when in _FLAT_VIEW if _SHOWN[when](sp)}}
 
@@ -505,7 +572,7 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
 def _check_record(v: Any, f: _Fields, where: str) -> dict[str, Any]:
     """A flat special-point record, every field it has checked by the special point's decoders; returned as read."""
     d = f.obj(v, where)
-    codecs = _SPECIAL_POINT_CODEC.codecs
+    codecs = _FLAT_CODECS
     for key, decode in (("model", f.string), ("kind", lambda x, field: f.choice(x, field, _KINDS)),
                         ("parameter", f.string)):
         f.take(d, where, key, decode)
@@ -514,6 +581,55 @@ def _check_record(v: Any, f: _Fields, where: str) -> dict[str, Any]:
         dec = _FLAT_CHECKS.get(key) or codecs[name][1]
         f.take(d, where, key, lambda x, field, dec=dec: dec(f, x, field, {}), None)
     return d
+
+
+# ---------------------------------------------------------------------------
+# two-parameter curves: a view of their branch
+# ---------------------------------------------------------------------------
+
+
+def codimension_two_record(sp: SpecialPoint) -> dict[str, Any]:
+    """A codimension-two point of a curve as ``saltation locus --json`` writes it.
+
+    Parameters
+    ----------
+    sp : SpecialPoint
+        A point of kind ``codimension_two``.
+
+    Returns
+    -------
+    dict
+        ``kind`` (the kinds on its two sides, ``"discontinuous_fold -> nonsmooth_flip"``), ``value`` (the two
+        parameters), ``accuracy`` and ``status``.
+    """
+    return {
+        "kind": " -> ".join(sp.sides),
+        "value": [float(sp.parameter), float(sp.second_parameter)],
+        "accuracy": float(sp.accuracy),
+        "status": sp.status.value,
+    }
+
+
+def locus_record(curve: Branch) -> dict[str, Any]:
+    """A two-parameter curve (:func:`saltation.special_points.loci.follow_locus`) as ``saltation locus --json``
+    writes it.
+
+    Parameters
+    ----------
+    curve : Branch
+        The curve: a branch with ``curve_of`` set.
+
+    Returns
+    -------
+    dict
+        ``points`` (``[first, second parameter]`` pairs), ``stop_reason`` (each direction's reason in words: the
+        branch's ``stop_detail``) and ``special_points`` (:func:`codimension_two_record` each).
+    """
+    return {
+        "points": [[float(p.parameter), float(p.second_parameter)] for p in curve.points],
+        "stop_reason": curve.stop_detail,
+        "special_points": [codimension_two_record(c) for c in curve.special_points],
+    }
 
 
 # ---------------------------------------------------------------------------

@@ -17,8 +17,8 @@ Reading
     number of fields, a CSV that ends inside a row, or a CSV with fewer or more rows than its side
     file records. A missing or unreadable file raises the usual ``OSError``.
 Headers
-    Every record file starts with ``{"format": NAME, "version": FORMAT_VERSION}``
-    (:func:`format_header`); :func:`check_format` reads it, and the names of earlier releases
+    Every record file starts with ``{"format": NAME, "version": FORMAT_VERSIONS[NAME]}``
+    (:func:`format_header`); :func:`check_format` reads it at every version of READABLE_VERSIONS, and the names of earlier releases
     (:data:`FORMAT_NAMES`).
 """
 
@@ -44,7 +44,9 @@ __all__ = [
     "DIAGRAM_FORMAT",
     "FORMAT_NAMES",
     "FORMAT_VERSION",
+    "FORMAT_VERSIONS",
     "PERIOD_MAP_FORMAT",
+    "READABLE_VERSIONS",
     "SWEEP_FORMAT",
     "FileFormatError",
     "PathType",
@@ -60,7 +62,16 @@ BRANCH_FORMAT = "saltation.branches.branch"
 DIAGRAM_FORMAT = "saltation.apps.diagram"
 SWEEP_FORMAT = "saltation.sweep"
 PERIOD_MAP_FORMAT = "saltation.period_map"
+#: The version every record file but a branch's is written at (sweeps, period maps, diagrams).
 FORMAT_VERSION = 1
+#: The version each format is written at.  Branches are at 2 since 2026-12-05: a special point's one-sided
+#: data and touch are nested parts (``one_sided``, ``touch``) instead of flat keys.
+FORMAT_VERSIONS: dict[str, int] = {BRANCH_FORMAT: 2, DIAGRAM_FORMAT: FORMAT_VERSION, SWEEP_FORMAT: FORMAT_VERSION,
+                                   PERIOD_MAP_FORMAT: FORMAT_VERSION}
+#: The versions each format is read at: every version written before (a record of an older version reads
+#: as the current one).
+READABLE_VERSIONS: dict[str, tuple[int, ...]] = {BRANCH_FORMAT: (1, 2), DIAGRAM_FORMAT: (1,), SWEEP_FORMAT: (1,),
+                                                 PERIOD_MAP_FORMAT: (1,)}
 
 #: Every ``"format"`` string the library has ever written, and what it reads it as: ``(format,
 #: versioned)``, the current format of the file and whether the file also carries ``"version"``
@@ -510,12 +521,12 @@ def _read_text(path: PathType, fields: _Fields, kind: str, empty: str) -> str:
 
 def format_header(name: str) -> dict[str, Any]:
     """The first two keys of every record file the library writes (branches, diagrams, sweeps, period
-    maps): ``{"format": name, "version": FORMAT_VERSION}``."""
-    return {"format": name, "version": FORMAT_VERSION}
+    maps): ``{"format": name, "version": FORMAT_VERSIONS[name]}``."""
+    return {"format": name, "version": FORMAT_VERSIONS[name]}
 
 
 def _check_format(d: Any, expected: str, fields: _Fields, where: str = "", *, legacy: str | None = None) -> dict[str, Any]:
-    """``d`` as an object of format ``expected``, version :data:`FORMAT_VERSION` (:func:`format_header`),
+    """``d`` as an object of format ``expected`` at a version it is read at (:data:`READABLE_VERSIONS`),
     or of a name an earlier release wrote for it (:data:`FORMAT_NAMES`); ``legacy`` is one more
     single ``"format"`` string (without ``"version"``) to accept."""
     d = fields.obj(d, where or "(top level)")
@@ -536,9 +547,10 @@ def _check_format(d: Any, expected: str, fields: _Fields, where: str = "", *, le
     version = d.get("version", _MISSING)
     if version is _MISSING:
         fields.fail(_sub(where, "version"), "missing")
-    if version != FORMAT_VERSION or isinstance(version, bool):
+    readable = READABLE_VERSIONS[expected]
+    if version not in readable or isinstance(version, bool):
         fields.fail(_sub(where, "version"), f"unsupported {expected} version {_show(version)} (this library reads "
-                    f"{FORMAT_VERSION})")
+                    f"{' and '.join(map(str, readable))})")
     return d
 
 

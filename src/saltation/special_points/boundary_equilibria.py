@@ -22,6 +22,7 @@ from saltation.branches.branch import (
     SpecialPoint,
     SpecialPointKind,
     SpecialPointStatus,
+    Touch,
     problem_and_point,
 )
 from saltation.errors import ConvergenceError, ModelError, SaltationError
@@ -175,7 +176,7 @@ def _record(problem, surface: str, mode: int, x: np.ndarray, lam: float, step: f
         kind=SpecialPointKind.BOUNDARY_EQUILIBRIUM, parameter=lam,
         bracket=(float(points[i].parameter), float(points[i + 1].parameter)), accuracy=step, index=i,
         state=x, period=math.nan, amplitude=float(abs(x[0])), multipliers=eig.astype(complex),
-        note=f"the equilibrium of {name!r} on surface {surface!r}", touch_surface=surface, touch_mode=name,
+        note=f"the equilibrium of {name!r} on surface {surface!r}", touch=Touch(surface, name),
         status=SpecialPointStatus.LOCATED, classification=classification,
     )
 
@@ -590,7 +591,7 @@ def follow_boundary_equilibrium_curve(
 
     from saltation.branches.branch import BranchKind
     from saltation.branches.continuation import ContinuationSettings
-    from saltation.special_points.loci import Locus, run_curve
+    from saltation.special_points.loci import Locus, curve_stops, run_curve
 
     if isinstance(flow, Branch):
         problem, point = problem_and_point(flow, point, "a boundary-equilibrium curve")
@@ -603,7 +604,7 @@ def follow_boundary_equilibrium_curve(
     settings = replace(settings or ContinuationSettings(), bounds=(min(bounds), max(bounds)), detect=False)
     u0 = np.append(np.asarray(point.state, dtype=float), point.parameter)
     lam0 = curve.lam0()
-    runs, reasons = [], []
+    runs, results = [], []
     for direction in (1, -1):
         cont, way, failure = run_curve(
             curve, settings, u0, lam0, direction, progress,
@@ -613,14 +614,14 @@ def follow_boundary_equilibrium_curve(
         n = flow.system.n  # the engine records the continuation parameter as ``parameter``: put both back
         runs.append([replace(bp, parameter=float(sol.z[n]), second_parameter=float(sol.z[-1]))
                      for bp, sol in zip(cont.branch.points, cont.solutions)])
-        reasons.append(f"{way}: {failure or cont.branch.stop_reason.value}")
+        results.append((cont, way, failure))
     points = list(reversed(runs[1]))[:-1] + runs[0]
     return Locus(
         model=flow.system.name, parameter_name=first, kind=BranchKind.EQUILIBRIUM, points=points,
         fixed_parameters=dict(zip(flow.system.parameter_names, map(float, values))),
         label="boundary_equilibrium curve", autonomous=True, second_parameter_name=second,
-        curve_of=SpecialPointKind.BOUNDARY_EQUILIBRIUM, stop_reason="; ".join(reasons),
-        state_names=tuple(flow.system.state_names),
+        curve_of=SpecialPointKind.BOUNDARY_EQUILIBRIUM, state_names=tuple(flow.system.state_names),
+        **curve_stops(results),
     )
 
 

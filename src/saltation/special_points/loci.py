@@ -39,8 +39,9 @@ curve's kind and the non-smooth point's.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -86,55 +87,79 @@ SLIDING_KINDS = frozenset(
 
 @dataclass(repr=False)  # (the repr of a Branch)
 class Locus(Branch):
-    """A curve of special points in two parameters.
+    """A curve of special points in two parameters: a :class:`~saltation.branches.branch.Branch` with
+    ``curve_of`` set and nothing of its own.
 
-    A :class:`~saltation.branches.branch.Branch` whose points carry both parameters (``parameter`` the
-    first, ``second_parameter`` the second), labelled with
-    :class:`~saltation.branches.branch.SpecialPoint` records of kind CODIMENSION_TWO where two defining
-    conditions meet.
+    Its points carry both parameters (``parameter`` the first, ``second_parameter`` the second) and, on a
+    corner's curve, the kind of the corner at each point (``curve_kind``; the column
+    :attr:`~saltation.branches.branch.Branch.curve_kinds`).  Its special points are of kind
+    CODIMENSION_TWO, where two defining conditions meet.  ``stop_reason`` is why the run of increasing
+    second parameter stopped, ``stop_reasons[0]`` why the decreasing one did, and ``stop_detail`` says both
+    in words (``"increasing f0: reached a parameter bound; decreasing f0: failed after 12 points: ..."``).
+
+    The class is kept for release 0.2 (``isinstance`` tests, :meth:`record`, :attr:`kinds`); release 0.3.0
+    returns plain branches.
 
     Attributes
     ----------
-    stop_reason : str
-        Beyond a branch's attributes: why each direction stopped, one clause each (``"increasing f0:
-        reached a parameter bound; decreasing f0: failed after 12 points: ..."``).
-    kinds : list of str
-        The kind of the special point at each curve point (grazing and corner curves, whose kind is
-        classified along the curve; empty otherwise).
+    model, parameter_name, kind, points, special_points, stop_reason, stop_reasons, stop_detail, ...
+        Those of :class:`~saltation.branches.branch.Branch`, as described above.
     """
-
-    stop_reason: str = ""
-    kinds: list[str] = field(default_factory=list)
 
     @property
     def values(self) -> np.ndarray:
         """``(first, second parameter)`` per curve point, shape (m, 2)."""
         return np.column_stack([self.parameter, self.second_parameter]).reshape(-1, 2)
 
+    @property
+    def kinds(self) -> list[str]:
+        """Deprecated (goes in release 0.3.0): the values of :attr:`Branch.curve_kinds`."""
+        _deprecated("Locus.kinds", "Branch.curve_kinds")
+        return [k.value for k in self.curve_kinds if k is not None]
+
     def record(self) -> dict:
-        """The curve as the command line writes it (``saltation locus --json``).
+        """Deprecated (goes in release 0.3.0): :func:`saltation.output.codecs.locus_record`.
 
         Returns
         -------
         dict
-            ``points`` (pairs of the two parameters), ``stop_reason`` and ``special_points`` (the
-            codimension-two points, as :func:`codimension_two_record` writes them).
+            The curve as ``saltation locus --json`` writes it.
         """
-        return {
-            "points": [[float(a), float(b)] for a, b in self.values],
-            "stop_reason": self.stop_reason,
-            "special_points": [codimension_two_record(c) for c in self.special_points],
-        }
+        _deprecated("Locus.record", "saltation.output.codecs.locus_record")
+        from saltation.output.codecs import locus_record
+
+        return locus_record(self)
 
 
 def codimension_two_record(sp: SpecialPoint) -> dict:
-    """A codimension-two point as ``saltation locus --json`` writes it."""
-    return {
-        "kind": " -> ".join(sp.sides),
-        "value": [float(sp.parameter), float(sp.second_parameter)],
-        "accuracy": float(sp.accuracy),
-        "status": sp.status.value,
-    }
+    """Deprecated (goes in release 0.3.0): :func:`saltation.output.codecs.codimension_two_record`."""
+    _deprecated("saltation.special_points.loci.codimension_two_record", "saltation.output.codecs.codimension_two_record")
+    from saltation.output.codecs import codimension_two_record as record
+
+    return record(sp)
+
+
+def _deprecated(old: str, new: str) -> None:
+    warnings.warn(f"{old} is deprecated and goes in release 0.3.0: use {new}", DeprecationWarning, stacklevel=3)
+
+
+def curve_stops(results: Sequence[tuple[Continuation, str, str | None]]) -> dict:
+    """How the two runs of a curve ended, as the fields of its branch.
+
+    Parameters
+    ----------
+    results : sequence of (Continuation, str, str or None)
+        What :func:`run_curve` returned for each direction (increasing, then decreasing).
+
+    Returns
+    -------
+    dict
+        ``stop_reason`` (the first run's), ``stop_reasons`` (the others') and ``stop_detail`` (each run's
+        direction and reason in words, the error where one stopped it).
+    """
+    reasons = [StopReason.ERROR if failure else cont.branch.stop_reason for cont, _, failure in results]
+    detail = "; ".join(f"{way}: {failure or cont.branch.stop_reason.value}" for cont, way, failure in results)
+    return {"stop_reason": reasons[0], "stop_reasons": reasons[1:], "stop_detail": detail}
 
 
 def _codimension_two(sides: tuple[str, str], values: Sequence[float], accuracy: float, index: int,
@@ -452,7 +477,7 @@ def follow_locus(
     # the curve's own turning points and the multipliers of its orbits are not special points of the curve
     settings = replace(settings, bounds=bounds, detect=False)
     lam0 = float(p[curve.lam_index])
-    runs, records, reasons, kinds_by_run, events_by_run, ends = [], [], [], [], [], []
+    runs, records, results, kinds_by_run, events_by_run, ends = [], [], [], [], [], []
     start = curve.snapshot()
     n = problem.system.n
     for direction in (1, -1):
@@ -468,7 +493,7 @@ def follow_locus(
         records.append([replace(bp, parameter=float(sol.z[curve.n_base]), second_parameter=float(sol.z[-1]))
                         for bp, sol in zip(cont.branch.points, cont.solutions)])
         kinds_by_run.append(list(getattr(curve, "kinds", [])))
-        reasons.append(f"{way}: {failure or cont.branch.stop_reason.value}")
+        results.append((cont, way, failure))
         events_by_run.append([canonical_events(e) for e in curve.event_ids])
         if isinstance(curve, MultiplierCurve) and failure is None and cont.branch.stop_reason is not StopReason.PARAMETER_BOUND:
             end = _end_at_a_corner(single, curve, point.kind, runs[-1], records[-1])
@@ -483,7 +508,7 @@ def follow_locus(
         model=problem.system.name, parameter_name=problem.lam_name, kind=BranchKind.PERIODIC,
         points=joined(records), fixed_parameters=dict(zip(problem.system.parameter_names, map(float, p))),
         label=f"{point.kind.value} curve", autonomous=problem.autonomous, second_parameter_name=second,
-        curve_of=point.kind, stop_reason="; ".join(reasons), state_names=tuple(problem.system.state_names),
+        curve_of=point.kind, state_names=tuple(problem.system.state_names), **curve_stops(results),
     )
     _mark_codimension_two(locus, zs, joined(kinds_by_run) if classify else None, joined(events_by_run),
                           curve, single, point.kind)
@@ -531,7 +556,7 @@ def _mark_codimension_two(locus: Locus, zs: list, kinds: list | None, events: li
                                 a, locus.points[a], bracket=(float(points[a][0]), float(points[a + 1][0])))
 
     if kinds is not None:
-        locus.kinds = kinds
+        locus.points = [replace(bp, curve_kind=SpecialPointKind(k)) for bp, k in zip(locus.points, kinds)]
         for a in range(len(zs) - 1):
             if kinds[a] != kinds[a + 1]:
                 locus.special_points.append(label(a, (kinds[a], kinds[a + 1])))
@@ -859,5 +884,5 @@ class MultiplierCurve(_Curve):
 
 __all__ = [
     "SLIDING_KINDS", "GrazingCurve", "Locus", "MultiplierCurve", "SlidingCurve", "arrival_identity",
-    "follow_locus", "grazed_transitions", "run_curve",
+    "curve_stops", "follow_locus", "grazed_transitions", "run_curve",
 ]

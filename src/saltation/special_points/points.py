@@ -16,9 +16,11 @@ import numpy as np
 
 from saltation.branches.branch import (
     Limits,
+    OneSided,
     SpecialPoint,
     SpecialPointKind,
     SpecialPointStatus,
+    Touch,
 )
 from saltation.branches.corrector import Solution
 from saltation.engine.flow import EventKind
@@ -39,6 +41,7 @@ from saltation.special_points.sliding import (
 )
 
 __all__ = [
+    "two_sides",
     "special_point_between",
     "grazing_point",
     "unlocated_grazing",
@@ -49,6 +52,31 @@ __all__ = [
     "unlocated_symmetry_breaking",
     "on_surface_point",
 ]
+
+
+def two_sides(lo: Solution, hi: Solution, **more) -> OneSided:
+    """The two sides of a non-smooth point between ``lo`` (minus) and ``hi`` (plus): their orbits'
+    multipliers, monodromies and event sequences (by label and by identity).
+
+    Parameters
+    ----------
+    lo, hi : Solution
+        The solutions on either side.
+    **more
+        Further fields of :class:`~saltation.branches.branch.OneSided` (or replacements of these).
+
+    Returns
+    -------
+    OneSided
+    """
+    a, b = lo.summary, hi.summary
+    sides = {
+        "multipliers_minus": a.multipliers, "multipliers_plus": b.multipliers,
+        "monodromy_minus": a.monodromy, "monodromy_plus": b.monodromy,
+        "event_labels_minus": a.event_labels, "event_labels_plus": b.event_labels,
+        "event_ids_minus": a.event_ids, "event_ids_plus": b.event_ids,
+    }
+    return OneSided(**{**sides, **more})
 
 
 def special_point_between(
@@ -95,14 +123,7 @@ def special_point_between(
         state=lo.summary.state,
         period=lo.summary.period,
         amplitude=lo.summary.amplitude,
-        multipliers_minus=lo.summary.multipliers,
-        multipliers_plus=hi.summary.multipliers,
-        monodromy_minus=lo.summary.monodromy,
-        monodromy_plus=monodromy_plus,
-        crossing_q=crossing.q,
-        crossing_point=crossing.point,
-        event_labels_minus=lo.summary.event_labels,
-        event_labels_plus=hi.summary.event_labels,
+        one_sided=two_sides(lo, hi, monodromy_plus=monodromy_plus, crossing_q=crossing.q, crossing_point=crossing.point),
         note=note,
     )
 
@@ -176,21 +197,13 @@ def sliding_bifurcation_point(problem, lo: Solution, hi: Solution, index: int) -
         state=found.state0,
         period=found.trajectory.t1 - found.trajectory.t0,
         amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
-        multipliers_minus=lo.summary.multipliers,
-        multipliers_plus=hi.summary.multipliers,
-        monodromy_minus=lo.summary.monodromy,
-        monodromy_plus=hi.summary.monodromy,
-        event_labels_minus=lo.summary.event_labels,
-        event_labels_plus=hi.summary.event_labels,
+        one_sided=two_sides(lo, hi, limits=Limits.NEAREST_ORBITS),
         note=(f"the orbit {where} (surface {change.surface!r}, t = {found.t_touch:.10g}, d2h/dt2 there "
               f"{found.curvature:.3g}){'' if change.count == 1 else f', at {change.count} points of the orbit at once'}; "
               f"the side with the extra events is {'plus' if lo_fewer else 'minus'}"),
         multipliers_accuracy=float(np.linalg.norm(hi.summary.monodromy - lo.summary.monodromy)),
-        limits=Limits.NEAREST_ORBITS,
         status=SpecialPointStatus.LOCATED,
-        touch_surface=change.surface,
-        touch_mode=found.mode,
-        touch_time=found.t_touch,
+        touch=Touch(change.surface, found.mode, found.t_touch),
     )
 
 
@@ -281,20 +294,13 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
         state=orbit.state0,
         period=orbit.period,
         amplitude=float(max(abs(traj.x_max[0]), abs(traj.x_min[0]))),
-        multipliers_minus=mu_lo,
-        multipliers_plus=mu_hi,
-        monodromy_minus=m_lo,
-        monodromy_plus=m_hi,
-        event_labels_minus=lo.summary.event_labels,
-        event_labels_plus=hi.summary.event_labels,
+        one_sided=two_sides(lo, hi, multipliers_minus=mu_lo, multipliers_plus=mu_hi, monodromy_minus=m_lo,
+                            monodromy_plus=m_hi, limits=crossing.limits),
         note=(f"grazing of surface {surface!r} at t = {orbit.t_graze:.10g}; the side with the crossing is "
               f"'{side}', {crossing.text}"),
         multipliers_accuracy=crossing.accuracy,
-        limits=crossing.limits,
         status=SpecialPointStatus.LOCATED,
-        touch_surface=surface,
-        touch_mode=problem.system.transitions[orbit.transition].source,
-        touch_time=orbit.t_graze,
+        touch=Touch(surface, problem.system.transitions[orbit.transition].source, orbit.t_graze),
     )
 
 
@@ -431,9 +437,9 @@ def unlocated_grazing(problem, lo: Solution, hi: Solution, index: int, *, bracke
     crossing = SetValuedCrossing(SpecialPointKind.GRAZING, None, None)
     sp = special_point_between(lo, hi, crossing, index=index, bracket=bracket, accuracy=accuracy,
                                monodromy_plus=None, note=(note + "; " if note else "") + why)
-    return replace(sp, multipliers_minus=mu_lo, multipliers_plus=mu_hi, monodromy_minus=None,
-                   multipliers_accuracy=float("nan"), limits=Limits.NEAREST_ORBITS,
-                   touch_surface=first.surface, touch_mode=first.mode_from, touch_time=float(first.t))
+    return replace(sp, one_sided=replace(sp.one_sided, multipliers_minus=mu_lo, multipliers_plus=mu_hi, monodromy_minus=None,
+                                         limits=Limits.NEAREST_ORBITS),
+                   multipliers_accuracy=float("nan"), touch=Touch(first.surface, first.mode_from, float(first.t)))
 
 
 def _autonomous_crossing_limit(problem, orbit, with_: Solution) -> tuple[np.ndarray, float] | None:
@@ -502,6 +508,7 @@ def smooth_point(kind: SpecialPointKind, best: Solution, *, bracket: tuple[float
         period=best.summary.period,
         amplitude=best.summary.amplitude,
         multipliers=best.summary.multipliers,
+        event_ids=best.summary.event_ids,
         multipliers_accuracy=multipliers_accuracy,
         note=note,
     )
@@ -578,6 +585,7 @@ def symmetry_breaking_point(summary, parameter: float, half_width: float, *, ind
         period=summary.period,
         amplitude=summary.amplitude,
         multipliers=summary.multipliers,
+        event_ids=summary.event_ids,
         multipliers_accuracy=multipliers_accuracy,
         status=SpecialPointStatus.LOCATED,
         note=note,
@@ -606,7 +614,7 @@ def unlocated_symmetry_breaking(a: Solution, b: Solution, index: int, why: str) 
         kind=SpecialPointKind.SYMMETRY_BREAKING, parameter=0.5 * (a.lam + b.lam),
         bracket=(min(a.lam, b.lam), max(a.lam, b.lam)), accuracy=float(np.linalg.norm(b.z - a.z)), index=index,
         state=a.summary.state, period=a.summary.period, amplitude=a.summary.amplitude,
-        multipliers=a.summary.multipliers, status=SpecialPointStatus.FAILED,
+        multipliers=a.summary.multipliers, event_ids=a.summary.event_ids, status=SpecialPointStatus.FAILED,
         note=f"a real half-period multiplier passes -1 between two branch points, but {why}",
     )
 
@@ -643,10 +651,12 @@ def on_surface_point(good: Solution, failed: float, on, crossing: SetValuedCross
     return SpecialPoint(
         kind=crossing.kind, parameter=good.lam, bracket=(lo_lam, hi_lam), accuracy=hi_lam - lo_lam,
         index=index, state=good.summary.state, period=good.summary.period,
-        amplitude=good.summary.amplitude, multipliers_minus=multipliers[0], multipliers_plus=multipliers[1],
-        monodromy_minus=monodromies[0], monodromy_plus=monodromies[1], crossing_q=crossing.q,
-        crossing_point=crossing.point, event_labels_minus=good.summary.event_labels, limits=Limits.ON_SURFACE,
-        multipliers_accuracy=multipliers_accuracy, touch_surface=on.surface, touch_mode=on.mode,
+        amplitude=good.summary.amplitude,
+        one_sided=OneSided(multipliers_minus=multipliers[0], multipliers_plus=multipliers[1],
+                           monodromy_minus=monodromies[0], monodromy_plus=monodromies[1], crossing_q=crossing.q,
+                           crossing_point=crossing.point, event_labels_minus=good.summary.event_labels,
+                           event_ids_minus=good.summary.event_ids, limits=Limits.ON_SURFACE),
+        multipliers_accuracy=multipliers_accuracy, touch=Touch(on.surface, on.mode),
         note=(f"the orbit lies on {on.surface} all round (|h| <= {on.distance:.1e}) in mode {on.mode}; beyond it "
               f"the orbits lie in {on.other_mode}, where the corrector cannot follow them from this side: "
               f"one-sided limits from the variational equation along it with {on.mode}'s and {on.other_mode}'s "

@@ -136,11 +136,12 @@ def _loci(args: argparse.Namespace, system, kind, problem, branch, settings, pro
 def _report(args: argparse.Namespace, system, kind, loci: list) -> None:
     """Write the curves into ``--out`` (JSON and a plot) and print them (``--json``: one JSON object)."""
     from saltation.output import plotting
+    from saltation.output.codecs import locus_record
     from saltation.output.io import write_json
 
     record = {
         "model": system.name, "kind": kind.value, "param": args.param, "param2": args.param2,
-        "curves": [locus.record() for locus in loci],
+        "curves": [locus_record(locus) for locus in loci],
     }
     if args.out is not None:
         out = Path(args.out)
@@ -153,7 +154,7 @@ def _report(args: argparse.Namespace, system, kind, loci: list) -> None:
         return
     print(f"{len(loci)} curve(s) of {kind.value} points of {system.name} in ({args.param}, {args.param2})")
     for k, locus in enumerate(loci):
-        print(f"  curve {k}: {len(locus.points)} points; {locus.stop_reason}")
+        print(f"  curve {k}: {len(locus.points)} points; {locus.stop_detail}")
         for c in locus.special_points:
             print(f"    {c.sides[0]} -> {c.sides[1]} at {args.param} = {c.parameter:.8g}, {args.param2} = "
                   f"{c.second_parameter:.8g} (within {c.accuracy:.2g}, {c.status.value})")
