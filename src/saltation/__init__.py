@@ -15,53 +15,50 @@ package).  The flat layout's import paths (``saltation.integrate``, ``saltation.
 for one more release, with a ``DeprecationWarning``.
 """
 
+import importlib as _importlib
+
 from saltation import _moved
 
 _moved.install()
 
-from saltation.branches.branch import Branch, SpecialPoint
-from saltation.engine.flow import (
-    EventKind,
-    Flow,
-    Status,
-    SwitchingEvent,
-    Tolerances,
-    Trajectory,
-    simulate,
-)
-from saltation.errors import (
-    ChatteringError,
-    ConvergenceError,
-    InconsistentResultError,
-    InitialModeError,
-    IntegrationError,
-    ModelError,
-    NonFiniteError,
-    NoOrbitNearGuessError,
-    SaltationError,
-    SlidingError,
-    StartGuessError,
-    StationaryStateError,
-    StepSizeError,
-)
-from saltation.kinds import SpecialPointKind
-from saltation.model.symmetry import Symmetry
-from saltation.model.system import Crossing, Mode, PiecewiseSystem, Transition
-from saltation.orbits.lyapunov import LyapunovExponents, lyapunov_exponents
-from saltation.orbits.pseudo_equilibria import (
-    PseudoEquilibrium,
-    find_pseudo_equilibrium,
-)
-from saltation.orbits.records import PeriodicOrbit
-from saltation.orbits.single import ShootingProblem
-from saltation.orbits.start import find_periodic_orbit
-from saltation.special_points.continuation import (
-    Continuation,
-    ContinuationSettings,
-    continue_branch,
-    continue_orbit,
-)
-from saltation.sweeps import SweepStart, period_map, sweep
+#: Where each of the everyday names lives.  They are imported when first used (``saltation.Flow``,
+#: ``from saltation import Flow``), so ``import saltation`` loads neither sympy nor numba, and the command
+#: line answers ``--version`` and ``--help`` at once.
+_HOMES: dict[str, tuple[str, ...]] = {
+    "saltation.branches.branch": ("Branch", "SpecialPoint"),
+    "saltation.engine.flow": ("EventKind", "Flow", "Status", "SwitchingEvent", "Tolerances", "Trajectory", "simulate"),
+    "saltation.errors": (
+        "ChatteringError", "ConvergenceError", "InconsistentResultError", "InitialModeError", "IntegrationError",
+        "ModelError", "NonFiniteError", "NoOrbitNearGuessError", "SaltationError", "SlidingError", "StartGuessError",
+        "StationaryStateError", "StepSizeError",
+    ),
+    "saltation.kinds": ("SpecialPointKind",),
+    "saltation.model.symmetry": ("Symmetry",),
+    "saltation.model.system": ("Crossing", "Mode", "PiecewiseSystem", "Transition"),
+    "saltation.orbits.lyapunov": ("LyapunovExponents", "lyapunov_exponents"),
+    "saltation.orbits.pseudo_equilibria": ("PseudoEquilibrium", "find_pseudo_equilibrium"),
+    "saltation.orbits.records": ("PeriodicOrbit",),
+    "saltation.orbits.single": ("ShootingProblem",),
+    "saltation.orbits.start": ("find_periodic_orbit",),
+    "saltation.special_points.continuation": ("Continuation", "ContinuationSettings", "continue_branch", "continue_orbit"),
+    "saltation.sweeps": ("SweepStart", "period_map", "sweep"),
+}
+_HOME_OF = {name: module for module, names in _HOMES.items() for name in names}
+
+
+def __getattr__(name: str):
+    """An everyday name, imported from its module on first use (PEP 562)."""
+    module = _HOME_OF.get(name)
+    if module is None:
+        raise AttributeError(f"module 'saltation' has no attribute {name!r}")
+    value = getattr(_importlib.import_module(module), name)
+    globals()[name] = value  # the next use is a plain lookup
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_HOME_OF})
+
 
 __version__ = "0.1.0"
 
@@ -73,19 +70,3 @@ __all__ = [
     "Status", "StepSizeError", "SweepStart", "SwitchingEvent", "Tolerances", "Trajectory", "Transition", "continue_branch",
     "continue_orbit", "find_periodic_orbit", "find_pseudo_equilibrium", "lyapunov_exponents", "period_map", "simulate", "sweep",
 ]
-
-
-def _no_terminal_reset_at_exit() -> None:
-    """numba formats its warnings (the first comes from the engine's contract, at import) through colorama,
-    whose first use registers a reset of the terminal's colours at exit: ``ESC[0m`` written to standard
-    output when Python stops, by a program that printed no colour.  Saltation unregisters it (colorama
-    registers it once per process, so it does not come back)."""
-    import atexit
-    import sys
-
-    initialise = sys.modules.get("colorama.initialise")
-    if initialise is not None and hasattr(initialise, "reset_all"):
-        atexit.unregister(initialise.reset_all)
-
-
-_no_terminal_reset_at_exit()

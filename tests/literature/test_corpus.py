@@ -128,7 +128,7 @@ def test_two_parameter_curve(case: LiteratureCase, request):
     )
     locus = follow_locus(problem, points[0], step.second, step.bounds)
     values = locus.values
-    assert len(values) >= 5, f"the curve has {len(values)} points: {locus.stop_reason}"
+    assert len(values) >= 5, f"the curve has {len(values)} points: {locus.stop_detail}"
     errors = [abs(first - step.reference(second)) for first, second in values]
     assert max(errors) <= step.tol, f"largest distance to the reference curve {max(errors):.3g} > {step.tol:.3g}"
 

@@ -265,7 +265,7 @@ def test_a_boundary_equilibrium_curve_against_its_closed_form():
     locus = follow_boundary_equilibrium_curve(flow, point, "mu", "nu", (-1.0, 1.0), settings=settings)
     mu, nu = locus.values.T
     assert nu.min() == pytest.approx(-1.0) and nu.max() == pytest.approx(1.0)  # both directions to the bounds
-    assert "reached a parameter bound" in locus.stop_reason
+    assert "reached a parameter bound" in locus.stop_detail
     # on the curve: mu = nu^2, the equilibrium (-mu, nu) on the surface; the corrector's tolerance 1e-12
     np.testing.assert_allclose(mu, nu**2, rtol=0, atol=1e-11)
     np.testing.assert_allclose(locus.states[:, 0], -mu, atol=1e-11)

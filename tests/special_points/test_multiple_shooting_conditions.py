@@ -97,7 +97,7 @@ def fold_curve_by_segments():
 
 def test_fold_curve_by_multiple_shooting_has_a_multiplier_one(fold_curve_by_segments):
     flow, _, curve = fold_curve_by_segments
-    assert "increasing f0: reached a parameter bound" in curve.stop_reason
+    assert "increasing f0: reached a parameter bound" in curve.stop_detail
     assert len(curve) > 5
     tol = Tolerances(rtol=1e-12, atol=1e-14, exact_affine=False)
     for point in curve.points[:: max(1, len(curve) // 4)]:

@@ -206,8 +206,8 @@ def switching_sliding_locus(branch):
 
 
 def _reaches_both_bounds(locus):
-    assert "increasing kappa: reached a parameter bound" in locus.stop_reason, locus.stop_reason
-    assert "decreasing kappa: reached a parameter bound" in locus.stop_reason, locus.stop_reason
+    assert "increasing kappa: reached a parameter bound" in locus.stop_detail, locus.stop_detail
+    assert "decreasing kappa: reached a parameter bound" in locus.stop_detail, locus.stop_detail
     assert locus.values[:, 1].min() == pytest.approx(KAPPA_RANGE[0], abs=1e-12)
     assert locus.values[:, 1].max() == pytest.approx(KAPPA_RANGE[1], abs=1e-12)
 

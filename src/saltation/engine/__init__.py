@@ -16,3 +16,16 @@ Modules:
 * ``saltation.engine._kernel_source``: the engine's source template (not imported; codegen writes and compiles it).
 * ``saltation.engine._records``: the named records the engine's step-and-event loop takes its settings and arrays in.
 """
+
+
+def _no_terminal_reset_at_exit() -> None:
+    """numba formats its warnings (the first comes from the engine's contract, at import) through colorama,
+    whose first use registers a reset of the terminal's colours at exit: ``ESC[0m`` written to standard
+    output when Python stops, by a program that printed no colour.  The engine unregisters it once its
+    modules are loaded (colorama registers it once per process, so it does not come back)."""
+    import atexit
+    import sys
+
+    initialise = sys.modules.get("colorama.initialise")
+    if initialise is not None and hasattr(initialise, "reset_all"):
+        atexit.unregister(initialise.reset_all)

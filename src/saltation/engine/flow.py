@@ -40,6 +40,9 @@ from saltation.engine.trajectory import (  # noqa: F401 (the private names: impo
 )
 from saltation.errors import InitialModeError, IntegrationError, ModelError
 from saltation.model.system import TIME, PiecewiseSystem
+from saltation.engine import _no_terminal_reset_at_exit
+
+_no_terminal_reset_at_exit()
 
 #: A state outside a named start mode's domain by at most this much (relative to ``1 + max |x_i|``) lies on
 #: its boundary, within rounding (the engine's tolerance for a state that leaves its mode's domain).

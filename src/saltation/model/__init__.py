@@ -10,19 +10,32 @@ Nothing here integrates; every other layer depends on this one.  Its modules:
 - :mod:`~saltation.model.labels`: how plots write a model's names.
 """
 
-from saltation.model.symmetry import Symmetry
-from saltation.model.system import TIME, Crossing, Mode, PiecewiseSystem, Transition
-
 __all__ = ["TIME", "Crossing", "Mode", "PiecewiseSystem", "Symmetry", "Transition"]
+
+#: the package's names and the modules that define them (imported on first use: sympy loads with them)
+_HOMES = {"Symmetry": "saltation.model.symmetry", **dict.fromkeys(("TIME", "Crossing", "Mode", "PiecewiseSystem",
+                                                                    "Transition"), "saltation.model.system")}
 
 
 def __getattr__(name: str):
-    """The other names of the flat layout's ``saltation.model`` (now :mod:`saltation.model.system`)."""
-    from saltation.model import system
+    """The package's names, imported on first use; and the other names of the flat layout's
+    ``saltation.model`` (now :mod:`saltation.model.system`), with a warning."""
+    import importlib
 
-    if name.startswith("__") or not hasattr(system, name):
+    if name in _HOMES:
+        value = getattr(importlib.import_module(_HOMES[name]), name)
+        globals()[name] = value
+        return value
+    if name.startswith("__"):
+        raise AttributeError(f"module 'saltation.model' has no attribute {name!r}")
+    system = importlib.import_module("saltation.model.system")
+    if not hasattr(system, name):
         raise AttributeError(f"module 'saltation.model' has no attribute {name!r}")
     import warnings
 
     warnings.warn(f"saltation.model.{name} has moved to saltation.model.system.{name}", DeprecationWarning, stacklevel=2)
     return getattr(system, name)
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_HOMES})

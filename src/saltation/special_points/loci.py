@@ -441,7 +441,7 @@ def follow_locus(
     Returns
     -------
     Locus
-        Its ``stop_reason`` says, per direction, whether the curve reached a bound or what failed.
+        ``stop_reason`` and ``stop_reasons[0]`` say why the increasing and the decreasing run stopped, ``stop_detail`` both in words.
 
     Raises
     ------

@@ -77,7 +77,7 @@ from saltation.apps.cli.options import (
     parse_vector,
     usable_parameters,
 )
-from saltation.apps.cli.orbit import cmd_orbit, format_orbit, orbit_to_dict
+from saltation.apps.cli.orbit import cmd_orbit, format_orbit
 from saltation.apps.cli.paper import PAPER_MIN_DS_MAX, cmd_paper
 from saltation.apps.cli.starts import (
     equilibrium_start,
@@ -88,7 +88,6 @@ from saltation.apps.cli.starts import (
 from saltation.apps.cli.sweep import cmd_sweep, sweep_start
 from saltation.apps.cli.text import multipliers_json
 from saltation.errors import SaltationError
-from saltation.models import SHIPPED
 
 
 class _Parser(argparse.ArgumentParser):
@@ -345,4 +344,15 @@ __all__ = [
 
 
 # names the module held in release 0.1 and no longer imports: found where they live now, until 0.3.0
-__getattr__ = forward_names(__name__, ('saltation.orbits.multiple', 'saltation.orbits.start', 'saltation.errors', 'saltation.model.system'))
+_forward = forward_names(__name__, ('saltation.orbits.multiple', 'saltation.orbits.start', 'saltation.errors', 'saltation.model.system'))
+#: names of this package imported on first use: the shipped models and the orbit codec load sympy and numba
+_LAZY = {"SHIPPED": "saltation.models", "orbit_to_dict": "saltation.output.codecs"}
+
+
+def __getattr__(name: str):
+    """:data:`SHIPPED` and ``orbit_to_dict`` on first use; the names of release 0.1, forwarded with a warning."""
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    return _forward(name)

@@ -5,16 +5,24 @@ from __future__ import annotations
 import sys
 import threading
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from saltation.apps.cli.errors import PROG, UsageError
 from saltation.errors import SaltationError
-from saltation.model.system import PiecewiseSystem
-from saltation.models import SHIPPED
+
+if TYPE_CHECKING:
+    from saltation.model.system import PiecewiseSystem
+
+#: The shipped models the command line names, in the order of :data:`saltation.models.SHIPPED` (written out
+#: here so that help and ``--version`` do not build the models: a test holds the two equal).
+SHIPPED_NAMES = ("trilinear", "block_on_belt", "impact_oscillator", "bouncing_ball", "friction_oscillator",
+                 "relay_feedback", "buck_converter", "two_mass_stops", "tilted_relay", "symmetric_impact_oscillator",
+                 "sliding_mode")
 
 
 def model_names() -> str:
     """The shipped models' names, as help and messages list them."""
-    return ", ".join(SHIPPED)
+    return ", ".join(SHIPPED_NAMES)
 
 
 MODEL_HELP = (
@@ -39,6 +47,8 @@ def build_model(spec: str) -> PiecewiseSystem:
     path, sep, attr = spec.rpartition(":")
     if sep and path.endswith(".py"):
         return load_model_file(Path(path), attr)
+    from saltation.models import SHIPPED
+
     try:
         factory = SHIPPED[spec].factory
     except KeyError:
@@ -61,6 +71,7 @@ def load_model_file(path: Path, name: str) -> PiecewiseSystem:
     import inspect
 
     from saltation.engine.compiled import CompiledSystem
+    from saltation.model.system import PiecewiseSystem
 
     where = f"model file {str(path)!r}"
     if not name.isidentifier():

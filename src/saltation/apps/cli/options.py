@@ -14,6 +14,7 @@ import os
 import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -21,8 +22,13 @@ from saltation.apps.cli.errors import UsageError
 from saltation.apps.cli.models import MODEL_HELP, model_names
 from saltation.apps.cli.text import fmt
 from saltation.errors import SaltationError
-from saltation.model.system import PiecewiseSystem
-from saltation.orbits.shooting import MAX_SEGMENTS
+
+if TYPE_CHECKING:
+    from saltation.model.system import PiecewiseSystem
+
+#: The most shooting segments ``--segments`` takes: :data:`saltation.orbits.multiple.MAX_SEGMENTS`, written out
+#: here so that building the parser loads no solver (a test holds the two equal).
+MAX_SEGMENTS = 1000
 
 #: The shortest period (guess) accepted, in time units, relative to ``max(1, |t0|)``: over shorter times
 #: the time axis near ``t0`` no longer resolves the period to a millionth, and every state of a model whose
@@ -97,6 +103,8 @@ def parse_sets(items: Sequence[str] | None, system: PiecewiseSystem) -> dict[str
         if not math.isfinite(value):
             raise UsageError(f"--set {item!r}: the value must be finite")
         out[name] = value
+    from saltation.model.system import PiecewiseSystem
+
     if isinstance(system, PiecewiseSystem):
         usable_parameters(system, out, "--set")  # a zero divisor (m = 0), named with its expression
     return out

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,10 +32,9 @@ from saltation.apps.cli.options import (
 )
 from saltation.apps.cli.starts import estimate_period, transient
 from saltation.apps.cli.text import complex_text, fmt, paragraph
-from saltation.model.system import PiecewiseSystem
-from saltation.models import SHIPPED
-from saltation.orbits.start import TRANSIENT_PERIODS
-from saltation.output.codecs import orbit_to_dict
+
+if TYPE_CHECKING:
+    from saltation.model.system import PiecewiseSystem
 
 
 def format_orbit(orbit, system: PiecewiseSystem) -> str:
@@ -109,6 +109,8 @@ def cmd_orbit(args: argparse.Namespace) -> int:
         mode0=mode0,
     )
     if args.json:
+        from saltation.output.codecs import orbit_to_dict
+
         print(json.dumps(orbit_to_dict(orbit, system)))
     else:
         print(format_orbit(orbit, system))
@@ -117,6 +119,9 @@ def cmd_orbit(args: argparse.Namespace) -> int:
 
 def orbit_epilog() -> str:
     """The epilog of ``saltation orbit --help``: the shipped models, the start, the output, the exit status."""
+    from saltation.models import SHIPPED
+    from saltation.orbits.start import TRANSIENT_PERIODS
+
     parts = ["shipped models (states; parameters with their default values):"]
     for name, shipped in SHIPPED.items():
         system = shipped.factory()

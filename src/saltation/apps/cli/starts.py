@@ -10,8 +10,6 @@ import numpy as np
 from saltation.apps.cli.errors import CommandError
 from saltation.apps.cli.options import check_mode0
 from saltation.errors import StartGuessError
-from saltation.models import SHIPPED
-from saltation.orbits import start as start_guesses
 
 
 def transient(flow, name: str, p: np.ndarray, state: np.ndarray | None, *, t0: float, backward: bool,
@@ -23,6 +21,9 @@ def transient(flow, name: str, p: np.ndarray, state: np.ndarray | None, *, t0: f
     then unit states)."""
     system = flow.system
     values = dict(zip(system.parameter_names, map(float, p)))
+    from saltation.models import SHIPPED
+    from saltation.orbits import start as start_guesses
+
     length_fn = SHIPPED[name].transient_length if name in SHIPPED else None
     length = length_fn(values) if (length_fn and system.is_autonomous) else None
     start = SHIPPED[name].start if name in SHIPPED else None
@@ -51,6 +52,8 @@ def estimate_period(traj) -> float:
         If the transient shows no oscillation (e.g. it settles to an equilibrium).
     """
     try:
+        from saltation.orbits import start as start_guesses
+
         return start_guesses.estimate_period(traj)
     except StartGuessError as exc:
         raise CommandError(f"{exc}; give --period and a guess --x0") from None

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,8 +32,9 @@ from saltation.apps.cli.options import (
     parse_vector,
 )
 from saltation.apps.cli.text import fmt, paragraph
-from saltation.model.system import PiecewiseSystem
-from saltation.models import SHIPPED
+
+if TYPE_CHECKING:
+    from saltation.model.system import PiecewiseSystem
 
 
 def sweep_start(args: argparse.Namespace, system: PiecewiseSystem):
@@ -47,6 +49,8 @@ def sweep_start(args: argparse.Namespace, system: PiecewiseSystem):
     if args.x0 is not None:
         x0 = parse_vector(args.x0, system)
     else:
+        from saltation.models import SHIPPED
+
         function = SHIPPED[args.model].start if args.model in SHIPPED else None
         x0 = None
         if function is not None:
