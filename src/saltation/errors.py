@@ -101,3 +101,8 @@ class NoOrbitNearGuessError(StationaryStateError, ConvergenceError):
         ConvergenceError.__init__(self, message, residuals)
         self.state = [float(v) for v in state]
         self.period = float(period)
+
+
+class MissingDependencyError(SaltationError, ImportError):
+    """An optional dependency a function needs is not installed; the message names the package and the
+    extra that installs it (``pip install 'saltation[xarray]'``)."""

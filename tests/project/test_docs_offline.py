@@ -16,6 +16,7 @@ Checked without building the site (``PYTHONPATH=src mkdocs build --strict`` does
 from __future__ import annotations
 
 import ast
+import importlib
 import importlib.util
 import re
 from pathlib import Path
@@ -235,6 +236,9 @@ def exported_by_packages(module: str) -> set[str]:
                     source = ".".join(parts[:depth - node.level + 1] + ([source] if source else []))
                 if source == module:
                     out.update(a.asname or a.name for a in node.names if (a.asname or a.name) in exported)
+        # a package that imports its names on first use (PEP 562) says where each lives in ``_HOME_OF``
+        home_of = getattr(importlib.import_module(package), "_HOME_OF", {})
+        out.update(name for name, home in home_of.items() if home == module and name in exported)
     return out
 
 

@@ -396,6 +396,70 @@ class Branch:
         """Multipliers per point, shape (m, n), complex."""
         return np.array([p.multipliers for p in self.points])
 
+    def to_pandas(self):
+        """The branch as a table: one row per point, columns named after the parameters and the states.
+
+        Columns: the continuation parameter (by its name; the second parameter too on a two-parameter
+        curve), the state at the section (by the states' names; ``state_<name>`` where a name is taken by
+        another column), ``period``, ``amplitude``, ``half_peak_to_peak``, ``stable``, the multipliers
+        ``multiplier1`` .. (complex; ``eigenvalue1`` .. on a branch of equilibria) with their moduli
+        ``multiplier1_abs`` .., ``events`` (the event sequence of one period, its labels joined by ``"; "``),
+        ``event_count``, ``mode0``, ``t0``, ``step``, ``iterations``, ``curve_kind`` and ``special_point``
+        (the kinds of the special points located between this point and the next, ``", "``-joined; empty
+        elsewhere).  ``DataFrame.attrs`` holds the branch's metadata (model, parameters, kind, label, how each
+        run stopped).
+
+        Returns
+        -------
+        pandas.DataFrame
+
+        Raises
+        ------
+        MissingDependencyError
+            If pandas is not installed (``pip install 'saltation[pandas]'``).
+        """
+        from saltation._optional import require
+
+        pd = require("pandas", "pandas", "Branch.to_pandas")
+        names = [self.parameter_name] + ([self.second_parameter_name] if self.second_parameter_name else [])
+        columns: dict[str, object] = {names[0]: self.parameter}
+        if self.second_parameter_name:
+            columns[names[1]] = self.second_parameter
+        n = len(self.points[0].state) if self.points else len(self.state_names)
+        fixed = {"period", "amplitude", "half_peak_to_peak", "stable", "events", "event_count", "mode0", "t0", "step",
+                 "iterations", "curve_kind", "special_point", *names}
+        for i, name in enumerate(self.state_names or [f"x{i + 1}" for i in range(n)]):
+            columns[f"state_{name}" if name in fixed else name] = self.states[:, i] if self.points else []
+        columns |= {"period": self.period, "amplitude": self.amplitude, "half_peak_to_peak": self.half_peak_to_peak,
+                    "stable": self.stable}
+        value = "eigenvalue" if self.kind is BranchKind.EQUILIBRIUM else "multiplier"
+        mu = self.multipliers.reshape(len(self.points), -1) if self.points else np.zeros((0, n), dtype=complex)
+        for i in range(mu.shape[1]):
+            columns[f"{value}{i + 1}"] = mu[:, i]
+            columns[f"{value}{i + 1}_abs"] = np.abs(mu[:, i])
+        special = ["" for _ in self.points]
+        for sp in self.special_points:
+            if 0 <= sp.index < len(special):
+                special[sp.index] = ", ".join(filter(None, (special[sp.index], sp.kind.value)))
+        columns |= {
+            "events": ["; ".join(p.event_labels) for p in self.points],
+            "event_count": [len(p.event_labels) for p in self.points],
+            "mode0": [p.mode0 for p in self.points], "t0": [p.t0 for p in self.points],
+            "step": [p.step for p in self.points], "iterations": [p.iterations for p in self.points],
+            "curve_kind": [None if p.curve_kind is None else p.curve_kind.value for p in self.points],
+            "special_point": special,
+        }
+        table = pd.DataFrame(columns)
+        table.attrs = {
+            "model": self.model, "parameter_name": self.parameter_name, "kind": self.kind.value, "label": self.label,
+            "backward": self.backward, "autonomous": self.autonomous, "fixed_parameters": dict(self.fixed_parameters),
+            "second_parameter_name": self.second_parameter_name,
+            "curve_of": None if self.curve_of is None else self.curve_of.value,
+            "stop_reasons": [None if r is None else r.name.lower() for r in [self.stop_reason, *self.stop_reasons]],
+            "stop_detail": self.stop_detail,
+        }
+        return table
+
     def check_stability_flags(self) -> bool:
         """Whether every stored stability flag agrees with the stored multipliers.
 

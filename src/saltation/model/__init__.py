@@ -13,7 +13,7 @@ Nothing here integrates; every other layer depends on this one.  Its modules:
 __all__ = ["TIME", "Crossing", "Mode", "PiecewiseSystem", "Symmetry", "Transition"]
 
 #: the package's names and the modules that define them (imported on first use: sympy loads with them)
-_HOMES = {"Symmetry": "saltation.model.symmetry", **dict.fromkeys(("TIME", "Crossing", "Mode", "PiecewiseSystem",
+_HOME_OF = {"Symmetry": "saltation.model.symmetry", **dict.fromkeys(("TIME", "Crossing", "Mode", "PiecewiseSystem",
                                                                     "Transition"), "saltation.model.system")}
 
 
@@ -22,8 +22,8 @@ def __getattr__(name: str):
     ``saltation.model`` (now :mod:`saltation.model.system`), with a warning."""
     import importlib
 
-    if name in _HOMES:
-        value = getattr(importlib.import_module(_HOMES[name]), name)
+    if name in _HOME_OF:
+        value = getattr(importlib.import_module(_HOME_OF[name]), name)
         globals()[name] = value
         return value
     if name.startswith("__"):
@@ -38,4 +38,4 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *_HOMES})
+    return sorted({*globals(), *_HOME_OF})

@@ -100,12 +100,14 @@ __all__ = [
     "load_branch_json",
     "load_branch_points_csv",
     "load_diagram_json",
+    "load_netcdf",
     "load_period_map",
     "load_special_points_json",
     "load_sweep",
     "save_branch_csv",
     "save_branch_json",
     "save_diagram_json",
+    "save_netcdf",
     "save_period_map",
     "save_special_points_json",
     "save_sweep",
@@ -780,3 +782,60 @@ def load_period_map(path: PathType) -> PeriodMap:
         If the file cannot be read.
     """
     return _PERIOD_MAP_FILE.load(path)
+
+
+def save_netcdf(result: SweepResult | PeriodMap, path: PathType) -> Path:
+    """Write a sweep or a period map to a NetCDF file: its :meth:`~saltation.sweeps.SweepResult.to_xarray`
+    dataset, with its attributes (atomically: see :func:`write_atomically`).
+
+    The file is NetCDF 3 (64-bit offsets), written by scipy, which saltation depends on: any NetCDF
+    reader opens it (``xarray.open_dataset(path)``, ``netCDF4``, ``ncdump``).
+
+    Parameters
+    ----------
+    result : SweepResult or PeriodMap
+        What to write.
+    path : str or path-like
+        The file (``.nc``).
+
+    Returns
+    -------
+    Path
+        The path written.
+
+    Raises
+    ------
+    MissingDependencyError
+        If xarray is not installed (``pip install 'saltation[xarray]'``).
+    OSError
+        If the file cannot be written.
+    """
+    data = result.to_xarray().to_netcdf(engine="scipy", format="NETCDF3_64BIT")
+    return write_atomically({path: bytes(data)})[0]
+
+
+def load_netcdf(path: PathType):
+    """Read a NetCDF file written by :func:`save_netcdf` (or any NetCDF file) into memory.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+
+    Returns
+    -------
+    xarray.Dataset
+        Its variables, coordinates and attributes, loaded (the file is closed).
+
+    Raises
+    ------
+    MissingDependencyError
+        If xarray is not installed (``pip install 'saltation[xarray]'``).
+    OSError
+        If the file cannot be read.
+    """
+    from saltation._optional import require
+
+    xr = require("xarray", "xarray", "load_netcdf")
+    with xr.open_dataset(path) as dataset:
+        return dataset.load()

@@ -155,6 +155,32 @@ def _describe_x0(x0: StartState | None) -> list[float] | str:
     return [float(v) for v in np.asarray(x0, dtype=float).reshape(-1)]
 
 
+def _described(system: PiecewiseSystem, base: np.ndarray, tolerances: Tolerances | None) -> dict[str, Any]:
+    """What a sweep's settings record of the model: every parameter's value (the swept ones at their base
+    value), the integration tolerances and the units the model declares."""
+    tol = tolerances or Tolerances()
+    return {
+        "parameters": {name: float(v) for name, v in zip(system.parameter_names, base)},
+        "tolerances": {"rtol": float(tol.rtol), "atol": float(tol.atol),
+                       "max_step": float(tol.max_step) if math.isfinite(tol.max_step) else "inf"},
+        "units": {name: unit for name, unit in getattr(system, "units", {}).items() if unit},
+    }
+
+
+def _attributes(settings: Mapping[str, Any], **more: Any) -> dict[str, Any]:
+    """NetCDF-ready attributes (strings and numbers): ``more``, the library's version, and each setting (a
+    mapping or a list as JSON text)."""
+    import json
+
+    from saltation import __version__
+
+    out: dict[str, Any] = {**more, "saltation_version": __version__}
+    for key, value in settings.items():
+        plain = isinstance(value, (str, int, float)) and not isinstance(value, bool)
+        out[f"settings_{key}"] = value if plain else json.dumps(value)
+    return out
+
+
 @dataclass(frozen=True)
 class SweepResult:
     """Points of a brute-force diagram.
@@ -209,6 +235,54 @@ class SweepResult:
     def x(self) -> np.ndarray:
         """First state of every point: with :attr:`parameter_points`, the pair to plot."""
         return self.states[:, 0]
+
+    def to_xarray(self):
+        """The sweep as an ``xarray.Dataset``: the swept parameter a dimension, the samples another.
+
+        One variable per state (``state_<name>`` where the name is taken), of dimensions
+        ``(parameter, "sample")``, padded with ``nan`` beyond each value's ``count`` (a variable of its
+        own); ``largest_exponent`` where it was computed.  The attributes hold the model, the section,
+        the start rule, the library's version, the failures and every setting (the model's parameters,
+        the tolerances, the units: mappings as JSON text); each state's variable has its ``units`` where
+        the model declares one.  ``dataset.to_netcdf(path)`` (or
+        :func:`saltation.output.io.save_netcdf`) writes it, and ``xarray.open_dataset`` reads it back.
+
+        Returns
+        -------
+        xarray.Dataset
+
+        Raises
+        ------
+        MissingDependencyError
+            If xarray is not installed (``pip install 'saltation[xarray]'``).
+        """
+        import json
+
+        from saltation._optional import require
+
+        xr = require("xarray", "xarray", "SweepResult.to_xarray")
+        width = int(self.counts.max()) if self.counts.size else 0
+        padded = np.full((self.values.size, width, len(self.state_names)), np.nan)
+        ends = np.cumsum(self.counts)
+        for k, (end, count) in enumerate(zip(ends, self.counts)):
+            padded[k, :count] = self.states[end - count:end]
+        dims = (self.parameter_name, "sample")
+        units = self.settings.get("units", {})
+        data = {}
+        for j, name in enumerate(self.state_names):
+            key = f"state_{name}" if name in (self.parameter_name, "sample", "count", "largest_exponent") else name
+            data[key] = xr.Variable(dims, padded[:, :, j], attrs={"units": units[name]} if name in units else {})
+        data["count"] = xr.Variable(dims[:1], np.asarray(self.counts, dtype=np.int64))
+        if self.largest_exponents is not None:
+            data["largest_exponent"] = xr.Variable(dims[:1], np.asarray(self.largest_exponents, dtype=float))
+        coords = {self.parameter_name: xr.Variable(dims[:1], np.asarray(self.values, dtype=float),
+                                                   attrs={"units": units[self.parameter_name]}
+                                                   if self.parameter_name in units else {}),
+                  "sample": np.arange(width)}
+        attrs = _attributes(self.settings, model=self.model, parameter=self.parameter_name, section=self.section,
+                            start=self.start.value, state_names=json.dumps(list(self.state_names)),
+                            failures=json.dumps([[float(v), m] for v, m in self.failures]))
+        return xr.Dataset(data, coords=coords, attrs=attrs)
 
     def points(self, state: int | str = 0) -> tuple[np.ndarray, np.ndarray]:
         """``(parameter_points, states[:, state])``: the flat pair of arrays to plot.
@@ -513,7 +587,8 @@ def sweep(
         exponents += chunk_exponents
     counts_arr = np.array(counts, dtype=int)
     states = np.concatenate(samples) if samples else np.zeros((0, system.n))
-    settings = {"periods": int(periods), "transient": int(transient), "t0": float(t0), "x0": _describe_x0(x0)}
+    settings = {"periods": int(periods), "transient": int(transient), "t0": float(t0), "x0": _describe_x0(x0),
+                **_described(system, base, tolerances)}
     if period is not None:
         settings["period"] = period
     if mode0 is not None:
@@ -575,6 +650,40 @@ class PeriodMap:
     settings: dict = field(default_factory=dict)
     start: SweepStart = SweepStart.PREVIOUS
     largest_exponents: np.ndarray | None = None
+
+    def to_xarray(self):
+        """The map as an ``xarray.Dataset``: ``period`` (and ``largest_exponent`` where computed) over the
+        dimensions ``(parameter2, parameter)``, attributes as :meth:`SweepResult.to_xarray` gives them (and
+        ``max_period``).
+
+        Returns
+        -------
+        xarray.Dataset
+
+        Raises
+        ------
+        MissingDependencyError
+            If xarray is not installed (``pip install 'saltation[xarray]'``).
+        """
+        import json
+
+        from saltation._optional import require
+
+        xr = require("xarray", "xarray", "PeriodMap.to_xarray")
+        dims = (self.parameter2_name, self.parameter_name)
+        units = self.settings.get("units", {})
+        data = {"period": xr.Variable(dims, np.asarray(self.periods, dtype=np.int64),
+                                      attrs={"description": "the attractor's period in forcing periods; 0: none up "
+                                                            "to max_period; -1: the simulation failed"})}
+        if self.largest_exponents is not None:
+            data["largest_exponent"] = xr.Variable(dims, np.asarray(self.largest_exponents, dtype=float))
+        coords = {name: xr.Variable((name,), np.asarray(values, dtype=float),
+                                    attrs={"units": units[name]} if name in units else {})
+                  for name, values in ((self.parameter_name, self.values), (self.parameter2_name, self.values2))}
+        attrs = _attributes(self.settings, model=self.model, parameter=self.parameter_name,
+                            parameter2=self.parameter2_name, max_period=int(self.max_period), start=self.start.value,
+                            failures=json.dumps([[float(a), float(b), m] for a, b, m in self.failures]))
+        return xr.Dataset(data, coords=coords, attrs=attrs)
 
     def __repr__(self) -> str:
         found = self.periods[self.periods > 0]
@@ -842,7 +951,8 @@ def period_map(
         model=system.name, parameter_name=parameter, parameter2_name=parameter2, values=values, values2=values2, periods=grid,
         max_period=int(max_period), failures=tuple(failures),
         settings={"periods": periods, "transient": int(transient), "tolerance": float(tolerance), "t0": float(t0),
-                  "x0": _describe_x0(x0), **({} if mode0 is None else {"mode0": mode0})},
+                  "x0": _describe_x0(x0), **({} if mode0 is None else {"mode0": mode0}),
+                  **_described(system, base, tolerances)},
         start=rule,
         largest_exponents=exponent_grid if lyapunov else None,
     )
