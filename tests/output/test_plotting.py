@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import functools
 import math
+import re
+import warnings
 
 import matplotlib
 import numpy as np
 import pytest
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
 from matplotlib.figure import Figure
 
 from saltation.branches.branch import Branch, BranchKind, BranchPoint, SpecialPoint, SpecialPointKind
@@ -325,3 +330,130 @@ def test_a_model_declares_its_labels_and_units():
     ax = plot_response(branch).axes[0]
     assert ax.get_xlabel() == r"$\omega$ (rad/s)"
     assert ax.get_ylabel() == r"$A = \max_t\,|x|$ (m)"
+
+
+# --- crowded special points -------------------------------------------------
+
+
+def crowded_branch(specials: list[tuple[SpecialPointKind, int, float]]) -> Branch:
+    """60 points, stable for the first half; a special point ``(kind, index, t)`` lies on the branch a fraction
+    ``t`` of the way from point ``index`` to the next (so it moves no axis limit)."""
+    pts = [_pt(1.0 + 0.01 * k, 0.5 + 0.02 * k + 0.3 * math.sin(k / 6), [0.5, 0.1], k < 30) for k in range(60)]
+    sps = []
+    for kind, i, t in specials:
+        p = (1 - t) * pts[i].parameter + t * pts[i + 1].parameter
+        a = (1 - t) * pts[i].amplitude + t * pts[i + 1].amplitude
+        sps.append(SpecialPoint(kind=kind, parameter=p, bracket=(pts[i].parameter, pts[i + 1].parameter),
+                                accuracy=0.01, index=i, state=np.array([a, 0.0]), period=1.0, amplitude=a))
+    return Branch(model="rotor", parameter_name="omega", kind=BranchKind.PERIODIC, points=pts, special_points=sps)
+
+
+_FILLED = "filled: near another point, labelled"
+
+
+def _named(text: str) -> int:
+    """How many points a label names: ``"grazing ×5"`` five, ``"7 more special points"`` seven, else one."""
+    counted = re.search(r"\u00d7(\d+)$", text) or re.match(r"(\d+) more special points$", text)
+    return int(counted.group(1)) if counted else 1
+
+
+def _check_crowded_figure(branch: Branch, bare_position) -> int:
+    """Draw the branch's response with every warning an error, and check the rule of crowded labels: the axes
+    as large as without special points, every label inside the axes (so inside the figure), every point an
+    open marker or counted once by a label or by the legend's entry for filled markers.  Returns how many
+    points the legend counts as unlabelled."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = plot_response(branch)
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+    ax = fig.axes[0]
+    # the layout is solved numerically (kiwisolver): equal decorations give equal axes up to round-off,
+    # far below a pixel (1e-9 of the figure)
+    np.testing.assert_allclose(ax.get_position().bounds, bare_position, rtol=0, atol=1e-9)
+    renderer = canvas.get_renderer()
+    labels = [t for t in ax.texts if str(t.get_gid()).endswith("_label")]
+    inside, page = ax.get_window_extent(renderer), fig.bbox
+    for label in labels:
+        box = label.get_window_extent(renderer)
+        assert page.x0 <= box.x0 and box.x1 <= page.x1 and page.y0 <= box.y0 and box.y1 <= page.y1, label
+        assert inside.x0 <= box.x0 and box.x1 <= inside.x1 and inside.y0 <= box.y0 and box.y1 <= inside.y1, label
+        assert not label.get_in_layout() and label.get_annotation_clip()
+    kinds = {kind.value for kind in SpecialPointKind}
+    marks = [ln for ln in ax.get_lines() if ln.get_gid() in kinds]
+    assert len(marks) == len(branch.special_points)  # every point marked at its point
+    filled = [ln for ln in marks if ln.get_markerfacecolor() == "k"]
+    legend = {t.get_text(): h for t, h in zip(ax.get_legend().get_texts(), ax.get_legend().legend_handles)}
+    entry = [text for text in legend if text.startswith(_FILLED)]
+    assert len(entry) == (1 if filled else 0)
+    left_out = 0
+    if entry:
+        assert legend[entry[0]].get_markerfacecolor() == "k"  # the entry shows a filled marker
+        counted = re.search(r"; (\d+) unlabelled \(no room\)$", entry[0])
+        left_out = int(counted.group(1)) if counted else 0
+    assert sum(_named(t.get_text()) for t in labels) + left_out == len(filled)
+    assert len(marks) - len(filled) + sum(_named(t.get_text()) for t in labels) + left_out == len(branch.special_points)
+    return left_out
+
+
+@functools.cache
+def _bare_position():
+    """The axes' position in the response diagram of the same branch without special points."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = plot_response(crowded_branch([]))
+    FigureCanvasAgg(fig).draw()
+    return fig.axes[0].get_position().bounds
+
+
+def test_thirty_eight_special_points_on_one_branch_keep_the_axes_and_count_every_point():
+    """A rotor-like branch with 38 special points, 30 of them in three clumps of six kinds: no warning, the axes
+    keep their size, the labels stay inside them, each clump is named by four labels (three kinds and the
+    rest counted) and the legend explains the filled markers."""
+    kinds = [SpecialPointKind.GRAZING, SpecialPointKind.GRAZING_SLIDING, SpecialPointKind.CROSSING_SLIDING,
+             SpecialPointKind.FOLD, SpecialPointKind.PERIOD_DOUBLING, SpecialPointKind.HOPF]
+    clumps = [(kinds[j % len(kinds)], centre, 0.05 * j) for centre in (10, 30, 48) for j in range(10)]
+    spread = [(SpecialPointKind.GRAZING, i, 0.5) for i in (2, 6, 18, 22, 38, 42, 54, 57)]  # alone
+    branch = crowded_branch(clumps + spread)
+    assert len(branch.special_points) == 38
+    _check_crowded_figure(branch, _bare_position())
+    ax = plot_response(branch).axes[0]
+    texts = sorted(t.get_text() for t in ax.texts)
+    assert texts == sorted(["grazing-sliding \u00d72", "crossing-sliding \u00d72", "fold \u00d72",
+                            "3 more special points"] * 3)
+    assert sum(ln.get_markerfacecolor() == "white" for ln in ax.get_lines() if ln.get_marker() != "None") == 11
+    assert any(t.get_text() == _FILLED for t in ax.get_legend().get_texts())
+
+
+def test_a_group_of_many_kinds_has_at_most_four_labels():
+    from saltation.output.plotting import _MAX_LABELS, _group_labels
+
+    others = [(kind, 1.0, 1.0) for kind in list(SpecialPointKind)[:7] for _ in range(2)]
+    labels = _group_labels(others)
+    assert len(labels) == _MAX_LABELS == 4
+    assert [text for text, *_ in labels] == ["fold \u00d72", "branch point \u00d72", "period doubling \u00d72",
+                                             "8 more special points"]
+    assert sum(count for _, _, count, _, _ in labels) == len(others)
+
+
+_KINDS = st.sampled_from(list(SpecialPointKind))
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.tuples(_KINDS, st.sampled_from([3, 4, 20, 21, 40, 57]), st.floats(0.0, 1.0)), max_size=48))
+@example([(SpecialPointKind.GRAZING, 20, 0.0)] * 40)
+@example([(kind, 40, 0.5) for kind in SpecialPointKind] * 2)
+def test_crowded_special_points_never_squash_the_axes(specials):
+    """Any number of special points of any kinds, clumped at a few places or not (every kind twice at one
+    point: a legend of 22 entries): the rule of crowded labels holds."""
+    _check_crowded_figure(crowded_branch(specials), _bare_position())
+
+
+def test_labels_without_room_are_counted_by_the_legend():
+    """112 special points, two at every step of the branch: the labels that find no room inside the axes
+    are left out, and the legend's entry for filled markers counts their points."""
+    specials = [(SpecialPointKind.GRAZING if i % 3 else SpecialPointKind.FOLD, i, t)
+                for i in range(2, 58) for t in (0.0, 0.5)]
+    assert _check_crowded_figure(crowded_branch(specials), _bare_position()) > 0

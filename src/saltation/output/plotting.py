@@ -300,6 +300,19 @@ def plot_response(
     Stable segments are drawn solid and unstable ones dash-dot (Figs. 3 and 7); each branch is
     split into runs by its ``stable`` column. Special points are marked, one marker per kind.
 
+    Crowded special points are grouped: a point closer than 3 % of the data's extent (on each axis, so
+    about the same distance on screen) to a group's first point joins that group.  The first point of a
+    group is drawn full size with an open marker, named by the legend; the others smaller with filled
+    markers, on top, and named beside the group by at most four labels: one per kind with its count
+    (``"grazing ×5"``), the fourth counting the points of any further kinds (``"7 more special
+    points"``).  A label stands a bounded offset from its marker, towards the middle of the axes, in the
+    first of a few places where it lies inside the axes and overlaps no other label; with no such place
+    it is left out, and the legend's entry for filled markers (there when any marker is filled) counts
+    its points.  So the open markers, the labels' counts and the points left out add up to the number of
+    special points.  Labels and legend take no part in the figure's layout (the axes keep their size
+    however many points there are; a legend of more than 12 entries is set in two columns), and a label
+    is not drawn when its point lies outside the axes.
+
     Parameters
     ----------
     branches : Branch or iterable of Branch
@@ -318,9 +331,9 @@ def plot_response(
     colors : sequence of str, optional
         One colour per branch; defaults to black for all (the paper's style).
     special_points : bool
-        Mark the branches' special points.
+        Mark the branches' special points (crowded ones grouped, as above).
     legend : bool
-        Add a legend (line styles, branch labels, kinds of special points present).
+        Add a legend (line styles, branch labels, kinds of special points present, filled markers).
     figsize : (float, float)
         Size of a new figure, in inches.
 
@@ -361,13 +374,13 @@ def plot_response(
                     kinds_seen.append(sp.kind)
         all_x.extend(branch.parameter)
         all_y.extend(np.asarray(y, dtype=float)[np.isfinite(y)])
-    _mark_special_points(fig, ax, marks_at, all_x, all_y)
+    filled = _mark_special_points(ax, marks_at, all_x, all_y)
     runs_styles = [Line2D([], [], **_run_style(eq, stable), label=_RUN_NAMES[(eq, stable)]) for eq, stable in drawn]
     marks = [
         Line2D([], [], linestyle="none", marker=SPECIAL_POINT_MARKERS[k][0], markersize=9,
                markerfacecolor="white", markeredgecolor="k", label=SPECIAL_POINT_MARKERS[k][1])
         for k in kinds_seen
-    ]
+    ] + ([filled] if filled is not None else [])
     first = branches[0] if branches else None
     if ylabel is None:
         ylabel = _measure_label(measure, first, state_name)
@@ -376,8 +389,14 @@ def plot_response(
         xlabel = axis_label(first.parameter_name, first.axis_labels) if first is not None else ""
     ax.set_xlabel(xlabel)
     if legend:
-        ax.legend(handles=runs_styles + handles + marks, loc="best", fontsize="small")
+        entries = runs_styles + handles + marks
+        box = ax.legend(handles=entries, loc="best", fontsize="small", ncol=1 if len(entries) <= _LEGEND_ROWS else 2)
+        box.set_in_layout(False)  # inside the axes: shrinking them to make room would only make it overflow more
     return fig
+
+
+#: Entries of a response diagram's legend in one column at most; more are set in two.
+_LEGEND_ROWS = 12
 
 
 _RUN_NAMES = {(False, True): "stable", (False, False): "unstable", (True, True): "equilibrium, stable",
@@ -407,36 +426,142 @@ def _measure_label(measure: Measure, branch: Branch | None, state_name: str | No
     return MEASURE_LABELS[measure].format(x=tex) + unit
 
 
-def _mark_special_points(fig: Figure, ax: Axes, marks: list[tuple[SpecialPointKind, float, float]],
-                         all_x: Sequence[float], all_y: Sequence[float], *, near: float = 0.03) -> None:
-    """Draw special-point markers, each at its point.  Of markers closer than ``near`` (a fraction of the
-    data's extent) the first is drawn full size; each other one smaller and filled, on top, so that none
-    hides another, and named by an annotation whose text lies towards the middle of the data (inside
-    the axes) with a leader line to its point."""
+#: Special points closer than this to a group's first point (a fraction of the data's extent on each axis,
+#: so about the same distance on screen in either direction) are drawn as one group (see :func:`plot_response`).
+_NEAR = 0.03
+#: At most this many labels name the filled markers of a group; past it the last one counts the rest.
+_MAX_LABELS = 4
+#: A label's offset from its marker, in points: sideways, and up or down by one of ``_LABEL_SLOTS`` steps.
+_LABEL_DX, _LABEL_DY, _LABEL_SLOTS = 24.0, 14.0, 6
+
+_Mark = tuple[SpecialPointKind, float, float]
+
+
+def _group_special_points(marks: Sequence[_Mark], width: float, height: float, near: float) -> list[list[_Mark]]:
+    """Groups of special points, in order: a point joins the first group whose first point lies closer than
+    ``near`` (a fraction of ``width`` and ``height``), else it starts a group of its own.  So every group
+    spans at most ``2 near``, and the first points of two groups are at least ``near`` apart."""
+    groups: list[list[_Mark]] = []
+    for mark in marks:
+        _, x, y = mark
+        for group in groups:
+            _, gx, gy = group[0]
+            if math.hypot((x - gx) / width, (y - gy) / height) < near:
+                group.append(mark)
+                break
+        else:
+            groups.append([mark])
+    return groups
+
+
+def _group_labels(others: Sequence[_Mark], most: int = _MAX_LABELS) -> list[tuple[str, str, int, float, float]]:
+    """The labels of a group's filled markers: ``(text, gid, count, x, y)``, ``(x, y)`` the marker the
+    leader line goes to.
+
+    One label per kind, in the order the kinds come, ``"grazing"`` for one point and ``"grazing ×5"`` for
+    five; past ``most`` kinds the last label counts the points of the remaining kinds (``"7 more special
+    points"``, gid ``special_points_label``), so the counts of a group's labels add up to ``len(others)``."""
+    by_kind: dict[SpecialPointKind, list[_Mark]] = {}
+    for mark in others:
+        by_kind.setdefault(mark[0], []).append(mark)
+    kinds = list(by_kind)
+    named = kinds if len(kinds) <= most else kinds[: most - 1]
+    labels = []
+    for kind in named:
+        (_, x, y), n, name = by_kind[kind][0], len(by_kind[kind]), SPECIAL_POINT_MARKERS[kind][1]
+        text = name if n == 1 else f"{name} \N{MULTIPLICATION SIGN}{n}"
+        labels.append((text, f"{kind.value}_label", n, x, y))
+    rest = [mark for kind in kinds[len(named):] for mark in by_kind[kind]]
+    if rest:
+        labels.append((f"{len(rest)} more special points", "special_points_label", len(rest), rest[0][1], rest[0][2]))
+    return labels
+
+
+def _place_labels(ax: Axes, labels: Sequence[tuple[str, str, int, float, float]]) -> int:
+    """Annotate the labels (:func:`_group_labels`), each where its text has room; return how many points
+    the labels left out name (those that found no room).
+
+    A label's text stands ``_LABEL_DX`` points beside its marker, towards the middle of the axes, and
+    ``_LABEL_DY`` times 1 to ``_LABEL_SLOTS`` points above or below it (towards the middle first), in the
+    first place where its box (measured from the font) lies inside the axes and overlaps no label placed
+    before it; with no such place it is left out.  The axes are measured as they are now, before the
+    figure's layout, which only moves the points apart if it enlarges them.  The labels take no part in
+    the layout and are not drawn when their point lies outside the axes."""
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.textpath import text_to_path
+
+    ax.get_xlim(), ax.get_ylim()  # (the limits the markers made)
+    prop = FontProperties(size="x-small")
+    scale = ax.figure.dpi / 72.0
+    pad = 2.0 * scale
+    frame = ax.bbox
+    placed: list[tuple[float, float, float, float]] = []
+    left_out = 0
+    for text, gid, count, x, y in labels:
+        px, py = ax.transData.transform((x, y))
+        fx, fy = ax.transAxes.inverted().transform((px, py))
+        dx, dy = (-1.0 if fx > 0.5 else 1.0), (-1.0 if fy > 0.5 else 1.0)  # towards the middle
+        w, h, _ = text_to_path.get_text_width_height_descent(text, prop, ismath=False)
+        w, h = w * scale, h * scale
+        for offset in [dy * _LABEL_DY * s for s in range(1, _LABEL_SLOTS + 1)] + \
+                      [-dy * _LABEL_DY * s for s in range(1, _LABEL_SLOTS + 1)]:
+            x0 = px + dx * _LABEL_DX * scale - (w if dx < 0 else 0.0)
+            y0 = py + offset * scale - 0.5 * h
+            box = (x0 - pad, y0 - pad, x0 + w + pad, y0 + h + pad)
+            inside = frame.x0 <= box[0] and box[2] <= frame.x1 and frame.y0 <= box[1] and box[3] <= frame.y1
+            if inside and not any(b[0] < box[2] and box[0] < b[2] and b[1] < box[3] and box[1] < b[3] for b in placed):
+                break
+        else:
+            left_out += count
+            continue
+        placed.append(box)
+        label = ax.annotate(text, xy=(x, y), xytext=(dx * _LABEL_DX, offset), textcoords="offset points",
+                            ha="right" if dx < 0 else "left", va="center", fontsize="x-small", gid=gid,
+                            annotation_clip=True, arrowprops={"arrowstyle": "-", "color": "0.4", "linewidth": 0.6,
+                                                             "shrinkA": 0, "shrinkB": 4})
+        label.set_in_layout(False)
+    return left_out
+
+
+def _mark_special_points(ax: Axes, marks: Sequence[_Mark], all_x: Sequence[float], all_y: Sequence[float], *,
+                         near: float = _NEAR) -> Line2D | None:
+    """Draw special-point markers, each at its point, and name crowded ones; return the legend's entry for
+    filled markers (``None`` when none is filled).
+
+    The points are grouped (:func:`_group_special_points`: closer than ``near``, a fraction of the data's
+    extent, to a group's first point).  A group's first point is drawn full size and open, named by the
+    legend as its kind; each other one smaller and filled, on top, so that none hides another.  The filled
+    markers of a group are named by at most :data:`_MAX_LABELS` labels (:func:`_group_labels`: one per
+    kind, with a count), each with a leader line to its kind's first filled marker, placed where they have
+    room inside the axes (:func:`_place_labels`; the legend's entry counts the points of labels left out).
+    So the open markers, the labels' counts and the points left out add up to all points.
+    """
     if not marks:
-        return
+        return None
     xs, ys = np.asarray(all_x, dtype=float), np.asarray(all_y, dtype=float)
     width = float(np.ptp(xs)) if xs.size and np.ptp(xs) > 0 else 1.0
     height = float(np.ptp(ys)) if ys.size and np.ptp(ys) > 0 else 1.0
-    mid_x = float(np.min(xs)) + 0.5 * width if xs.size else 0.0
-    mid_y = float(np.min(ys)) + 0.5 * height if ys.size else 0.0
-    placed: list[tuple[float, float]] = []
-    for kind, x, y in marks:
-        crowd = sum(1 for (px, py) in placed if math.hypot((x - px) / width, (y - py) / height) < near)
-        placed.append((x, y))
-        marker, name = SPECIAL_POINT_MARKERS[kind]
-        style = {"linestyle": "none", "marker": marker, "markersize": 9, "markerfacecolor": "white",
-                 "markeredgecolor": "k", "zorder": 5, "gid": kind.value, "clip_on": False}  # (whole at an edge)
-        if crowd == 0:
+    filled: list[str] = []  # the markers drawn filled
+    labels: list[tuple[str, str, int, float, float]] = []
+    for first, *others in _group_special_points(marks, width, height, near):
+        for rank, (kind, x, y) in enumerate([first, *others]):
+            style = {"linestyle": "none", "marker": SPECIAL_POINT_MARKERS[kind][0], "markersize": 9,
+                     "markerfacecolor": "white", "markeredgecolor": "k", "zorder": 5, "gid": kind.value,
+                     "clip_on": False}  # (whole at an edge)
+            if rank:
+                style.update(markersize=max(4.0, 9.0 - 2.0 * rank), markerfacecolor="k", zorder=5 + rank)
+                filled.append(style["marker"])
             ax.plot([x], [y], **style)
-            continue
-        style.update(markersize=max(4.0, 9.0 - 2.0 * crowd), markerfacecolor="k", zorder=5 + crowd)
-        ax.plot([x], [y], **style)
-        dx = -1.0 if x > mid_x else 1.0  # towards the middle: the text stays inside the axes
-        dy = -1.0 if y > mid_y else 1.0
-        ax.annotate(name, xy=(x, y), xytext=(dx * 24.0, dy * 18.0 * crowd), textcoords="offset points",
-                    ha="right" if dx < 0 else "left", va="center", fontsize="x-small", gid=f"{kind.value}_label",
-                    arrowprops={"arrowstyle": "-", "color": "0.4", "linewidth": 0.6, "shrinkA": 0, "shrinkB": 4})
+        labels += _group_labels(others)
+    left_out = _place_labels(ax, labels)
+    if not filled:
+        return None
+    from matplotlib.markers import MarkerStyle
+
+    marker = next((m for m in filled if MarkerStyle(m).is_filled()), "o")  # (not "x": it shows no face)
+    text = "filled: near another point, labelled" + (f"; {left_out} unlabelled (no room)" if left_out else "")
+    return Line2D([], [], linestyle="none", marker=marker, markersize=6.0, markerfacecolor="k", markeredgecolor="k",
+                  label=text)
 
 
 # ---------------------------------------------------------------------------
