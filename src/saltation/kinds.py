@@ -42,6 +42,8 @@ class SpecialPointKind(enum.Enum):
     SYMMETRY_BREAKING = "symmetry_breaking"
     #: the set-valued half-period multiplier of a symmetric orbit jumps through -1 at a corner
     DISCONTINUOUS_SYMMETRY_BREAKING = "discontinuous_symmetry_breaking"
+    #: where a user's monitor (:class:`saltation.branches.monitors.Monitor`) crosses zero along a branch
+    MONITOR = "monitor"
 
     @property
     def is_nonsmooth(self) -> bool:
@@ -117,6 +119,7 @@ class StopReason(enum.Enum):
     USER = "stopped by the user"
     CYCLE_COLLAPSE = "the cycle collapsed onto an equilibrium"
     ERROR = "stopped by an error (the branch's stop_detail gives it)"
+    MONITOR = "a monitor that stops the branch reached its value"
 
 
 class BranchKind(enum.Enum):

@@ -65,6 +65,8 @@ MODULES = (
     "saltation.orbits.conditions.segmented",
     "saltation.orbits.conditions.joining",
     "saltation.orbits.start",
+    "saltation.orbits.measures",
+    "saltation.branches.monitors",
     "saltation.special_points.continuation",
     "saltation.special_points.loci",
     "saltation.special_points.grazing",
@@ -97,6 +99,10 @@ SKIPPED_MODULES = frozenset({
 
 #: Functions without a ``Raises`` section, and why.
 RAISES_EXEMPT = {
+    "saltation.orbits.measures.measure_state": "arithmetic on the given state",
+    "saltation.orbits.measures.measure_label": "builds a text",
+    "saltation.branches.monitors.illinois_on_secant": "the test function's and the corrector's errors are theirs; "
+                                                       "a point the corrector cannot reach ends the iteration",
     "saltation.special_points.loci.curve_stops": "record building",
     "saltation.special_points.points.two_sides": "record building",
     "saltation.orbits.single.stationary_floor": "arithmetic on the given tolerances and size",

@@ -296,6 +296,9 @@ class Branch:
     axis_labels : dict of str to str
         The axis label of each state and parameter as the model declares it (mathtext with its unit,
         :meth:`saltation.model.system.PiecewiseSystem.axis_label`); plots use them.
+    measures : tuple of str
+        The measures of the orbits every point records (:attr:`BranchPoint.measures`,
+        :mod:`saltation.orbits.measures`; :meth:`measure` gives a column).
     problem : BranchProblem or None
         The problem the branch was computed with (set by the continuation; not written to files, and
         None for a branch read from one): two-parameter curves and branch switches start from it.
@@ -317,6 +320,7 @@ class Branch:
     curve_of: SpecialPointKind | None = None
     state_names: tuple[str, ...] = ()
     axis_labels: dict[str, str] = field(default_factory=dict)
+    measures: tuple[str, ...] = ()
     #: The problem the branch was computed with (set by the continuation; not a field: not compared, not
     #: written to files).  Curves in two parameters and branch switches start from it.
     problem = None
@@ -358,6 +362,29 @@ class Branch:
     def second_parameter(self) -> np.ndarray:
         """The second parameter's column on a two-parameter curve (``nan`` on a one-parameter branch)."""
         return np.array([p.second_parameter for p in self.points])
+
+    def measure(self, text: str) -> np.ndarray:
+        """The column of one of the branch's measures (:attr:`measures`).
+
+        Parameters
+        ----------
+        text : str
+            The measure, as it was asked for (``"norm"``, ``"sqrt(x**2 + y**2)"``).
+
+        Returns
+        -------
+        ndarray
+            Its value at every point (``nan`` where a point lacks it).
+
+        Raises
+        ------
+        KeyError
+            If the branch was not computed with that measure (the message lists those it has).
+        """
+        if text not in self.measures and not any(text in p.measures for p in self.points):
+            raise KeyError(f"the branch has no measure {text!r}; its measures: {', '.join(self.measures) or 'none'} "
+                           "(ContinuationSettings(measures=...))")
+        return np.array([p.measures.get(text, np.nan) for p in self.points], dtype=float)
 
     @property
     def curve_kinds(self) -> list[SpecialPointKind | None]:
@@ -406,7 +433,8 @@ class Branch:
         ``multiplier1_abs`` .., ``events`` (the event sequence of one period, its labels joined by ``"; "``),
         ``event_count``, ``mode0``, ``t0``, ``step``, ``iterations``, ``curve_kind`` and ``special_point``
         (the kinds of the special points located between this point and the next, ``", "``-joined; empty
-        elsewhere).  ``DataFrame.attrs`` holds the branch's metadata (model, parameters, kind, label, how each
+        elsewhere), then one column per measure the branch was computed with (:attr:`measures`, by its text;
+        ``measure <text>`` where the text is taken).  ``DataFrame.attrs`` holds the branch's metadata (model, parameters, kind, label, how each
         run stopped).
 
         Returns
@@ -449,6 +477,8 @@ class Branch:
             "curve_kind": [None if p.curve_kind is None else p.curve_kind.value for p in self.points],
             "special_point": special,
         }
+        for text in self.measures:  # the measures the branch was computed with, by their text
+            columns[text if text not in columns else f"measure {text}"] = self.measure(text)
         table = pd.DataFrame(columns)
         table.attrs = {
             "model": self.model, "parameter_name": self.parameter_name, "kind": self.kind.value, "label": self.label,

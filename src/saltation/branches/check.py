@@ -210,6 +210,8 @@ def _change_made(sp, autonomous: bool) -> tuple[int, bool] | None:
         return 2, True
     if kind in ("cycle_collapse", "codimension_two", "boundary_equilibrium"):
         return None
+    if kind == "monitor":
+        return 0, False  # a user's mark: it moves no multiplier
     if sp.multipliers_minus is not None and sp.multipliers_plus is not None:
         a = unstable_count(sp.multipliers_minus, autonomous=autonomous)
         b = unstable_count(sp.multipliers_plus, autonomous=autonomous)

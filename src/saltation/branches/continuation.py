@@ -38,10 +38,13 @@ from saltation.branches.branch import (
     BranchPoint,
     SpecialPoint,
     SpecialPointKind,
+    SpecialPointStatus,
     StopReason,
 )
 from saltation.branches.corrector import Corrector, Solution, canonical_events
+from saltation.branches.monitors import illinois_on_secant, parse_monitors
 from saltation.errors import SaltationError
+from saltation.orbits.measures import parse_measures
 from saltation.orbits.problem import BranchProblem
 
 
@@ -138,6 +141,14 @@ class ContinuationSettings:
         Distance in ``(u, lam)`` to which special points are located.
     max_correction : float
         A corrector step longer than this (relative to ``1 + |z|``) counts as divergence.
+    measures : tuple of str
+        Measures of the orbits every branch point records (:mod:`saltation.orbits.measures`: ``"norm"``,
+        ``"ptp:x"``, ``"sqrt(x**2 + y**2)"``, ...), in :attr:`BranchPoint.measures` and
+        :attr:`Branch.measures`.
+    monitors : tuple of Monitor or str
+        The user's test functions, located where they cross zero and recorded as special points of kind
+        ``monitor`` (:mod:`saltation.branches.monitors`; a text is parsed by ``Monitor.parse``); one with
+        ``stop=True`` ends the run there.
 
     Raises
     ------
@@ -156,6 +167,8 @@ class ContinuationSettings:
     detect: bool = True
     locate_tol: float = 1e-9
     max_correction: float = 0.2
+    measures: tuple[str, ...] = ()
+    monitors: tuple = ()
 
     def __post_init__(self):
         if not 0 < self.ds_min <= self.ds <= self.ds_max:
@@ -209,6 +222,10 @@ class Continuation:
             raise SaltationError("the problem needs a continuation parameter (continuation_parameter=...)")
         self.problem = problem
         self.settings = settings or ContinuationSettings()
+        self.monitors = parse_monitors(self.settings.monitors, problem.system, problem.lam_name)
+        wanted = (*self.settings.measures, *(m for monitor in self.monitors for m in monitor.measures))
+        if wanted or problem.measures:
+            problem.measures = parse_measures(wanted, problem.system)
         self.corrector = Corrector(problem, self.settings)
         self.branch = Branch(
             model=problem.system.name,
@@ -219,8 +236,10 @@ class Continuation:
             autonomous=bool(problem.system.is_autonomous),
             state_names=tuple(problem.system.state_names),
             axis_labels=_axis_labels(problem.system),
+            measures=tuple(m.text for m in problem.measures),
         )
         self.branch.problem = problem
+        self._monitor_stop = False
         self.solutions: list[Solution] = []
         self.last_failure: np.ndarray | None = None
         self.last_error: SaltationError | None = None
@@ -300,6 +319,7 @@ class Continuation:
             closed, collapse = self._record(prev, new, jumped, detector)
             yield self.branch.points[-1]
             reason = (StopReason.CYCLE_COLLAPSE if collapse is not None else StopReason.CLOSED_LOOP if closed
+                      else StopReason.MONITOR if self._monitor_stop
                       else StopReason.PARAMETER_BOUND if new.lam >= hi or new.lam <= lo else None)
             if reason is not None:
                 self.branch.stop_reason = reason
@@ -386,10 +406,40 @@ class Continuation:
                     closed = True  # met again, from the same side: the branch has come round a loop
                 else:
                     self._add_special(sp)
+        for sp in self._monitor_points(self.solutions[-2], self.solutions[-1], len(self.branch.points) - 2):
+            self._add_special(sp)
         collapse = self._collapse(strict=True)
         if collapse is not None:
             self._add_special(collapse)
         return closed, collapse
+
+    def _monitor_points(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
+        """Where the monitors cross zero between two consecutive points, located on their secant by the
+        Illinois iteration of the smooth special points (:func:`~saltation.branches.monitors.illinois_on_secant`)."""
+        found = []
+        for monitor in self.monitors:
+            ga, gb = monitor(a.summary), monitor(b.summary)
+            if not (math.isfinite(ga) and math.isfinite(gb)) or not ((ga < 0.0 <= gb) or (ga > 0.0 >= gb)):
+                continue
+            d = b.z - a.z
+            lo, hi = illinois_on_secant(
+                lambda sigma: self.corrector.solve_bordered(a.z + sigma * d, d / np.linalg.norm(d)),
+                lambda sol: monitor(sol.summary), a, b, tol=self.settings.locate_tol,
+                distance=lambda p, q: float(np.linalg.norm(q.z - p.z)))
+            best = lo if abs(monitor(lo.summary)) <= abs(monitor(hi.summary)) else hi
+            width = float(np.linalg.norm(hi.z - lo.z))
+            found.append(SpecialPoint(
+                kind=SpecialPointKind.MONITOR, parameter=best.lam, bracket=(min(lo.lam, hi.lam), max(lo.lam, hi.lam)),
+                accuracy=width, index=index, state=best.summary.state, period=best.summary.period,
+                amplitude=best.summary.amplitude, multipliers=best.summary.multipliers,
+                event_ids=best.summary.event_ids, t0=best.summary.t0,
+                status=(SpecialPointStatus.LOCATED if width <= self.settings.locate_tol
+                        else SpecialPointStatus.BRACKETED),
+                note=f"monitor {monitor.name}: {monitor(best.summary):.3g} there" + (" (it stops the run)"
+                                                                                      if monitor.stop else ""),
+            ))
+            self._monitor_stop = self._monitor_stop or monitor.stop
+        return found
 
     def _collapse(self, *, strict: bool) -> SpecialPoint | None:
         """The cycle collapse ahead of the last three orbits of an autonomous branch, or None.

@@ -18,6 +18,7 @@ from saltation.engine.flow import (
 from saltation.errors import (
     ModelError,
 )
+from saltation.orbits.measures import measure_state
 from saltation.orbits.problem import BranchProblem, newton
 from saltation.orbits.records import (
     BranchPoint,
@@ -161,6 +162,7 @@ class EquilibriumProblem(BranchProblem):
             multipliers=eig,
             stable=bool(np.all(eig.real < 0)),
             event_labels=(),
+            measures=measure_state(u, self.parameters_at(lam, u), self.measures),
         )
 
     def accept(self, u: np.ndarray, lam: float | None) -> None:

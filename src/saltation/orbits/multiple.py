@@ -29,6 +29,7 @@ from saltation.orbits.floquet import (
     reciprocal,
     sort_multipliers,
 )
+from saltation.orbits.measures import measure_orbit
 from saltation.orbits.problem import BranchProblem, newton
 from saltation.orbits.records import (
     BranchPoint,
@@ -567,7 +568,10 @@ class MultipleShootingProblem(BranchProblem):
             parameter=math.nan if lam is None else float(lam), state=np.array(U[: self.n]), period=orbit.period,
             multipliers=orbit.multipliers, stable=is_stable(orbit.multipliers, autonomous=self.autonomous),
             event_labels=event_labels(traj), monodromy=traj.monodromy, event_ids=event_ids(traj),
-            trivial_error=orbit.trivial_error, mode0=orbit.mode0, **amplitude_measures(traj),
+            trivial_error=orbit.trivial_error, mode0=orbit.mode0,
+            measures=measure_orbit(self.flow, U[: self.n], orbit.period, self.parameters_at(lam, U), self.measures,
+                                   t0=self.t0, mode0=orbit.mode0, backward=self.backward),
+            **amplitude_measures(traj),
         )
 
     def accept(self, U: np.ndarray, lam: float | None) -> None:

@@ -40,8 +40,8 @@ class BranchProblem(abc.ABC):
        a guess), :meth:`correct` (a compiled corrector), :meth:`rephase` (move the unknowns to another
        section of the same solution), :attr:`single_shooting` (the single-shooting problem it is, for
        the one-sided limits and the half-period map) and the class attributes :attr:`branch_kind`,
-       :attr:`backward`, :attr:`autonomous`, :attr:`can_collapse`, :attr:`periods`, :attr:`mode0` and
-       :attr:`tolerances`.
+       :attr:`backward`, :attr:`autonomous`, :attr:`can_collapse`, :attr:`periods`, :attr:`mode0`,
+       :attr:`tolerances` and :attr:`measures`.
 
     Implementations document only what differs from this contract.
     """
@@ -60,6 +60,9 @@ class BranchProblem(abc.ABC):
     mode0: str | None = None
     #: Integration tolerances (None: the flow's own).
     tolerances: object = None
+    #: The measures every described point carries in :attr:`BranchPoint.measures`
+    #: (:class:`saltation.orbits.measures.Measure`; the continuation sets them from its settings).
+    measures: tuple = ()
 
     system: object
     #: The model's compiled flow.

@@ -93,6 +93,9 @@ class BranchPoint:
     curve_kind : SpecialPointKind or None
         On a two-parameter curve of non-smooth points: the kind of the special point this curve point
         is, classified from its one-sided limits (it may change along the curve); None elsewhere.
+    measures : dict of str to float
+        The measures the branch was computed with (:mod:`saltation.orbits.measures`), by their text
+        (``{"norm": 1.02}``); empty where none was asked for.
     """
 
     parameter: float
@@ -113,6 +116,7 @@ class BranchPoint:
     mode0: str | None = None
     t0: float = 0.0
     curve_kind: SpecialPointKind | None = None
+    measures: dict[str, float] = field(default_factory=dict)
 
     def recorded(self, parameter: float, step: float, iterations: int) -> BranchPoint:
         """This point as a branch records it: with its parameter, the step that led to it and the corrector's

@@ -59,6 +59,7 @@ from saltation.orbits.floquet import (
     is_stable,
     multipliers_from_monodromy,
 )
+from saltation.orbits.measures import measure_orbit
 from saltation.orbits.problem import BranchProblem, newton
 from saltation.orbits.records import (
     BranchPoint,
@@ -937,6 +938,8 @@ class ShootingProblem(BranchProblem):
             event_ids=event_ids(traj),
             trivial_error=trivial_error,
             mode0=traj.mode0,
+            measures=measure_orbit(self.flow, u[: self.system.n], self.period_of(u, lam), self.parameters_at(lam, u),
+                                   self.measures, t0=self.t0, mode0=traj.mode0, backward=self.backward),
             **amplitude_measures(traj),
         )
 

@@ -194,6 +194,8 @@ _BY_TYPE: dict[str, tuple[Encoder, Decoder]] = {
     "float | None": (lambda x: None if x is None else _enc_float(x), _nullable(_dec("real"))),
     "str | None": (lambda s: None if s is None else _enc_str(s), _nullable(_dec("string"))),
     "complex | None": (lambda z: None if z is None else _enc_complex(z), _nullable(_dec("complex"))),
+    "dict[str, float]": (lambda d: {str(k): _enc_float(v) for k, v in d.items()},
+                         lambda f, v, field, done: {k: f.real(x, _sub(field, k)) for k, x in f.obj(v, field).items()}),
 }
 _REAL_ARRAY = (_enc_real_array, _nullable(_dec("reals")))
 _COMPLEX_ARRAY = (_enc_complex_array, _nullable(_dec("complexes")))

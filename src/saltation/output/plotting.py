@@ -23,6 +23,7 @@ from matplotlib.lines import Line2D
 
 from saltation.branches.branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
 from saltation.model.labels import tex_name
+from saltation.orbits.measures import measure_label
 from saltation.sweeps.sweeps import PeriodMap, SweepResult
 
 __all__ = [
@@ -65,6 +66,7 @@ SPECIAL_POINT_MARKERS: dict[SpecialPointKind, tuple[str, str]] = {
     SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER: ("X", "discontinuous Neimark-Sacker"),
     SpecialPointKind.NONSMOOTH_NO_CROSSING: ("v", "non-smooth point, no crossing"),
     SpecialPointKind.GRAZING: ("h", "grazing"),
+    SpecialPointKind.MONITOR: ("d", "monitor"),
     SpecialPointKind.GRAZING_SLIDING: ("H", "grazing-sliding"),
     SpecialPointKind.CROSSING_SLIDING: ("<", "crossing-sliding"),
     SpecialPointKind.SWITCHING_SLIDING: (">", "switching-sliding"),
@@ -216,9 +218,13 @@ def _as_list(branches: Branch | Iterable[Branch]) -> list[Branch]:
 def _measure_values(branch: Branch, measure: Measure) -> np.ndarray:
     if callable(measure):
         return np.asarray(measure(branch), dtype=float)
-    if measure not in MEASURE_LABELS:
-        raise ValueError(f"unknown amplitude measure {measure!r}; use one of {sorted(MEASURE_LABELS)} or a callable")
-    return getattr(branch, measure)
+    if measure in MEASURE_LABELS:
+        return getattr(branch, measure)
+    if measure in branch.measures:
+        return branch.measure(measure)
+    raise ValueError(f"unknown amplitude measure {measure!r}; use one of {sorted(MEASURE_LABELS)}, a measure the "
+                     f"branch was computed with ({', '.join(branch.measures) or 'none'}: "
+                     "ContinuationSettings(measures=...)) or a callable")
 
 
 def _special_point_y(branch: Branch, sp: SpecialPoint, y: np.ndarray, measure: Measure) -> float:
@@ -415,6 +421,8 @@ def _measure_label(measure: Measure, branch: Branch | None, state_name: str | No
     """The y label of a measure: mathtext of the first state, with its unit if the model declares one."""
     if not isinstance(measure, str):
         return "A"
+    if measure not in MEASURE_LABELS:
+        return measure_label(measure)
     unit = ""
     if state_name is None:
         name = branch.state_names[0] if branch is not None and branch.state_names else "x"

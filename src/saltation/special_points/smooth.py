@@ -23,6 +23,7 @@ import numpy as np
 
 from saltation.branches.branch import SpecialPoint, SpecialPointKind
 from saltation.branches.corrector import Solution, canonical_events
+from saltation.branches.monitors import illinois_on_secant
 from saltation.errors import SaltationError
 from saltation.orbits.single import ShootingProblem
 from saltation.special_points.context import (
@@ -172,34 +173,8 @@ def locate_smooth(
     equation", BIT 11 (the Illinois method).  Govaerts (2000), *Numerical Methods for Bifurcations
     of Dynamical Equilibria*, SIAM (test functions).
     """
-    sa, sb = 0.0, 1.0
-    ga, gb = test(a), test(b)
-    lo, hi = a, b
-    side = 0
-    for _ in range(80):
-        if np.linalg.norm(hi.z - lo.z) <= ctx.tol:
-            break
-        sm = sb - gb * (sb - sa) / (gb - ga) if gb != ga else 0.5 * (sa + sb)
-        if not (sa < sm < sb) or (sb - sa) < 1e-14:
-            sm = 0.5 * (sa + sb)
-        try:
-            mid = ctx.on_secant(a, b, sm)
-        except SaltationError:
-            break
-        gm = test(mid)
-        if gm == 0.0:
-            lo = hi = mid
-            break
-        if np.sign(gm) == np.sign(ga):
-            sa, ga, lo = sm, gm, mid
-            if side == -1:
-                gb *= 0.5
-            side = -1
-        else:
-            sb, gb, hi = sm, gm, mid
-            if side == 1:
-                ga *= 0.5
-            side = 1
+    lo, hi = illinois_on_secant(lambda sigma: ctx.on_secant(a, b, sigma), test, a, b, tol=ctx.tol,
+                                distance=lambda p, q: float(np.linalg.norm(q.z - p.z)))
     best = lo if abs(test(lo)) <= abs(test(hi)) else hi
     bracket = (min(lo.lam, hi.lam), max(lo.lam, hi.lam))
     multipliers_accuracy = float("nan")

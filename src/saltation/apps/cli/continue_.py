@@ -5,6 +5,7 @@ written as CSV, JSON and a diagram."""
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 
 import saltation.apps.cli.models as models  # noqa: PLR0402 (one place to replace it; importing the package would be a cycle)
@@ -12,7 +13,9 @@ from saltation.apps.cli.errors import UsageError
 from saltation.apps.cli.models import build_model
 from saltation.apps.cli.options import (
     add_mode0,
+    add_measure,
     add_model,
+    add_monitor,
     add_no_progress,
     add_out,
     add_period,
@@ -28,6 +31,8 @@ from saltation.apps.cli.options import (
     check_start_period,
     finite,
     forcing_period_at,
+    parse_measure_options,
+    parse_monitor_options,
     parse_sets,
     parse_start,
     step_settings,
@@ -74,7 +79,9 @@ def _checked(args: argparse.Namespace):
     start, stop = float(args.start), float(args.stop)
     if start == stop:
         raise UsageError(f"--from and --to must differ, got {fmt(start)} twice")
-    settings = step_settings(args, (start, stop))
+    settings = replace(step_settings(args, (start, stop)),
+                       measures=tuple(m.text for m in parse_measure_options(args, system)),
+                       monitors=parse_monitor_options(args, system))
     if args.equilibrium is not None:
         check_equilibrium_option(args, system)
     check_mode0(args, system)
@@ -117,7 +124,8 @@ def _write(args: argparse.Namespace, system, branches: list, note: str) -> None:
         io.save_branch_csv(br, out / f"{stem}_branch{suffix}.csv")
     records = [io.special_point_record(sp, system.name, args.param) for sp in distinct_special_points(branches)]
     io.save_special_points_json(records, out / f"{stem}_special_points.json")
-    plotting.save_figure(plotting.plot_response(branches), out / f"{stem}_diagram")
+    measure = args.measure[0] if args.measure else "amplitude"
+    plotting.save_figure(plotting.plot_response(branches, measure=measure), out / f"{stem}_diagram")
     total = sum(len(b) for b in branches)
     reasons = "; ".join(b.stop_reason.value for b in branches if b.stop_reason is not None)
     print(f"{total} point{'s' if total != 1 else ''} on {len(branches)} branch{'es' if len(branches) != 1 else ''} of "
@@ -157,5 +165,7 @@ def add_parser(sub) -> None:
     add_out(p)
     add_step_options(p)
     add_segments(p, "; the branch's multipliers come from the segments' matrices (periodic Schur decomposition)")
+    add_measure(p, "; every point records them (the branch files' measures) and the diagram plots the first")
+    add_monitor(p)
     add_no_progress(p)
     p.set_defaults(handler=cmd_continue)

@@ -435,6 +435,63 @@ def add_step_options(p, what: str = "") -> None:
                    help=f"largest number of points{what}, a positive integer (default 2000)")
 
 
+#: Help of ``--measure``.
+MEASURE_HELP = ("a measure of the orbits: a state NAME (max |NAME| over the period), ptp:NAME (peak to peak), "
+                "section:NAME (its value at the section), norm (max of the state's Euclidean norm), or an expression "
+                "of the states, parameters and t (its largest value; min:EXPR its smallest), e.g. 'sqrt(x**2 + y**2)'; "
+                "repeat for several")
+
+
+def add_measure(p: argparse.ArgumentParser, what: str = "") -> None:
+    """``--measure SPEC`` (repeatable)."""
+    p.add_argument("--measure", metavar="SPEC", action="append", default=[], help=MEASURE_HELP + what)
+
+
+def parse_measure_options(args: argparse.Namespace, system) -> tuple:
+    """The ``--measure`` options as measures of the model.
+
+    Raises
+    ------
+    UsageError
+        Naming the measure and the model's states, for one that does not parse.
+    """
+    from saltation.errors import ModelError
+    from saltation.orbits.measures import parse_measures
+
+    try:
+        return parse_measures(args.measure, system)
+    except ModelError as exc:
+        raise UsageError(f"--measure: {exc}") from None
+
+
+def add_monitor(p: argparse.ArgumentParser) -> None:
+    """``--monitor EXPR`` (repeatable) and ``--stop-at-monitor``."""
+    p.add_argument("--monitor", metavar="EXPR", action="append", default=[],
+                   help="locate where EXPR crosses zero along the branch (or where LHS = RHS), recorded as a "
+                        "special point of kind monitor: an expression of parameter (or the parameter's name), "
+                        "period, amplitude, half_peak_to_peak, excursion, largest_multiplier and the model's "
+                        "parameters, or a measure of the orbits as --measure writes it, e.g. 'amplitude = 1.5' or "
+                        "'sqrt(x**2 + y**2) = 0.8'; repeat for several")
+    p.add_argument("--stop-at-monitor", action="store_true", help="end the branch where a --monitor crosses zero")
+
+
+def parse_monitor_options(args: argparse.Namespace, system) -> tuple:
+    """The ``--monitor`` options as monitors of the model.
+
+    Raises
+    ------
+    UsageError
+        Naming the monitor, for one that does not parse.
+    """
+    from saltation.branches.monitors import Monitor
+    from saltation.errors import ModelError
+
+    try:
+        return tuple(Monitor.parse(text, system, args.param, stop=args.stop_at_monitor) for text in args.monitor)
+    except ModelError as exc:
+        raise UsageError(f"--monitor: {exc}") from None
+
+
 def step_settings(args, bounds: tuple[float, float]):
     """The continuation settings of ``--ds``, ``--ds-max`` and ``--max-points`` over ``bounds``."""
     from saltation.special_points.continuation import ContinuationSettings

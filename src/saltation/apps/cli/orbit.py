@@ -15,6 +15,7 @@ from saltation.apps.cli.models import build_model
 from saltation.apps.cli.options import (
     MIN_PERIOD,
     add_json,
+    add_measure,
     add_mode0,
     add_model,
     add_period,
@@ -27,6 +28,7 @@ from saltation.apps.cli.options import (
     check_start_field,
     finite,
     forcing_period_at,
+    parse_measure_options,
     parse_sets,
     parse_vector,
 )
@@ -82,6 +84,7 @@ def cmd_orbit(args: argparse.Namespace) -> int:
 
     system = build_model(args.model)
     overrides = parse_sets(args.set, system)
+    measures = parse_measure_options(args, system)
     x0 = parse_vector(args.x0, system) if args.x0 is not None else None
     mode0 = check_mode0(args, system)
     period = args.period
@@ -108,12 +111,20 @@ def cmd_orbit(args: argparse.Namespace) -> int:
         flow, x0, parameters=overrides, period=period, backward=args.backward, t0=t0, segments=args.segments,
         mode0=mode0,
     )
+    values = {}
+    if measures:
+        from saltation.orbits.measures import measure_orbit
+
+        values = measure_orbit(flow, orbit.state0, orbit.period, p, measures, t0=orbit.t0, mode0=orbit.mode0,
+                               backward=args.backward)
     if args.json:
         from saltation.output.codecs import orbit_to_dict
 
-        print(json.dumps(orbit_to_dict(orbit, system)))
+        print(json.dumps(orbit_to_dict(orbit, system) | ({"measures": values} if measures else {})))
     else:
         print(format_orbit(orbit, system))
+        for m in measures:
+            print(f"{'measure':<12} {m.label} = {fmt(values[m.text])}")
     return 0
 
 
@@ -197,5 +208,6 @@ def add_parser(sub) -> None:
     )
     add_segments(p)
     add_mode0(p)
+    add_measure(p, "; printed after the orbit (--json: the key measures, by SPEC)")
     add_json(p, "print one JSON object instead of a table")
     p.set_defaults(handler=cmd_orbit)
