@@ -16,10 +16,13 @@ for one more release, with a ``DeprecationWarning``.
 """
 
 import importlib as _importlib
+import logging as _logging
 
 from saltation import _moved
 
 _moved.install()
+# quiet unless the application configures logging: each module logs to ``saltation.<layer>.<module>``
+_logging.getLogger("saltation").addHandler(_logging.NullHandler())
 
 #: Where each of the everyday names lives.  They are imported when first used (``saltation.Flow``,
 #: ``from saltation import Flow``), so ``import saltation`` loads neither sympy nor numba, and the command

@@ -66,6 +66,7 @@ MODULES = (
     "saltation.orbits.conditions.joining",
     "saltation.orbits.start",
     "saltation.orbits.measures",
+    "saltation.progress",
     "saltation.branches.monitors",
     "saltation.special_points.continuation",
     "saltation.special_points.loci",
@@ -99,6 +100,9 @@ SKIPPED_MODULES = frozenset({
 
 #: Functions without a ``Raises`` section, and why.
 RAISES_EXEMPT = {
+    "saltation.progress.enabled": "reads a setting",
+    "saltation.progress.set_enabled": "stores a setting",
+    "saltation.progress.bar": "makes a tqdm bar",
     "saltation.orbits.measures.measure_state": "arithmetic on the given state",
     "saltation.orbits.measures.measure_label": "builds a text",
     "saltation.branches.monitors.illinois_on_secant": "the test function's and the corrector's errors are theirs; "

@@ -22,7 +22,7 @@ import saltation
 
 ROOT = Path(saltation.__file__).parent
 LAYERS = ["model", "engine", "orbits", "branches", "special_points", "sweeps", "output", "apps"]
-FOUNDATION = {"errors", "summary", "_moved", "kinds", "_optional"}  # import nothing of the package's layers
+FOUNDATION = {"errors", "summary", "_moved", "kinds", "_optional", "progress"}  # import nothing of the package's layers
 
 #: (module, function) whose imports are not counted: the records' deprecated file and figure methods,
 #: which import the output layer when called (they go in release 0.3.0).

@@ -24,6 +24,7 @@ equilibria): ``evaluate(u, lam) -> Evaluation``, ``describe``, ``accept``.
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
@@ -46,6 +47,8 @@ from saltation.branches.monitors import illinois_on_secant, parse_monitors
 from saltation.errors import SaltationError
 from saltation.orbits.measures import parse_measures
 from saltation.orbits.problem import BranchProblem
+
+_log = logging.getLogger(__name__)
 
 
 def _axis_labels(system) -> dict[str, str]:
@@ -569,6 +572,8 @@ class Continuation:
 
     def _add_special(self, sp) -> None:
         """A located special point, stamped with the section its state lies at."""
+        _log.info("%s: %s at %s = %.10g (%s, to %.1e)", self.branch.model, sp.kind.value, self.branch.parameter_name,
+                  sp.parameter, sp.status.value, sp.accuracy)
         t0 = self._section()
         self.branch.special_points.append(sp if t0 == sp.t0 else replace(sp, t0=t0))
 
@@ -576,6 +581,9 @@ class Continuation:
         self.problem.accept(sol.u, sol.lam)
         self.solutions.append(sol)
         point = sol.summary.recorded(sol.lam, sol.step, sol.iterations)
+        _log.debug("%s: point %d at %s = %.10g (step %.3g, %d Newton iterations, %s)", self.branch.model,
+                   len(self.branch.points), self.branch.parameter_name, sol.lam, sol.step, sol.iterations,
+                   "stable" if point.stable else "unstable")
         t0 = self._section()
         if t0 != point.t0:
             object.__setattr__(point, "t0", t0)  # (a fresh record: see BranchPoint.recorded)
@@ -685,9 +693,14 @@ def run_both_ways(make_run: Callable[[int], Continuation], u0: np.ndarray, lam0:
     branch: Branch | None = None
     for d in directions:
         cont = make_run(d)
+        _log.info("%s: following %s from %.10g, %s", cont.branch.model, cont.branch.parameter_name, lam0,
+                  "increasing" if d > 0 else "decreasing")
         for point in cont.run(np.asarray(u0, dtype=float), lam0, direction=d):
             if progress is not None:
                 progress(point)
+        run = cont.branch
+        _log.info("%s: %d points, stopped: %s%s", run.model, len(run), run.stop_reason.value if run.stop_reason else "-",
+                  f" ({run.stop_detail})" if run.stop_detail else "")
         if branch is None:
             branch = cont.branch
         else:

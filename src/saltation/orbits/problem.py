@@ -14,6 +14,7 @@ how well a located unknown is known, and :func:`bordered_solve` the one solve of
 from __future__ import annotations
 
 import abc
+import logging
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -23,6 +24,8 @@ from scipy.linalg import lapack
 
 from saltation.errors import ConvergenceError, ModelError, SaltationError
 from saltation.orbits.records import BranchPoint, Evaluation
+
+_log = logging.getLogger(__name__)
 
 
 class BranchProblem(abc.ABC):
@@ -388,6 +391,7 @@ def newton(
     for it in range(max_iter + 1):
         rn = residual_norm(r)
         history.append(rn)
+        _log.debug("%s: iteration %d, residual %.3e", what, it, rn)
         if not np.isfinite(rn):
             why = ("not finite" if not np.isfinite(r).all() else
                    f"too large for a float (its entries reach {float(np.max(np.abs(r))):.3g})")

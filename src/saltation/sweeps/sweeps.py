@@ -49,6 +49,7 @@ tolerance), not by stopping the integrator at every section crossing.
 from __future__ import annotations
 
 import enum
+import logging
 import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -67,6 +68,8 @@ from saltation.engine.flow import Tolerances
 from saltation.errors import ModelError
 from saltation.model.system import PiecewiseSystem
 from saltation.sweeps.parallel import _Job, _RowsJob, _run_jobs, _workers
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["PeriodMap", "StartState", "SweepResult", "SweepStart", "attractor_period", "period_map", "sweep"]
 
@@ -577,6 +580,7 @@ def sweep(
              period, float(t0), tolerances, bool(lyapunov), mode0)
         for k in pieces
     ]
+    _log.info("%s: sweep of %s over %d values in %d jobs", system.name, parameter, values.size, len(jobs))
     results = _run_jobs(system, jobs, client)
 
     counts, samples, failures, exponents = [], [], [], []
@@ -586,6 +590,8 @@ def sweep(
         failures += chunk_failures
         exponents += chunk_exponents
     counts_arr = np.array(counts, dtype=int)
+    for value, message in failures:
+        _log.warning("%s: the sweep failed at %s = %.10g: %s", system.name, parameter, value, message)
     states = np.concatenate(samples) if samples else np.zeros((0, system.n))
     settings = {"periods": int(periods), "transient": int(transient), "t0": float(t0), "x0": _describe_x0(x0),
                 **_described(system, base, tolerances)}
