@@ -555,3 +555,53 @@ def test_the_suite_compiles_into_its_own_cache():
     user_default = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "saltation"
     assert TEST_CACHE.resolve() != user_default.resolve()
     assert codegen.cache_directory() == TEST_CACHE.resolve()
+
+
+# -- 4. a warm start reads what it generated before ------------------------------------------------------
+
+
+def test_a_warm_start_reads_the_generated_source_back_and_never_a_damaged_one(cache, monkeypatch):
+    """The memo of generated sources: a new system object of the same model (a new process) gets the module
+    generated before, read back from the cache folder, without generating it (sympy's work); a module file
+    that no longer hashes to its name is not taken, and is generated again."""
+    first = forced_oscillator()
+    stem, source = codegen._model_module(first)
+    Flow(first)  # writes the module (and its memo)
+
+    def no_generation(system):
+        raise AssertionError("generated again")
+
+    monkeypatch.setattr(codegen, "model_source", no_generation)
+    assert codegen._model_module(forced_oscillator()) == (stem, source)
+    # another model (another fingerprint) is generated
+    with pytest.raises(AssertionError, match="generated again"):
+        codegen._model_module(forced_oscillator(field="-x - 3*zeta*v + cos(omega*t)"))
+    # a damaged module file is not taken for the module
+    _module_file(first).write_text(source[: len(source) // 2])
+    assert codegen._remembered("model", first.fingerprint) is None
+    monkeypatch.undo()
+    monkeypatch.setenv("SALTATION_CACHE_DIR", str(cache))
+    assert codegen._model_module(forced_oscillator()) == (stem, source)
+
+
+def test_numba_files_found_whole_are_not_read_again_until_they_change(cache, monkeypatch):
+    """Checking numba's files pickle by pickle takes a tenth of a second a start: their sizes and times,
+    stamped when they were last found whole, stand for the check until a file changes."""
+    system = forced_oscillator()
+    reference = _run(Flow(system))
+    stem, source = codegen._model_module(system)
+    Flow(system)
+    _forget(system)
+    Flow(system)  # a second start: the files are checked and stamped
+    stamp = codegen._numba_cache_dir(cache) / f"{stem}.saltation-intact.json"
+    assert stamp.is_file()
+    checked = []
+    real = codegen._intact
+    monkeypatch.setattr(codegen, "_intact", lambda path, pickles: checked.append(path) or real(path, pickles))
+    _forget(system)
+    _assert_same(_run(Flow(system)), reference)
+    assert checked == []  # nothing changed: nothing read
+    _forget(system)
+    _damage(system, "truncated index")
+    _assert_same(_run(Flow(system)), reference)
+    assert checked  # a file changed: every file is read again, and the damaged one rebuilt

@@ -54,6 +54,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import importlib.util
+import json
 import os
 import pickletools
 import stat
@@ -682,12 +683,65 @@ _ENGINES: dict[int, tuple[str, str]] = {}  # N_STATE -> (stem, source) in this p
 _MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # system -> (stem, source)
 
 
+#: The files whose text shapes a generated module besides the model itself: a change to any of them is a
+#: change of the generators, and the memo of sources (:func:`_remembered`) forgets what they made.
+_GENERATORS = (Path(__file__), _TEMPLATE, _CONTRACT, _RECORDS, Path(__file__).with_name("affine.py"),
+               Path(__file__).parents[1] / "model" / "system.py", Path(__file__).parents[1] / "model" / "nonsmooth.py")
+_GENERATOR_DIGEST: list[str] = []
+
+
+def _generator_digest() -> str:
+    """A hash of the generators' text and of the versions of what they call (sympy; scipy's DOP853 tableau)."""
+    if not _GENERATOR_DIGEST:
+        from importlib.metadata import version
+
+        texts = [p.read_text() for p in _GENERATORS]
+        _GENERATOR_DIGEST.append(_digest(*texts, f"sympy {version('sympy')}; scipy {version('scipy')}", _versions()))
+    return _GENERATOR_DIGEST[0]
+
+
+def _remembered(kind: str, identity: str) -> tuple[str, str] | None:
+    """The module generated before for ``identity`` (a model's fingerprint, an engine's dimension) by these
+    generators: ``(stem, source)`` read back from the cache folder, or None.
+
+    Generating a module's source takes sympy's differentiation and printing (0.2 s for a small model, 1.3 s
+    for a 32-state one; the engine's needs scipy's tableau): a warm start reads it instead.  The memo names
+    the module only; the module must still hash to its name (:func:`_digest` of its text), so a damaged or
+    foreign file is never taken for it.
+    """
+    try:
+        key = _digest(kind, identity, _generator_digest())
+        for directory in dict.fromkeys((active_cache_directory(), cache_directory())):
+            memo = directory / "memo" / key
+            if not memo.is_file():
+                continue
+            stem = memo.read_text().strip()
+            source = (directory / f"{stem}.py").read_text()
+            if stem.rsplit("_", 1)[-1] == _digest(source, _versions()):
+                return stem, source
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+    return None
+
+
+def _remember(kind: str, identity: str, stem: str) -> None:
+    """Write the memo of :func:`_remembered` (where the folder cannot be written, it is only not kept)."""
+    with contextlib.suppress(OSError):
+        folder = active_cache_directory() / "memo"
+        folder.mkdir(exist_ok=True)
+        _write_atomic(folder / _digest(kind, identity, _generator_digest()), stem.encode())
+
+
 def _engine_module(n_state: int) -> tuple[str, str]:
     """The engine's module name (``engine_n<N>_<hash of its source and versions>``) and its source."""
     with _IMPORT_LOCK:
         if n_state not in _ENGINES:
-            source = engine_source(n_state)
-            _ENGINES[n_state] = (f"engine_n{n_state}_{_digest(source, _versions())}", source)
+            hit = _remembered("engine", str(n_state))
+            if hit is None:
+                source = engine_source(n_state)
+                hit = (f"engine_n{n_state}_{_digest(source, _versions())}", source)
+                _remember("engine", str(n_state), hit[0])
+            _ENGINES[n_state] = hit
         return _ENGINES[n_state]
 
 
@@ -704,8 +758,13 @@ def _model_module(system: PiecewiseSystem) -> tuple[str, str]:
         except TypeError:  # an object that cannot be a weak key: generate each time
             hit = None
         if hit is None:
-            source = model_source(system)
-            hit = (f"{system.name}_{_digest(source, _versions())}", source)
+            identity = getattr(system, "fingerprint", None)
+            hit = _remembered("model", identity) if isinstance(identity, str) else None
+            if hit is None:
+                source = model_source(system)
+                hit = (f"{system.name}_{_digest(source, _versions())}", source)
+                if isinstance(identity, str):
+                    _remember("model", identity, hit[0])
             try:
                 _MODELS[system] = hit
             except TypeError:
@@ -794,6 +853,24 @@ def _intact(path: Path, pickles: int) -> bool:
         return False
 
 
+def _stamps(files: list[Path]) -> dict[str, list[int]]:
+    """Size and modification time (ns) of each file, by name: what changes when a file is rewritten or cut."""
+    out = {}
+    for f in files:
+        with contextlib.suppress(OSError):
+            st = f.stat()
+            out[f.name] = [st.st_size, st.st_mtime_ns]
+    return out
+
+
+def _read_stamps(path: Path) -> dict | None:
+    """The stamps :func:`_prepare` wrote when it last found a module's numba files whole, or None."""
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+
+
 def _remove(files: list[Path]) -> None:
     for f in files:
         with contextlib.suppress(FileNotFoundError):
@@ -838,7 +915,15 @@ def _prepare(directory: Path, stem: str, source: str, what: str) -> bool:
         _write_atomic(path, data)
     numba_dir = _numba_cache_dir(directory)
     files = _numba_files(numba_dir, stem)
-    damaged = [f for f in files if not _intact(f, 2 if f.suffix == ".nbi" else 1)]
+    stamp = numba_dir / f"{stem}.saltation-intact.json"
+    seen = _stamps(files)
+    if _read_stamps(stamp) == seen:
+        damaged = []  # every file as it was when it was last found whole
+    else:
+        damaged = [f for f in files if not _intact(f, 2 if f.suffix == ".nbi" else 1)]
+        if not damaged and files:
+            with contextlib.suppress(OSError):
+                _write_atomic(stamp, json.dumps(seen).encode())
     if damaged:
         names = ", ".join(f.name for f in damaged[:2]) + (f" and {len(damaged) - 2} more" if len(damaged) > 2 else "")
         _notice(f"numba's cache of {what} in {numba_dir} was damaged ({names}); compiling it again")
