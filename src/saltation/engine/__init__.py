@@ -10,6 +10,7 @@ Modules:
 * :mod:`~saltation.engine.kernel_newton`: the engine's Newton on periodic orbits, run from a flow.
 * :mod:`~saltation.engine.codegen`: writes a model's functions and the engine, and caches them per machine.
 * :mod:`~saltation.engine.precompile`: compiling several models and engines at once, in parallel.
+* :mod:`~saltation.engine.buildtime`: how long a first build takes on this machine (the estimate its message gives).
 * :mod:`~saltation.engine.affine`: the exact flow of affine modes.
 * :mod:`~saltation.engine.compiled`: models given as compiled callables.
 * ``saltation.engine._contract``: the layouts and codes shared by the engine, the model functions and Python.

@@ -8,11 +8,13 @@ compiles once per machine:
   state dimension up to 4 (``N_STATE`` a compile-time constant) and one for
   every larger dimension; it takes the model as a tuple of first-class
   functions, so it does not depend on the model and is compiled once, not
-  once per model (about 40 s, the first time a dimension is used);
+  once per model (about 40 s of compiling, the first time a dimension is used; the message says
+  how long it should take on this machine, :mod:`saltation.engine.buildtime`);
 * the **model functions**: the model's exact derivatives printed as Python
   source (with common subexpressions eliminated), each compiled eagerly with
   its signature from the contract (``_contract.py``); a new or changed model
-  compiles only these (seconds).
+  compiles only these (seconds; announced when it should take 10 s or more here, as for a model of
+  many states).
 
 The kernel cache
 ----------------
@@ -41,6 +43,9 @@ once.  Every file saltation writes goes through a temporary file renamed over
 the target, so a crash leaves the old file or the whole new one.  What cannot
 be rebuilt raises :class:`KernelCacheError` naming the folder to delete.
 
+*Build times.*  Each build's duration is recorded in ``build_times.json`` in the folder; the next
+builds' messages estimate their time from it (:mod:`saltation.engine.buildtime`).
+
 *Read-only caches.*  If the folder (or numba's folder for it) cannot be
 written, the process says so once on standard error and uses a private
 per-user folder in the temporary directory (:func:`fallback_directory`)
@@ -64,7 +69,7 @@ import threading
 import time
 import uuid
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -75,6 +80,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from saltation.engine._contract import MODEL_FUNCTIONS, MODEL_SIGNATURES
 from saltation.engine.affine import affine_form
+from saltation.engine.buildtime import BuildEstimate, estimate_build, timed
 from saltation.errors import SaltationError
 from saltation.model.system import TIME, PiecewiseSystem
 
@@ -1022,17 +1028,24 @@ def build_watcher(callback: Callable[[str | None, float], None]):
 
 
 @contextlib.contextmanager
-def building(message: str, *, stream=None, interval: float = 1.0):
+def building(message: str | None, *, stream=None, interval: float = 1.0, estimate: BuildEstimate | None = None):
     """Say on standard error what is being built, and, on a terminal, keep the line moving with the
     seconds elapsed until it is done (a compile of a minute should not look like a hang).  With a
     :func:`build_watcher` active, the watcher shows it instead.  A build within one already announced
-    (in this thread) is not announced again."""
+    (in this thread) is not announced again, nor recorded.  ``message`` None: a build not announced.
+
+    With ``estimate`` (:func:`saltation.engine.buildtime.estimate_build`, made as the build starts), a build
+    that finishes is recorded in the kernel cache folder, and the next builds' estimates come from it."""
     if getattr(_BUILD_NOTICE, "active", False):  # (within a build already announced: that notice covers it)
         yield
         return
     _BUILD_NOTICE.active = True
     try:
-        with _announced(message, stream, interval):
+        with contextlib.ExitStack() as stack:
+            if estimate is not None:  # (a build that raises is not recorded)
+                stack.enter_context(timed(active_cache_directory(), estimate))
+            if message is not None:
+                stack.enter_context(_announced(message, stream, interval))
             yield
     finally:
         _BUILD_NOTICE.active = False
@@ -1113,6 +1126,58 @@ COMPILE_GROUP_SECONDS = (22.0, 18.0)
 engine): :mod:`saltation.engine.precompile` balances the processes of a cold build by them."""
 
 
+SHARED_ENGINE_FACTOR = 1.2
+"""How much longer the engine that every larger dimension shares (``N_STATE = 0``: loops over a state of
+unknown length) takes to compile than one of a fixed dimension.  Measured: 1.11 and 1.27 times the
+processor time, in two pairs of first builds on one machine (with a 10-state chain's functions, against
+the 2-state engine with ``trilinear``'s)."""
+
+
+def engine_seconds(n_state: int, names: Iterable[str]) -> float:
+    """About how long compiling the entry points ``names`` of the engine with ``N_STATE = n_state`` takes,
+    on one core as :data:`COMPILE_GROUP_SECONDS`: each group's seconds shared equally between its
+    functions, times :data:`SHARED_ENGINE_FACTOR` for the shared engine (0).
+
+    Parameters
+    ----------
+    n_state : int
+        The engine's ``N_STATE`` (:func:`engine_dimension`).
+    names : iterable of str
+        Entry points (:data:`ENTRY_POINTS`) to compile.
+
+    Returns
+    -------
+    float
+        Seconds.
+    """
+    todo = set(names)
+    seconds = sum(cost * len(todo.intersection(group)) / len(group)
+                  for group, cost in zip(COMPILE_GROUPS, COMPILE_GROUP_SECONDS))
+    return seconds * (SHARED_ENGINE_FACTOR if n_state == 0 else 1.0)
+
+
+def model_seconds(system: PiecewiseSystem) -> float:
+    """About how long a model's functions take to compile, in an interpreter that has compiled something
+    already (one core of a 2-core machine, as :data:`COMPILE_GROUP_SECONDS`):
+    2 s, a tenth of a second for each pair of a mode and a surface (the Lie derivatives) and each
+    transition (the guards), and ``n**2 / 400`` s for ``n`` states (the Jacobians).  Measured: 3.3 s for
+    ``trilinear`` (3 modes, 4 surfaces, 8 transitions), 5 s for ``block_on_belt`` (3, 5, 14); on a
+    machine (or a load) that took 6.4 s for ``trilinear``, a chain of 2 masses (4 states; 3, 4, 8) 7.3 s,
+    of 8 masses 8.5 s, of 16 10.5 s and of 32 (64 states) 23.6 s.
+
+    Parameters
+    ----------
+    system : PiecewiseSystem
+        The model.
+
+    Returns
+    -------
+    float
+        Seconds.
+    """
+    return 2.0 + 0.1 * (len(system.modes) * len(system.surface_names) + len(system.transitions)) + system.n**2 / 400
+
+
 def _entry_points(names: tuple[str, ...]) -> Callable[[ModuleType], None]:
     def compile_them(module: ModuleType) -> None:
         for name in names:
@@ -1126,8 +1191,8 @@ def _entry_points(names: tuple[str, ...]) -> Callable[[ModuleType], None]:
 
 def load_engine(n: int, entry_points: tuple[str, ...] = tuple(ENTRY_POINTS)) -> ModuleType:
     """Import the engine that integrates models of ``n`` states with its ``entry_points`` compiled,
-    compiling them first if this machine has not yet (once; it says so on standard error, since it
-    takes a while)."""
+    compiling them first if this machine has not yet (once; it says so on standard error, with how long
+    it should take here, since it takes a while)."""
     n_state = engine_dimension(n)
     stem, source = _engine_module(n_state)
     modname = f"_saltation_engine_{stem}"
@@ -1137,10 +1202,36 @@ def load_engine(n: int, entry_points: tuple[str, ...] = tuple(ENTRY_POINTS)) -> 
         _cached(stem, name) for name in entry_points
     ):
         which = f"{n_state}-state models" if n_state else f"models of {min(SPECIALIZED_DIMENSIONS.stop, n)} or more states"
-        with building(f"compiling the integrator for {which}, once for this machine (about 40 s; "
-                      f"cached in {active_cache_directory()})"):
+        estimate = None
+        if not getattr(_BUILD_NOTICE, "active", False):  # (within a build, that build's estimate covers it)
+            work = engine_seconds(n_state, [name for name in entry_points if not _cached(stem, name)])
+            estimate = estimate_build(active_cache_directory(), engine_kind(n_state), (work,))
+        when = f"{estimate.text}; " if estimate is not None and estimate.text else ""
+        with building(f"compiling the integrator for {which}, once for this machine ({when}"
+                      f"cached in {active_cache_directory()})", estimate=estimate):
             return _load(stem, source, modname, what, _entry_points(entry_points))
     return _load(stem, source, modname, what, _entry_points(entry_points))
+
+
+def engine_kind(n_state: int) -> str:
+    """The kind of build (:mod:`saltation.engine.buildtime`) of the engine with ``N_STATE = n_state``.
+
+    Parameters
+    ----------
+    n_state : int
+        The engine's ``N_STATE`` (:func:`engine_dimension`).
+
+    Returns
+    -------
+    str
+        ``"engine 2"``, or ``"engine 5+"`` for the engine every larger dimension shares (0).
+    """
+    return f"engine {n_state}" if n_state else f"engine {SPECIALIZED_DIMENSIONS.stop}+"
+
+
+MODEL_ANNOUNCED_SECONDS = 10.0
+"""A model's functions compiled on their own are announced (:func:`building`) when they should take at
+least this long here: a model of many states (some 25 s for 64), not the seconds of a small one."""
 
 
 _LOADED_COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # CompiledSystem -> model tuple
@@ -1157,4 +1248,12 @@ def load_model_functions(system: PiecewiseSystem) -> tuple:
                 _LOADED_COMPILED[system] = build_model_functions(system)
             return _LOADED_COMPILED[system]
     stem, source = _model_module(system)
-    return _load(stem, source, f"_saltation_model_{stem}", f"the functions of model {system.name!r}").MODEL
+    modname, what = f"_saltation_model_{stem}", f"the functions of model {system.name!r}"
+    if modname in _LOADED or getattr(_BUILD_NOTICE, "active", False) or _cached(stem, "vector_field"):
+        return _load(stem, source, modname, what).MODEL
+    work = model_seconds(system)  # (a small model is not worth the probe of a first estimate: it is not announced)
+    estimate = estimate_build(active_cache_directory(), "model functions", (work,), calibrate=work >= 5.0)
+    announced = estimate.seconds is not None and estimate.seconds >= MODEL_ANNOUNCED_SECONDS
+    message = f"compiling {what}, once for this machine ({estimate.text})" if announced else None
+    with building(message, estimate=estimate):
+        return _load(stem, source, modname, what).MODEL

@@ -1,7 +1,8 @@
 """Compiling the engines and model functions several models need at once (a cold cache only).
 
-The engine of a state dimension (about 25 s on two cores, 40 s on one) and a model's functions
-(seconds) compile on first use and are cached per machine.  A process that
+The engine of a state dimension (about 25 s on two free cores, 40 s on one) and a model's functions
+(seconds) compile on first use and are cached per machine; the message says how long it should take
+here (:mod:`saltation.engine.buildtime`).  A process that
 needs several (the paper's figures, the test suite) compiles them here in
 parallel: in this process and in fresh interpreters, one per further core, which
 start before the models are built and then load what they compiled from the
@@ -20,27 +21,23 @@ import subprocess
 import sys
 from collections.abc import Iterable
 
-from saltation.engine.codegen import (
-    COMPILE_GROUP_SECONDS,
+from saltation.engine.buildtime import estimate_build
+from saltation.engine.codegen import (  # (COMPILE_GROUP_SECONDS: a name of release 0.1 here)
+    COMPILE_GROUP_SECONDS,  # noqa: F401
     COMPILE_GROUPS,
     SPECIALIZED_DIMENSIONS,
+    active_cache_directory,
     building,
     engine_dimension,
+    engine_kind,
+    engine_seconds,
     is_compiled,
     is_engine_compiled,
     load_engine,
     load_model_functions,
+    model_seconds,
 )
 from saltation.model.system import PiecewiseSystem
-
-
-def model_seconds(system: PiecewiseSystem) -> float:
-    """About how long a model's functions take to compile, in an interpreter that has compiled something
-    already (one core of a 2-core machine, as :data:`~saltation.engine.codegen.COMPILE_GROUP_SECONDS`):
-    2 s, and a tenth of a second for each pair of a mode and a surface (the Lie derivatives) and each
-    transition (the guards).  Measured: 3.3 s for ``trilinear`` (3 modes, 4 surfaces, 8 transitions), 5 s
-    for ``block_on_belt`` (3, 5, 14)."""
-    return 2.0 + 0.1 * (len(system.modes) * len(system.surface_names) + len(system.transitions))
 
 Job = tuple[str, object]
 
@@ -49,8 +46,14 @@ def _compile_in_worker(jobs: list[Job], report=None) -> None:
     """Compile groups of engines' functions and models' functions, in turn (or load them, where cached).
 
     A job that fails is skipped (the caller's first use compiles it again, and reports the error); the
-    index of each that succeeds is written to ``report`` (a worker's standard output), as a line.
+    index of each that succeeds is written to ``report`` (a worker's standard output), as a line.  The
+    jobs are one build, the caller's: none is announced or recorded on its own.
     """
+    with building(None):
+        _compile_jobs(jobs, report)
+
+
+def _compile_jobs(jobs: list[Job], report) -> None:
     for k, (kind, what) in enumerate(jobs):
         try:
             if kind == "engine":
@@ -129,7 +132,8 @@ def _give_jobs(worker: subprocess.Popen, jobs: list[Job]) -> None:
 def _job_cost(job: Job) -> float:
     kind, what = job
     if kind == "engine":
-        return COMPILE_GROUP_SECONDS[COMPILE_GROUPS.index(tuple(what[1]))]
+        dimension, group = what
+        return engine_seconds(engine_dimension(dimension), group)
     return model_seconds(what)
 
 
@@ -201,12 +205,18 @@ def compile_in_parallel(systems: Iterable[PiecewiseSystem], workers: int | None 
         sizes = [f"{d}-state models" if d else f"models of {SPECIALIZED_DIMENSIONS.stop} or more states" for d in dims]
         models = f"{len(todo)} model{'s' if len(todo) != 1 else ''}"
         functions = f"the functions of {models}"
+        # how long: each process's share of the work, on the cores free now, at this machine's scale
+        costs = [_job_cost(job) for job in jobs]
+        work = [sum(costs[j] for j in share) for share in schedule(costs, helpers + 1)]
+        kind = ", ".join(engine_kind(d) for d in dims) if dims else "model functions"
+        estimate = estimate_build(active_cache_directory(), kind, work)
+        when = f"{estimate.text}, " if estimate.text else ""
         if engines:
-            what = f"compiling the integrator for {' and '.join(sizes)} (about 25 s, side by side on the cores)"
-            what += (f" and {functions}" if todo else "") + ", once for this machine"
+            what = f"compiling the integrator for {' and '.join(sizes)}" + (f" and {functions}" if todo else "")
+            what += f", once for this machine ({when}side by side on the cores)"
         else:
-            what = f"compiling {functions}"
-        with building(what):
+            what = f"compiling {functions} ({when}side by side on the cores)"
+        with building(what, estimate=estimate):
             _run_in_processes(jobs, started)
         finished = True
         return [s.name for s in todo]
