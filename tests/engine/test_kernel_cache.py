@@ -10,6 +10,7 @@ imported module (:func:`_forget`), and once for real in a fresh interpreter.
 from __future__ import annotations
 
 import errno
+import logging
 import os
 import pickle
 import shutil
@@ -73,6 +74,27 @@ def floquet_multipliers(period: float) -> np.ndarray:
 
 
 # -- a fresh cache per test ----------------------------------------------------------------------------
+
+
+class _Stderr(logging.Handler):
+    """The engine's records as lines ``saltation: MESSAGE`` on the standard error of the moment, as an
+    application (the command line) that shows them does."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        print(f"saltation: {record.getMessage()}", file=sys.stderr)
+
+
+@pytest.fixture(autouse=True)
+def _engine_records_on_stderr():
+    """The library is quiet by default (it logs); these tests read what it says about the cache on stderr."""
+    handler, logger = _Stderr(logging.INFO), logging.getLogger("saltation.engine")
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    yield
+    logger.removeHandler(handler)
+    logger.setLevel(level)
+
 
 
 @pytest.fixture(scope="module")
@@ -344,8 +366,10 @@ def test_a_new_process_repairs_a_damaged_cache(cache, engine):
     prints the same trajectory, bit for bit."""
     _copy_engine(engine, cache)
     script = textwrap.dedent(f"""
+        import logging
         import sys
         sys.path.insert(0, {str(Path(__file__).parent)!r})
+        logging.basicConfig(format="saltation: %(message)s")  # (the library logs; this run shows its warnings)
         from saltation import Flow
         from test_kernel_cache import forced_oscillator, _run
         tr = _run(Flow(forced_oscillator()))
@@ -578,7 +602,7 @@ def test_a_warm_start_reads_the_generated_source_back_and_never_a_damaged_one(ca
         codegen._model_module(forced_oscillator(field="-x - 3*zeta*v + cos(omega*t)"))
     # a damaged module file is not taken for the module
     _module_file(first).write_text(source[: len(source) // 2])
-    assert codegen._remembered("model", first.fingerprint) is None
+    assert codegen._remembered("model", codegen._definition(first)) is None
     monkeypatch.undo()
     monkeypatch.setenv("SALTATION_CACHE_DIR", str(cache))
     assert codegen._model_module(forced_oscillator()) == (stem, source)

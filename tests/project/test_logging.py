@@ -87,3 +87,50 @@ def test_no_print_in_the_library_outside_the_command_line():
         if lines:
             found[str(path.relative_to(ROOT))] = lines
     assert found == {}
+
+
+class _Terminal:
+    """A standard error that says it is a terminal, keeping what is written."""
+
+    def __init__(self):
+        import io
+
+        self.buffer = io.StringIO()
+
+    def write(self, text):
+        return self.buffer.write(text)
+
+    def flush(self):
+        pass
+
+    def isatty(self):
+        return True
+
+
+def test_a_build_shows_a_bar_on_a_terminal_and_the_switch_turns_it_off(monkeypatch, caplog):
+    import time
+
+    from saltation import progress
+    from saltation.engine.codegen import building
+
+    for value, on in (("", True), ("1", True), ("0", False), ("off", False), ("False", False)):
+        monkeypatch.setenv(progress.ENVIRONMENT_VARIABLE, value)
+        assert progress.enabled() is on
+    monkeypatch.delenv(progress.ENVIRONMENT_VARIABLE)
+    progress.set_enabled(False)
+    assert not progress.enabled() and progress.bar("x", 3.0) is None
+    progress.set_enabled(None)
+    assert progress.enabled()
+
+    terminal = _Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    with caplog.at_level(logging.INFO, logger="saltation.engine"), building("compiling a test", interval=0.02):
+        time.sleep(0.15)
+    assert "saltation: compiling a test" in terminal.buffer.getvalue()  # the bar, with its seconds
+    messages = [r.getMessage() for r in caplog.records if r.name == "saltation.engine.codegen"]
+    assert messages[0] == "compiling a test" and messages[1].startswith("compiling a test: done in ")
+    terminal.buffer.truncate(0)
+    monkeypatch.setenv(progress.ENVIRONMENT_VARIABLE, "0")
+    with building("compiling a test", interval=0.02):
+        time.sleep(0.05)
+    assert terminal.buffer.getvalue() == ""

@@ -57,10 +57,13 @@ why.
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import importlib.util
 import json
+import logging
 import os
+import pickle
 import pickletools
 import stat
 import sys
@@ -88,6 +91,7 @@ _TEMPLATE = Path(__file__).with_name("_kernel_source.py")
 _CONTRACT = Path(__file__).with_name("_contract.py")
 _RECORDS = Path(__file__).with_name("_records.py")
 _LOADED: dict[str, ModuleType] = {}
+_log = logging.getLogger(__name__)
 _IMPORT_LOCK = threading.RLock()  # threads that build flows at once import each module once
 
 
@@ -591,10 +595,11 @@ _NOTICES: set[str] = set()  # messages already printed by this process
 
 
 def _notice(message: str) -> None:
-    """Print ``message`` on standard error, once per process."""
+    """Log ``message`` as a warning of ``saltation.engine.codegen``, once per process (the command line shows
+    the library's warnings on standard error)."""
     if message not in _NOTICES:
         _NOTICES.add(message)
-        print(f"saltation: {message}", file=sys.stderr, flush=True)
+        _log.warning("%s", message)
 
 
 def _numba_cache_dir(directory: Path) -> Path:
@@ -706,9 +711,24 @@ def _generator_digest() -> str:
     return _GENERATOR_DIGEST[0]
 
 
+def _definition(system) -> str | None:
+    """A hash of everything a model was built from: every attribute it holds but the ones derived from the
+    others on demand (its ``cached_property`` values, the fingerprint among them), pickled.  Anything that can
+    change the generated code is in it (so a memo found by it is that code); what cannot (labels, units,
+    defaults) only makes more misses.  None where the model does not pickle."""
+    try:
+        state = system.__getstate__()
+        derived = {name for cls in type(system).__mro__ for name, value in vars(cls).items()
+                   if isinstance(value, functools.cached_property)}
+        return hashlib.sha256(pickle.dumps({k: state[k] for k in sorted(state) if k not in derived},
+                                           protocol=4)).hexdigest()
+    except Exception:  # noqa: BLE001 (a model that does not pickle is generated each time)
+        return None
+
+
 def _remembered(kind: str, identity: str) -> tuple[str, str] | None:
-    """The module generated before for ``identity`` (a model's fingerprint, an engine's dimension) by these
-    generators: ``(stem, source)`` read back from the cache folder, or None.
+    """The module generated before for ``identity`` (a hash of a model's definition, :func:`_definition`; an
+    engine's dimension) by these generators: ``(stem, source)`` read back from the cache folder, or None.
 
     Generating a module's source takes sympy's differentiation and printing (0.2 s for a small model, 1.3 s
     for a 32-state one; the engine's needs scipy's tableau): a warm start reads it instead.  The memo names
@@ -764,12 +784,12 @@ def _model_module(system: PiecewiseSystem) -> tuple[str, str]:
         except TypeError:  # an object that cannot be a weak key: generate each time
             hit = None
         if hit is None:
-            identity = getattr(system, "fingerprint", None)
-            hit = _remembered("model", identity) if isinstance(identity, str) else None
+            identity = _definition(system)
+            hit = _remembered("model", identity) if identity is not None else None
             if hit is None:
                 source = model_source(system)
                 hit = (f"{system.name}_{_digest(source, _versions())}", source)
-                if isinstance(identity, str):
+                if identity is not None:
                     _remember("model", identity, hit[0])
             try:
                 _MODELS[system] = hit
@@ -1029,10 +1049,12 @@ def build_watcher(callback: Callable[[str | None, float], None]):
 
 @contextlib.contextmanager
 def building(message: str | None, *, stream=None, interval: float = 1.0, estimate: BuildEstimate | None = None):
-    """Say on standard error what is being built, and, on a terminal, keep the line moving with the
-    seconds elapsed until it is done (a compile of a minute should not look like a hang).  With a
-    :func:`build_watcher` active, the watcher shows it instead.  A build within one already announced
-    (in this thread) is not announced again, nor recorded.  ``message`` None: a build not announced.
+    """Say what is being built, and keep saying it until it is done (a compile of a minute should not look
+    like a hang): an ``INFO`` record of ``saltation.engine.codegen`` at its start and its end, and a tqdm bar
+    of its seconds on standard error where that is a terminal or a notebook (:mod:`saltation.progress`, which
+    can turn it off).  With a :func:`build_watcher` active, the watcher shows it instead; with ``stream``, a
+    line on that stream, rewritten with the seconds on a terminal.  A build within one already announced (in
+    this thread) is not announced again, nor recorded.  ``message`` None: a build not announced.
 
     With ``estimate`` (:func:`saltation.engine.buildtime.estimate_build`, made as the build starts), a build
     that finishes is recorded in the kernel cache folder, and the next builds' estimates come from it."""
@@ -1045,7 +1067,8 @@ def building(message: str | None, *, stream=None, interval: float = 1.0, estimat
             if estimate is not None:  # (a build that raises is not recorded)
                 stack.enter_context(timed(active_cache_directory(), estimate))
             if message is not None:
-                stack.enter_context(_announced(message, stream, interval))
+                stack.enter_context(_announced(message, stream, interval,
+                                               None if estimate is None else estimate.seconds))
             yield
     finally:
         _BUILD_NOTICE.active = False
@@ -1055,7 +1078,18 @@ _BUILD_NOTICE = threading.local()
 
 
 @contextlib.contextmanager
-def _announced(message: str, stream, interval: float):
+def _announced(message: str, stream, interval: float, seconds: float | None = None):
+    _log.info("%s", message)
+    start = time.monotonic()
+    try:
+        with _shown(message, stream, interval, seconds):
+            yield
+    finally:
+        _log.info("%s: done in %.0f s", message, time.monotonic() - start)
+
+
+@contextlib.contextmanager
+def _shown(message: str, stream, interval: float, seconds: float | None):
     watchers = list(_BUILD_WATCHERS)
     if watchers:
         done = threading.Event()
@@ -1078,7 +1112,10 @@ def _announced(message: str, stream, interval: float):
             for watch in watchers:
                 watch(None, time.monotonic() - start)
         return
-    stream = sys.stderr if stream is None else stream
+    if stream is None:
+        with _progress_bar(message, interval, seconds):
+            yield
+        return
     live = bool(getattr(stream, "isatty", lambda: False)())
     stream.write(f"saltation: {message}" + ("" if live else "\n"))
     stream.flush()
@@ -1102,6 +1139,35 @@ def _announced(message: str, stream, interval: float):
         ticker.join()
         stream.write(f"\rsaltation: {message} ... done in {time.monotonic() - start:.0f} s\n")
         stream.flush()
+
+
+@contextlib.contextmanager
+def _progress_bar(message: str, interval: float, seconds: float | None):
+    """A tqdm bar of the seconds of a build (:func:`saltation.progress.bar`; nothing where bars are off or
+    standard error is not a terminal)."""
+    from saltation.progress import bar
+
+    shown = bar(f"saltation: {message}", seconds)
+    if shown is None or shown.disable:
+        if shown is not None:
+            shown.close()
+        yield
+        return
+    done = threading.Event()
+    start = time.monotonic()
+
+    def tick() -> None:
+        while not done.wait(interval):
+            shown.update(time.monotonic() - start - shown.n)
+
+    ticker = threading.Thread(target=tick, name="saltation-build-bar", daemon=True)
+    ticker.start()
+    try:
+        yield
+    finally:
+        done.set()
+        ticker.join()
+        shown.close()
 
 
 ENTRY_POINTS = {

@@ -36,6 +36,8 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import contextlib
+import logging
 import os
 import sys
 import tempfile  # noqa: F401 (saltation.apps.cli.tempfile: the module whose mkstemp tries --out)
@@ -217,7 +219,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if getattr(args, "handler", None) is None:
             raise UsageError(f"choose a subcommand ({', '.join(parser._subparsers._group_actions[0].choices)}); "
                              f"see '{PROG} --help'")
-        status = int(_handler(args)(args) or 0)
+        with _library_warnings_on_stderr():
+            status = int(_handler(args)(args) or 0)
         sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's last flush
         return status
     except SystemExit as exc:  # --help, --version
@@ -253,6 +256,28 @@ def main(argv: Sequence[str] | None = None) -> int:
         _fail(f"internal error: {type(exc).__name__}{': ' + text if text else ''} "
               f"(run with --debug for the traceback)")
         return 1
+
+
+class _StderrHandler(logging.Handler):
+    """The library's warnings as lines ``saltation: MESSAGE`` on the standard error of the moment (a test's
+    captured stream included)."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        with contextlib.suppress(Exception):
+            print(f"{PROG}: {record.getMessage()}", file=sys.stderr, flush=True)
+
+
+@contextlib.contextmanager
+def _library_warnings_on_stderr():
+    """While a subcommand runs, the library's warnings (a damaged kernel cache rebuilt, a sweep's failed value)
+    are shown on standard error; its other records stay with the application's logging."""
+    handler = _StderrHandler(logging.WARNING)
+    logger = logging.getLogger("saltation")
+    logger.addHandler(handler)
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
 
 
 def _handler(args: argparse.Namespace) -> Callable[[argparse.Namespace], int]:
