@@ -12,8 +12,8 @@ import saltation.apps.cli.models as models  # noqa: PLR0402 (one place to replac
 from saltation.apps.cli.errors import UsageError
 from saltation.apps.cli.models import build_model
 from saltation.apps.cli.options import (
-    add_mode0,
     add_measure,
+    add_mode0,
     add_model,
     add_monitor,
     add_no_progress,

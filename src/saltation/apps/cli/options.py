@@ -16,8 +16,6 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from saltation.apps.cli.errors import UsageError
 from saltation.apps.cli.models import MODEL_HELP, model_names
 from saltation.apps.cli.text import fmt
@@ -112,6 +110,8 @@ def parse_sets(items: Sequence[str] | None, system: PiecewiseSystem) -> dict[str
 
 def usable_parameters(system: PiecewiseSystem, values: Mapping[str, float], where: str) -> np.ndarray:
     """The parameter vector at ``values``, or bad usage naming ``where`` (a zero divisor, a non-finite value)."""
+    import numpy as np
+
     try:
         return system.parameter_vector(values)
     except SaltationError as exc:
@@ -126,6 +126,8 @@ def parse_vector(text: str, system: PiecewiseSystem, option: str = "--x0") -> np
     UsageError
         For a malformed list or the wrong number of components.
     """
+    import numpy as np
+
     parts = [s.strip() for s in text.split(",")]
     try:
         values = [float(s) for s in parts]
@@ -154,6 +156,8 @@ def check_start_field(flow, x0: np.ndarray, p: np.ndarray, text: str, t0: float 
     UsageError
         If the vector field at ``(t0, x0)`` holds an infinity or a NaN.
     """
+    import numpy as np
+
     try:
         mode = flow.start_mode(x0, p, t0, mode0)
     except SaltationError:
@@ -263,6 +267,8 @@ def forcing_period_at(system: PiecewiseSystem, p: np.ndarray, where: str) -> flo
     UsageError
         If it is not a positive finite number there (``where`` names the options that set ``p``).
     """
+    import numpy as np
+
     try:
         value = float(system.forcing_period(p))
     except (SaltationError, ArithmeticError, ValueError) as exc:  # e.g. 2*pi/omega at omega = 0
@@ -286,6 +292,8 @@ def check_forced_period(system: PiecewiseSystem, period: float | None, p: np.nda
     UsageError
         Naming the forcing period when ``period`` contradicts it.
     """
+    import numpy as np
+
     if period is None or system.is_autonomous:
         return
     forcing = forcing_period_at(system, p, where)
@@ -361,6 +369,8 @@ def check_grid(start: float, stop: float, num: int, names: tuple[str, str, str])
     UsageError
         Naming the three options and their values.
     """
+    import numpy as np
+
     first, last, count = names
     if num == 1 and start != stop:
         raise UsageError(f"{count} 1 takes one value, but {first} {fmt(start)} and {last} {fmt(stop)} differ "
@@ -378,6 +388,8 @@ def check_start_period(args: argparse.Namespace, system: PiecewiseSystem, p: np.
     UsageError
         Naming the value (and the forcing period it contradicts).
     """
+    import numpy as np
+
     if system.is_autonomous:
         check_period(args.period)
     else:
@@ -570,6 +582,8 @@ def parse_start(args: argparse.Namespace, flow, p: np.ndarray) -> np.ndarray | N
     UsageError
         For a malformed ``--x0`` or a field that is not finite there.
     """
+    import numpy as np
+
     x0 = parse_vector(args.x0, flow.system) if args.x0 is not None else None
     if x0 is not None:
         check_start_field(flow, x0, p, args.x0, 0.0, args.mode0)

@@ -7,8 +7,6 @@ import json
 import math
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 import saltation.apps.cli.models as models  # noqa: PLR0402 (one place to replace it; importing the package would be a cycle)
 from saltation.apps.cli.errors import PROG
 from saltation.apps.cli.models import build_model
@@ -41,6 +39,8 @@ if TYPE_CHECKING:
 
 def format_orbit(orbit, system: PiecewiseSystem) -> str:
     """A short human-readable table of an orbit."""
+    import numpy as np
+
     from saltation.engine.flow import EventKind
 
     kind = "autonomous" if system.is_autonomous else f"forced, forcing period {system.period_expr}"

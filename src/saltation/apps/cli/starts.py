@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
 from saltation.apps.cli.errors import CommandError
 from saltation.apps.cli.options import check_mode0
 from saltation.errors import StartGuessError
@@ -19,6 +17,8 @@ def transient(flow, name: str, p: np.ndarray, state: np.ndarray | None, *, t0: f
     model's domains give it); returns (trajectory, start state).  An autonomous model without a start state
     starts where its transient oscillates (:func:`saltation.orbits.start.oscillating_transient`: the origin,
     then unit states)."""
+    import numpy as np
+
     system = flow.system
     values = dict(zip(system.parameter_names, map(float, p)))
     from saltation.models import SHIPPED
@@ -63,6 +63,8 @@ def periodic_start(args: argparse.Namespace, flow, overrides: dict[str, float], 
     """The shooting problem over ``--param`` and its first unknowns: a periodic orbit from ``--x0`` (or
     the end of a transient) and ``--period`` (or an estimate), forward or ``--backward``, starting in
     ``--mode0`` where it is given (and then every point of the branch)."""
+    import numpy as np
+
     from saltation.orbits.shooting import (
         MultipleShootingProblem,
         ShootingProblem,
@@ -94,6 +96,8 @@ def periodic_start(args: argparse.Namespace, flow, overrides: dict[str, float], 
 def equilibrium_start(which: str, flow, overrides: dict, parameter: str, x0, start: float):
     """The problem and first point of an equilibrium branch: ``which`` is a mode (its equilibria) or
     ``sliding:SURFACE`` (pseudo-equilibria), ``x0`` the guess (the origin when None)."""
+    import numpy as np
+
     from saltation.orbits.shooting import EquilibriumProblem
 
     guess = x0 if x0 is not None else np.zeros(flow.system.n)
@@ -115,6 +119,8 @@ def branch_start(args: argparse.Namespace, flow, overrides: dict, p: np.ndarray,
                  start: float):
     """The problem and first unknowns of the branch a command line asks for: of ``--equilibrium``
     (:func:`equilibrium_start`) or of periodic orbits (:func:`periodic_start`), at ``--param`` = ``start``."""
+    import numpy as np
+
     if args.equilibrium is not None:
         return equilibrium_start(args.equilibrium, flow, overrides, args.param, x0, start)
     return periodic_start(args, flow, overrides, p, x0)

@@ -8,8 +8,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 import saltation.apps.cli.models as models  # noqa: PLR0402 (one place to replace it; importing the package would be a cycle)
 from saltation.apps.cli.errors import UsageError
 from saltation.apps.cli.models import build_model
@@ -67,6 +65,8 @@ def sweep_start(args: argparse.Namespace, system: PiecewiseSystem):
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``saltation sweep``: a brute-force diagram of a shipped model."""
+    import numpy as np
+
     from saltation.output import io, plotting
     from saltation.sweeps import SweepStart, sweep
 
@@ -149,6 +149,8 @@ def _checked_grid(args: argparse.Namespace):
 def _check_forcing(args: argparse.Namespace, system: PiecewiseSystem, overrides: dict[str, float],
                    values: np.ndarray, values2: np.ndarray | None) -> None:
     """Every value of the grid has a forcing period (bad usage naming the value otherwise)."""
+    import numpy as np
+
     base = system.parameter_vector(overrides)
     for v in values:
         for v2 in (values2 if values2 is not None else [None]):

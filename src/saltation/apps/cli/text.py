@@ -7,8 +7,6 @@ import sys
 import textwrap
 from collections.abc import Callable, Sequence
 
-import numpy as np
-
 
 def fmt(value: float) -> str:
     """A number with ten significant digits, as every message and table prints it."""
@@ -17,6 +15,8 @@ def fmt(value: float) -> str:
 
 def complex_text(mu: complex) -> str:
     """A multiplier as ``RE + IMi`` (``inf`` for an infinite one, ``RE`` for a real one)."""
+    import numpy as np
+
     if not np.isfinite(mu):
         return "inf"
     if mu.imag == 0:
@@ -27,6 +27,8 @@ def complex_text(mu: complex) -> str:
 
 def multipliers_json(mu: Sequence[complex]) -> list:
     """Multipliers as ``[re, im]`` pairs, an infinite one as the string ``"inf"``."""
+    import numpy as np
+
     return ["inf" if not np.isfinite(m) else [float(m.real), float(m.imag)] for m in np.asarray(mu, dtype=complex)]
 
 
