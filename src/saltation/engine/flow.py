@@ -16,7 +16,7 @@ import numpy as np
 
 from saltation._moved import forward_names
 from saltation.engine import _contract as kc
-from saltation.engine import kernel_newton
+from saltation.engine import _no_terminal_reset_at_exit, kernel_newton
 from saltation.engine.codegen import (
     is_engine_compiled,
     load_engine,
@@ -40,7 +40,6 @@ from saltation.engine.trajectory import (  # noqa: F401 (the private names: impo
 )
 from saltation.errors import InitialModeError, IntegrationError, ModelError
 from saltation.model.system import TIME, PiecewiseSystem
-from saltation.engine import _no_terminal_reset_at_exit
 
 _no_terminal_reset_at_exit()
 

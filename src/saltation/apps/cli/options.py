@@ -22,6 +22,8 @@ from saltation.apps.cli.text import fmt
 from saltation.errors import SaltationError
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from saltation.model.system import PiecewiseSystem
 
 #: The most shooting segments ``--segments`` takes: :data:`saltation.orbits.multiple.MAX_SEGMENTS`, written out
@@ -110,7 +112,6 @@ def parse_sets(items: Sequence[str] | None, system: PiecewiseSystem) -> dict[str
 
 def usable_parameters(system: PiecewiseSystem, values: Mapping[str, float], where: str) -> np.ndarray:
     """The parameter vector at ``values``, or bad usage naming ``where`` (a zero divisor, a non-finite value)."""
-    import numpy as np
 
     try:
         return system.parameter_vector(values)
@@ -267,7 +268,6 @@ def forcing_period_at(system: PiecewiseSystem, p: np.ndarray, where: str) -> flo
     UsageError
         If it is not a positive finite number there (``where`` names the options that set ``p``).
     """
-    import numpy as np
 
     try:
         value = float(system.forcing_period(p))
@@ -292,7 +292,6 @@ def check_forced_period(system: PiecewiseSystem, period: float | None, p: np.nda
     UsageError
         Naming the forcing period when ``period`` contradicts it.
     """
-    import numpy as np
 
     if period is None or system.is_autonomous:
         return
@@ -388,7 +387,6 @@ def check_start_period(args: argparse.Namespace, system: PiecewiseSystem, p: np.
     UsageError
         Naming the value (and the forcing period it contradicts).
     """
-    import numpy as np
 
     if system.is_autonomous:
         check_period(args.period)
@@ -582,7 +580,6 @@ def parse_start(args: argparse.Namespace, flow, p: np.ndarray) -> np.ndarray | N
     UsageError
         For a malformed ``--x0`` or a field that is not finite there.
     """
-    import numpy as np
 
     x0 = parse_vector(args.x0, flow.system) if args.x0 is not None else None
     if x0 is not None:

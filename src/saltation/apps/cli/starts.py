@@ -3,6 +3,11 @@ point of a branch (a periodic orbit or an equilibrium) with its problem."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import numpy as np
+
 import argparse
 
 from saltation.apps.cli.errors import CommandError
@@ -119,7 +124,6 @@ def branch_start(args: argparse.Namespace, flow, overrides: dict, p: np.ndarray,
                  start: float):
     """The problem and first unknowns of the branch a command line asks for: of ``--equilibrium``
     (:func:`equilibrium_start`) or of periodic orbits (:func:`periodic_start`), at ``--param`` = ``start``."""
-    import numpy as np
 
     if args.equilibrium is not None:
         return equilibrium_start(args.equilibrium, flow, overrides, args.param, x0, start)

@@ -32,6 +32,8 @@ from saltation.apps.cli.options import (
 from saltation.apps.cli.text import fmt, paragraph
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from saltation.model.system import PiecewiseSystem
 
 
@@ -149,7 +151,6 @@ def _checked_grid(args: argparse.Namespace):
 def _check_forcing(args: argparse.Namespace, system: PiecewiseSystem, overrides: dict[str, float],
                    values: np.ndarray, values2: np.ndarray | None) -> None:
     """Every value of the grid has a forcing period (bad usage naming the value otherwise)."""
-    import numpy as np
 
     base = system.parameter_vector(overrides)
     for v in values:
