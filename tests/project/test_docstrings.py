@@ -81,6 +81,7 @@ MODULES = (
     "saltation.branches.continuation",
     "saltation.engine.flow",
     "saltation.apps.sweeps",
+    "saltation.sweeps.sections",
     "saltation.output.io",
     "saltation.model.regularize",
     "saltation.model.symmetry",
