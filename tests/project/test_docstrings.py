@@ -85,6 +85,7 @@ MODULES = (
     "saltation.engine.flow",
     "saltation.engine.buildtime",
     "saltation.apps.sweeps",
+    "saltation.sweeps.sections",
     "saltation.output.io",
     "saltation.model.regularize",
     "saltation.model.symmetry",

@@ -45,9 +45,11 @@ from saltation.output.files import (
     _Fields,
     _item,
     _short,
+    _show,
     _sub,
     format_header,
 )
+from saltation.sweeps.sections import Section
 from saltation.sweeps.sweeps import PeriodMap, SweepResult, SweepStart
 
 __all__ = [
@@ -643,6 +645,16 @@ def _start_rule(f: _Fields, v: Any, field: str) -> SweepStart:
     return f.choice(v, field, {k.value: k for k in SweepStart})
 
 
+def _section_code(f: _Fields, v: Any, field: str) -> str:
+    """A sweep's ``section``: ``"poincare"``, ``"maxima"`` (every file before sections could be named) or the code
+    of a surface or an expression (:meth:`Section.from_code <saltation.sweeps.sections.Section.from_code>`)."""
+    try:
+        return Section.from_code(v).code if isinstance(v, str) else f.string(v, field)
+    except ValueError:
+        f.fail(field, f'expected one of "poincare", "maxima", "surface:NAME", "surface:NAME:WORD" or '
+                      f'"expr:EXPRESSION:WORD" (WORD rising, falling or either), got {_show(v)}')
+
+
 def sweep_to_dict(result: SweepResult) -> dict[str, Any]:
     """A sweep as a JSON-ready dictionary (non-finite numbers as strings), with the format header.
 
@@ -683,7 +695,9 @@ def sweep_from_dict(d: dict[str, Any], *, source: str = "sweep record") -> Sweep
     """The sweep :func:`sweep_to_dict` describes, every field checked.
 
     A record without ``"start"``, written before it was recorded, started each value from the previous
-    one: :attr:`~saltation.sweeps.SweepStart.PREVIOUS`.
+    one: :attr:`~saltation.sweeps.SweepStart.PREVIOUS`.  Its ``"section"`` is ``"poincare"``,
+    ``"maxima"`` (as in every record written before sections could be named) or the code of a surface
+    or an expression (:meth:`Section.from_code <saltation.sweeps.sections.Section.from_code>`).
 
     Parameters
     ----------
@@ -730,8 +744,7 @@ def sweep_from_dict(d: dict[str, Any], *, source: str = "sweep record") -> Sweep
         parameter_points=points,
         states=states,
         state_names=names,
-        section=f.take(d, "", "section", lambda v, field: f.choice(v, field, {"poincare": "poincare",
-                                                                               "maxima": "maxima"})),
+        section=f.take(d, "", "section", lambda v, field: _section_code(f, v, field)),
         failures=tuple((f.real(v, f"failures[{k}][0]"), f.string(m, f"failures[{k}][1]"))
                        for k, (v, m) in enumerate(failures)),
         settings=dict(f.take(d, "", "settings", f.obj, {})),

@@ -24,6 +24,7 @@ from matplotlib.lines import Line2D
 from saltation.branches.branch import Branch, BranchKind, SpecialPoint, SpecialPointKind
 from saltation.model.labels import tex_name
 from saltation.orbits.measures import measure_label
+from saltation.sweeps.sections import Section
 from saltation.sweeps.sweeps import PeriodMap, SweepResult
 
 __all__ = [
@@ -1072,8 +1073,10 @@ def plot_sweep(result: SweepResult, ax: Axes | None = None, *, state: int | str 
     name = result.state_names[k]
     if result.section == "poincare":
         ax.set_ylabel(f"{name} (Poincare section)")
-    else:
+    elif result.section == "maxima":
         ax.set_ylabel(f"{name} at maxima of {result.state_names[0]}")
+    else:  # a surface's events or an expression's crossings
+        ax.set_ylabel(f"{name} at {Section.from_code(result.section).words}")
     ax.set_title(f"{result.model}: brute-force diagram")
     if exponent_ax is not None:
         exponent_ax.axhline(0.0, color="0.6", linewidth=0.8)

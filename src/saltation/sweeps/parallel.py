@@ -2,10 +2,12 @@
 processes, or as Dask tasks, and what one chunk computes.
 
 A job (:class:`_Job`) is a contiguous chunk of values of one parameter, with their start states; a
-period map gives each worker several rows (:class:`_RowsJob`).  :func:`_run_jobs` runs the jobs and
-returns, per job, the sample counts, the samples, the failures and the largest Lyapunov exponents
-(:func:`_run_chunk`).  Forked workers inherit the loaded kernels; elsewhere, and on a Dask cluster,
-each worker process loads (or compiles) them once.
+period map gives each worker several rows (:class:`_RowsJob`).  A value is sampled over windows of
+a time unit ``T`` (the stroboscopic section, the maxima: :func:`_window_samples`), or at the crossings
+of a section, counted (:func:`_crossing_samples`, with :mod:`~saltation.sweeps.sections`).
+:func:`_run_jobs` runs the jobs and returns, per job, the sample counts, the samples, the failures and
+the largest Lyapunov exponents (:func:`_run_chunk`).  Forked workers inherit the loaded kernels;
+elsewhere, and on a Dask cluster, each worker process loads (or compiles) them once.
 """
 
 from __future__ import annotations
@@ -21,6 +23,12 @@ import numpy as np
 from saltation.engine.flow import Flow, Tolerances, Trajectory, dense_evaluate
 from saltation.errors import SaltationError
 from saltation.model.system import PiecewiseSystem
+from saltation.sweeps.sections import (
+    Section,
+    _expression_crossings,
+    _expression_function,
+    _surface_crossings,
+)
 
 _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 #: Dense-output evaluations per integration step when looking for maxima.
@@ -29,6 +37,8 @@ _MAXIMA_GRID = 12
 _MAXIMA_ITERATIONS = 60
 #: ``x_1`` varying by less than this (relative) over the sampling window has no maxima.
 _FLAT = 1e-9
+#: A value's section crossings are looked for over at most this many time units ``T`` per crossing asked for.
+_PATIENCE = 10
 
 
 @dataclass(frozen=True)
@@ -51,6 +61,9 @@ class _Job:
     lyapunov: bool = False
     #: the mode each start state is in (None: the model's initial-mode rule)
     mode0: str | None = None
+    #: a section of crossings (a surface or an expression), whose counts ``transient`` and ``periods`` are;
+    #: None: the stroboscopic section or the maxima (``poincare``), over windows of ``T``
+    section: Section | None = None
 
 
 _WORKER_FLOW: Flow | None = None
@@ -133,8 +146,6 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
     """Simulate one chunk of values, each from its own start or from the previous final state: the sample
     counts, the samples, the failures, and per value the largest Lyapunov exponent over the sampled
     periods (``nan`` unless the job asks for them, or where the value failed)."""
-    from saltation.orbits.lyapunov import lyapunov_exponents
-
     system = flow.system
     p = job.base.copy()
     x: np.ndarray | None = None  # a fresh start: the job's start state of the value
@@ -152,26 +163,11 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
             if fresh and mode is not None:
                 flow.start_mode(x, p, job.t0, mode)  # a start outside the mode's domain fails this value, saying why
             T = job.period if job.period is not None else system.forcing_period(p)
-            t_sample = job.t0 + job.transient * T
-            t_end = t_sample + job.periods * T
-            if job.transient:
-                traj = flow.run(x, job.t0, t_sample, p, mode0=mode, tolerances=job.tolerances)
-                x, mode = traj.x1, traj.mode1
-            exponent = math.nan
-            if job.lyapunov:  # over the sampled periods, from the same state (a variational run beside the samples)
-                exponent = lyapunov_exponents(flow, x, parameters=p, time=job.periods * T, t0=t_sample, interval=T,
-                                              blocks=max(2, min(10, job.periods)), tolerances=job.tolerances,
-                                              mode0=None if mode is None or "|" in mode else mode).largest
-            traj = flow.run(x, t_sample, t_end, p, mode0=mode, dense=True, tolerances=job.tolerances)
-            if job.poincare:
-                times = t_sample + T * np.arange(1, job.periods + 1)
-                pts = traj.at(times)
-                pts[-1] = traj.x1  # the integrator ends exactly there
+            if job.section is not None:
+                pts, x, mode, t_end = _crossing_samples(flow, job, x, mode, p, T)
+                exponent = _exponent(flow, job, x, mode, p, t_end, T) if job.lyapunov else math.nan
             else:
-                pts = _maxima(traj)
-                if len(pts) == 0:
-                    pts = traj.x1[None, :].copy()
-            x, mode = traj.x1.copy(), traj.mode1
+                pts, x, mode, exponent = _window_samples(flow, job, x, mode, p, T)
         except (SaltationError, ValueError, ArithmeticError) as exc:
             failures.append((float(value), f"{type(exc).__name__}: {exc}"))
             counts.append(0)
@@ -182,6 +178,73 @@ def _run_chunk(flow: Flow, job: _Job) -> tuple[list[int], list[np.ndarray], list
         samples.append(np.asarray(pts, dtype=float))
         largest.append(float(exponent))
     return counts, samples, failures, largest
+
+
+def _exponent(flow: Flow, job: _Job, x: np.ndarray, mode: str | None, p: np.ndarray, t: float, T: float) -> float:
+    """The largest Lyapunov exponent over ``job.periods`` times ``T`` from ``(t, x)`` in ``mode``, in blocks of
+    ``T``."""
+    from saltation.orbits.lyapunov import lyapunov_exponents
+
+    return float(lyapunov_exponents(flow, x, parameters=p, time=job.periods * T, t0=t, interval=T,
+                                    blocks=max(2, min(10, job.periods)), tolerances=job.tolerances,
+                                    mode0=None if mode is None or "|" in mode else mode).largest)
+
+
+def _window_samples(flow: Flow, job: _Job, x: np.ndarray, mode: str | None, p: np.ndarray, T: float):
+    """One value sampled over windows of ``T``: ``transient`` of them discarded, then the stroboscopic section or
+    the maxima over ``periods`` more; the samples, the final state and mode, and the largest Lyapunov exponent
+    over the sampled windows (``nan`` unless asked for)."""
+    t_sample = job.t0 + job.transient * T
+    t_end = t_sample + job.periods * T
+    if job.transient:
+        traj = flow.run(x, job.t0, t_sample, p, mode0=mode, tolerances=job.tolerances)
+        x, mode = traj.x1, traj.mode1
+    exponent = math.nan
+    if job.lyapunov:  # over the sampled periods, from the same state (a variational run beside the samples)
+        exponent = _exponent(flow, job, x, mode, p, t_sample, T)
+    traj = flow.run(x, t_sample, t_end, p, mode0=mode, dense=True, tolerances=job.tolerances)
+    if job.poincare:
+        times = t_sample + T * np.arange(1, job.periods + 1)
+        pts = traj.at(times)
+        pts[-1] = traj.x1  # the integrator ends exactly there
+    else:
+        pts = _maxima(traj)
+        if len(pts) == 0:
+            pts = traj.x1[None, :].copy()
+    return pts, traj.x1.copy(), traj.mode1, exponent
+
+
+def _crossing_samples(flow: Flow, job: _Job, x: np.ndarray, mode: str | None, p: np.ndarray, T: float):
+    """One value sampled at its section's crossings: ``transient`` crossings discarded, the next ``periods``
+    sampled; the samples (fewer where the crossings stopped), the final state, mode and time.
+
+    The run goes on in windows until it has crossed the section ``transient + periods`` times, or for at most
+    :data:`_PATIENCE` times as many time units ``T``: the first window lasts ``T`` per crossing asked for, the
+    next as long as the crossings seen so far say the rest takes (a quarter more), or, without any, as long
+    as the run so far.
+    """
+    section = job.section
+    needed = job.transient + job.periods
+    t, limit = job.t0, job.t0 + _PATIENCE * needed * T
+    dense = section.kind == "expression"
+    g = _expression_function(flow.system, section.target) if dense else None
+    g_last = None
+    found: list[np.ndarray] = []
+    count, window = 0, needed * T
+    while count < needed and t < limit:
+        t_next = min(t + window, limit)
+        traj = flow.run(x, t, t_next, p, mode0=mode, dense=dense, tolerances=job.tolerances)
+        if dense:
+            _, states, g_last = _expression_crossings(traj, g, p, section.direction, g_last)
+        else:
+            _, states = _surface_crossings(traj, section, p)
+        found.append(states)
+        count += len(states)
+        x, mode, t = traj.x1.copy(), traj.mode1, t_next
+        elapsed = t - job.t0
+        window = elapsed if count == 0 else max(T, 1.25 * (needed - count) * elapsed / count)
+    pts = np.concatenate(found)[job.transient:needed] if found else np.zeros((0, x.size))
+    return pts, x, mode, t
 
 
 # -- reading the dense output --------------------------------------------------------------------

@@ -9,7 +9,22 @@ it settles to:
   state ``x_1`` (the state at each maximum is kept), found on the integrator's
   dense output and refined by golden-section search on it.  An orbit whose
   ``x_1`` has no maximum in the sampling window (an equilibrium) contributes
-  its final state once.
+  its final state once;
+* or a section named by ``section=`` (:mod:`~saltation.sweeps.sections`): a
+  switching surface of the model (its switching events), or an expression of
+  the states, parameters and time crossed in a ``direction`` (located on the
+  dense output), such as the clock of a clocked model.  ``transient`` and
+  ``periods`` then count crossings: the first ``transient`` are discarded,
+  the next ``periods`` sampled.
+
+What a "period" is: for a forced model, its forcing period ``T``; for an
+autonomous model, a time unit ``period`` (``2 pi`` unless given), which is not
+the period of its orbits.  The maxima are those within the ``periods`` time
+units that follow ``transient`` of them.  With a section of crossings the time
+unit only bounds the search: a value that has not crossed ``transient +
+periods`` times within ``10 (transient + periods)`` time units gives the
+crossings it has (its count may be 0: an equilibrium, or an attractor that does
+not cross the section).
 
 Where each value starts is a documented choice, ``start=`` (a
 :class:`SweepStart`), applied to ``x0``: a state, or a function
@@ -43,7 +58,9 @@ whose simulation fails (chattering, a state in no mode, ...) is recorded in
 Each value costs two calls of the compiled integrator: one over the transient,
 one over the sampling window with dense output; the samples are read off the
 dense output (DOP853's continuous extension, accurate to the integration
-tolerance), not by stopping the integrator at every section crossing.
+tolerance), not by stopping the integrator at every section crossing.  A
+section of crossings is run in windows (with dense output for an expression)
+until it has been crossed often enough.
 """
 
 from __future__ import annotations
@@ -68,6 +85,7 @@ from saltation.engine.flow import Tolerances
 from saltation.errors import ModelError
 from saltation.model.system import PiecewiseSystem
 from saltation.sweeps.parallel import _Job, _RowsJob, _run_jobs, _workers
+from saltation.sweeps.sections import Section, parse_section
 
 _log = logging.getLogger(__name__)
 
@@ -197,19 +215,25 @@ class SweepResult:
     values : ndarray, shape (m,)
         The parameter values, in the order given.
     counts : ndarray of int, shape (m,)
-        Number of points sampled at each value (0 where the simulation failed).
+        Number of points sampled at each value (0 where the simulation failed, listed in
+        :attr:`failures`, or, with a section of crossings, where none was sampled).
     parameter_points : ndarray, shape (N,)
         Parameter value of each sampled point (``N = counts.sum()``).
     states : ndarray, shape (N, n)
         The sampled states.
     state_names : tuple of str
     section : str
-        ``"poincare"`` (stroboscopic section of a forced system) or ``"maxima"``
-        (local maxima of the first state).
+        What was sampled, as :attr:`Section.code <saltation.sweeps.sections.Section.code>` writes it:
+        ``"poincare"`` (stroboscopic section of a forced system), ``"maxima"`` (local maxima of the
+        first state), ``"surface:NAME"`` (the switching events on a surface), ``"surface:NAME:WORD"``
+        (those in one direction) or ``"expr:EXPRESSION:WORD"`` (the crossings of ``EXPRESSION = 0``),
+        ``WORD`` one of ``rising``, ``falling``, ``either``.  :meth:`Section.from_code
+        <saltation.sweeps.sections.Section.from_code>` reads it.
     failures : tuple of (float, str)
         Parameter values whose simulation failed, with the error message.
     settings : dict
-        ``periods``, ``transient``, ``t0``, the time of one period for autonomous systems,
+        ``periods``, ``transient`` (windows of a time unit, or with a section of crossings numbers of
+        crossings), ``t0``, ``period``, the time unit of an autonomous system,
         ``x0``: the start state, ``"zeros"``, or ``"function NAME"`` for a function of the parameters,
         and ``mode0``, the mode the starts are in, where it was named (:func:`sweep`).
     start : SweepStart
@@ -458,7 +482,9 @@ def sweep(
     transient: int = 100,
     x0: StartState | None = None,
     start: SweepStart | str = SweepStart.PREVIOUS,
-    poincare: bool = True,
+    poincare: bool | None = None,
+    section: str | Section | None = None,
+    direction: int | None = None,
     workers: int | None = None,
     tolerances: Tolerances | None = None,
     parameters: Mapping[str, float] | None = None,
@@ -479,9 +505,10 @@ def sweep(
     values : sequence of float
         Parameter values, simulated in this order.
     periods : int
-        Number of periods sampled per value (forced systems: section points).
+        Number of periods sampled per value (forced systems: section points; autonomous systems: time
+        units ``period``), or, with a section of crossings, number of crossings sampled.
     transient : int
-        Number of periods simulated and discarded first.
+        Number of periods (or crossings) simulated and discarded first.
     x0 : array_like, shape (n,), or callable, optional
         The start state (zeros by default), or a function
         ``parameters -> state`` of a mapping of every parameter's name to its
@@ -493,9 +520,22 @@ def sweep(
         and the value after a failed one, start from ``x0``.  ``OWN``: every
         value starts from ``x0`` at its own parameters (the values are
         independent: the result does not depend on ``workers``).
-    poincare : bool
-        Forced systems: sample the Poincare section ``x(t0 + k T)`` (True) or
-        the maxima of ``x_1`` (False).  Autonomous systems always sample maxima.
+    poincare : bool, optional
+        Without ``section``: forced systems sample the Poincare section ``x(t0 + k T)``
+        (True, the default) or the maxima of ``x_1`` (False); autonomous systems sample maxima.
+    section : str or Section, optional
+        What to sample (:func:`~saltation.sweeps.sections.parse_section`): ``"poincare"``
+        (forced systems), ``"maxima"``, the name of a switching surface (its switching events: the
+        transitions that fire on it and the sliding motions that start on it, each sampled just
+        before the event), or an expression of the states, parameters and time ``t`` (``"x - 1"``,
+        ``"v"``, ``"sin(omega*t)"``), sampled where it crosses zero in ``direction``, located on the
+        dense output to rounding.  A name that is both a surface and a state is the surface
+        (``"expr:NAME"`` is the state).  With a surface or an expression, ``periods`` and
+        ``transient`` count crossings.  Recorded as :attr:`SweepResult.section`.
+    direction : int, optional
+        With a surface or an expression: +1 the crossings where it rises through zero, -1 where
+        it falls, 0 both.  None (the default): a surface's every switching event (each in its
+        transition's direction), an expression's rising crossings.
     workers : int, optional
         Worker processes (default: every available core; 1 runs in this process).
     tolerances : Tolerances, optional
@@ -503,8 +543,11 @@ def sweep(
     parameters : dict, optional
         Values of the other parameters.
     period : float, optional
-        Autonomous systems: the time of one "period" in ``periods`` and
-        ``transient`` (default ``2 pi``).  Ignored for forced systems.
+        Autonomous systems: the time unit of ``periods`` and ``transient``, default ``2 pi`` (a
+        time unit, not the period of an orbit: the maxima are sampled over ``periods * period``
+        time units after ``transient * period``).  With a section of crossings it bounds the
+        search: at most ``10 (transient + periods)`` of these units per value (forced systems:
+        forcing periods).  Ignored for forced systems.
     t0 : float
         Initial time (forced systems: the phase of the section).
     client : dask.distributed.Client, optional
@@ -531,12 +574,16 @@ def sweep(
     Raises
     ------
     ModelError
-        For an unknown parameter or mode (the message lists the model's), or a start state (given or
-        returned by ``x0``) with the wrong number of components or not finite.
+        For an unknown parameter or mode (the message lists the model's), a start state (given or
+        returned by ``x0``) with the wrong number of components or not finite, an unknown section
+        (the message lists the model's surfaces and states), or the section ``"poincare"`` of an
+        autonomous model.
     ValueError
         For no values, values or ``t0`` not finite, ``periods`` not a
         positive integer, ``transient`` not a non-negative one, ``period``
-        not positive and finite, ``workers`` below 1, or an unknown ``start``.
+        not positive and finite, ``workers`` below 1, an unknown ``start``,
+        both ``section`` and ``poincare`` given, or a ``direction`` other than
+        +1, -1, 0, or without a surface or an expression.
     KernelCacheError
         If the model cannot be compiled into the kernel cache.
 
@@ -567,17 +614,18 @@ def sweep(
             raise ValueError(f"period must be positive and finite, got {period}")
     else:
         period = None
+    chosen = _sweep_section(system, poincare, section, direction)
     rows = np.tile(base, (values.size, 1))
     rows[:, p_index] = values
     starts = _start_states(system, x0, rows, lambda p: f"{parameter}={p[p_index]:.10g}")
-    use_poincare = bool(poincare) and not autonomous
+    use_poincare = chosen.kind == "poincare"
 
     n_workers = _workers(workers, client)
     n_workers = min(n_workers, values.size)
     pieces = np.array_split(np.arange(values.size), n_workers)
     jobs = [
         _Job(values[k], starts[k], rule is SweepStart.OWN, p_index, base, int(periods), int(transient), use_poincare,
-             period, float(t0), tolerances, bool(lyapunov), mode0)
+             period, float(t0), tolerances, bool(lyapunov), mode0, chosen if chosen.crossings else None)
         for k in pieces
     ]
     _log.info("%s: sweep of %s over %d values in %d jobs", system.name, parameter, values.size, len(jobs))
@@ -607,12 +655,34 @@ def sweep(
         parameter_points=np.repeat(values, counts_arr),
         states=states.reshape(-1, system.n),
         state_names=tuple(system.state_names),
-        section="poincare" if use_poincare else "maxima",
+        section=chosen.code,
         failures=tuple(failures),
         settings=settings,
         start=rule,
         largest_exponents=np.array(exponents, dtype=float) if lyapunov else None,
     )
+
+
+def _sweep_section(system: PiecewiseSystem, poincare: bool | None, section: str | Section | None,
+                   direction: int | None) -> Section:
+    """The section a sweep samples: ``section`` read against the model, or without it the stroboscopic section
+    of a forced model (unless ``poincare`` is False) and the maxima otherwise.
+
+    Raises
+    ------
+    ModelError
+        From :func:`~saltation.sweeps.sections.parse_section`.
+    ValueError
+        For both ``section`` and ``poincare``, a ``direction`` without a section, or a bad direction.
+    """
+    if section is None:
+        if direction is not None:
+            raise ValueError(f"direction {direction!r} belongs to a section (section=a surface or an expression)")
+        return Section("poincare" if (poincare is None or poincare) and not system.is_autonomous else "maxima")
+    if poincare is not None:
+        raise ValueError("give section= or poincare=, not both (section='poincare' or 'maxima' says what "
+                         "poincare= did)")
+    return parse_section(system, section, direction)
 
 
 # -- two-parameter maps -------------------------------------------------------------------------

@@ -73,6 +73,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from saltation.sweeps import SweepStart, sweep
 
     system, overrides, values, values2 = _checked_grid(args)
+    section = _checked_section(args, system)
     x0, rule = sweep_start(args, system)
     mode0 = check_mode0(args, system)
     check_out_dir(args.out)
@@ -88,7 +89,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         result = sweep(
             system, args.param, values, periods=200 if args.periods is None else args.periods,
             transient=args.transient, x0=x0, start=rule, parameters=overrides, workers=args.workers, client=client,
-            lyapunov=args.lyapunov, mode0=mode0,
+            lyapunov=args.lyapunov, mode0=mode0, section=section,
         )
     finally:
         if client is not None:
@@ -98,7 +99,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     stem = out / f"{system.name}_{args.param}_sweep"
     io.save_sweep(result, stem.with_suffix(".json"))
     plotting.save_figure(plotting.plot_sweep(result), stem)
-    kind = "Poincare section points" if not system.is_autonomous else "maxima of x_1"
+    kind = {"poincare": "Poincare section points", "maxima": "maxima of x_1"}.get(result.section)
+    if kind is None:
+        kind = section.words
     how = "its own start" if rule is SweepStart.OWN else "the previous value's final state"
     print(f"{sum(len(result.at(k)) for k in range(args.num))} {kind} at {args.num} values of {args.param} "
           f"(each from {how}); written to {stem}.json/.png/.pdf")
@@ -107,6 +110,42 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                                                                      for v, m in result.failures[:3])
               + ("; ..." if len(result.failures) > 3 else ""))
     return 0
+
+
+def _checked_section(args: argparse.Namespace, system: PiecewiseSystem):
+    """``--section`` and ``--direction`` read against the model: a :class:`~saltation.sweeps.sections.Section`, or
+    None (the default: the stroboscopic section of a forced model, the maxima of x_1 otherwise).
+
+    Raises
+    ------
+    UsageError
+        For an unknown name (naming the model's surfaces and states), the stroboscopic section of an autonomous
+        model, a direction without a surface or an expression, or a section given with ``--param2``.
+    """
+    from saltation.errors import ModelError
+    from saltation.sweeps.sections import parse_section
+
+    if args.section is None:
+        if args.direction is not None:
+            raise UsageError("--direction belongs to --section (a switching surface or an expression)")
+        return None
+    if args.param2 is not None:
+        raise UsageError("--section belongs to a sweep; a two-parameter map (--param2) reads the stroboscopic section")
+    try:
+        return parse_section(system, args.section, args.direction)
+    except (ModelError, ValueError) as exc:
+        raise UsageError(f"--section: {exc}") from None
+
+
+def _direction(text: str) -> int:
+    """The converter of ``--direction``: +1, -1 or 0 (or rising, falling, either)."""
+    words = {"+1": 1, "1": 1, "rising": 1, "-1": -1, "falling": -1, "0": 0, "either": 0}
+    if text.strip() not in words:
+        raise argparse.ArgumentTypeError(f"{text!r} is not +1 (rising), -1 (falling) or 0 (either)")
+    return words[text.strip()]
+
+
+_direction.__name__ = "--direction"
 
 
 def _checked_grid(args: argparse.Namespace):
@@ -209,8 +248,11 @@ def add_parser(sub) -> None:
         description=paragraph(
             """Simulate a shipped model at --num parameter values between --from and --to, discard a
             transient, and sample the attractor: the Poincare section x(t0 + k T) for forced models,
-            the maxima of x_1 for autonomous ones. Each value starts from its own start (--start own:
-            --x0, or the shipped model's start at that value's parameters) or from the previous value's
+            the maxima of x_1 for autonomous ones (over --periods time units of 2 pi, which are not
+            the period of an orbit), or with --section the crossings of a switching surface or of an
+            expression of the states (--periods and --transient then count crossings). Each value
+            starts from its own start (--start own: --x0, or the shipped model's start at that
+            value's parameters) or from the previous value's
             final state (--start previous); the default is own where the model has a start of its own
             and --x0 is not given, previous otherwise. Uses every local core, or a Dask cluster
             (--scheduler). Writes MODEL_PARAM_sweep.json and a plot (PNG, PDF) into --out. With
@@ -226,9 +268,20 @@ def add_parser(sub) -> None:
     p.add_argument("--num", metavar="N", type=integer("--num", 1), required=True,
                    help="number of values (1 takes --from = --to)")
     p.add_argument("--periods", metavar="P", type=integer("--periods", 1), default=None,
-                   help="periods sampled per value (default 200; a map: 4 times --max-period)")
+                   help="periods sampled per value: forcing periods, or time units of 2 pi for an autonomous model, "
+                        "or with --section crossings (default 200; a map: 4 times --max-period)")
     p.add_argument("--transient", metavar="Q", type=integer("--transient", 0), default=100,
-                   help="periods discarded first (default 100)")
+                   help="periods (or with --section crossings) discarded first (default 100)")
+    p.add_argument("--section", metavar="NAME_OR_EXPR", default=None,
+                   help="what to sample: 'poincare' (forced models: x(t0 + k T), their default), 'maxima' (maxima "
+                        "of x_1, the default of autonomous models), a switching surface's name (its switching "
+                        "events, the state just before each), or an expression of the states, parameters and time "
+                        "t such as 'x - 1' or 'sin(omega*t)' (its crossings of zero); with a surface or an "
+                        "expression --periods and --transient count crossings")
+    p.add_argument("--direction", metavar="+1|-1|0", type=_direction, default=None,
+                   help="with --section a surface or an expression: +1 the crossings where it rises through zero, "
+                        "-1 where it falls, 0 both (default: a surface's every event, an expression's rising "
+                        "crossings)")
     add_set(p, "override another parameter")
     add_x0(p, "start state (default: the shipped model's start at each value's own parameters, if it has one, else "
            "zeros)")
