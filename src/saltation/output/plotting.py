@@ -67,7 +67,7 @@ SPECIAL_POINT_MARKERS: dict[SpecialPointKind, tuple[str, str]] = {
     SpecialPointKind.DISCONTINUOUS_NEIMARK_SACKER: ("X", "discontinuous Neimark-Sacker"),
     SpecialPointKind.NONSMOOTH_NO_CROSSING: ("v", "non-smooth point, no crossing"),
     SpecialPointKind.GRAZING: ("h", "grazing"),
-    SpecialPointKind.MONITOR: ("d", "monitor"),
+    SpecialPointKind.MONITOR: ("3", "monitor"),
     SpecialPointKind.GRAZING_SLIDING: ("H", "grazing-sliding"),
     SpecialPointKind.CROSSING_SLIDING: ("<", "crossing-sliding"),
     SpecialPointKind.SWITCHING_SLIDING: (">", "switching-sliding"),
