@@ -15,6 +15,7 @@ Modules:
 * :mod:`~saltation.engine.compiled`: models given as compiled callables.
 * ``saltation.engine._contract``: the layouts and codes shared by the engine, the model functions and Python.
 * ``saltation.engine._kernel_source``: the engine's source template (not imported; codegen writes and compiles it).
+* ``saltation.engine._atomic``: files written whole or not at all (the cache's modules, memos and records).
 * ``saltation.engine._records``: the named records the engine's step-and-event loop takes its settings and arrays in.
 """
 

@@ -34,9 +34,10 @@ import math
 import os
 import statistics
 import time
-import uuid
 from dataclasses import dataclass
 from pathlib import Path
+
+from saltation.engine._atomic import write_atomic
 
 RECORD_FILE = "build_times.json"
 """The name of the record of this machine's builds, in the kernel cache folder."""
@@ -255,17 +256,7 @@ def _valid(entry) -> bool:
 
 
 def _write_atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
-    try:
-        with open(tmp, "x") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
+    write_atomic(path, text.encode())
 
 
 def _processor_seconds() -> float | None:

@@ -70,7 +70,6 @@ import sys
 import tempfile
 import threading
 import time
-import uuid
 import weakref
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -81,6 +80,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
+from saltation.engine._atomic import write_atomic
 from saltation.engine._contract import MODEL_FUNCTIONS, MODEL_SIGNATURES
 from saltation.engine.affine import affine_form
 from saltation.engine.buildtime import BuildEstimate, estimate_build, timed
@@ -851,20 +851,8 @@ def is_compiled(system: PiecewiseSystem) -> bool:
 
 
 def _write_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file renamed over it, so that a crash leaves
-    either the old file or the whole new one, never a part."""
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
-    try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
+    """Write ``data`` to ``path`` whole or not at all (:func:`saltation.engine._atomic.write_atomic`)."""
+    write_atomic(path, data)
 
 
 def _intact(path: Path, pickles: int) -> bool:
@@ -1089,26 +1077,39 @@ def _announced(message: str, stream, interval: float, seconds: float | None = No
 
 
 @contextlib.contextmanager
+def _ticking(interval: float, tick: Callable[[float], None], name: str):
+    """Call ``tick(seconds elapsed)`` every ``interval`` seconds in a thread of its own while the block runs."""
+    done = threading.Event()
+    start = time.monotonic()
+
+    def run() -> None:
+        while not done.wait(interval):
+            tick(time.monotonic() - start)
+
+    ticker = threading.Thread(target=run, name=name, daemon=True)
+    ticker.start()
+    try:
+        yield
+    finally:
+        done.set()
+        ticker.join()
+
+
+@contextlib.contextmanager
 def _shown(message: str, stream, interval: float, seconds: float | None):
+    """Show a build while it runs: to the build watchers, on ``stream``, or in a progress bar."""
+    start = time.monotonic()
     watchers = list(_BUILD_WATCHERS)
     if watchers:
-        done = threading.Event()
-        start = time.monotonic()
-
-        def tell() -> None:
+        def tell(elapsed: float) -> None:
             for watch in watchers:
-                watch(message, time.monotonic() - start)
-            while not done.wait(interval):
-                for watch in watchers:
-                    watch(message, time.monotonic() - start)
+                watch(message, elapsed)
 
-        ticker = threading.Thread(target=tell, name="saltation-build-watch", daemon=True)
-        ticker.start()
+        tell(0.0)
         try:
-            yield
+            with _ticking(interval, tell, "saltation-build-watch"):
+                yield
         finally:
-            done.set()
-            ticker.join()
             for watch in watchers:
                 watch(None, time.monotonic() - start)
         return
@@ -1122,21 +1123,15 @@ def _shown(message: str, stream, interval: float, seconds: float | None):
     if not live:
         yield
         return
-    done = threading.Event()
-    start = time.monotonic()
 
-    def tick() -> None:
-        while not done.wait(interval):
-            stream.write(f"\rsaltation: {message} ... {time.monotonic() - start:.0f} s")
-            stream.flush()
+    def tick(elapsed: float) -> None:
+        stream.write(f"\rsaltation: {message} ... {elapsed:.0f} s")
+        stream.flush()
 
-    ticker = threading.Thread(target=tick, name="saltation-build-notice", daemon=True)
-    ticker.start()
     try:
-        yield
+        with _ticking(interval, tick, "saltation-build-notice"):
+            yield
     finally:
-        done.set()
-        ticker.join()
         stream.write(f"\rsaltation: {message} ... done in {time.monotonic() - start:.0f} s\n")
         stream.flush()
 
@@ -1153,20 +1148,10 @@ def _progress_bar(message: str, interval: float, seconds: float | None):
             shown.close()
         yield
         return
-    done = threading.Event()
-    start = time.monotonic()
-
-    def tick() -> None:
-        while not done.wait(interval):
-            shown.update(time.monotonic() - start - shown.n)
-
-    ticker = threading.Thread(target=tick, name="saltation-build-bar", daemon=True)
-    ticker.start()
     try:
-        yield
+        with _ticking(interval, lambda elapsed: shown.update(elapsed - shown.n), "saltation-build-bar"):
+            yield
     finally:
-        done.set()
-        ticker.join()
         shown.close()
 
 
