@@ -20,6 +20,8 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,7 +29,7 @@ from conftest import oscillator_system
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from saltation import Crossing, Mode, PiecewiseSystem, Transition
+from saltation import Crossing
 from saltation.apps import cli
 from saltation.errors import ModelError
 from saltation.models import bouncing_ball, buck_converter, trilinear
@@ -36,20 +38,12 @@ from saltation.output.io import FileFormatError, load_sweep, save_sweep
 from saltation.output.plotting import plot_sweep
 from saltation.sweeps import Section, parse_section, sweep
 
+sys.path.insert(0, str(Path(__file__).parents[1] / "orbits"))
+from test_lyapunov import hopf  # noqa: E402 (the Hopf normal form in two modes: the same model, the same kernels)
+
 A_WALL = 0.5  # the oscillator's wall x = a (its default)
 
 
-def hopf(mu: float = 0.25) -> PiecewiseSystem:
-    """The Hopf normal form split by y = 0 into two modes of the same field (as in tests/orbits/test_lyapunov.py:
-    the same model, the same compiled kernels)."""
-    field = ["mu*x - y - x*(x**2 + y**2)", "x + mu*y - y*(x**2 + y**2)"]
-    return PiecewiseSystem(
-        "test_lyapunov_hopf", states=["x", "y"], parameters={"mu": mu},
-        modes=[Mode("upper", field, domain=["y >= 0"]), Mode("lower", field, domain=["y < 0"])],
-        surfaces={"axis": "y"},
-        transitions=[Transition("upper", "axis", Crossing.FALLING, "lower"),
-                     Transition("lower", "axis", Crossing.RISING, "upper")],
-    )
 
 
 def oscillator_sweep(ws, R, section, direction=None, periods=4, transient=1, **kw):
