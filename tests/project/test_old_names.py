@@ -35,3 +35,22 @@ def test_a_moved_name_says_where_it_lives():
         assert old.event_ids is event_ids
     with pytest.raises(AttributeError, match="has no attribute 'no_such_name'"):
         old.no_such_name  # noqa: B018
+
+
+# modules kept whole only to hold release 0.1's names: the library itself imports from their new homes, so
+# that a command loads only what it uses (``saltation.orbits.shooting`` imports every orbit module)
+REEXPORT_MODULES = ("saltation.orbits.shooting", "saltation.special_points.detection")
+
+
+def test_the_library_does_not_import_its_old_module_names():
+    import re
+
+    src = Path(__file__).parents[2] / "src" / "saltation"
+    pattern = re.compile(r"^\s*(from|import)\s+(" + "|".join(re.escape(m) for m in REEXPORT_MODULES) + r")\b", re.MULTILINE)
+    users = []
+    for path in sorted(src.rglob("*.py")):
+        dotted = ".".join(path.relative_to(src.parent).with_suffix("").parts)
+        if dotted in REEXPORT_MODULES:
+            continue
+        users += [f"{path.relative_to(src.parent)}: {m.group(0).strip()}" for m in pattern.finditer(path.read_text())]
+    assert users == [], "import from the new homes instead:\n" + "\n".join(users)

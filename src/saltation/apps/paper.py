@@ -35,13 +35,10 @@ from saltation.model.regularize import regularize
 from saltation.model.system import PiecewiseSystem
 from saltation.models import SHIPPED, block_on_belt, trilinear
 from saltation.models.trilinear import linear_response_state
+from saltation.orbits.equilibria import EquilibriumProblem
 from saltation.orbits.floquet import multipliers_from_monodromy
-from saltation.orbits.shooting import (
-    EquilibriumProblem,
-    ShootingProblem,
-    find_periodic_orbit,
-)
-from saltation.orbits.start import estimate_period, transient
+from saltation.orbits.single import ShootingProblem
+from saltation.orbits.start import estimate_period, find_periodic_orbit, transient
 from saltation.output import io, plotting
 from saltation.special_points.continuation import ContinuationSettings, continue_branch
 from saltation.special_points.follow import BifurcationDiagram, follow_branch

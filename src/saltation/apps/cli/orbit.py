@@ -80,7 +80,7 @@ def format_orbit(orbit, system: PiecewiseSystem) -> str:
 
 def cmd_orbit(args: argparse.Namespace) -> int:
     """``saltation orbit``: find one periodic orbit of a shipped model and print it."""
-    from saltation.orbits.shooting import find_periodic_orbit
+    from saltation.orbits.start import find_periodic_orbit
 
     system = build_model(args.model)
     overrides = parse_sets(args.set, system)

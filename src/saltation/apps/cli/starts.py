@@ -70,11 +70,9 @@ def periodic_start(args: argparse.Namespace, flow, overrides: dict[str, float], 
     ``--mode0`` where it is given (and then every point of the branch)."""
     import numpy as np
 
-    from saltation.orbits.shooting import (
-        MultipleShootingProblem,
-        ShootingProblem,
-        find_periodic_orbit,
-    )
+    from saltation.orbits.multiple import MultipleShootingProblem
+    from saltation.orbits.single import ShootingProblem
+    from saltation.orbits.start import find_periodic_orbit
 
     system = flow.system
     period = args.period if system.is_autonomous else None  # checked by the caller (check_start_period)
@@ -103,7 +101,7 @@ def equilibrium_start(which: str, flow, overrides: dict, parameter: str, x0, sta
     ``sliding:SURFACE`` (pseudo-equilibria), ``x0`` the guess (the origin when None)."""
     import numpy as np
 
-    from saltation.orbits.shooting import EquilibriumProblem
+    from saltation.orbits.equilibria import EquilibriumProblem
 
     guess = x0 if x0 is not None else np.zeros(flow.system.n)
     if which.startswith("sliding:"):
