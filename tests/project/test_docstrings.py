@@ -88,6 +88,7 @@ MODULES = (
     "saltation.sweeps.sections",
     "saltation.output.io",
     "saltation.model.regularize",
+    "saltation.model.sides",
     "saltation.model.symmetry",
     "saltation.orbits.symmetry",
 )
@@ -106,6 +107,7 @@ RAISES_EXEMPT = {
     "saltation.progress.set_enabled": "stores a setting",
     "saltation.progress.bar": "makes a tqdm bar",
     "saltation.orbits.measures.measure_state": "arithmetic on the given state",
+    "saltation.model.sides.on_its_side": "rewrites a sympy expression; sympy's own errors are its",
     "saltation.orbits.measures.measure_label": "builds a text",
     "saltation.branches.monitors.illinois_on_secant": "the test function's and the corrector's errors are theirs; "
                                                        "a point the corrector cannot reach ends the iteration",

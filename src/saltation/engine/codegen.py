@@ -85,6 +85,7 @@ from saltation.engine._contract import MODEL_FUNCTIONS, MODEL_SIGNATURES
 from saltation.engine.affine import affine_form
 from saltation.engine.buildtime import BuildEstimate, estimate_build, timed
 from saltation.errors import SaltationError
+from saltation.model.sides import on_its_side
 from saltation.model.system import TIME, PiecewiseSystem
 
 _TEMPLATE = Path(__file__).with_name("_kernel_source.py")
@@ -279,16 +280,20 @@ def _field_source(system: PiecewiseSystem, em: _Emitter) -> list[str]:
     src: list[str] = []
     modes = range(len(system.modes))
     # f, f_x, f_p
+    # each mode read on its own side of its surfaces (saltation.model.sides), after differentiation
+    sides = [system.mode_sides(m) for m in modes]
+    moving = [*x, TIME]
     src += _mode_dispatch(
         "vector_field", "mode, t, x, p, out", em,
-        [(m, [_Assignment(f"out[{i}]", e) for i, e in enumerate(system.fields[m])]) for m in modes], [],
+        [(m, [_Assignment(f"out[{i}]", on_its_side(e, sides[m], moving)) for i, e in enumerate(system.fields[m])])
+         for m in modes], [],
     )
     jac_cases = []
     dp_cases = []
     for m in modes:
         f = system.fields[m]
-        jac_cases.append((m, _matrix_assignments("out", f.jacobian(x))))
-        fp = f.jacobian(p) if system.n_params else sp.zeros(system.n, 0)
+        jac_cases.append((m, _matrix_assignments("out", on_its_side(f.jacobian(x), sides[m], moving))))
+        fp = on_its_side(f.jacobian(p), sides[m], moving) if system.n_params else sp.zeros(system.n, 0)
         dp_cases.append((m, _matrix_assignments("out", fp)))
     src += _mode_dispatch("vector_field_jac", "mode, t, x, p, out", em, jac_cases, ["out[:, :] = 0.0"])
     src += _mode_dispatch("vector_field_dp", "mode, t, x, p, out", em, dp_cases, ["out[:, :] = 0.0"])
@@ -338,8 +343,9 @@ def _lie_source(system: PiecewiseSystem, em: _Emitter) -> list[str]:
     lie_lines = [_decorator("lie_derivative"), "def lie_derivative(mode, surface, t, x, p, gx, gp):", "    gx[:] = 0.0", "    gp[:] = 0.0"]
     for m, s in pairs:
         sigma = system.lie_derivative(m, s)
-        gx = sp.Matrix([sigma]).jacobian(x)
-        gp = sp.Matrix([sigma]).jacobian(p) if system.n_params else sp.zeros(1, 0)
+        gx = on_its_side(sp.Matrix([sigma]).jacobian(x), system.mode_sides(m), [*x, TIME])
+        gp = on_its_side(sp.Matrix([sigma]).jacobian(p), system.mode_sides(m), [*x, TIME]) if system.n_params else sp.zeros(1, 0)
+        sigma = on_its_side(sigma, system.mode_sides(m), [*x, TIME])
         assigns = [_Assignment(f"gx[{i}]", gx[0, i]) for i in range(system.n) if gx[0, i] != 0]
         assigns += [_Assignment(f"gp[{j}]", gp[0, j]) for j in range(system.n_params) if gp[0, j] != 0]
         lie_lines.append(f"    if mode == {m} and surface == {s}:")
@@ -348,7 +354,7 @@ def _lie_source(system: PiecewiseSystem, em: _Emitter) -> list[str]:
     src += lie_lines
     lie_t = [_decorator("lie_derivative_dt"), "def lie_derivative_dt(mode, surface, t, x, p):"]
     for m, s in pairs:
-        dsigma = sp.diff(system.lie_derivative(m, s), TIME)
+        dsigma = on_its_side(sp.diff(system.lie_derivative(m, s), TIME), system.mode_sides(m), [*x, TIME])
         if dsigma != 0:
             lie_t.append(f"    if mode == {m} and surface == {s}:")
             lie_t += em.block([], ind, result=dsigma)
@@ -696,8 +702,10 @@ _MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # system -> (s
 
 #: The files whose text shapes a generated module besides the model itself: a change to any of them is a
 #: change of the generators, and the memo of sources (:func:`_remembered`) forgets what they made.
+#: the files whose text decides the generated code: the code generator's and every module of the model layer
+#: (how a model reads its expressions: the expansion of ``sign``..., one-sided fields)
 _GENERATORS = (Path(__file__), _TEMPLATE, _CONTRACT, _RECORDS, Path(__file__).with_name("affine.py"),
-               Path(__file__).parents[1] / "model" / "system.py", Path(__file__).parents[1] / "model" / "nonsmooth.py")
+               *sorted((Path(__file__).parents[1] / "model").glob("*.py")))
 _GENERATOR_DIGEST: list[str] = []
 
 

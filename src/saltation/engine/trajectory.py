@@ -423,7 +423,9 @@ def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, 
                     "from a smaller t0 (shift the time origin by a multiple of the forcing period)")
         return StepSizeError(f"step size fell below floating-point resolution {where}{hint}")
     if status == Status.NON_FINITE:
-        return NonFiniteError(f"the vector field of mode {mode!r} returned NaN or infinity {where}")
+        return NonFiniteError(f"the vector field of mode {mode!r} returned NaN or infinity {where} (the field, or "
+                              "its derivatives f_x, f_p where the variational equation is carried: a power below 1 "
+                              "of the distance to a surface has none at the surface)")
     if status == Status.SLIDING_UNDEFINED:
         cause = int(info[kc.INFO_SLIDE])
         if cause == kc.SLIDE_RESET_INTO:

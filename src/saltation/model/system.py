@@ -42,6 +42,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from saltation.errors import InitialModeError, ModelError
 from saltation.model.nonsmooth import Expansion, expand_nonsmooth
 from saltation.model.symmetry import Symmetry, SymmetryMap, check_symmetry
+from saltation.model.sides import on_its_side
 
 TIME = sp.Symbol("t", real=True)
 
@@ -756,6 +757,38 @@ class PiecewiseSystem(NamedParts):
                 failed.append(f"{c.expr} {'>' if c.strict else '>='} 0 (it is {value:.6g})")
         return failed
 
+    def mode_sides(self, mode: int | str) -> tuple[sp.Expr, ...]:
+        """Expressions that are non-negative wherever ``mode`` is active (read by
+        :func:`saltation.model.sides.on_its_side`: each mode's field on its own side of its surfaces).
+
+        Parameters
+        ----------
+        mode : int or str
+            The mode, by index or name.
+
+        Returns
+        -------
+        tuple of sympy expressions
+            The mode's domain conditions (``expr > 0`` or ``expr >= 0``), and for each transition out of the
+            mode without a guard, its surface's indicator ``h`` (the mode is left where ``h`` falls through 0)
+            or ``-h`` (left where ``h`` rises).  A transition that fires either way, or only under a guard,
+            says nothing about the side.
+
+        Raises
+        ------
+        ModelError
+            If there is no such mode.
+        """
+        m = self.mode_index(mode)
+        name = self.mode_names[m]
+        sides: list[sp.Expr] = [c.expr for c in self.domains[m]]
+        for tr, guard in zip(self.transitions, self.guards):
+            if tr.source != name or guard or int(tr.direction) == 0:
+                continue
+            h = self.indicators[self.surface_index(tr.surface)]
+            sides.append(h if int(tr.direction) < 0 else -h)
+        return tuple(dict.fromkeys(sides))  # (in order, once)
+
     # -- exact derivatives ------------------------------------------------------------------
     def jacobian(self, mode: int | str) -> sp.Matrix:
         """``f_x`` of a mode."""
@@ -827,7 +860,8 @@ class PiecewiseSystem(NamedParts):
         g = self.resets[transition]
         return self.x if g is None else g
 
-    def saltation_matrix(self, transition: int, *, on_surface: bool = True, simplify: bool = True) -> sp.Matrix:
+    def saltation_matrix(self, transition: int, *, on_surface: bool = True, simplify: bool = True,
+                         one_sided: bool = False) -> sp.Matrix:
         """Closed-form saltation matrix of a transition, eq. (9) generalised to resets.
 
         ``S = g_x + (f+ - g_x f- - g_t) h_x / (h_x f- + h_t)``, with ``f-`` the
@@ -836,7 +870,9 @@ class PiecewiseSystem(NamedParts):
         simplify (the state lies on the surface when the event happens).
         ``simplify`` gives sympy's most readable form; without it the entries
         are only brought to cancelled fractions (the same functions, some ten
-        times faster: what the numerical uses take).
+        times faster: what the numerical uses take).  ``one_sided`` reads each field on its mode's side
+        of its surfaces (:func:`saltation.model.sides.on_its_side`: fractional powers of a vanishing
+        base take their limit), for evaluation at and near the surface.
         """
         tr = self.transitions[transition]
         src, dst = self.mode_index(tr.source), self.mode_index(tr.target)
@@ -844,8 +880,12 @@ class PiecewiseSystem(NamedParts):
         g = self.reset_map(transition)
         g_x = g.jacobian(self.x)
         g_t = sp.diff(g, TIME)
-        f_minus = self.fields[src]
-        f_plus = self.fields[dst].xreplace(dict(zip(self.x, g)))
+        f_minus, f_plus = self.fields[src], self.fields[dst]
+        if one_sided:
+            moving = [*self.x, TIME]
+            f_minus = on_its_side(f_minus, self.mode_sides(src), moving)
+            f_plus = on_its_side(f_plus, self.mode_sides(dst), moving)
+        f_plus = f_plus.xreplace(dict(zip(self.x, g)))
         den = (d.h_x * f_minus)[0, 0] + d.h_t
         S = g_x + (f_plus - g_x * f_minus - g_t) * d.h_x / den
         reduce = sp.simplify if simplify else sp.cancel

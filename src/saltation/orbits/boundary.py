@@ -35,6 +35,7 @@ import sympy as sp
 from scipy.optimize import brentq
 
 from saltation.engine.flow import EventKind, SwitchingEvent, Trajectory
+from saltation.model.sides import on_its_side
 from saltation.model.system import PiecewiseSystem
 
 
@@ -106,7 +107,7 @@ def zero_length_segments(
 def _closed_form_saltation(system: PiecewiseSystem, transition: int):
     """eq. (9) with resets, simplified on the switching surface, as a numeric function of (t, x, p)
     (fractions cancelled, not sympy's full simplify: the same function, at a tenth of the cost)."""
-    S = system.saltation_matrix(transition, on_surface=True, simplify=False)
+    S = system.saltation_matrix(transition, on_surface=True, simplify=False, one_sided=True)
     return sp.lambdify((system.t, list(system.x), list(system.p)), S, modules="numpy")
 
 
@@ -169,7 +170,8 @@ def _tangency_terms(system: PiecewiseSystem, transition: int):
     """``(h_x f- + h_t, |h_x|, |f-|)`` of a transition, as a numeric function of (t, x, p)."""
     tr = system.transitions[transition]
     d = system.surface_derivatives(tr.surface)
-    f_minus = system.fields[system.mode_index(tr.source)]
+    source = system.mode_index(tr.source)
+    f_minus = on_its_side(system.fields[source], system.mode_sides(source), [*system.x, system.t])
     speed = (d.h_x * f_minus)[0, 0] + d.h_t
     return sp.lambdify((system.t, list(system.x), list(system.p)),
                        [speed, sp.sqrt(sum(e**2 for e in d.h_x)), sp.sqrt(sum(e**2 for e in f_minus))],
