@@ -48,9 +48,9 @@ from saltation.branches.branch import (
 )
 from saltation.errors import SaltationError
 
-logger = logging.getLogger(__name__)
+_log = logging.getLogger(__name__)
 
-C2 = CodimensionTwoKind
+_C2 = CodimensionTwoKind
 
 
 @dataclass
@@ -131,6 +131,11 @@ def fold_eigenvectors(M: np.ndarray, reference: tuple[np.ndarray, np.ndarray] | 
     Returns
     -------
     q, p : ndarray, shape (n,)
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the singular value decomposition does not converge.
     """
     n = M.shape[0]
     U, _, Vt = np.linalg.svd(M - np.eye(n))
@@ -202,28 +207,28 @@ def _cusp(curve, point: CurvePoint, reference):
 #: The test functions of each curve's kind.
 TESTS: dict[SpecialPointKind, tuple[TestFunction, ...]] = {
     SpecialPointKind.FOLD: (
-        TestFunction(C2.CUSP, "fold", _cusp),
-        TestFunction(C2.STRONG_RESONANCE_1_1, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0)),
-        TestFunction(C2.FOLD_FLIP, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0)),
-        TestFunction(C2.FOLD_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
+        TestFunction(_C2.CUSP, "fold", _cusp),
+        TestFunction(_C2.STRONG_RESONANCE_1_1, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0)),
+        TestFunction(_C2.FOLD_FLIP, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0)),
+        TestFunction(_C2.FOLD_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
     ),
     SpecialPointKind.PERIOD_DOUBLING: (
-        TestFunction(C2.FOLD_FLIP, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0)),
-        TestFunction(C2.STRONG_RESONANCE_1_2, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0)),
-        TestFunction(C2.FLIP_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
+        TestFunction(_C2.FOLD_FLIP, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0)),
+        TestFunction(_C2.STRONG_RESONANCE_1_2, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0)),
+        TestFunction(_C2.FLIP_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
         # slot: the cubic normal-form coefficient of the flip changes sign (not computed yet)
-        TestFunction(C2.GENERALIZED_PERIOD_DOUBLING, "period_doubling", None),
+        TestFunction(_C2.GENERALIZED_PERIOD_DOUBLING, "period_doubling", None),
     ),
     SpecialPointKind.NEIMARK_SACKER: (
-        TestFunction(C2.STRONG_RESONANCE_1_1, "fold", lambda c, pt, r: pt.kappa - 1.0),
-        TestFunction(C2.STRONG_RESONANCE_1_2, "period_doubling", lambda c, pt, r: pt.kappa + 1.0),
-        TestFunction(C2.STRONG_RESONANCE_1_3, "neimark_sacker", lambda c, pt, r: pt.kappa + 0.5, circle_only=True),
-        TestFunction(C2.STRONG_RESONANCE_1_4, "neimark_sacker", lambda c, pt, r: pt.kappa, circle_only=True),
-        TestFunction(C2.FOLD_NEIMARK_SACKER, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0), circle_only=True),
-        TestFunction(C2.FLIP_NEIMARK_SACKER, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0),
+        TestFunction(_C2.STRONG_RESONANCE_1_1, "fold", lambda c, pt, r: pt.kappa - 1.0),
+        TestFunction(_C2.STRONG_RESONANCE_1_2, "period_doubling", lambda c, pt, r: pt.kappa + 1.0),
+        TestFunction(_C2.STRONG_RESONANCE_1_3, "neimark_sacker", lambda c, pt, r: pt.kappa + 0.5, circle_only=True),
+        TestFunction(_C2.STRONG_RESONANCE_1_4, "neimark_sacker", lambda c, pt, r: pt.kappa, circle_only=True),
+        TestFunction(_C2.FOLD_NEIMARK_SACKER, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0), circle_only=True),
+        TestFunction(_C2.FLIP_NEIMARK_SACKER, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0),
                      circle_only=True),
         # slot: the first Lyapunov coefficient of the torus changes sign (not computed yet)
-        TestFunction(C2.CHENCINER, "neimark_sacker", None, circle_only=True),
+        TestFunction(_C2.CHENCINER, "neimark_sacker", None, circle_only=True),
     ),
 }
 
@@ -336,7 +341,7 @@ class CodimensionTwoSearch:
             try:
                 v = test.value(self.curve, point, reference)
             except (SaltationError, np.linalg.LinAlgError) as exc:
-                logger.debug("%s test function failed at %s: %s", test.name.value, point.z[-1], exc)
+                _log.debug("%s test function failed at %s: %s", test.name.value, point.z[-1], exc)
                 values.append(None)
                 continue
             if isinstance(v, tuple):
@@ -429,18 +434,18 @@ class CodimensionTwoSearch:
                     status = SpecialPointStatus.LOCATED
                     break
         except (SaltationError, np.linalg.LinAlgError) as exc:
-            logger.info("%s between curve points %d and %d not located: %s", test.name.value, index, index + 1, exc)
+            _log.info("%s between curve points %d and %d not located: %s", test.name.value, index, index + 1, exc)
         if best_point is None:
             best_z, best_point = (za, ea.point) if abs(ea.values[k]) <= abs(eb.values[k]) else (zb, eb.point)
-        if test.name in (C2.FOLD_NEIMARK_SACKER, C2.FLIP_NEIMARK_SACKER) and self.kind is not SpecialPointKind.NEIMARK_SACKER:
+        if test.name in (_C2.FOLD_NEIMARK_SACKER, _C2.FLIP_NEIMARK_SACKER) and self.kind is not SpecialPointKind.NEIMARK_SACKER:
             if not _pair_on_circle(best_point.others):
-                logger.info("%s test vanishes at a real pair with product 1 (a neutral saddle): not a bifurcation",
+                _log.info("%s test vanishes at a real pair with product 1 (a neutral saddle): not a bifurcation",
                             test.name.value)
                 return None
         if status is SpecialPointStatus.LOCATED:
             where = params(best_z)
             accuracy = float(np.max(np.abs(params(hi_z) - params(lo_z))))
-            if test.name is C2.CUSP:  # the central difference's error, through the test function's slope
+            if test.name is _C2.CUSP:  # the central difference's error, through the test function's slope
                 accuracy += self._cusp_error(best_point, q_ref, ea, eb, k)
         else:
             where, accuracy = params(best_z), float(np.max(np.abs(params(zb) - params(za))))
