@@ -29,14 +29,18 @@ import json
 
 import numpy as np
 import pytest
+import rotor_reference as reference
+from conftest import trial_model
 from scipy.linalg import expm
 from scipy.optimize import brentq, fsolve
 
-import rotor_reference as reference
-from conftest import trial_model
 from saltation import Flow
 from saltation.apps import cli
-from saltation.branches.branch import CodimensionTwoKind, SpecialPointKind, SpecialPointStatus
+from saltation.branches.branch import (
+    CodimensionTwoKind,
+    SpecialPointKind,
+    SpecialPointStatus,
+)
 from saltation.orbits.conditions import NeimarkSackerCondition
 from saltation.orbits.shooting import ShootingProblem
 from saltation.special_points.continuation import ContinuationSettings, continue_branch
@@ -136,7 +140,7 @@ def test_the_neimark_sacker_curve_is_the_rotating_frames_hopf_curve(ns_curve):
     periodicity) with an integration error of about 1e-10; the Hopf condition's slope in ``mu`` is of order one, so
     ``mu`` agrees to 1e-8.  The multipliers agree with ``exp(lambda T)`` to 1e-8 (monodromy to the integration
     tolerance, eigenvalues of a well-separated spectrum)."""
-    ns, curve = ns_curve
+    _, curve = ns_curve
     assert curve.curve_of is SpecialPointKind.NEIMARK_SACKER
     assert len(curve.points) > 30 and "reached a parameter bound" in curve.stop_detail
     on_circle = [bp for bp in curve.points if bp.curve_kind is SpecialPointKind.NEIMARK_SACKER]

@@ -399,7 +399,7 @@ class CodimensionTwoSearch:
         curve = self.curve
         za, zb = ea.point.z, eb.point.z
         first = curve.n_base  # the first parameter's place in z
-        params = lambda z: np.array([z[first], z[-1]])  # noqa: E731
+        params = lambda z: np.array([z[first], z[-1]])
         reborder = getattr(curve, "reborder_at", None)
         if reborder is not None:
             reborder(za)
@@ -437,11 +437,12 @@ class CodimensionTwoSearch:
             _log.info("%s between curve points %d and %d not located: %s", test.name.value, index, index + 1, exc)
         if best_point is None:
             best_z, best_point = (za, ea.point) if abs(ea.values[k]) <= abs(eb.values[k]) else (zb, eb.point)
-        if test.name in (_C2.FOLD_NEIMARK_SACKER, _C2.FLIP_NEIMARK_SACKER) and self.kind is not SpecialPointKind.NEIMARK_SACKER:
-            if not _pair_on_circle(best_point.others):
-                _log.info("%s test vanishes at a real pair with product 1 (a neutral saddle): not a bifurcation",
-                            test.name.value)
-                return None
+        pairs = (_C2.FOLD_NEIMARK_SACKER, _C2.FLIP_NEIMARK_SACKER)
+        if (test.name in pairs and self.kind is not SpecialPointKind.NEIMARK_SACKER
+                and not _pair_on_circle(best_point.others)):
+            _log.info("%s test vanishes at a real pair with product 1 (a neutral saddle): not a bifurcation",
+                      test.name.value)
+            return None
         if status is SpecialPointStatus.LOCATED:
             where = params(best_z)
             accuracy = float(np.max(np.abs(params(hi_z) - params(lo_z))))
@@ -491,5 +492,12 @@ def _record(kind: SpecialPointKind, test: TestFunction, where: np.ndarray, accur
     )
 
 
-__all__ = ["CodimensionTwoSearch", "CurvePoint", "TESTS", "TestFunction", "cusp_coefficient", "fold_eigenvectors",
-           "others_of"]
+__all__ = [
+    "TESTS",
+    "CodimensionTwoSearch",
+    "CurvePoint",
+    "TestFunction",
+    "cusp_coefficient",
+    "fold_eigenvectors",
+    "others_of",
+]

@@ -67,6 +67,7 @@ from saltation.branches.branch import (
     StopReason,
     problem_and_point,
 )
+from saltation.branches.corrector import Corrector
 from saltation.engine.flow import EventKind, Flow
 from saltation.errors import IntegrationError, ModelError, SaltationError
 from saltation.orbits.boundary import corner_saltation_is_bounded, saltation_at_corner
@@ -83,7 +84,6 @@ from saltation.orbits.conditions import (
 from saltation.orbits.conditions.neimark_sacker import nearest_pair_kappa
 from saltation.orbits.records import BranchPoint
 from saltation.orbits.single import ShootingProblem
-from saltation.branches.corrector import Corrector
 from saltation.special_points.codimension_two import CodimensionTwoSearch
 from saltation.special_points.continuation import (
     Continuation,

@@ -317,7 +317,7 @@ class NeimarkSackerCondition(Condition):
         if kept is not None:
             out.d_x0[:], out.d_period[:], out.d_parameters[:] = kept.d_x0, kept.d_period, kept.d_parameters
             return out
-        g = lambda M: self._g(M, kappa)  # noqa: E731
+        g = lambda M: self._g(M, kappa)
         for i in range(n):
             d = self.h * max(1.0, abs(shot.x0[i]))
             e = np.zeros(n)
@@ -375,7 +375,7 @@ class NeimarkSackerCondition(Condition):
         n, m, T, p = len(shot.x0), len(segs), shot.period, shot.parameters
         factors = [seg.monodromy for seg in segs]
         out = self._head(_product(factors), kappa, m * n, len(params))
-        g = lambda M: self._g(M, kappa)  # noqa: E731
+        g = lambda M: self._g(M, kappa)
 
         def whole(TT: float, q: np.ndarray) -> np.ndarray:
             ts = shot.t0 + shot.sign * TT * np.arange(m + 1) / m
