@@ -182,6 +182,22 @@ def test_the_one_one_resonance_ends_the_neimark_sacker_curve_at_the_bogdanov_tak
     assert len(curve.special_points) == 1
 
 
+def test_the_name_of_a_codimension_two_point_is_written_and_read(ns_curve, tmp_path):
+    """A curve with a named codimension-two point round-trips through a branch file (and a file without the
+    field reads as None)."""
+    from saltation.output.codecs import branch_from_dict, branch_to_dict
+    from saltation.output.io import load_branch_json, save_branch_json
+
+    _, curve = ns_curve
+    again = load_branch_json(save_branch_json(curve, tmp_path / "ns.json"))
+    assert [sp.codimension_two for sp in again.special_points] == [CodimensionTwoKind.STRONG_RESONANCE_1_1]
+    assert [bp.curve_kind for bp in again.points] == [bp.curve_kind for bp in curve.points]
+    old = branch_to_dict(curve)
+    for sp in old["special_points"]:
+        del sp["codimension_two"]
+    assert branch_from_dict(old).special_points[0].codimension_two is None
+
+
 def test_the_fold_curve_finds_the_same_one_one_resonance(rotor):
     """On the fold curve of the contact whirls a second multiplier reaches +1 at the same Bogdanov-Takens point
     (its test function is the product of the other multipliers minus one, not ``kappa``)."""
