@@ -66,6 +66,40 @@ NONSMOOTH_KINDS = frozenset(
 )
 
 
+class CodimensionTwoKind(enum.Enum):
+    """Names of the smooth codimension-two points of a fixed point of the period map, met along a curve of folds,
+    period doublings or Neimark-Sacker points (Kuznetsov, *Elements of Applied Bifurcation Theory*, 3rd ed.,
+    Springer 2004, section 9.1, the codimension-two bifurcations of fixed points of maps); the value is the
+    name used in files.
+
+    :attr:`SpecialPoint.codimension_two` names the point; :attr:`SpecialPoint.sides` holds the curve's kind
+    and the kind it meets there.
+    """
+
+    #: on a fold curve: the quadratic normal-form coefficient ``<p, B(q, q)> / 2`` changes sign (two folds meet)
+    CUSP = "cusp"
+    #: 1:1 resonance: a double multiplier +1 (Jordan block); on a Neimark-Sacker curve ``kappa = cos theta -> 1``,
+    #: on a fold curve a second multiplier reaches +1 (the Bogdanov-Takens point of the map)
+    STRONG_RESONANCE_1_1 = "strong_resonance_1_1"
+    #: 1:2 resonance: a double multiplier -1; ``kappa -> -1`` on a Neimark-Sacker curve, a second multiplier -1
+    #: on a period-doubling curve
+    STRONG_RESONANCE_1_2 = "strong_resonance_1_2"
+    #: 1:3 resonance: multipliers ``exp(+-2 pi i / 3)`` (``kappa = -1/2``)
+    STRONG_RESONANCE_1_3 = "strong_resonance_1_3"
+    #: 1:4 resonance: multipliers ``+-i`` (``kappa = 0``)
+    STRONG_RESONANCE_1_4 = "strong_resonance_1_4"
+    #: fold-flip: multipliers +1 and -1 (a fold curve meets a period-doubling curve)
+    FOLD_FLIP = "fold_flip"
+    #: fold-Neimark-Sacker: a multiplier +1 and a complex pair on the unit circle
+    FOLD_NEIMARK_SACKER = "fold_neimark_sacker"
+    #: flip-Neimark-Sacker: a multiplier -1 and a complex pair on the unit circle
+    FLIP_NEIMARK_SACKER = "flip_neimark_sacker"
+    #: generalized period doubling: the cubic normal-form coefficient of the flip vanishes (needs that coefficient)
+    GENERALIZED_PERIOD_DOUBLING = "generalized_period_doubling"
+    #: Chenciner (degenerate Neimark-Sacker): the first Lyapunov coefficient of the torus vanishes (needs it)
+    CHENCINER = "chenciner"
+
+
 class SpecialPointStatus(str, enum.Enum):
     """How a special point was found; the value is the name used in files."""
 
@@ -127,4 +161,4 @@ class BranchKind(enum.Enum):
     EQUILIBRIUM = "equilibrium"
 
 
-__all__ = ["NONSMOOTH_KINDS", "BranchKind", "Limits", "SpecialPointKind", "SpecialPointStatus", "StopReason"]
+__all__ = ["NONSMOOTH_KINDS", "BranchKind", "CodimensionTwoKind", "Limits", "SpecialPointKind", "SpecialPointStatus", "StopReason"]

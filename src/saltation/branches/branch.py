@@ -13,6 +13,7 @@ from saltation.errors import SaltationError
 from saltation.kinds import (  # noqa: F401  (the vocabulary's names here: where release 0.1 had them)
     NONSMOOTH_KINDS,
     BranchKind,
+    CodimensionTwoKind,
     Limits,
     SpecialPointKind,
     SpecialPointStatus,
@@ -153,7 +154,10 @@ class SpecialPoint:
         On a two-parameter curve: the second parameter's value at the point (``parameter`` is the
         first's; ``nan`` on a one-parameter branch).
     sides : (str, str)
-        At a CODIMENSION_TWO point: the kinds of the special point on either side along the curve.
+        At a CODIMENSION_TWO point: the kinds of the special point on either side along the curve (where a
+        corner's kind changes), or the curve's kind and the kind it meets there (a smooth point named by
+        ``codimension_two``: ``("fold", "period_doubling")`` at a fold-flip, ``("neimark_sacker",
+        "neutral_saddle")`` where a Neimark-Sacker curve turns into a neutral saddle at a 1:1 resonance).
     classification : str
         At a BOUNDARY_EQUILIBRIUM: ``persistence`` (the equilibrium of the mode and the pseudo-equilibrium
         exist on opposite sides of the point: one goes on as the other) or ``nonsmooth_fold`` (on the same
@@ -165,6 +169,9 @@ class SpecialPoint:
         The two sides of a non-smooth point (None at a smooth one).
     touch : Touch or None
         Where the orbit touches a surface (grazing, sliding bifurcations, boundary equilibria).
+    codimension_two : CodimensionTwoKind or None
+        At a smooth CODIMENSION_TWO point of a fold, period-doubling or Neimark-Sacker curve: its name (cusp,
+        a strong resonance, fold-flip ...); None elsewhere (and in files written before 2027-01).
 
     Raises
     ------
@@ -193,8 +200,11 @@ class SpecialPoint:
     t0: float = 0.0
     one_sided: OneSided | None = None
     touch: Touch | None = None
+    codimension_two: CodimensionTwoKind | None = None
 
     def __post_init__(self):
+        if self.codimension_two is not None and not isinstance(self.codimension_two, CodimensionTwoKind):
+            object.__setattr__(self, "codimension_two", CodimensionTwoKind(self.codimension_two))
         if not isinstance(self.status, SpecialPointStatus):
             object.__setattr__(self, "status", SpecialPointStatus(self.status))
         object.__setattr__(self, "event_ids", tuple(tuple(int(i) for i in e) for e in self.event_ids))
@@ -230,6 +240,8 @@ class SpecialPoint:
         if self.second_parameter is not None and math.isfinite(self.second_parameter):
             where += f", {self.second_parameter:.10g}"
         sides = f" {self.sides[0]} -> {self.sides[1]}" if self.sides else ""
+        if self.codimension_two is not None:
+            sides = f" {self.codimension_two.value}{sides}"
         return f"SpecialPoint({self.kind.value}{sides} at {where}, located to {self.accuracy:.1e}, {self.status.value})"
 
 

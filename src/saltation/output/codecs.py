@@ -29,6 +29,7 @@ from saltation.branches.branch import (
     Branch,
     BranchKind,
     BranchPoint,
+    CodimensionTwoKind,
     OneSided,
     SpecialPoint,
     SpecialPointKind,
@@ -325,6 +326,9 @@ _SPECIAL_POINT_CODEC = _Codec(
         "status": _enum(SpecialPointStatus),
         "one_sided": _part(_ONE_SIDED_CODEC),
         "touch": _part(_TOUCH_CODEC),
+        # files before 2027-01 do not have it: None
+        "codimension_two": (lambda k: None if k is None else k.value,
+                            _nullable(_choice({k.value: k for k in CodimensionTwoKind}))),
     },
 )
 
@@ -603,11 +607,14 @@ def codimension_two_record(sp: SpecialPoint) -> dict[str, Any]:
     Returns
     -------
     dict
-        ``kind`` (the kinds on its two sides, ``"discontinuous_fold -> nonsmooth_flip"``), ``value`` (the two
-        parameters), ``accuracy`` and ``status``.
+        ``kind`` (the kinds on its two sides, ``"discontinuous_fold -> nonsmooth_flip"``; at a smooth point the
+        curve's kind and the one it meets, ``"fold -> period_doubling"``), ``name`` (a smooth point's
+        :class:`~saltation.kinds.CodimensionTwoKind` value, ``"fold_flip"``, ``"cusp"`` ...; null at a change of
+        a corner's kind), ``value`` (the two parameters), ``accuracy`` and ``status``.
     """
     return {
         "kind": " -> ".join(sp.sides),
+        "name": None if sp.codimension_two is None else sp.codimension_two.value,
         "value": [float(sp.parameter), float(sp.second_parameter)],
         "accuracy": float(sp.accuracy),
         "status": sp.status.value,

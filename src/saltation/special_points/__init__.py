@@ -16,6 +16,8 @@ Modules:
 * :mod:`~saltation.special_points.sliding`: the defining systems of the sliding bifurcations;
 * :mod:`~saltation.special_points.boundary_equilibria`: equilibria on a switching surface and their curves;
 * :mod:`~saltation.special_points.loci`: curves of special points in two parameters;
+* :mod:`~saltation.special_points.codimension_two`: the smooth codimension-two points along fold,
+  period-doubling and Neimark-Sacker curves (test functions, their location);
 * :mod:`~saltation.special_points.branch_switching`: the period-2 branch at a period doubling and the
   asymmetric branches at a symmetry breaking.
 * :mod:`~saltation.special_points.follow`: a branch as far as it goes: the branches born on it, and the one

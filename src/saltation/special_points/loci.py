@@ -22,7 +22,14 @@ Every curve is the orbit's problem with a condition attached
   singular (``mu = +1`` or ``-1``), the minimally augmented system of Govaerts
   (*Numerical Methods for Bifurcations of Dynamical Equilibria*, SIAM 2000);
   derivatives of ``g`` by central differences
-  (:class:`~saltation.orbits.conditions.MultiplierCondition`).
+  (:class:`~saltation.orbits.conditions.MultiplierCondition`);
+* Neimark-Sacker points (:class:`NeimarkSackerCurve`): periodicity plus two
+  entries of the bordered ``M^2 - 2 kappa M + I``, ``kappa = cos theta`` one
+  more unknown (:class:`~saltation.orbits.conditions.NeimarkSackerCondition`).
+  The same system holds at a neutral saddle (a real pair ``mu``, ``1/mu``,
+  ``|kappa| > 1``): those points of the curve have no ``curve_kind`` (the
+  Neimark-Sacker ones have ``neimark_sacker``), and a curve does not start
+  from one.
 
 A curve ends at its bounds, at a located or bracketed codimension-two point,
 or with a stop reason that says what failed.
@@ -35,6 +42,12 @@ Along a fold or period-doubling curve the orbit's event sequence is
 followed; where it changes, the curve meets a corner or grazing there (a
 fold born at a corner, a grazing that ends a fold curve), labelled with the
 curve's kind and the non-smooth point's.
+
+Along fold, period-doubling and Neimark-Sacker curves the smooth
+codimension-two points (cusp, the strong resonances 1:1 to 1:4, fold-flip,
+fold- and flip-Neimark-Sacker) are found by test functions and located on the
+curve (:mod:`saltation.special_points.codimension_two`); their
+``codimension_two`` names them.
 """
 
 from __future__ import annotations
@@ -54,6 +67,7 @@ from saltation.branches.branch import (
     StopReason,
     problem_and_point,
 )
+from saltation.branches.corrector import Corrector
 from saltation.engine.flow import EventKind, Flow
 from saltation.errors import IntegrationError, ModelError, SaltationError
 from saltation.orbits.boundary import corner_saltation_is_bounded, saltation_at_corner
@@ -64,10 +78,13 @@ from saltation.orbits.conditions import (
     CubicTangency,
     EventIdentity,
     MultiplierCondition,
+    NeimarkSackerCondition,
     Tangency,
 )
+from saltation.orbits.conditions.neimark_sacker import nearest_pair_kappa
 from saltation.orbits.records import BranchPoint
 from saltation.orbits.single import ShootingProblem
+from saltation.special_points.codimension_two import CodimensionTwoSearch
 from saltation.special_points.continuation import (
     Continuation,
     ContinuationSettings,
@@ -478,6 +495,7 @@ def follow_locus(
     settings = replace(settings, bounds=bounds, detect=False)
     lam0 = float(p[curve.lam_index])
     runs, records, results, kinds_by_run, events_by_run, ends = [], [], [], [], [], []
+    raw, summaries = [], []  # the curve's points in its own layout, and their records (codimension two)
     start = curve.snapshot()
     n = problem.system.n
     for direction in (1, -1):
@@ -493,9 +511,12 @@ def follow_locus(
         records.append([replace(bp, parameter=float(sol.z[curve.n_base]), second_parameter=float(sol.z[-1]))
                         for bp, sol in zip(cont.branch.points, cont.solutions)])
         kinds_by_run.append(list(getattr(curve, "kinds", [])))
+        raw.append([sol.z for sol in cont.solutions])
+        summaries.append(list(cont.branch.points))
         results.append((cont, way, failure))
         events_by_run.append([canonical_events(e) for e in curve.event_ids])
-        if isinstance(curve, MultiplierCurve) and failure is None and cont.branch.stop_reason is not StopReason.PARAMETER_BOUND:
+        if (isinstance(curve, MultiplierCurve) and failure is None
+                and cont.branch.stop_reason is not StopReason.PARAMETER_BOUND):
             end = _end_at_a_corner(single, curve, point.kind, runs[-1], records[-1])
             if end is not None:
                 ends.append((len(runs) - 1, end))
@@ -512,6 +533,14 @@ def follow_locus(
     )
     _mark_codimension_two(locus, zs, joined(kinds_by_run) if classify else None, joined(events_by_run),
                           curve, single, point.kind)
+    if isinstance(curve, NeimarkSackerCurve):  # a neutral saddle's points are not Neimark-Sacker points
+        locus.points = [replace(bp, curve_kind=SpecialPointKind.NEIMARK_SACKER if abs(z[-2]) < 1 else None)
+                        for bp, z in zip(locus.points, joined(raw))]
+    if isinstance(curve, (MultiplierCurve, NeimarkSackerCurve)):
+        search = CodimensionTwoSearch(curve, point.kind, Corrector(curve, settings))
+        for index, sp in search.search(joined(raw), joined(summaries)):
+            locus.special_points.append(sp)
+        locus.special_points.sort(key=lambda sp: sp.index)
     # a corner that ends a run lies beyond its last point: the curve's last (increasing) or first (decreasing)
     locus.special_points.extend(replace(e, index=(len(zs) - 1 if run == 0 else 0)) for run, e in ends)
     return locus
@@ -541,6 +570,11 @@ def _curve_for(problem: ShootingProblem, single: ShootingProblem, point: Special
         return GrazingCurve(problem, p, problem.lam_name, second, transition, t_g, others=others), True
     if point.kind in (SpecialPointKind.FOLD, SpecialPointKind.PERIOD_DOUBLING):
         return MultiplierCurve(problem, p, second, mu=1.0 if point.kind is SpecialPointKind.FOLD else -1.0), False
+    if point.kind is SpecialPointKind.NEIMARK_SACKER:
+        if point.multipliers is None:
+            raise ModelError("the Neimark-Sacker point does not record its multipliers")
+        kappa = nearest_pair_kappa(point.multipliers)
+        return NeimarkSackerCurve(problem, p, second, kappa=kappa), False
     raise ModelError(f"no two-parameter continuation for special points of kind {point.kind.value}")
 
 
@@ -882,7 +916,86 @@ class MultiplierCurve(_Curve):
         super().__init__(problem, [MultiplierCondition(mu, h=h)], parameters, problem.lam_name, second)
 
 
+class NeimarkSackerCurve(_Curve):
+    """Neimark-Sacker points of a forced orbit in two parameters.
+
+    Periodicity plus :class:`~saltation.orbits.conditions.NeimarkSackerCondition`; the unknowns are
+    ``(x0, lam1, kappa)``, ``kappa = cos theta`` of the pair ``exp(+-i theta)`` on the unit circle.  Where
+    ``|kappa|`` passes 1 (a 1:1 or 1:2 resonance) the same system goes on as a neutral saddle.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        The problem of the branch (forced, forward time).
+    parameters : ndarray
+        Parameter values at the start.
+    second : str
+        The parameter the curve is followed in.
+    kappa : float
+        ``cos theta`` at the start (:func:`~saltation.orbits.conditions.neimark_sacker.nearest_pair_kappa`).
+    h : float
+        Relative step of the central differences of the conditions.
+
+    Raises
+    ------
+    ModelError
+        For an autonomous or backward-time problem, or an unknown parameter.
+    SaltationError
+        If ``|kappa| >= 1``: the start is a neutral saddle, not a Neimark-Sacker point.
+
+    References
+    ----------
+    Kuznetsov (2004), *Elements of Applied Bifurcation Theory*, 3rd ed., Springer, section 10.3.
+    """
+
+    def __init__(self, problem: ShootingProblem, parameters: np.ndarray, second: str, *, kappa: float,
+                 h: float = 1e-6):
+        if not abs(kappa) < 1.0:
+            raise SaltationError(f"kappa = {kappa:.10g}: the multipliers are a real pair with product 1 (a neutral "
+                                 "saddle), not a Neimark-Sacker point")
+        self.condition = NeimarkSackerCondition(kappa, h=h)
+        super().__init__(problem, [self.condition], parameters, problem.lam_name, second)
+
+    def snapshot(self) -> dict:
+        """The state that :meth:`accept` moves along a run, with the condition's borders.
+
+        Returns
+        -------
+        dict
+            As :meth:`_Curve.snapshot`, with the condition's state.
+        """
+        return super().snapshot() | {"_ns": self.condition.state()}
+
+    def restore(self, state: dict) -> None:
+        """Restore a :meth:`snapshot` before a run in the other direction (the borders too).
+
+        Parameters
+        ----------
+        state : dict
+            What :meth:`snapshot` returned.
+        """
+        state = dict(state)
+        self.condition.restore(state.pop("_ns"))
+        super().restore(state)
+
+    def reborder_at(self, z: np.ndarray) -> None:
+        """Border the condition again at a curve point ``z = (u, lam)`` (before a location that starts there).
+
+        Parameters
+        ----------
+        z : ndarray
+            A point of the curve, in its layout.
+
+        Raises
+        ------
+        SaltationError
+            If the point's shot fails or the bordered matrix is singular there.
+        """
+        self.equations(z[:-1], float(z[-1]), need_lam=False)  # (the condition keeps its monodromy)
+        self.condition.reborder(*self.condition.last)
+
+
 __all__ = [
-    "SLIDING_KINDS", "GrazingCurve", "Locus", "MultiplierCurve", "SlidingCurve", "arrival_identity",
+    "SLIDING_KINDS", "GrazingCurve", "Locus", "MultiplierCurve", "NeimarkSackerCurve", "SlidingCurve", "arrival_identity",
     "curve_stops", "follow_locus", "grazed_transitions", "run_curve",
 ]

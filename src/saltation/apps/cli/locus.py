@@ -156,7 +156,8 @@ def _report(args: argparse.Namespace, system, kind, loci: list) -> None:
     for k, locus in enumerate(loci):
         print(f"  curve {k}: {len(locus.points)} points; {locus.stop_detail}")
         for c in locus.special_points:
-            print(f"    {c.sides[0]} -> {c.sides[1]} at {args.param} = {c.parameter:.8g}, {args.param2} = "
+            name = f"{c.codimension_two.value}: " if c.codimension_two is not None else ""
+            print(f"    {name}{c.sides[0]} -> {c.sides[1]} at {args.param} = {c.parameter:.8g}, {args.param2} = "
                   f"{c.second_parameter:.8g} (within {c.accuracy:.2g}, {c.status.value})")
     if args.out is not None:
         print(f"written to {stem}.json (.png, .pdf)")
@@ -172,8 +173,11 @@ def add_parser(sub) -> None:
             (as 'continue' does), take every special point of kind --kind on it, and continue each as a
             curve in (--param, --param2) with --param2 in --range2, in both directions, by its defining
             system: grazing and corner collisions by periodicity plus tangency, folds and period
-            doublings by periodicity plus a bordered test function. Where the kind of a corner changes
-            along its curve (a codimension-two point) the curve records it. With --kind
+            doublings by periodicity plus a bordered test function, Neimark-Sacker points by periodicity
+            plus two entries of the bordered M^2 - 2 kappa M + I. Where the kind of a corner changes
+            along its curve, or a fold, period-doubling or Neimark-Sacker curve meets a second condition
+            (cusp, strong resonances, fold-flip ...: a codimension-two point, its "name"), the curve
+            records it. With --kind
             boundary_equilibrium and --equilibrium MODE (or sliding:SURFACE) the branch is of equilibria, and
             each boundary equilibrium is continued by the mode's equilibrium plus h = 0. --json prints
             {"model", "kind", "param", "param2", "curves": [{"points": [[value of param, value of
@@ -182,7 +186,7 @@ def add_parser(sub) -> None:
     )
     add_model(p)
     p.add_argument("--kind", metavar="KIND", required=True,
-                   help="a SpecialPointKind value: fold, period_doubling, grazing, discontinuous_fold, nonsmooth_no_crossing, ...")
+                   help="a SpecialPointKind value: fold, period_doubling, neimark_sacker, grazing, discontinuous_fold, nonsmooth_no_crossing, ...")
     p.add_argument("--param", metavar="NAME", required=True, help="the parameter of the branch")
     p.add_argument("--range", metavar="A,B", type=parse_range("--range"), required=True, help="the branch from A towards B")
     p.add_argument("--param2", metavar="NAME2", required=True, help="the second parameter")

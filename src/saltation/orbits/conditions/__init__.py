@@ -23,7 +23,9 @@ The conditions:
   side's field is tangent with zero rate: ``L_A = 0`` and ``L_A,x f_A + L_A,t = 0``;
 * :class:`MultiplierCondition`: a fold (``mu = +1``) or a period doubling (``mu = -1``), minimally
   augmented: the bordered test function of Govaerts (*Numerical Methods for Bifurcations of Dynamical
-  Equilibria*, SIAM 2000) vanishes where ``M - mu I`` is singular.
+  Equilibria*, SIAM 2000) vanishes where ``M - mu I`` is singular;
+* :class:`NeimarkSackerCondition`: a complex pair ``exp(+-i theta)`` on the unit circle, ``kappa = cos theta``
+  an unknown: ``M^2 - 2 kappa M + I`` has a two-dimensional null space, two borders on each side.
 
 :class:`ConditionedProblem` is the augmented problem.  It has the continuation protocol (so a
 two-parameter curve is :class:`~saltation.branches.continuation.Continuation` on it) and one Newton
@@ -38,6 +40,7 @@ Its modules:
 - :mod:`~saltation.orbits.conditions.arrival`: :class:`EventIdentity`, :class:`ArrivalTangency` and
   :class:`CubicTangency` (sliding bifurcations);
 - :mod:`~saltation.orbits.conditions.multiplier`: :class:`MultiplierCondition`;
+- :mod:`~saltation.orbits.conditions.neimark_sacker`: :class:`NeimarkSackerCondition`;
 - :mod:`~saltation.orbits.conditions.conditioned`: :class:`ConditionedProblem`, its layout, shots,
   single-shooting equations and Newton;
 - :mod:`~saltation.orbits.conditions.segmented`: its equations under multiple shooting;
@@ -55,12 +58,13 @@ from saltation.orbits.conditions.conditioned import ConditionedProblem
 from saltation.orbits.conditions.joining import _joined as _joined
 from saltation.orbits.conditions.joining import join
 from saltation.orbits.conditions.multiplier import MultiplierCondition
+from saltation.orbits.conditions.neimark_sacker import NeimarkSackerCondition
 from saltation.orbits.conditions.shot import Located, Piece, Rows, Shot
 from saltation.orbits.conditions.tangency import ReturnTangency, Tangency
 
 __all__ = [
     "ArrivalTangency", "Condition", "ConditionedProblem", "CubicTangency", "EventIdentity", "Located",
-    "MultiplierCondition", "Piece", "ReturnTangency", "Rows", "Shot", "Tangency", "join",
+    "MultiplierCondition", "NeimarkSackerCondition", "Piece", "ReturnTangency", "Rows", "Shot", "Tangency", "join",
 ]
 
 

@@ -1,0 +1,503 @@
+"""Smooth codimension-two points along curves of folds, period doublings and Neimark-Sacker points.
+
+Along a two-parameter curve of a smooth bifurcation of a periodic orbit (a fixed point of the period map),
+test functions of the curve's points change sign where a second condition is met (Kuznetsov 2004, section
+9.1, the codimension-two bifurcations of fixed points of maps).  Each is a :class:`TestFunction`; the
+curve's kind has its list (:data:`TESTS`):
+
+* a fold curve (a multiplier ``+1``): the cusp (the quadratic normal-form coefficient ``<p, B(q, q)> / (2
+  <p, q>)`` changes sign; ``B`` the second derivative of the period map, by central differences of the
+  monodromy along ``q``: ``B(q, q) = (M(x + h q) - M(x - h q)) q / (2 h)``; :func:`cusp_coefficient`), the 1:1
+  resonance (a second multiplier at
+  ``+1``), fold-flip (one at ``-1``), fold-Neimark-Sacker (a pair with product 1);
+* a period-doubling curve (``-1``): fold-flip (a multiplier ``+1``), the 1:2 resonance (a second ``-1``),
+  flip-Neimark-Sacker, and the generalized period doubling (a slot: its test function needs the cubic
+  normal-form coefficient of the flip, which this module does not compute yet);
+* a Neimark-Sacker curve (``exp(+-i theta)``, ``kappa = cos theta``): the strong resonances 1:1
+  (``kappa = 1``), 1:2 (``kappa = -1``), 1:3 (``kappa = -1/2``) and 1:4 (``kappa = 0``), fold- and
+  flip-Neimark-Sacker, and Chenciner (a slot: it needs the first Lyapunov coefficient of the torus).
+
+The multipliers other than the curve's own (the one nearest ``+1`` or ``-1``, or the pair nearest
+``exp(+-i theta)``) enter as products ``prod (mu - 1)``, ``prod (mu + 1)`` and ``prod_{i<j} (mu_i mu_j -
+1)``, real for a real matrix.  A sign change between two curve points is located on the curve (the curve's
+own corrector on the hyperplanes across the chord between them) by the Illinois variant of regula falsi,
+to ``tol`` in the two parameters; a location that does not converge is left bracketed between the two
+points.  A zero of ``prod (mu_i mu_j - 1)`` at a real pair (a neutral saddle among the other multipliers)
+is not a bifurcation and is dropped.
+
+References
+----------
+Kuznetsov (2004), *Elements of Applied Bifurcation Theory*, 3rd ed., Springer: section 9.1 (the
+codimension-two bifurcations of maps), section 10.3 (their test functions along fold, flip and
+Neimark-Sacker curves).  Govaerts (2000), *Numerical Methods for Bifurcations of Dynamical Equilibria*, SIAM.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from saltation.branches.branch import (
+    CodimensionTwoKind,
+    SpecialPoint,
+    SpecialPointKind,
+    SpecialPointStatus,
+)
+from saltation.errors import SaltationError
+
+_log = logging.getLogger(__name__)
+
+_C2 = CodimensionTwoKind
+
+
+@dataclass
+class CurvePoint:
+    """What a test function reads at a point of a curve.
+
+    Attributes
+    ----------
+    z : ndarray
+        The curve's unknowns and its parameter, ``(x0 or nodes, first parameter, extras, second parameter)``.
+    multipliers : ndarray
+        The orbit's multipliers.
+    monodromy : ndarray
+        Its monodromy matrix.
+    kappa : float or None
+        On a Neimark-Sacker curve: ``cos theta`` (the curve's unknown).
+    others : ndarray
+        The multipliers without the curve's own (the one nearest ``+1`` or ``-1``, the pair of ``kappa``).
+    """
+
+    z: np.ndarray
+    multipliers: np.ndarray
+    monodromy: np.ndarray
+    kappa: float | None
+    others: np.ndarray
+
+
+@dataclass(frozen=True)
+class TestFunction:
+    """A codimension-two point's test function along a curve.
+
+    Attributes
+    ----------
+    name : CodimensionTwoKind
+        The point it finds.
+    meets : str
+        The kind of special point the curve meets there (the second of its ``sides``).
+    value : callable or None
+        ``(curve, point, reference) -> float`` (``reference`` the previous point's fold vectors ``(q, p)``, which
+        orient this point's, or None; the cusp's returns ``(value, (q, p))``);
+        None: a slot whose test function is not computed yet (the normal-form coefficients it needs).
+    circle_only : bool
+        On a Neimark-Sacker curve: only between two points whose pair lies on the unit circle (``|kappa| < 1``).
+    """
+
+    name: CodimensionTwoKind
+    meets: str
+    value: Callable | None
+    circle_only: bool = False
+
+
+def _prod_minus(others: np.ndarray, target: float) -> float:
+    """``prod (mu - target)`` over the other multipliers (real: they come in conjugate pairs)."""
+    return float(np.real(np.prod(others - target))) if others.size else 1.0
+
+
+def _prod_pairs(others: np.ndarray) -> float:
+    """``prod_{i<j} (mu_i mu_j - 1)``: zero where two of the other multipliers have product 1."""
+    out = 1.0 + 0.0j
+    for i in range(len(others)):
+        for j in range(i + 1, len(others)):
+            out *= others[i] * others[j] - 1.0
+    return float(np.real(out))
+
+
+def fold_eigenvectors(M: np.ndarray, reference: tuple[np.ndarray, np.ndarray] | None = None
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Unit null vectors of a fold: ``M q = q``, ``p^T M = p^T``, ``|q| = |p| = 1``.
+
+    Parameters
+    ----------
+    M : ndarray, shape (n, n)
+        The monodromy at a fold.
+    reference : (ndarray, ndarray), optional
+        ``(q, p)`` of a neighbouring point of the curve: each is oriented along its own (``q . q_ref >= 0``,
+        ``p . p_ref >= 0``); without it, ``p . q >= 0``.
+
+    Returns
+    -------
+    q, p : ndarray, shape (n,)
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the singular value decomposition does not converge.
+    """
+    n = M.shape[0]
+    U, _, Vt = np.linalg.svd(M - np.eye(n))
+    q, p = Vt[-1].copy(), U[:, -1].copy()
+    if reference is not None:
+        q = q if q @ reference[0] >= 0 else -q
+        p = p if p @ reference[1] >= 0 else -p
+    elif p @ q < 0:
+        p = -p
+    return q, p
+
+
+def cusp_coefficient(curve, point: CurvePoint, reference: tuple[np.ndarray, np.ndarray] | None = None, *,
+                     h: float = 1e-4) -> tuple[float, tuple[np.ndarray, np.ndarray]]:
+    """The cusp's test function: ``<p, B(q, q)>`` at a fold of the period map, with unit ``p`` and ``q``.
+
+    The quadratic normal-form coefficient of the fold is ``a = <p, B(q, q)> / (2 <p, q>)`` (the map reads
+    ``y -> y + a y^2 + ...`` on its centre manifold); the test function leaves out the factor ``1 / (2 <p,
+    q>)``, which passes through infinity where ``<p, q>`` vanishes (a 1:1 resonance, a Jordan block of the
+    multiplier 1), so that it changes sign at a cusp only; ``p`` and ``q`` are oriented along the curve.
+    ``B(q, q)``, the second derivative of the period map along ``q``, is the central difference of the
+    monodromy along ``q``: ``(M(x + d q) - M(x - d q)) q / (2 d)``, ``d = h (1 + |x|)``; its error is
+    ``O(d^2)`` times the third derivative of the period map plus the integration error divided by ``d``.
+
+    Parameters
+    ----------
+    curve
+        The fold curve's problem (:class:`~saltation.special_points.loci.MultiplierCurve`): its ``monodromy``,
+        ``period_at`` and parameters.
+    point : CurvePoint
+        A point of the curve.
+    reference : (ndarray, ndarray), optional
+        ``(q, p)`` of the previous point, which orient these.
+    h : float
+        Relative step of the central difference.
+
+    Returns
+    -------
+    value : float
+        ``<p, B(q, q)>``.
+    vectors : (ndarray, ndarray)
+        The oriented ``(q, p)``.
+
+    Raises
+    ------
+    SaltationError
+        If a run fails.
+    """
+    n = curve.system.n
+    z = point.z
+    x0 = np.asarray(z[:n], dtype=float)
+    p_all = _parameters(curve, z)
+    T = curve.period_at(z[:-1], p_all)
+    q, p = fold_eigenvectors(point.monodromy, reference)
+    d = h * (1.0 + float(np.linalg.norm(x0)))
+    B = (curve.monodromy(x0 + d * q, T, p_all) @ q - curve.monodromy(x0 - d * q, T, p_all) @ q) / (2.0 * d)
+    return float(p @ B), (q, p)
+
+
+def _parameters(curve, z: np.ndarray) -> np.ndarray:
+    """Every parameter's value at a curve point ``z = (u, lam)``."""
+    return curve.parameters_at(float(z[-1]), z[:-1])
+
+
+def _cusp(curve, point: CurvePoint, reference):
+    return cusp_coefficient(curve, point, reference)
+
+
+#: The test functions of each curve's kind.
+TESTS: dict[SpecialPointKind, tuple[TestFunction, ...]] = {
+    SpecialPointKind.FOLD: (
+        TestFunction(_C2.CUSP, "fold", _cusp),
+        TestFunction(_C2.STRONG_RESONANCE_1_1, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0)),
+        TestFunction(_C2.FOLD_FLIP, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0)),
+        TestFunction(_C2.FOLD_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
+    ),
+    SpecialPointKind.PERIOD_DOUBLING: (
+        TestFunction(_C2.FOLD_FLIP, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0)),
+        TestFunction(_C2.STRONG_RESONANCE_1_2, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0)),
+        TestFunction(_C2.FLIP_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
+        # slot: the cubic normal-form coefficient of the flip changes sign (not computed yet)
+        TestFunction(_C2.GENERALIZED_PERIOD_DOUBLING, "period_doubling", None),
+    ),
+    SpecialPointKind.NEIMARK_SACKER: (
+        TestFunction(_C2.STRONG_RESONANCE_1_1, "fold", lambda c, pt, r: pt.kappa - 1.0),
+        TestFunction(_C2.STRONG_RESONANCE_1_2, "period_doubling", lambda c, pt, r: pt.kappa + 1.0),
+        TestFunction(_C2.STRONG_RESONANCE_1_3, "neimark_sacker", lambda c, pt, r: pt.kappa + 0.5, circle_only=True),
+        TestFunction(_C2.STRONG_RESONANCE_1_4, "neimark_sacker", lambda c, pt, r: pt.kappa, circle_only=True),
+        TestFunction(_C2.FOLD_NEIMARK_SACKER, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0), circle_only=True),
+        TestFunction(_C2.FLIP_NEIMARK_SACKER, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0),
+                     circle_only=True),
+        # slot: the first Lyapunov coefficient of the torus changes sign (not computed yet)
+        TestFunction(_C2.CHENCINER, "neimark_sacker", None, circle_only=True),
+    ),
+}
+
+
+def others_of(multipliers: np.ndarray, kind: SpecialPointKind, kappa: float | None) -> np.ndarray:
+    """The multipliers without the curve's own: the one nearest ``+1`` (fold) or ``-1`` (period doubling), or
+    the two nearest the pair of ``kappa`` (Neimark-Sacker: ``kappa +- i sqrt(1 - kappa^2)``, or the real pair
+    ``kappa +- sqrt(kappa^2 - 1)`` of a neutral saddle).
+
+    Parameters
+    ----------
+    multipliers : ndarray
+        The orbit's multipliers.
+    kind : SpecialPointKind
+        FOLD, PERIOD_DOUBLING or NEIMARK_SACKER.
+    kappa : float or None
+        The Neimark-Sacker curve's ``kappa``.
+
+    Returns
+    -------
+    ndarray
+        The other multipliers.
+    """
+    mu = np.asarray(multipliers, dtype=complex)
+    if kind is SpecialPointKind.NEIMARK_SACKER:
+        root = np.sqrt(complex(kappa * kappa - 1.0))
+        own = [kappa + root, kappa - root]
+    else:
+        own = [1.0 if kind is SpecialPointKind.FOLD else -1.0]
+    keep = np.ones(len(mu), dtype=bool)
+    for target in own:
+        free = np.flatnonzero(keep)
+        keep[free[np.argmin(np.abs(mu[free] - target))]] = False
+    return mu[keep]
+
+
+@dataclass
+class _Evaluated:
+    """A curve point with its test values (None where a slot) and the fold's ``(q, p)``."""
+
+    point: CurvePoint
+    values: list[float | None]
+    q: tuple[np.ndarray, np.ndarray] | None = None
+
+
+class CodimensionTwoSearch:
+    """Test functions along a fold, period-doubling or Neimark-Sacker curve, and the location of their zeros.
+
+    Parameters
+    ----------
+    curve
+        The curve's problem (:class:`~saltation.special_points.loci.MultiplierCurve` or
+        :class:`~saltation.special_points.loci.NeimarkSackerCurve`).
+    kind : SpecialPointKind
+        FOLD, PERIOD_DOUBLING or NEIMARK_SACKER.
+    corrector : Corrector
+        The curve's corrector (:class:`~saltation.branches.corrector.Corrector`).
+    tol : float
+        Location tolerance in the two parameters.
+    max_iter : int
+        Largest number of corrected points per location.
+    """
+
+    def __init__(self, curve, kind: SpecialPointKind, corrector, *, tol: float = 1e-8, max_iter: int = 30):
+        self.curve = curve
+        self.kind = kind
+        self.corrector = corrector
+        self.tests = TESTS[kind]
+        self.tol = float(tol)
+        self.max_iter = int(max_iter)
+
+    # -- one point --------------------------------------------------------------------------------
+    def point(self, z: np.ndarray, multipliers: np.ndarray, monodromy: np.ndarray) -> CurvePoint:
+        """A curve point as the test functions read it.
+
+        Parameters
+        ----------
+        z : ndarray
+            ``(u, lam)`` in the curve's layout.
+        multipliers, monodromy : ndarray
+            The orbit's.
+
+        Returns
+        -------
+        CurvePoint
+        """
+        kappa = float(z[-2]) if self.kind is SpecialPointKind.NEIMARK_SACKER else None
+        return CurvePoint(z=np.asarray(z, dtype=float), multipliers=np.asarray(multipliers),
+                          monodromy=np.asarray(monodromy), kappa=kappa,
+                          others=others_of(multipliers, self.kind, kappa))
+
+    def evaluate(self, point: CurvePoint, reference: np.ndarray | None) -> _Evaluated:
+        """Every test function at a point (None for slots, and where one fails: a run, a Jordan block).
+
+        Parameters
+        ----------
+        point : CurvePoint
+        reference : (ndarray, ndarray) or None
+            Orients the fold's ``q`` and ``p``.
+
+        Returns
+        -------
+        _Evaluated
+        """
+        values, q = [], None
+        for test in self.tests:
+            if test.value is None:
+                values.append(None)
+                continue
+            try:
+                v = test.value(self.curve, point, reference)
+            except (SaltationError, np.linalg.LinAlgError) as exc:
+                _log.debug("%s test function failed at %s: %s", test.name.value, point.z[-1], exc)
+                values.append(None)
+                continue
+            if isinstance(v, tuple):
+                v, q = v
+            values.append(float(v))
+        return _Evaluated(point, values, q)
+
+    # -- along the curve --------------------------------------------------------------------------
+    def search(self, zs: Sequence[np.ndarray], summaries: Sequence) -> list[tuple[int, SpecialPoint]]:
+        """The codimension-two points between consecutive curve points.
+
+        Parameters
+        ----------
+        zs : sequence of ndarray
+            The curve's points ``(u, lam)`` in the curve's layout, in order along it.
+        summaries : sequence of BranchPoint
+            Their records (multipliers, monodromy), in the same order.
+
+        Returns
+        -------
+        list of (int, SpecialPoint)
+            ``(index, point)``: the point lies between curve points ``index`` and ``index + 1``.
+        """
+        evaluated: list[_Evaluated] = []
+        q = None
+        for z, bp in zip(zs, summaries):
+            e = self.evaluate(self.point(z, bp.multipliers, bp.monodromy), q)
+            q = e.q if e.q is not None else q
+            evaluated.append(e)
+        found = []
+        for a in range(len(evaluated) - 1):
+            ea, eb = evaluated[a], evaluated[a + 1]
+            for k, test in enumerate(self.tests):
+                va, vb = ea.values[k], eb.values[k]
+                if va is None or vb is None or va * vb > 0 or (va == 0 and vb == 0):
+                    continue
+                if test.circle_only and not (abs(ea.point.kappa) < 1 and abs(eb.point.kappa) < 1):
+                    continue
+                sp = self._locate(test, k, ea, eb, a, summaries[a])
+                if sp is not None:
+                    found.append((a, sp))
+        return found
+
+    def _corrected(self, za: np.ndarray, zb: np.ndarray, s: float) -> tuple[np.ndarray, CurvePoint]:
+        """The curve's point on the hyperplane across the chord ``za -> zb`` at ``za + s (zb - za)``."""
+        chord = zb - za
+        normal = chord / np.linalg.norm(chord)
+        sol = self.corrector.solve_bordered(za + s * chord, normal)
+        bp = sol.summary
+        return sol.z, self.point(sol.z, bp.multipliers, bp.monodromy)
+
+    def _locate(self, test: TestFunction, k: int, ea: _Evaluated, eb: _Evaluated, index: int, near
+                ) -> SpecialPoint | None:
+        """A sign change of ``test`` between two curve points, located by Illinois on the chord's hyperplanes."""
+        curve = self.curve
+        za, zb = ea.point.z, eb.point.z
+        first = curve.n_base  # the first parameter's place in z
+        params = lambda z: np.array([z[first], z[-1]])
+        reborder = getattr(curve, "reborder_at", None)
+        if reborder is not None:
+            reborder(za)
+        s_lo, s_hi, f_lo, f_hi = 0.0, 1.0, ea.values[k], eb.values[k]
+        lo_z, hi_z = za, zb
+        q_ref = ea.q
+        status, side = SpecialPointStatus.BRACKETED, 0
+        best_z, best_point = None, None
+        try:
+            for _ in range(self.max_iter):
+                s = (s_lo * f_hi - s_hi * f_lo) / (f_hi - f_lo) if f_hi != f_lo else 0.5 * (s_lo + s_hi)
+                s = min(max(s, s_lo + 1e-3 * (s_hi - s_lo)), s_hi - 1e-3 * (s_hi - s_lo))
+                z, point = self._corrected(za, zb, s)
+                e = self.evaluate(point, q_ref)
+                f = e.values[k]
+                if f is None:
+                    break
+                best_z, best_point = z, point
+                if f == 0.0:
+                    lo_z = hi_z = z
+                    status = SpecialPointStatus.LOCATED
+                    break
+                if (f > 0) == (f_lo > 0):
+                    s_lo, f_lo, lo_z = s, f, z
+                    f_hi = f_hi * 0.5 if side == -1 else f_hi
+                    side = -1
+                else:
+                    s_hi, f_hi, hi_z = s, f, z
+                    f_lo = f_lo * 0.5 if side == 1 else f_lo
+                    side = 1
+                if np.max(np.abs(params(hi_z) - params(lo_z))) <= self.tol * (1.0 + np.max(np.abs(params(z)))):
+                    status = SpecialPointStatus.LOCATED
+                    break
+        except (SaltationError, np.linalg.LinAlgError) as exc:
+            _log.info("%s between curve points %d and %d not located: %s", test.name.value, index, index + 1, exc)
+        if best_point is None:
+            best_z, best_point = (za, ea.point) if abs(ea.values[k]) <= abs(eb.values[k]) else (zb, eb.point)
+        pairs = (_C2.FOLD_NEIMARK_SACKER, _C2.FLIP_NEIMARK_SACKER)
+        if (test.name in pairs and self.kind is not SpecialPointKind.NEIMARK_SACKER
+                and not _pair_on_circle(best_point.others)):
+            _log.info("%s test vanishes at a real pair with product 1 (a neutral saddle): not a bifurcation",
+                      test.name.value)
+            return None
+        if status is SpecialPointStatus.LOCATED:
+            where = params(best_z)
+            accuracy = float(np.max(np.abs(params(hi_z) - params(lo_z))))
+            if test.name is _C2.CUSP:  # the central difference's error, through the test function's slope
+                accuracy += self._cusp_error(best_point, q_ref, ea, eb, k)
+        else:
+            where, accuracy = params(best_z), float(np.max(np.abs(params(zb) - params(za))))
+        return _record(self.kind, test, where, accuracy, index, near, status,
+                       (float(params(lo_z)[0]), float(params(hi_z)[0])), best_point, curve)
+
+
+    def _cusp_error(self, point: CurvePoint, q_ref, ea: _Evaluated, eb: _Evaluated, k: int) -> float:
+        """The cusp's location error from that of its test function: ``4/3 |f(h) - f(h/2)|`` (the ``O(h^2)``
+        error of the central difference, estimated) over the test function's slope between the two points."""
+        first = self.curve.n_base
+        try:
+            f1 = cusp_coefficient(self.curve, point, q_ref)[0]
+            f2 = cusp_coefficient(self.curve, point, q_ref, h=0.5e-4)[0]
+        except SaltationError:
+            return float("inf")
+        za, zb = ea.point.z, eb.point.z
+        width = float(np.max(np.abs(np.array([zb[first] - za[first], zb[-1] - za[-1]]))))
+        slope = abs(eb.values[k] - ea.values[k]) / width if width > 0 else 0.0
+        return float("inf") if slope == 0 else 4.0 / 3.0 * abs(f1 - f2) / slope
+
+
+def _pair_on_circle(others: np.ndarray, tol: float = 1e-3) -> bool:
+    """Whether two of the multipliers are a complex pair on the unit circle (not a real pair with product 1)."""
+    for m in others:
+        if abs(m.imag) > tol and abs(abs(m) - 1.0) < tol:
+            return True
+    return False
+
+
+def _record(kind: SpecialPointKind, test: TestFunction, where: np.ndarray, accuracy: float, index: int, near,
+            status: SpecialPointStatus, bracket: tuple[float, float], point: CurvePoint, curve) -> SpecialPoint:
+    """The record of a located (or bracketed) codimension-two point."""
+    n = curve.system.n
+    name = test.name.value.replace("_", " ")
+    lo, hi = sorted(bracket)
+    return SpecialPoint(
+        kind=SpecialPointKind.CODIMENSION_TWO, parameter=float(where[0]), second_parameter=float(where[1]),
+        bracket=(lo, hi), accuracy=accuracy, index=int(index), state=np.array(point.z[:n]),
+        period=float(near.period), amplitude=float(near.amplitude), status=status,
+        sides=(kind.value, test.meets), codimension_two=test.name, multipliers=np.array(point.multipliers),
+        note=f"{name} on the {kind.value} curve (a zero of its test function, {status.value})",
+    )
+
+
+__all__ = [
+    "TESTS",
+    "CodimensionTwoSearch",
+    "CurvePoint",
+    "TestFunction",
+    "cusp_coefficient",
+    "fold_eigenvectors",
+    "others_of",
+]
