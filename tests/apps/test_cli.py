@@ -201,12 +201,12 @@ def test_failed_computation_is_one_line_exit_1(capsys, compiled):
 
 
 def test_newton_failure_is_one_line_exit_1(capsys, compiled, monkeypatch):
-    import saltation.orbits.shooting
+    import saltation.orbits.start
 
     def fail(*args, **kwargs):
         raise ConvergenceError("shooting (forward time) for 'trilinear' did not converge in 30 iterations", [1.0, 2.0])
 
-    monkeypatch.setattr(saltation.orbits.shooting, "find_periodic_orbit", fail)
+    monkeypatch.setattr(saltation.orbits.start, "find_periodic_orbit", fail)
     code, out, err = _run(capsys, "orbit", "trilinear", "--x0", "0.5,0.5", "--json")
     assert code == 1 and out == ""
     lines = err.strip().splitlines()

@@ -164,16 +164,16 @@ def _raise(exc: BaseException):
 
 
 def test_internal_error_is_one_line_exit_1(capsys, monkeypatch):
-    import saltation.orbits.shooting
+    import saltation.orbits.start
 
-    monkeypatch.setattr(saltation.orbits.shooting, "find_periodic_orbit", _raise(ZeroDivisionError("float division by zero")))
+    monkeypatch.setattr(saltation.orbits.start, "find_periodic_orbit", _raise(ZeroDivisionError("float division by zero")))
     code, out, err = _run(capsys, "orbit", "trilinear", "--x0", "0.5,0.5")
     assert code == 1 and out == ""
     assert err.strip().splitlines() == [
         "saltation: error: internal error: ZeroDivisionError: float division by zero "
         "(run with --debug for the traceback)"
     ]
-    monkeypatch.setattr(saltation.orbits.shooting, "find_periodic_orbit", _raise(KeyError()))
+    monkeypatch.setattr(saltation.orbits.start, "find_periodic_orbit", _raise(KeyError()))
     code, _, err = _run(capsys, "orbit", "trilinear", "--x0", "0.5,0.5")
     assert code == 1
     assert err.strip().splitlines() == ["saltation: error: internal error: KeyError (run with --debug for the traceback)"]
@@ -181,14 +181,14 @@ def test_internal_error_is_one_line_exit_1(capsys, monkeypatch):
 
 @pytest.mark.parametrize("where", ["before", "after"])
 def test_debug_lets_the_exception_through(capsys, monkeypatch, where):
-    import saltation.orbits.shooting
+    import saltation.orbits.start
 
     argv = ["orbit", "trilinear", "--x0", "0.5,0.5"]
     argv = ["--debug", *argv] if where == "before" else [*argv, "--debug"]
-    monkeypatch.setattr(saltation.orbits.shooting, "find_periodic_orbit", _raise(RuntimeError("a bug")))
+    monkeypatch.setattr(saltation.orbits.start, "find_periodic_orbit", _raise(RuntimeError("a bug")))
     with pytest.raises(RuntimeError, match="a bug"):
         cli.main(argv)
-    monkeypatch.setattr(saltation.orbits.shooting, "find_periodic_orbit",
+    monkeypatch.setattr(saltation.orbits.start, "find_periodic_orbit",
                         _raise(ConvergenceError("shooting did not converge", [1.0])))
     with pytest.raises(ConvergenceError):  # a failed computation too: --debug is for finding out why
         cli.main(argv)
@@ -206,13 +206,13 @@ def test_debug_is_documented(capsys):
 
 SCRIPT = """
 import sys
-import saltation.orbits.shooting
+import saltation.orbits.start
 from saltation.apps import cli
 
 def fail(*args, **kwargs):
     raise RuntimeError("a bug")
 
-saltation.orbits.shooting.find_periodic_orbit = fail
+saltation.orbits.start.find_periodic_orbit = fail
 sys.exit(cli.main(sys.argv[1:]))
 """
 
@@ -233,10 +233,10 @@ def test_no_traceback_reaches_the_user_without_debug(trilinear_flow):
 # -- a "periodic orbit" that is a stationary state ---------------------------------------------------------
 
 def test_stationary_state_error_is_one_line_exit_1(capsys, monkeypatch):
-    import saltation.orbits.shooting
+    import saltation.orbits.start
 
     message = "shooting converged to an equilibrium at [1.0, 0.0], not a periodic orbit"
-    monkeypatch.setattr(saltation.orbits.shooting, "find_periodic_orbit",
+    monkeypatch.setattr(saltation.orbits.start, "find_periodic_orbit",
                         _raise(StationaryStateError(message, [1.0, 0.0], 6.3)))
     code, out, err = _run(capsys, "orbit", "block_on_belt", "--x0", "2,0", "--period", "6.3")
     assert code == 1 and out == ""

@@ -91,6 +91,7 @@ MODULES = (
     "saltation.output.io",
     "saltation.model.regularize",
     "saltation.model.sides",
+    "saltation.model.contacts",
     "saltation.model.symmetry",
     "saltation.orbits.symmetry",
 )

@@ -5,6 +5,7 @@ Nothing here integrates; every other layer depends on this one.  Its modules:
 - :mod:`~saltation.model.system`: modes, switching surfaces, transitions and resets, written as sympy
   expressions (:class:`PiecewiseSystem`);
 - :mod:`~saltation.model.nonsmooth`: ``sign``, ``Abs``, ... in a field turned into modes and surfaces;
+- :mod:`~saltation.model.contacts`: impacts that stick, continued as the motion constrained to their surface;
 - :mod:`~saltation.model.sides`: each mode's field read on its own side of its surfaces (contact laws with
   fractional powers);
 - :mod:`~saltation.model.regularize`: the smoothed model the paper warns about;

@@ -40,6 +40,7 @@ from sympy.logic.boolalg import Boolean
 from sympy.printing.pycode import PythonCodePrinter
 
 from saltation.errors import InitialModeError, ModelError
+from saltation.model.contacts import Sticking, expand_sticking
 from saltation.model.nonsmooth import Expansion, expand_nonsmooth
 from saltation.model.symmetry import Symmetry, SymmetryMap, check_symmetry
 from saltation.model.sides import on_its_side
@@ -93,6 +94,11 @@ class Transition:
         Reset map ``x+ = g(t, x-, p)`` (impacts); identity when omitted.
     guard : sequence of relations, optional
         Conditions that must hold at the crossing for the transition to fire.
+    sticks : bool or sequence of expressions, optional
+        An impact that can leave no relative velocity (a plastic impact) continues as a motion
+        constrained to its moving surface until the contact force changes sign
+        (:mod:`saltation.model.contacts`); True takes the contact force along the one state the reset
+        changes, a sequence gives its direction, one expression per state.
     """
 
     source: str
@@ -101,6 +107,7 @@ class Transition:
     target: str
     reset: Sequence[Expr] | None = None
     guard: Sequence[Expr] = ()
+    sticks: bool | Sequence[Expr] = False
 
     @property
     def label(self) -> str:
@@ -566,7 +573,13 @@ class PiecewiseSystem(NamedParts):
                 raise ModelError(f"a mode's name must be a non-empty string, got {m.name!r}")
         #: where generated modes and surfaces came from (sign, Heaviside, Abs, Min, Max in a field)
         self.expansion = Expansion({}, {})
+        #: the stuck modes of impacts that stick (``Transition(..., sticks=True)``), by name
+        self.sticking: dict[str, Sticking] = {}
         if isinstance(surfaces, Mapping) and isinstance(transitions, Sequence) and not isinstance(transitions, str):
+            modes, surfaces, transitions, self.sticking = expand_sticking(
+                modes, dict(surfaces), transitions, lambda value, where: _sympify(value, self._symbols, where),
+                list(self.x), TIME, (Mode, Transition, Crossing),
+            )
             modes, surfaces, transitions, self.expansion = expand_nonsmooth(
                 modes, surfaces, transitions, lambda value, where: _sympify(value, self._symbols, where), set(self.x),
                 (Mode, Transition, Crossing),

@@ -11,6 +11,11 @@ Period-1 orbits impact once per forcing period ``T = 2 pi / omega`` at a phase
 with ``v+ = g T / 2`` and returns with ``-g T / 2``.  As ``A`` grows they lose
 stability in a period doubling (Holmes, J. Sound Vib. 84, 1982; Luck and
 Mehta, Phys. Rev. E 48, 1993).
+
+The impact sticks (``sticks=True``, :mod:`saltation.model.contacts`): an impact that leaves no relative
+velocity (``e = 0``) continues as the motion with the table, mode ``flight@table``, until the contact
+force ``g - A omega^2 sin(omega t)`` vanishes, at ``t_r = asin(g / (A omega^2)) / omega``, where the
+ball leaves (surface ``table@release``).
 """
 
 from __future__ import annotations
@@ -33,7 +38,8 @@ def bouncing_ball(**overrides: float) -> PiecewiseSystem:
         modes=[Mode("flight", ["v", "-g"])],
         surfaces={"table": "y - A*sin(omega*t)"},
         transitions=[
-            Transition("flight", "table", Crossing.FALLING, "flight", reset=["y", "(1 + e)*A*omega*cos(omega*t) - e*v"]),
+            Transition("flight", "table", Crossing.FALLING, "flight", reset=["y", "(1 + e)*A*omega*cos(omega*t) - e*v"],
+                       sticks=True),
         ],
         period="2*pi/omega",
     )
