@@ -44,7 +44,7 @@ SRC = REPO / "src"
 
 #: Gallery models, each a function below that returns ``(Figure, special points)``.
 MODELS = ("impact_oscillator", "impact_chaos", "bouncing_ball", "friction_oscillator", "relay_feedback", "buck_converter",
-          "two_mass_stops", "tilted_relay", "sliding_mode")
+          "two_mass_stops", "tilted_relay", "sliding_mode", "phase_response")
 
 _RESULTS: dict[str, dict] = {}
 
@@ -301,6 +301,34 @@ def figure_tilted_relay():
     ax2.set_title("sliding bifurcation curves in (v, kappa)")
     ax2.legend(fontsize="small")
     return fig, _records(branch)
+
+
+def figure_phase_response():
+    """The Izhikevich neuron's phase response curve (regular spiking, I = 10), from the spike, both components."""
+    import numpy as np
+
+    from saltation import Crossing, Flow, Mode, PiecewiseSystem, Transition, find_periodic_orbit, phase_response
+
+    neuron = PiecewiseSystem(
+        name="izhikevich",
+        states=["v", "u"],
+        parameters={"a": 0.02, "b": 0.2, "c": -65.0, "d": 8.0, "I": 10.0},
+        modes=[Mode("subthreshold", ["0.04*v**2 + 5*v + 140 - u + I", "a*(b*v - u)"])],
+        surfaces={"apex": "v - 30"},
+        transitions=[Transition("subthreshold", "apex", Crossing.RISING, "subthreshold", reset=["c", "u + d"])],
+    )
+    orbit = find_periodic_orbit(Flow(neuron), [-65.0, -5.0], period=40.0)
+    prc = phase_response(orbit, points=600)
+    since = np.mod(prc.phases - prc.event_phases[0], 1.0)  # the phase since the spike (its reset)
+    order = np.argsort(since)
+    fig, (ax1, ax2) = _two_panels()
+    for ax, j, unit in ((ax1, 0, "ms per mV"), (ax2, 1, "ms per unit of u")):
+        ax.plot(since[order], prc.values[order, j], "k-")
+        ax.axhline(0.0, color="0.7", linewidth=0.8)
+        ax.set_xlabel("phase since the spike (cycles)")
+        ax.set_ylabel(f"Z_{prc.state_names[j]} ({unit})")
+        ax.set_title(f"phase response to a kick of {prc.state_names[j]} (T = {prc.period:.2f} ms)")
+    return fig, []
 
 
 def compute(model: str) -> dict:

@@ -39,6 +39,8 @@ _HOMES: dict[str, tuple[str, ...]] = {
     "saltation.model.symmetry": ("Symmetry",),
     "saltation.model.system": ("Crossing", "Mode", "PiecewiseSystem", "Transition"),
     "saltation.orbits.lyapunov": ("LyapunovExponents", "lyapunov_exponents"),
+    "saltation.orbits.phase_response": ("PhaseResponse", "PhaseResponseSensitivity", "phase_response",
+                                        "phase_response_sensitivity"),
     "saltation.orbits.pseudo_equilibria": ("PseudoEquilibrium", "find_pseudo_equilibrium"),
     "saltation.orbits.records": ("PeriodicOrbit",),
     "saltation.orbits.single": ("ShootingProblem",),
@@ -67,9 +69,10 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Branch", "ChatteringError", "Continuation", "ContinuationSettings", "ConvergenceError", "Crossing", "InconsistentResultError", "EventKind", "Flow",
-    "InitialModeError", "IntegrationError", "LyapunovExponents", "Mode", "ModelError", "NoOrbitNearGuessError", "NonFiniteError", "PeriodicOrbit",
+    "InitialModeError", "IntegrationError", "LyapunovExponents", "Mode", "ModelError", "NoOrbitNearGuessError", "NonFiniteError", "PeriodicOrbit", "PhaseResponse", "PhaseResponseSensitivity",
     "PiecewiseSystem", "PseudoEquilibrium", "SaltationError", "ShootingProblem", "SlidingError", "SpecialPoint", "StartGuessError", "StationaryStateError", "SpecialPointKind",
     "Symmetry",
     "Status", "StepSizeError", "SweepStart", "SwitchingEvent", "Tolerances", "Trajectory", "Transition", "continue_branch",
-    "continue_orbit", "find_periodic_orbit", "find_pseudo_equilibrium", "lyapunov_exponents", "period_map", "simulate", "sweep",
+    "continue_orbit", "find_periodic_orbit", "find_pseudo_equilibrium", "lyapunov_exponents", "period_map", "phase_response",
+    "phase_response_sensitivity", "simulate", "sweep",
 ]

@@ -67,6 +67,7 @@ MODULES = (
     "saltation.orbits.conditions.joining",
     "saltation.orbits.start",
     "saltation.orbits.measures",
+    "saltation.orbits.phase_response",
     "saltation.progress",
     "saltation.branches.monitors",
     "saltation.special_points.continuation",

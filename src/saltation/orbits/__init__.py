@@ -18,6 +18,8 @@ Depends on the engine and the model.  Its modules:
 - :mod:`~saltation.orbits.boundary`: the one-sided monodromies at a boundary orbit, exact limits;
 - :mod:`~saltation.orbits.symmetry`: symmetric orbits by the half-period map;
 - :mod:`~saltation.orbits.lyapunov`: Lyapunov exponents;
+- :mod:`~saltation.orbits.phase_response`: phase response curves of autonomous orbits, the adjoint carried through
+  the events by the transposed saltation matrices, and their parameter derivatives;
 - :mod:`~saltation.orbits.measures`: scalar measures of an orbit (``max |x|``, ``norm``, an expression's largest
   value) that branches record and figures plot;
 - :mod:`~saltation.orbits.on_surface`: orbits that lie on a switching surface;
