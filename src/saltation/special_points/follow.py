@@ -468,8 +468,8 @@ def switch_branches(
       pseudo-equilibria on the surface from a mode's equilibria, the mode's equilibria from a branch of
       pseudo-equilibria.  The boundary equilibria are those recorded on the branch
       (:func:`follow_branch` records them).
-    * At a period doubling of a forced branch (single shooting), only when ``kinds`` names it: the
-      branch of period-2 orbits
+    * At a period doubling of a branch of periodic orbits (single shooting; forced, or autonomous with
+      the doubled period an unknown), only when ``kinds`` names it: the branch of period-2 orbits
       (:func:`~saltation.special_points.branch_switching.follow_period_doubled_branch`).
 
     A branch that cannot start (no new orbit or equilibrium is found there) is left out.
@@ -502,7 +502,7 @@ def switch_branches(
     if problem.single_shooting is None:
         return []
     others = _asymmetric_branches(problem, branch, settings) if SpecialPointKind.SYMMETRY_BREAKING in kinds else []
-    if SpecialPointKind.PERIOD_DOUBLING in kinds and not problem.autonomous:
+    if SpecialPointKind.PERIOD_DOUBLING in kinds:
         others += _period_doubled_branches(problem, branch, settings)
     return others
 
@@ -554,7 +554,7 @@ def _asymmetric_branches(problem: ShootingProblem, branch: Branch, settings: Con
 
 
 def _period_doubled_branches(problem: ShootingProblem, branch: Branch, settings: ContinuationSettings) -> list[Branch]:
-    """From each period doubling of a forced branch, the branch of period-2 orbits born there."""
+    """From each period doubling of a branch of periodic orbits, the branch of period-2 orbits born there."""
     others = []
     for sp in branch.special_points:
         if sp.kind is not SpecialPointKind.PERIOD_DOUBLING:
@@ -668,6 +668,7 @@ def follow_branch(
     progress: Progress | None = None,
     switch: bool = True,
     through_fold: bool = True,
+    switch_at: Sequence[SpecialPointKind] = SWITCHES,
 ) -> FollowedBranch:
     """Follow a branch one way from a start point, and the branches that go on from it.
 
@@ -675,7 +676,8 @@ def follow_branch(
        (:class:`~saltation.special_points.continuation.Continuation`).
     2. On a branch of equilibria its boundary equilibria are located and recorded
        (:func:`boundary_equilibria_on`).
-    3. With ``switch``, the branches born at its special points are followed (:func:`switch_branches`).
+    3. With ``switch``, the branches born at its special points of the kinds ``switch_at`` are followed
+       (:func:`switch_branches`).
     4. Where the run stops at the minimum step: at a special point whose orbit lies on a switching
        surface all round the branch ends there; otherwise, with ``through_fold``, a forward-time
        single-shooting branch is followed through the discontinuous fold
@@ -699,6 +701,9 @@ def follow_branch(
         Follow the branches born at its special points.
     through_fold : bool
         Follow the branch beyond a discontinuous fold.
+    switch_at : sequence of SpecialPointKind
+        The special points to switch branches at (:data:`SWITCHES`: symmetry breakings and boundary
+        equilibria; add ``SpecialPointKind.PERIOD_DOUBLING`` for the period-2 branches).
 
     Returns
     -------
@@ -726,7 +731,7 @@ def follow_branch(
         branch.special_points = sorted([*branch.special_points, *found], key=lambda sp: sp.index)
     followed = FollowedBranch(branch, cont, boundary_equilibria=found)
     if switch:
-        followed.switched = switch_branches(problem, branch, settings=settings)
+        followed.switched = switch_branches(problem, branch, settings=settings, kinds=switch_at)
     if branch.stop_reason is not StopReason.MIN_STEP:
         return followed
     ended = [sp for sp in branch.special_points if sp.index >= len(branch.points) - 1 and sp.limits == Limits.ON_SURFACE]

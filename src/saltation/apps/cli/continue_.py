@@ -50,7 +50,8 @@ from saltation.apps.cli.text import (
 
 def cmd_continue(args: argparse.Namespace) -> int:
     """``saltation continue``: follow one branch of a shipped model and write its data and plot."""
-    from saltation.special_points.follow import follow_branch
+    from saltation.kinds import SpecialPointKind
+    from saltation.special_points.follow import SWITCHES, follow_branch
 
     system, overrides, settings = _checked(args)
     start, stop = float(args.start), float(args.stop)
@@ -61,8 +62,9 @@ def cmd_continue(args: argparse.Namespace) -> int:
     counter = point_counter(update, f"{args.model}: {args.param}")
     try:
         problem, u0 = branch_start(args, flow, overrides, p, x0, start)
+        switch_at = (*SWITCHES, SpecialPointKind.PERIOD_DOUBLING) if args.period_doubled else SWITCHES
         followed = follow_branch(problem, u0, start, settings=settings, direction=1 if stop > start else -1,
-                                 progress=counter)
+                                 progress=counter, switch_at=switch_at)
     finally:
         close()
     _write(args, system, followed.branches, _end_note(followed, args.param))
@@ -84,6 +86,9 @@ def _checked(args: argparse.Namespace):
                        monitors=parse_monitor_options(args, system))
     if args.equilibrium is not None:
         check_equilibrium_option(args, system)
+    if args.period_doubled and args.segments != 1:
+        raise UsageError(f"--period-doubled follows the period-2 branches by single shooting: drop --segments "
+                         f"{args.segments}")
     check_mode0(args, system)
     overrides[args.param] = start
     for flag, value in (("--to", stop), ("--from", start)):
@@ -162,6 +167,9 @@ def add_parser(sub) -> None:
     p.add_argument("--equilibrium", metavar="MODE", help="continue an equilibrium of this mode instead of periodic orbits "
                    "(autonomous models); sliding:SURFACE continues the pseudo-equilibria of the sliding motion on "
                    "that surface")
+    p.add_argument("--period-doubled", action="store_true",
+                   help="also follow the branch of period-2 orbits born at each period doubling (forced models: "
+                   "over two forcing periods; autonomous ones: the doubled period an unknown)")
     add_out(p)
     add_step_options(p)
     add_segments(p, "; the branch's multipliers come from the segments' matrices (periodic Schur decomposition)")

@@ -418,7 +418,8 @@ def check_equilibrium_option(args: argparse.Namespace, system) -> None:
         raise UsageError(f"unknown mode {args.equilibrium!r} in --equilibrium for model {system.name!r}; modes "
                          f"are {', '.join(system.mode_names)} (or sliding:SURFACE for pseudo-equilibria)") from None
     for flag, given in (("--period", args.period is not None), ("--backward", args.backward),
-                        ("--segments", args.segments != 1), ("--mode0", getattr(args, "mode0", None) is not None)):
+                        ("--segments", args.segments != 1), ("--mode0", getattr(args, "mode0", None) is not None),
+                        ("--period-doubled", getattr(args, "period_doubled", False))):
         if given:
             raise UsageError(f"{flag} does not apply to --equilibrium (an equilibrium has no period and no "
                              "direction of time)")
