@@ -113,7 +113,7 @@ class NormalFormCoefficient:
     eigenvector: np.ndarray = field(repr=False)
     coordinates: str = "state"
     basis: np.ndarray | None = field(default=None, repr=False)
-    state: np.ndarray = field(default=None, repr=False)
+    state: np.ndarray | None = field(default=None, repr=False)
     t0: float = 0.0
     step: float = float("nan")
 

@@ -488,7 +488,9 @@ def period_map_derivatives(orbit, *, rtol: float = RTOL, atol: float = ATOL) -> 
     a forced orbit's stroboscopic map, an autonomous orbit's time-``T`` map.  Its first derivative is the
     monodromy matrix (checked against the engine's, which carries the saltation matrices of eq. 9); the
     second derivative composes the second variational equation of each segment with the second derivatives
-    of the event times, of the resets and of the surfaces (see the module's description).
+    of the event times, of the resets and of the surfaces (see the module's description).  Where the orbit's
+    state lies on an event (a surface crossed, or a sliding motion started, at ``t0``), the map is not smooth
+    there: its derivatives are those of the side the run takes, as the monodromy's are.
 
     Parameters
     ----------
