@@ -189,6 +189,39 @@ def test_a_monodromy_that_disagrees_is_refused():
         period_map_derivatives(wrong)
 
 
+def test_an_orbit_that_starts_in_a_sliding_motion():
+    """The friction oscillator's orbit started inside its stick phase: the run starts its sliding motion at
+    once (an event at t0, whose saltation matrix projects onto the surface), and the derivatives are those of
+    that side, as the engine's monodromy is; the criticality's expansion moves off the sliding motion."""
+    from saltation.orbits.criticality import _ReturnMap
+
+    orbit = ORBITS["friction_oscillator"]()
+    flow, p = orbit.problem.flow, orbit.parameters
+    slide, leave = orbit.events[:2]
+    t_mid = 0.5 * (slide.t + leave.t)
+    mid = flow.run(orbit.state0, orbit.t0, t_mid, p, mode0=orbit.mode0)
+    assert mid.sliding_at_end
+    traj = flow.run(mid.x1, t_mid, t_mid + orbit.period, p, mode0=mid.mode1, variational=True)
+    assert traj.events[0].t == t_mid and traj.events[0].kind.name == "SLIDING_START"
+    moved = replace(orbit, trajectory=traj, state0=mid.x1, t0=t_mid, monodromy=traj.monodromy, mode0=mid.mode1)
+    first, second = period_map_derivatives(moved)
+    np.testing.assert_allclose(first, traj.monodromy, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(second[1], 0.0, atol=1e-12)  # v stays on the belt's speed: its map is constant
+    expanded = _ReturnMap(moved)
+    assert not expanded.trajectory.sliding_at_end and expanded.trajectory.events[0].t > expanded.t0
+    np.testing.assert_allclose(np.sort(np.linalg.eigvals(expanded.jets()[0]).real),
+                               np.sort(orbit.multipliers.real), atol=1e-9)
+
+
+def test_a_model_without_expressions_is_refused():
+    orbit = ORBITS["impact_oscillator"]()
+    compiled = replace(orbit, trajectory=replace(orbit.trajectory, system=object()))
+    with pytest.raises(ModelError, match="compiled callables"):
+        period_map_derivatives(compiled)
+    with pytest.raises(ModelError, match="compiled callables"):
+        criticality(compiled)
+
+
 @pytest.fixture(scope="module")
 def straight_to_circle():
     """A straight flow ``x' = v`` and the circle ``|x| = 1`` it reaches; and the closed form of the second
@@ -262,6 +295,10 @@ def test_supercritical_period_doubling_of_the_bouncing_ball():
     assert result.criticality is Criticality.SUPERCRITICAL
     assert result.kind is SpecialPointKind.PERIOD_DOUBLING and result.multiplier == -1
     assert 0 < result.accuracy < 1e-4 * result.coefficient
+    # from the problem the branch was computed with, and from the index of the point, the same
+    again = special_point_criticality(branch.problem, pd)
+    assert abs(again.coefficient - result.coefficient) <= result.accuracy
+    assert special_point_criticality(branch, branch.special_points.index(pd)).criticality is Criticality.SUPERCRITICAL
     doubled = follow_period_doubled_branch(branch, pd, settings=ContinuationSettings(ds=5e-4, ds_max=5e-4, max_points=8,
                                                                                     bounds=(0.37, 0.38)))
     assert all(point.parameter > pd.parameter for point in doubled.points[1:])
