@@ -52,6 +52,7 @@ from saltation.orbits.second_order import (
     _segments,
     _symbolic_model,
     extended_jets,
+    section_basis,
     section_map_derivatives,
 )
 
@@ -157,6 +158,7 @@ class _ReturnMap:
             key = _segments(self.trajectory)[0].field
             F = _field_at(self.system, key, np.concatenate([[self.t0], self.state]), self.p)[0][1:]
             self.normal = F / float(np.linalg.norm(F))
+            self.basis = section_basis(self.normal)
 
     def _run(self, x: np.ndarray, t0: float, span: float, mode0: str, variational: bool = True) -> Trajectory:
         return self.flow.run(x, t0, t0 + span, self.p, mode0=mode0, variational=variational,
@@ -195,7 +197,6 @@ class _ReturnMap:
                 raise _SequenceChanged(f"the run from {x} has other events than the orbit")
         if self.autonomous:
             d = section_map_derivatives(traj, self.p, traj.monodromy, normal=self.normal, point=self.state)
-            self.basis = d.basis
             return d.first, d.second
         J, K, _, _ = extended_jets(traj, self.p)
         _check_first_derivative(J[1:, 1:], traj.monodromy, f"the period map of {self.system.name!r}")
@@ -206,12 +207,13 @@ def _parse_kind(kind) -> SpecialPointKind | None:
     if kind is None:
         return None
     try:
-        kind = SpecialPointKind(kind) if not isinstance(kind, SpecialPointKind) else kind
+        parsed = kind if isinstance(kind, SpecialPointKind) else SpecialPointKind(kind)
     except ValueError:
-        kind = None
-    if kind not in (SpecialPointKind.PERIOD_DOUBLING, SpecialPointKind.NEIMARK_SACKER):
-        raise ModelError(f"criticality is defined for period_doubling and neimark_sacker, got {kind!r}")
-    return kind
+        parsed = None
+    if parsed not in (SpecialPointKind.PERIOD_DOUBLING, SpecialPointKind.NEIMARK_SACKER):
+        raise ModelError(f"criticality is defined for period_doubling and neimark_sacker, got "
+                         f"{getattr(kind, 'value', kind)!r}")
+    return parsed
 
 
 def _eig(A: np.ndarray, target: complex) -> tuple[complex, np.ndarray, np.ndarray, float]:
