@@ -156,9 +156,22 @@ class StopReason(enum.Enum):
     MONITOR = "a monitor that stops the branch reached its value"
 
 
+class Criticality(str, enum.Enum):
+    """What a period doubling or Neimark-Sacker bifurcation gives birth to, by the sign of its normal-form
+    coefficient (:func:`saltation.orbits.criticality.criticality`); the value is the name used in files."""
+
+    #: a stable period-2 orbit or invariant circle (torus), on the side where the orbit is unstable
+    SUPERCRITICAL = "supercritical"
+    #: an unstable period-2 orbit or invariant circle, on the side where the orbit is stable
+    SUBCRITICAL = "subcritical"
+    #: the coefficient is zero within its accuracy: a higher-order term decides (a codimension-two point)
+    DEGENERATE = "degenerate"
+
+
 class BranchKind(enum.Enum):
     PERIODIC = "periodic"
     EQUILIBRIUM = "equilibrium"
 
 
-__all__ = ["NONSMOOTH_KINDS", "BranchKind", "CodimensionTwoKind", "Limits", "SpecialPointKind", "SpecialPointStatus", "StopReason"]
+__all__ = ["NONSMOOTH_KINDS", "BranchKind", "CodimensionTwoKind", "Criticality", "Limits", "SpecialPointKind",
+           "SpecialPointStatus", "StopReason"]

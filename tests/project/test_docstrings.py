@@ -68,6 +68,8 @@ MODULES = (
     "saltation.orbits.start",
     "saltation.orbits.measures",
     "saltation.orbits.phase_response",
+    "saltation.orbits.second_order",
+    "saltation.orbits.criticality",
     "saltation.progress",
     "saltation.branches.monitors",
     "saltation.special_points.continuation",
@@ -134,6 +136,7 @@ RAISES_EXEMPT = {
     "saltation.engine.buildtime.wall_seconds": "arithmetic on the given work",
     "saltation.engine.buildtime.probe_seconds": "a compile that fails gives None",
     "saltation.orbits.floquet.reciprocal": "array arithmetic on the given multipliers",
+    "saltation.orbits.second_order.compose": "array arithmetic on the given jets",
     "saltation.orbits.floquet.sort_multipliers": "sorts the given values",
     "saltation.orbits.floquet.trivial_multiplier_error": "array arithmetic on the given multipliers",
     "saltation.orbits.floquet.is_stable": "array arithmetic on the given multipliers",
@@ -163,6 +166,8 @@ RAISES_EXEMPT = {
 
 #: Callables whose algorithm comes from the literature: they cite it.
 REFERENCES_REQUIRED = (
+    "saltation.orbits.second_order.period_map_derivatives",
+    "saltation.orbits.criticality.criticality",
     "saltation.engine.flow.Flow.run",
     "saltation.engine.flow.Flow.transition_jump",
     "saltation.engine.flow.simulate",

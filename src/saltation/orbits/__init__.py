@@ -20,6 +20,9 @@ Depends on the engine and the model.  Its modules:
 - :mod:`~saltation.orbits.lyapunov`: Lyapunov exponents;
 - :mod:`~saltation.orbits.phase_response`: phase response curves of autonomous orbits, the adjoint carried through
   the events by the transposed saltation matrices, and their parameter derivatives;
+- :mod:`~saltation.orbits.second_order`: second derivatives of the period map, exact through the events;
+- :mod:`~saltation.orbits.criticality`: criticality of period doublings and Neimark-Sacker points, from the
+  period map's normal form;
 - :mod:`~saltation.orbits.measures`: scalar measures of an orbit (``max |x|``, ``norm``, an expression's largest
   value) that branches record and figures plot;
 - :mod:`~saltation.orbits.on_surface`: orbits that lie on a switching surface;
