@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -204,6 +204,59 @@ def _cusp(curve, point: CurvePoint, reference):
     return cusp_coefficient(curve, point, reference)
 
 
+def normal_form_coefficient(curve, point: CurvePoint, kind: SpecialPointKind) -> float:
+    """The cubic normal-form coefficient at a curve point: the flip's ``b`` (period-doubling curves) or the first
+    Lyapunov coefficient ``d`` (Neimark-Sacker curves), by :func:`saltation.orbits.criticality.criticality`.
+
+    The point's orbit is solved again from its state (Newton converges at once), at every parameter of the point.
+
+    Parameters
+    ----------
+    curve
+        The curve's problem (its flow, section time, parameters and period).
+    point : CurvePoint
+        A point of the curve.
+    kind : SpecialPointKind
+        ``period_doubling`` or ``neimark_sacker``.
+
+    Returns
+    -------
+    float
+        The coefficient; it changes sign at a generalised period doubling or a Chenciner point.
+
+    Raises
+    ------
+    SaltationError
+        If the orbit cannot be solved again, or as :func:`~saltation.orbits.criticality.criticality` (a strong
+        resonance, a change of the event sequence within the differences' steps).
+    """
+    from saltation.orbits.criticality import criticality
+    from saltation.orbits.start import find_periodic_orbit
+
+    n = curve.system.n
+    z = point.z
+    p_all = _parameters(curve, z)
+    T = curve.period_at(z[:-1], p_all)
+    orbit = find_periodic_orbit(curve.flow, np.asarray(z[:n], dtype=float),
+                                parameters=dict(zip(curve.system.parameter_names, map(float, p_all))),
+                                period=T if curve.autonomous else None, t0=curve.t0, backward=curve.backward)
+    return float(criticality(orbit, kind).coefficient)
+
+
+def _flip_coefficient(curve, point: CurvePoint, reference) -> float:
+    return normal_form_coefficient(curve, point, SpecialPointKind.PERIOD_DOUBLING)
+
+
+def _lyapunov_coefficient(curve, point: CurvePoint, reference) -> float:
+    return normal_form_coefficient(curve, point, SpecialPointKind.NEIMARK_SACKER)
+
+
+#: the test functions that need the cubic normal form (each point's orbit solved again and its second and third
+#: derivatives taken: a tenth of a second to seconds a point), computed when asked (``normal_forms=True``)
+NORMAL_FORM_TESTS = {CodimensionTwoKind.GENERALIZED_PERIOD_DOUBLING: _flip_coefficient,
+                     CodimensionTwoKind.CHENCINER: _lyapunov_coefficient}
+
+
 #: The test functions of each curve's kind.
 TESTS: dict[SpecialPointKind, tuple[TestFunction, ...]] = {
     SpecialPointKind.FOLD: (
@@ -216,7 +269,7 @@ TESTS: dict[SpecialPointKind, tuple[TestFunction, ...]] = {
         TestFunction(_C2.FOLD_FLIP, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0)),
         TestFunction(_C2.STRONG_RESONANCE_1_2, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0)),
         TestFunction(_C2.FLIP_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
-        # slot: the cubic normal-form coefficient of the flip changes sign (not computed yet)
+        # the cubic normal-form coefficient of the flip changes sign (with normal_forms=True)
         TestFunction(_C2.GENERALIZED_PERIOD_DOUBLING, "period_doubling", None),
     ),
     SpecialPointKind.NEIMARK_SACKER: (
@@ -227,7 +280,7 @@ TESTS: dict[SpecialPointKind, tuple[TestFunction, ...]] = {
         TestFunction(_C2.FOLD_NEIMARK_SACKER, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0), circle_only=True),
         TestFunction(_C2.FLIP_NEIMARK_SACKER, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0),
                      circle_only=True),
-        # slot: the first Lyapunov coefficient of the torus changes sign (not computed yet)
+        # the first Lyapunov coefficient of the torus changes sign (with normal_forms=True)
         TestFunction(_C2.CHENCINER, "neimark_sacker", None, circle_only=True),
     ),
 }
@@ -290,13 +343,18 @@ class CodimensionTwoSearch:
         Location tolerance in the two parameters.
     max_iter : int
         Largest number of corrected points per location.
+    normal_forms : bool
+        Also the tests that need the cubic normal form at every point (:data:`NORMAL_FORM_TESTS`: generalised
+        period doubling, Chenciner), which cost a tenth of a second to seconds a point.
     """
 
-    def __init__(self, curve, kind: SpecialPointKind, corrector, *, tol: float = 1e-8, max_iter: int = 30):
+    def __init__(self, curve, kind: SpecialPointKind, corrector, *, tol: float = 1e-8, max_iter: int = 30,
+                 normal_forms: bool = False):
         self.curve = curve
         self.kind = kind
         self.corrector = corrector
-        self.tests = TESTS[kind]
+        self.tests = tuple(replace(t, value=NORMAL_FORM_TESTS[t.name]) if normal_forms and t.value is None
+                           and t.name in NORMAL_FORM_TESTS else t for t in TESTS[kind])
         self.tol = float(tol)
         self.max_iter = int(max_iter)
 
@@ -407,7 +465,7 @@ class CodimensionTwoSearch:
         lo_z, hi_z = za, zb
         q_ref = ea.q
         status, side = SpecialPointStatus.BRACKETED, 0
-        best_z, best_point = None, None
+        best_z, best_point, f_best = None, None, None
         try:
             for _ in range(self.max_iter):
                 s = (s_lo * f_hi - s_hi * f_lo) / (f_hi - f_lo) if f_hi != f_lo else 0.5 * (s_lo + s_hi)
@@ -417,7 +475,7 @@ class CodimensionTwoSearch:
                 f = e.values[k]
                 if f is None:
                     break
-                best_z, best_point = z, point
+                best_z, best_point, f_best = z, point, f
                 if f == 0.0:
                     lo_z = hi_z = z
                     status = SpecialPointStatus.LOCATED
@@ -437,6 +495,12 @@ class CodimensionTwoSearch:
             _log.info("%s between curve points %d and %d not located: %s", test.name.value, index, index + 1, exc)
         if best_point is None:
             best_z, best_point = (za, ea.point) if abs(ea.values[k]) <= abs(eb.values[k]) else (zb, eb.point)
+        if f_best is not None and abs(f_best) > max(abs(ea.values[k]), abs(eb.values[k])):
+            # the test function grew where it changed sign: it passed through infinity (the cubic coefficient at a
+            # strong resonance), not through zero
+            _log.info("%s test changes sign through a pole between curve points %d and %d: not a bifurcation",
+                      test.name.value, index, index + 1)
+            return None
         pairs = (_C2.FOLD_NEIMARK_SACKER, _C2.FLIP_NEIMARK_SACKER)
         if (test.name in pairs and self.kind is not SpecialPointKind.NEIMARK_SACKER
                 and not _pair_on_circle(best_point.others)):
@@ -493,11 +557,13 @@ def _record(kind: SpecialPointKind, test: TestFunction, where: np.ndarray, accur
 
 
 __all__ = [
+    "NORMAL_FORM_TESTS",
     "TESTS",
     "CodimensionTwoSearch",
     "CurvePoint",
     "TestFunction",
     "cusp_coefficient",
+    "normal_form_coefficient",
     "fold_eigenvectors",
     "others_of",
 ]

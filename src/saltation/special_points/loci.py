@@ -433,6 +433,7 @@ def follow_locus(
     *,
     settings: ContinuationSettings | None = None,
     progress: Callable | None = None,
+    normal_forms: bool = False,
 ) -> Locus:
     """Continue a special point of a branch in a second parameter, in both directions.
 
@@ -454,6 +455,11 @@ def follow_locus(
         not detected).
     progress : callable, optional
         Called with each new curve point.
+    normal_forms : bool
+        On a period-doubling or Neimark-Sacker curve, also locate where its cubic normal-form coefficient
+        changes sign (generalised period doubling, Chenciner): the coefficient is computed at every curve point
+        (:func:`saltation.special_points.codimension_two.normal_form_coefficient`, a tenth of a second to
+        seconds a point).
 
     Returns
     -------
@@ -537,7 +543,7 @@ def follow_locus(
         locus.points = [replace(bp, curve_kind=SpecialPointKind.NEIMARK_SACKER if abs(z[-2]) < 1 else None)
                         for bp, z in zip(locus.points, joined(raw))]
     if isinstance(curve, (MultiplierCurve, NeimarkSackerCurve)):
-        search = CodimensionTwoSearch(curve, point.kind, Corrector(curve, settings))
+        search = CodimensionTwoSearch(curve, point.kind, Corrector(curve, settings), normal_forms=normal_forms)
         for index, sp in search.search(joined(raw), joined(summaries)):
             locus.special_points.append(sp)
         locus.special_points.sort(key=lambda sp: sp.index)
