@@ -242,3 +242,20 @@ def test_bad_requests_name_the_problem(trilinear_branch, tmp_path):
                                backward=True)
     with pytest.raises(ModelError, match="backward time"):
         sensitivities(backward, trilinear_branch.special_points[i])
+
+
+def test_multiple_shooting_gives_the_same_sensitivities(trilinear_branch):
+    """The defining system by multiple shooting (three segments, the condition read from the segment that holds
+    its instant) against single shooting's, at the corner and at the fold."""
+    import copy
+
+    from saltation.orbits.shooting import MultipleShootingProblem
+
+    for kind in ("discontinuous_fold", "fold"):
+        point = trilinear_branch.special_points[point_of(trilinear_branch, kind)]
+        single = sensitivities(trilinear_branch.problem, point, parameters=["f0", "c"])
+        multiple = sensitivities(MultipleShootingProblem(copy.copy(trilinear_branch.problem), 3), point,
+                                 parameters=["f0", "c"])
+        for q in ("f0", "c"):
+            assert multiple.d_parameter[q] == pytest.approx(single.d_parameter[q],
+                                                            abs=single.accuracy[q] + multiple.accuracy[q] + 1e-12)
