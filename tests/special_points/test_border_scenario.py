@@ -122,8 +122,10 @@ def test_the_scenario_is_kept_in_files_and_shown(trilinear_branch, tmp_path):
     from saltation.output.io import (
         load_branch_csv,
         load_branch_json,
+        load_special_points_json,
         save_branch_csv,
         save_branch_json,
+        save_special_points_json,
     )
     from saltation.summary import special_point_summary
 
@@ -150,6 +152,7 @@ def test_the_scenario_is_kept_in_files_and_shown(trilinear_branch, tmp_path):
     assert branch_to_dict(older)["version"] == 2
     records = [special_point_record(sp, "trilinear", "omega") for sp in trilinear_branch.special_points]
     assert [r.get("scenario") for r in records] == ["persistence", None, "nonsmooth_fold"]
+    assert load_special_points_json(save_special_points_json(records, tmp_path / "sp.json")) == records
     table = special_point_table(records).splitlines()
     assert table[0].endswith("border collision")
     assert table[1].endswith("persistence") and table[3].endswith("nonsmooth_fold") and table[2].endswith("-")

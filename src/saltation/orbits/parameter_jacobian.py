@@ -109,7 +109,7 @@ def orbit_parameter_jacobian(orbit, parameters: Sequence[str] | None = None) -> 
     Raises
     ------
     SaltationError
-        If the orbit holds no problem (a record built by hand), or its periodicity equations are singular
+        If the orbit holds no shooting problem (a record built by hand), or its periodicity equations are singular
         (a multiplier at 1 besides the trivial one: a fold or branch point, where the orbit does not move
         smoothly with the parameters).
     ModelError
@@ -127,7 +127,11 @@ def orbit_parameter_jacobian(orbit, parameters: Sequence[str] | None = None) -> 
     if problem is None:
         raise SaltationError("the orbit holds no shooting problem (a record built by hand): find it with "
                              "find_periodic_orbit or ShootingProblem.solve")
-    single = copy.copy(problem.single_shooting if problem.single_shooting is not None else problem)
+    # (multiple shooting: its single-shooting problem, from the orbit's first node)
+    single = problem.single_shooting if problem.single_shooting is not None else getattr(problem, "problem", None)
+    if single is None or not hasattr(single, "periodicity"):
+        raise SaltationError(f"the orbit's problem ({type(problem).__name__}) is not one of shooting periodic orbits")
+    single = copy.copy(single)
     system, flow = single.system, single.flow
     names = tuple(system.parameter_names if parameters is None else parameters)
     columns = [system.parameter_index(name) for name in names]

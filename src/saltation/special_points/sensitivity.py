@@ -280,7 +280,8 @@ def sensitivities(source, point: SpecialPoint | int, *, parameters: Sequence[str
     u, p = located.unknowns, located.parameters
     lam_index = sys_.parameter_index(lam)
     found = float(p[lam_index])
-    allowed = 100.0 * (max(point.accuracy, 0.0) + float(located.accuracy[0])) + 1e-7 * (1.0 + abs(found))
+    claimed = point.accuracy if np.isfinite(point.accuracy) else np.inf  # (a point known only so well)
+    allowed = 100.0 * (max(claimed, 0.0) + float(located.accuracy[0])) + 1e-7 * (1.0 + abs(found))
     if not abs(found - point.parameter) <= allowed:
         raise SaltationError(f"the {point.kind.value} point at {lam} = {point.parameter:.12g} was relocated by its "
                              f"defining system at {found:.12g}, farther than their accuracies allow ({allowed:.1e})")
