@@ -222,6 +222,8 @@ def test_sensitivities_are_stored_on_the_points_and_kept_in_files(trilinear_bran
 
 
 def test_bad_requests_name_the_problem(trilinear_branch, tmp_path):
+    from dataclasses import replace
+
     from saltation.output.io import load_branch_json, save_branch_json
 
     i = point_of(trilinear_branch, "fold")
@@ -240,8 +242,13 @@ def test_bad_requests_name_the_problem(trilinear_branch, tmp_path):
         add_sensitivities(read)
     backward = ShootingProblem(trilinear_branch.problem.flow, {"omega": 1.0}, continuation_parameter="omega",
                                backward=True)
-    with pytest.raises(ModelError, match="backward time"):
-        sensitivities(backward, trilinear_branch.special_points[i])
+    corner = trilinear_branch.special_points[point_of(trilinear_branch, "discontinuous_fold")]
+    with pytest.raises(ModelError, match="backward-time orbit: the point does not say which surface"):
+        sensitivities(backward, corner)
+    autonomous = ShootingProblem(Flow(hopf_model(False)), {"mu": 0.2}, continuation_parameter="mu")
+    fold = replace(trilinear_branch.special_points[i], state=np.array([-0.5, 0.0]))
+    with pytest.raises(ModelError, match="fold of an autonomous orbit"):
+        sensitivities(autonomous, fold)
 
 
 def test_multiple_shooting_gives_the_same_sensitivities(trilinear_branch):
@@ -259,3 +266,33 @@ def test_multiple_shooting_gives_the_same_sensitivities(trilinear_branch):
         for q in ("f0", "c"):
             assert multiple.d_parameter[q] == pytest.approx(single.d_parameter[q],
                                                             abs=single.accuracy[q] + multiple.accuracy[q] + 1e-12)
+
+
+def hopf_model(backward: bool):
+    """The Hopf normal form against a wall ``x = c`` with the impact ``y -> -r y`` (the model of
+    test_grazing_backward_autonomous.py, written the same way): its cycle ``rho = sqrt(mu)`` of period 2 pi
+    grazes the wall at ``mu* = c^2``, so ``d mu* / dc = 2 c``, ``d mu* / dr = 0`` and the period does not move."""
+    from saltation import Crossing, Mode, PiecewiseSystem, Transition
+
+    s = "-" if backward else ""
+    return PiecewiseSystem(
+        name=f"test_hopf_impact_{'backward' if backward else 'forward'}", states=["x", "y"],
+        parameters={"mu": 0.2, "c": 0.5, "r": 0.8},
+        modes=[Mode("free", [f"{s}(mu*x - y - x*(x**2 + y**2))", f"{s}(x + mu*y - y*(x**2 + y**2))"])],
+        surfaces={"wall": "x - c"},
+        transitions=[Transition("free", "wall", Crossing.RISING, "free", reset=["x", "-r*y"])],
+    )
+
+
+@pytest.mark.parametrize("backward", [False, True], ids=["forward", "backward"])
+def test_an_autonomous_grazing_against_closed_form(backward):
+    problem = ShootingProblem(Flow(hopf_model(backward)), {"mu": 0.2}, continuation_parameter="mu", backward=backward)
+    branch = continue_branch(problem, problem.pack([-np.sqrt(0.2), 0.0], 2 * np.pi), 0.2, directions=(1,),
+                             settings=ContinuationSettings(ds=0.01, ds_max=0.02, bounds=(0.2, 0.3)))
+    s = sensitivities(branch, point_of(branch, "grazing"))
+    assert s.parameter == pytest.approx(0.25, abs=s.location_accuracy + 1e-12)
+    assert s.d_parameter["c"] == pytest.approx(2 * 0.5, abs=s.accuracy["c"] + 1e-12)
+    assert s.d_parameter["r"] == pytest.approx(0.0, abs=s.accuracy["r"] + 1e-14)
+    assert s.d_period["c"] == pytest.approx(0.0, abs=1e-10)  # the cycle's period is 2 pi for every mu
+    # the branch's problem keeps its own phase anchor
+    assert branch.problem.x_ref is not None and not np.allclose(branch.problem.x_ref, s.state)

@@ -139,14 +139,34 @@ def _touch_transition(problem, point: SpecialPoint) -> tuple[int, float] | None:
     return None
 
 
+def _own_copy(problem):
+    """A copy of a branch's problem whose phase anchor and section this module may set (with multiple shooting,
+    of its single-shooting problem too)."""
+    own = copy.copy(problem)
+    if hasattr(own, "problem"):
+        own.problem = copy.copy(own.problem)
+    return own
+
+
 def defining_system(problem, point: SpecialPoint) -> tuple[ConditionedProblem, np.ndarray]:
     """The defining system of a special point of a branch: the branch's problem with the point's conditions
     attached and its parameter freed, and the unknowns to start from (the point's own).
 
+    Which problems: single or multiple shooting, forced or autonomous, forward or backward time, for every
+    kind whose defining condition the point says enough to write down.  A grazing or corner needs the
+    transition touched and when: from the orbit itself for a forced forward-time orbit over one forcing
+    period (:func:`~saltation.special_points.loci.grazed_transitions`), from the point's ``touch`` otherwise
+    (a located grazing has one; a corner bracketed on such a branch has not).  A crossing- or
+    switching-sliding needs its arrival named (:func:`~saltation.special_points.loci.arrival_identity`):
+    forced forward-time orbits over one forcing period.  An autonomous orbit's fold has none here (its
+    trivial multiplier makes ``M - I`` singular all along the branch); its period doubling has.  An
+    autonomous orbit's phase is anchored at the point's state.
+
     Parameters
     ----------
     problem : ShootingProblem or MultipleShootingProblem
-        The branch's problem (forced, forward time, one forcing period; its continuation parameter set).
+        The branch's problem (its continuation parameter set).  It is not changed: the system is built on a
+        copy.
     point : SpecialPoint
         A fold, branch point or period doubling; a grazing or corner; a sliding bifurcation.
 
@@ -161,40 +181,47 @@ def defining_system(problem, point: SpecialPoint) -> tuple[ConditionedProblem, n
     Raises
     ------
     ModelError
-        For an autonomous or backward-time problem, one over several forcing periods, one without a
-        continuation parameter, or a kind without a defining system here.
+        For a problem without a continuation parameter, or a kind (or a problem for that kind) without a
+        defining system here: the message says which.
     SaltationError
         If the orbit touches no surface (a grazing or corner), or does not arrive at the surface (a
         sliding bifurcation), or its run fails.
     """
     if problem.lam_name is None:
         raise ModelError("the branch's problem has no continuation parameter: the special point's parameter is unknown")
-    if problem.autonomous or problem.backward or getattr(problem, "periods", 1) != 1:
-        raise ModelError("sensitivities of special points are implemented for forced models in forward time, over one "
-                         f"forcing period (as their two-parameter curves); {problem.system.name!r} is "
-                         + ("autonomous" if problem.autonomous else "in backward time" if problem.backward
-                            else f"over {problem.periods} periods"))
+    problem = _own_copy(problem)
     single = getattr(problem, "problem", problem)
     flow = problem.flow
     p = problem.parameters_at(point.parameter)
     state = np.asarray(point.state, dtype=float)
     kind = point.kind
+    # the orbit's own touches and arrivals are read over one forcing period, forward in time
+    plain = not problem.autonomous and not problem.backward and getattr(problem, "periods", 1) == 1
+    what = ("an autonomous orbit" if problem.autonomous else "a backward-time orbit" if problem.backward
+            else f"an orbit of {getattr(problem, 'periods', 1)} forcing periods")
     if kind in _MULTIPLIER_KINDS:
-        conditions = [MultiplierCondition(_MULTIPLIER_KINDS[kind])]
+        mu = _MULTIPLIER_KINDS[kind]
+        if problem.autonomous and mu > 0:
+            raise ModelError(f"no defining system for the sensitivities of the {kind.value} of an autonomous orbit: its "
+                             "trivial multiplier makes M - I singular all along the branch")
+        conditions = [MultiplierCondition(mu)]
     elif kind in SLIDING_KINDS:
         if not point.touch_surface:
             raise ModelError(f"the {kind.value} point does not say where the orbit touches the surface")
         if kind is SpecialPointKind.ADDING_SLIDING:
             conditions = [CubicTangency(flow, point.touch_mode, point.touch_surface, float(point.touch_time))]
-        else:
+        elif plain:
             identity, t_e = arrival_identity(flow, state, p, point.touch_surface, float(point.touch_time),
                                              t0=single.t0, tolerances=single.tolerances)
             conditions = [ArrivalTangency(flow, identity, point.touch_mode, t_e)]
+        else:
+            raise ModelError(f"no defining system for the sensitivities of the {kind.value} of {what}: its arrival is "
+                             "named for forced orbits in forward time over one forcing period")
     elif kind.is_nonsmooth:
         touched = _touch_transition(single, point)
-        if kind is SpecialPointKind.GRAZING_SLIDING and touched is not None:
-            transition, t_g, others = *touched, []  # (its run may slide for a rounding at the touch)
-        else:
+        if touched is not None and (kind is SpecialPointKind.GRAZING_SLIDING or not plain):
+            transition, t_g, others = *touched, []  # (a grazing-sliding's run may slide for a rounding at the touch)
+        elif plain:
             try:
                 (transition, t_g), *others = grazed_transitions(flow, state, p, t0=single.t0,
                                                                 tolerances=single.tolerances)
@@ -202,22 +229,27 @@ def defining_system(problem, point: SpecialPoint) -> tuple[ConditionedProblem, n
                 if touched is None:
                     raise
                 transition, t_g, others = *touched, []
+        else:
+            raise ModelError(f"no defining system for the sensitivities of the {kind.value} of {what}: the point does "
+                             "not say which surface its orbit touches, and when")
         conditions = [Tangency(flow, transition, t_g, also_disabled=[k for k, _ in others])]
     else:
         raise ModelError(f"no defining system for the sensitivities of special points of kind {kind.value} (those of "
                          "folds, branch points, period doublings, grazings, corners and sliding bifurcations)")
+    if problem.autonomous:
+        single.x_ref = single.f_ref = None  # (anchored at the point's state when the system is solved)
     system = ConditionedProblem(problem, conditions, free=(problem.lam_name,), parameters=p)
     system.tolerances = location_tolerances(flow, problem.tolerances)
-    return system, system.pack(state)
+    return system, system.pack(state, period=float(point.period) if problem.autonomous else None)
 
 
-def _columns(problem, system: ConditionedProblem, u: np.ndarray, p: np.ndarray, names: Sequence[str]
+def _columns(system: ConditionedProblem, u: np.ndarray, p: np.ndarray, names: Sequence[str]
              ) -> tuple[np.ndarray, np.ndarray, object]:
     """``G_u`` (by the unknowns, the freed parameter among them) and ``G_q`` for each of ``names`` (a column
     each), and the shot there."""
     J, columns, shot = None, [], None
     for q in names:
-        with_q = ConditionedProblem(problem, system.conditions, free=system.free_names, continuation=q, parameters=p)
+        with_q = ConditionedProblem(system.base, system.conditions, free=system.free_names, continuation=q, parameters=p)
         with_q.tolerances = system.tolerances
         _, J_q, g_q, shot_q = with_q.equations(u, float(p[with_q.lam_index]), need_lam=True)
         if J is None:
@@ -236,8 +268,8 @@ def sensitivities(source, point: SpecialPoint | int, *, parameters: Sequence[str
     Parameters
     ----------
     source : Branch or ShootingProblem
-        The branch (it holds its problem), or its problem (forced, forward time, its continuation
-        parameter set).
+        The branch (it holds its problem), or its problem (its continuation parameter set; which problems,
+        for which kinds: :func:`defining_system`).
     point : SpecialPoint or int
         The special point, or its index in ``branch.special_points``.
     parameters : sequence of str, optional
@@ -267,6 +299,7 @@ def sensitivities(source, point: SpecialPoint | int, *, parameters: Sequence[str
     *Recipes for Continuation*, SIAM (an orbit problem extended by zero functions).
     """
     problem, point = problem_and_point(source, point, "the sensitivities of a special point")
+    problem = _own_copy(problem)  # (the user's problem is left as it is)
     getattr(problem, "align_section", lambda point: None)(point)  # (the point's state lies at its own section)
     system, u0 = defining_system(problem, point)
     sys_ = problem.system
@@ -285,7 +318,7 @@ def sensitivities(source, point: SpecialPoint | int, *, parameters: Sequence[str
     if not abs(found - point.parameter) <= allowed:
         raise SaltationError(f"the {point.kind.value} point at {lam} = {point.parameter:.12g} was relocated by its "
                              f"defining system at {found:.12g}, farther than their accuracies allow ({allowed:.1e})")
-    J, G, shot = _columns(problem, system, u, p, names)
+    J, G, shot = _columns(system, u, p, names)
     condition = float(np.linalg.cond(J))
     if not condition < SINGULAR_CONDITION:
         raise SaltationError(
@@ -307,15 +340,18 @@ def sensitivities(source, point: SpecialPoint | int, *, parameters: Sequence[str
             if isinstance(c2, MultiplierCondition):
                 c2.h, c2._kept = 2.0 * c.h, None
             doubled.append(c2)
-        twice = ConditionedProblem(problem, doubled, free=system.free_names, parameters=p)
+        twice = ConditionedProblem(system.base, doubled, free=system.free_names, parameters=p)
         twice.tolerances = system.tolerances
-        J2, G2, _ = _columns(problem, twice, u, p, names)
+        J2, G2, _ = _columns(twice, u, p, names)
         error = error + np.abs(V[k] - (-np.linalg.solve(J2, G2))[k])
     n = sys_.n
     d_parameter = {q: float(V[k, c]) for c, q in enumerate(names)}
-    periods = getattr(problem, "periods", 1)
-    d_period = {q: periods * (sys_.period_derivative(p, sys_.parameter_index(q))
-                              + sys_.period_derivative(p, lam_index) * d_parameter[q]) for q in names}
+    if problem.autonomous:  # the period is an unknown
+        d_period = {q: float(V[system.n_nodes, c]) for c, q in enumerate(names)}
+    else:
+        periods = getattr(problem, "periods", 1)
+        d_period = {q: periods * (sys_.period_derivative(p, sys_.parameter_index(q))
+                                  + sys_.period_derivative(p, lam_index) * d_parameter[q]) for q in names}
     return PointSensitivities(
         kind=point.kind, parameter_name=lam, parameter=found, location_accuracy=float(located.accuracy[0]),
         state=np.array(located.state0), period=float(located.period), d_parameter=d_parameter, d_period=d_period,
