@@ -143,6 +143,19 @@ class Limits(str, enum.Enum):
         return cls(head), exponents
 
 
+class BorderScenario(str, enum.Enum):
+    """What Feigin's classification of a border collision predicts at a discontinuity-induced point; the value
+    is the name used in files (:func:`saltation.orbits.border_collision.feigin_scenario`)."""
+
+    #: the orbit crosses the border: one orbit on either side, it goes on as the other
+    PERSISTENCE = "persistence"
+    #: the orbits of the two sides lie on the same side of the point, meet there and vanish together
+    NONSMOOTH_FOLD = "nonsmooth_fold"
+    #: the theorem says nothing: a multiplier on the unit circle within the accuracy, both sides unbounded, or
+    #: the one-sided multipliers of the half-period map needed (a symmetric orbit's symmetry breaking)
+    UNDETERMINED = "undetermined"
+
+
 class StopReason(enum.Enum):
     """Why a continuation run stopped; the value is the message."""
 
@@ -173,5 +186,5 @@ class BranchKind(enum.Enum):
     EQUILIBRIUM = "equilibrium"
 
 
-__all__ = ["NONSMOOTH_KINDS", "BranchKind", "CodimensionTwoKind", "Criticality", "Limits", "SpecialPointKind",
-           "SpecialPointStatus", "StopReason"]
+__all__ = ["NONSMOOTH_KINDS", "BorderScenario", "BranchKind", "CodimensionTwoKind", "Criticality", "Limits",
+           "SpecialPointKind", "SpecialPointStatus", "StopReason"]

@@ -103,11 +103,25 @@ def special_point_summary(point) -> str:
     if point.event_labels_minus or point.event_labels_plus:
         rows.append(("events, one side", _sequence(point.event_labels_minus)))
         rows.append(("events, other side", _sequence(point.event_labels_plus)))
+    if point.scenario is not None:
+        rows.append(("border collision (Feigin)", scenario_text(point)))
+    if point.sensitivities:
+        rows.append(("sensitivities", ", ".join(f"d/d{name} {value:.6g}" for name, value in point.sensitivities.items())))
     if point.touch_surface:
         rows.append(("touches", f"surface {point.touch_surface} (field of {point.touch_mode}) at t = {point.touch_time:.8g}"))
     if point.note:
         rows.append(("note", point.note))
     return f"**{point.kind.value}**\n\n" + _table(rows)
+
+
+def scenario_text(point) -> str:
+    """What Feigin's classification predicts at a non-smooth point, in words: ``persistence``,
+    ``nonsmooth_fold``, either with ``, period two`` where a period-two orbit is born, or ``undetermined``
+    (``-`` where it was not asked)."""
+    scenario = point.scenario
+    if scenario is None:
+        return "-"
+    return scenario.value + (", period two" if point.period_two else "")
 
 
 def stop_text(branch) -> str:

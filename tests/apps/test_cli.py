@@ -288,7 +288,9 @@ def test_continue_records_and_passes_a_grazing(tmp_path, capsys):
     zeta, w = 0.05, 0.8
     (grazing,) = [r for r in records if r["kind"] == "grazing"]
     assert grazing["value"] == pytest.approx(1 / np.hypot(1 - w**2, 2 * zeta * w), abs=1e-9)
-    assert grazing["limits"] == "grazing" and "inf" in grazing["multipliers_plus"]
+    # the crossing side's multiplier grows without bound along the negative real axis (Nordmark's map)
+    assert grazing["limits"] == "grazing" and ["-inf", 0.0] in grazing["multipliers_plus"]
+    assert grazing["scenario"] == "persistence" and grazing["period_two"] is True
     branch = json.loads((tmp_path / "impact_oscillator_s_branch.json").read_text())
     assert min(pt["parameter"] for pt in branch["points"]) == pytest.approx(2.5)
 

@@ -97,6 +97,9 @@ MODULES = (
     "saltation.model.contacts",
     "saltation.model.symmetry",
     "saltation.orbits.symmetry",
+    "saltation.orbits.border_collision",
+    "saltation.orbits.parameter_jacobian",
+    "saltation.special_points.sensitivity",
 )
 
 #: Modules whose docstrings are being rewritten by another change at the same time.

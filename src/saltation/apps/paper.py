@@ -368,24 +368,43 @@ def write(results: PaperResults, out: Path) -> list[Path]:
 
 
 def special_point_table(records: list[dict]) -> str:
-    """A plain-text table of located special points."""
+    """A plain-text table of located special points: where, the multipliers' moduli on either side, and what
+    Feigin's classification predicts at a non-smooth point (``persistence`` or ``nonsmooth_fold``, with
+    ``, period two`` where a period-two orbit is born; ``undetermined``; ``-`` at a smooth point)."""
 
     def fmt(mu) -> str:
         if mu is None:
             return "-"
-        return " ".join("inf" if m == "inf" else f"{abs(complex(*m)):.4f}" for m in mu)
+        return " ".join(_modulus(m) for m in mu)
+
+    def scenario(r: dict) -> str:
+        if r.get("scenario") is None:
+            return "-"
+        return str(r["scenario"]) + (", period two" if r.get("period_two") else "")
 
     cells = [(str(r["model"]), str(r["kind"]), str(r["parameter"]), f"{r['value']:.10f}",
-              fmt(r.get("multipliers_minus", r.get("multipliers"))), fmt(r.get("multipliers_plus"))) for r in records]
-    head = ("model", "kind", "parameter", "value", "|mu| minus / at", "|mu| plus")
+              fmt(r.get("multipliers_minus", r.get("multipliers"))), fmt(r.get("multipliers_plus")), scenario(r))
+             for r in records]
+    head = ("model", "kind", "parameter", "value", "|mu| minus / at", "|mu| plus", "border collision")
     # each column as wide as its longest entry (at least as the paper's table has it): long names keep the columns
-    widths = [max([least, len(h)] + [len(c[k]) for c in cells]) for k, (least, h) in enumerate(zip((14, 30, 10, 16, 22, 18), head))]
-    left = (True, True, False, False, False, False)
+    widths = [max([least, len(h)] + [len(c[k]) for c in cells])
+              for k, (least, h) in enumerate(zip((14, 30, 10, 16, 22, 18, 18), head))]
+    left = (True, True, False, False, False, False, False)
 
     def line(row) -> str:
         return " ".join(f"{c:<{w}}" if lft else f"{c:>{w}}" for c, w, lft in zip(row, widths, left)).rstrip()
 
     return "\n".join([line(head), *(line(c) for c in cells)])
+
+
+def _modulus(m) -> str:
+    """A multiplier's modulus as the table shows it (``inf`` for an infinite one, written ``"inf"`` or
+    ``["-inf", 0.0]``)."""
+    if m == "inf":
+        return "inf"
+    re, im = (float(x) for x in m)  # ("-inf", "nan" as files write them)
+    z = abs(complex(re, im))
+    return "inf" if z == float("inf") else f"{z:.4f}"
 
 
 def _counter(progress: Progress, what: str):

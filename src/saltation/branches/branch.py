@@ -12,6 +12,7 @@ import numpy as np
 from saltation.errors import SaltationError
 from saltation.kinds import (  # noqa: F401  (the vocabulary's names here: where release 0.1 had them)
     NONSMOOTH_KINDS,
+    BorderScenario,
     BranchKind,
     CodimensionTwoKind,
     Limits,
@@ -52,11 +53,20 @@ class OneSided:
         Where the set-valued multipliers cross the unit circle.
     crossing_point : complex or None
         The multiplier on the unit circle at ``crossing_q``.
+    scenario : BorderScenario or None
+        What Feigin's classification of the border collision predicts from the two sides' real multipliers
+        (:func:`saltation.orbits.border_collision.feigin_scenario`): ``persistence`` (the orbit crosses the
+        border), ``nonsmooth_fold`` (the orbits of both sides meet there and vanish) or ``undetermined``;
+        None where it was not asked (and in files written before 2026-12-06).
+    period_two : bool or None
+        With ``scenario``: True where a period-two orbit is born at the point (an odd number of real
+        multipliers less than -1 on the two sides together), False where the theorem says nothing about
+        one, None where the scenario is undetermined or was not asked.
 
     Raises
     ------
     ValueError
-        If ``limits`` is given as a name that is not one of its values.
+        If ``limits`` or ``scenario`` is given as a name that is not one of its values.
     """
 
     multipliers_minus: np.ndarray | None = None
@@ -71,9 +81,13 @@ class OneSided:
     growth_exponents: tuple[float, ...] = ()
     crossing_q: float | None = None
     crossing_point: complex | None = None
+    scenario: BorderScenario | None = None
+    period_two: bool | None = None
 
     def __post_init__(self):
         # names as files and older callers give them
+        if self.scenario is not None and not isinstance(self.scenario, BorderScenario):
+            object.__setattr__(self, "scenario", BorderScenario(self.scenario))
         if not isinstance(self.limits, Limits):
             limits, exponents = Limits.parse(str(self.limits))
             object.__setattr__(self, "limits", limits)
@@ -172,6 +186,12 @@ class SpecialPoint:
     codimension_two : CodimensionTwoKind or None
         At a smooth CODIMENSION_TWO point of a fold, period-doubling or Neimark-Sacker curve: its name (cusp,
         a strong resonance, fold-flip ...); None elsewhere (and in files written before 2027-01).
+    sensitivities : dict of str to float, or None
+        How the point's parameter moves with each other parameter of the model, ``d parameter / d q`` by
+        the implicit function theorem on its defining system
+        (:func:`saltation.special_points.sensitivity.sensitivities`, which also gives the derivatives of
+        the period and the state); None until they are asked for
+        (:func:`saltation.special_points.sensitivity.add_sensitivities`).
 
     Raises
     ------
@@ -201,6 +221,7 @@ class SpecialPoint:
     one_sided: OneSided | None = None
     touch: Touch | None = None
     codimension_two: CodimensionTwoKind | None = None
+    sensitivities: dict[str, float] | None = None
 
     def __post_init__(self):
         if self.codimension_two is not None and not isinstance(self.codimension_two, CodimensionTwoKind):
@@ -222,6 +243,8 @@ class SpecialPoint:
     growth_exponents = property(lambda self: self._side("growth_exponents"))
     crossing_q = property(lambda self: self._side("crossing_q"))
     crossing_point = property(lambda self: self._side("crossing_point"))
+    scenario = property(lambda self: self._side("scenario"))
+    period_two = property(lambda self: self._side("period_two"))
     touch_surface = property(lambda self: self.touch.surface if self.touch is not None else "")
     touch_mode = property(lambda self: self.touch.mode if self.touch is not None else "")
     touch_time = property(lambda self: self.touch.time if self.touch is not None else float("nan"))

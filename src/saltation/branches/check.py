@@ -12,6 +12,10 @@ hold of it, whatever the model:
   one at -1, a Neimark-Sacker point a complex pair on the unit circle, a discontinuous point a set-valued
   crossing where its kind says);
 - a ``bracketed`` point lies inside its bracket, and its ``accuracy`` is at least the bracket's width;
+- a non-smooth point whose border collision Feigin's classification decides (``scenario``) agrees with the
+  branch through it: at a ``nonsmooth_fold`` the branch turns back (the points before and after it lie on
+  the same side of its parameter), at ``persistence`` it goes on (on opposite sides).  Checked where the
+  step holds that point alone and both points lie farther from it than its accuracy;
 - a branch that stopped because its corrector failed says what it found there: a special point at that
   end, or the corrector's named failure (``stop_detail``).
 
@@ -39,7 +43,8 @@ class Violation:
     Attributes
     ----------
     rule : str
-        ``trivial_multiplier``, ``uncovered_change``, ``kind_mismatch``, ``bracket`` or ``silent_stop``.
+        ``trivial_multiplier``, ``uncovered_change``, ``kind_mismatch``, ``bracket``, ``border_scenario`` or
+        ``silent_stop``.
     index : int or None
         The branch point (or the step from it to the next) where it is broken.
     message : str
@@ -219,6 +224,34 @@ def _change_made(sp, autonomous: bool) -> tuple[int, bool] | None:
     return None  # a non-smooth point whose sides are unknown: it may make any change
 
 
+def _scenario_violations(branch) -> list[Violation]:
+    """Where a non-smooth point's Feigin scenario disagrees with the branch through it (see the module)."""
+    pts = branch.points
+    out = []
+    count: dict[int, int] = {}
+    for sp in branch.special_points:
+        count[sp.index] = count.get(sp.index, 0) + 1
+    for sp in branch.special_points:
+        scenario = getattr(sp.scenario, "value", None)
+        if scenario not in ("persistence", "nonsmooth_fold") or sp.status.value == "failed":
+            continue
+        i = sp.index
+        if not (0 <= i and i + 1 < len(pts)) or count[i] != 1:
+            continue
+        margin = max(sp.accuracy if math.isfinite(sp.accuracy) else math.inf, 1e-12 * max(1.0, abs(sp.parameter)))
+        before, after = pts[i].parameter - sp.parameter, pts[i + 1].parameter - sp.parameter
+        if not (abs(before) > margin and abs(after) > margin):
+            continue
+        turns = (before > 0) == (after > 0)
+        if turns != (scenario == "nonsmooth_fold"):
+            what = "turns back at it" if turns else "goes on through it"
+            out.append(Violation(
+                "border_scenario", i,
+                f"{sp.kind.value} at {sp.parameter:.10g}: Feigin's classification says {scenario}, but the branch "
+                f"{what} ({branch.parameter_name} {pts[i].parameter:.10g} -> {pts[i + 1].parameter:.10g})"))
+    return out
+
+
 # ---------------------------------------------------------------------------------------------------
 def check_branch(branch, *, trivial_tol: float = 1e-6) -> BranchCheck:
     """The invariants of a computed branch (see the module's description).
@@ -274,6 +307,7 @@ def check_branch(branch, *, trivial_tol: float = 1e-6) -> BranchCheck:
                                          f"its bracket's width {hi - lo:.3g}"))
 
     if not curve:
+        out.extend(_scenario_violations(branch))
         ranges = [count_range(p.multipliers, autonomous=autonomous, equilibrium=equilibrium) for p in pts]
         by_index: dict[int, list] = {}
         for sp in branch.special_points:

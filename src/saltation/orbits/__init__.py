@@ -15,6 +15,10 @@ Depends on the engine and the model.  Its modules:
 - :mod:`~saltation.orbits.floquet`: Floquet multipliers from the monodromy matrix;
 - :mod:`~saltation.orbits.classification`: the set-valued classification of a corner from its one-sided
   monodromies;
+- :mod:`~saltation.orbits.border_collision`: Feigin's classification of a border collision from the one-sided
+  multipliers (persistence, non-smooth fold, a period-two orbit);
+- :mod:`~saltation.orbits.parameter_jacobian`: the derivatives of an orbit's initial state and period by the
+  parameters (implicit function theorem on the periodicity equations);
 - :mod:`~saltation.orbits.boundary`: the one-sided monodromies at a boundary orbit, exact limits;
 - :mod:`~saltation.orbits.symmetry`: symmetric orbits by the half-period map;
 - :mod:`~saltation.orbits.lyapunov`: Lyapunov exponents;

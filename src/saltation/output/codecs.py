@@ -10,7 +10,8 @@ decoders, a few fields renamed and the rest left out.  :class:`~saltation.sweeps
 codec each (:func:`sweep_to_dict`, :func:`period_map_to_dict`, :func:`orbit_to_dict`).
 
 Encoding: numbers at full precision; a non-finite real is the string ``"inf"``, ``"-inf"`` or
-``"nan"``; a complex number a pair ``[re, im]``, an infinite one the string ``"inf"``.  Decoding
+``"nan"``; a complex number a pair ``[re, im]``, an infinite one the string ``"inf"`` (``["-inf", 0.0]``
+along the negative real axis).  Decoding
 checks every value and fails with :class:`~saltation.output.files.FileFormatError` naming the
 field (:mod:`saltation.output.files`).
 """
@@ -26,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from saltation.branches.branch import (
+    BorderScenario,
     Branch,
     BranchKind,
     BranchPoint,
@@ -112,8 +114,12 @@ def _enc_float(x: float) -> float | str:
 
 
 def _enc_complex(z: complex) -> list[float | str] | str:
-    """A complex number as ``[re, im]``; an infinite one as ``"inf"``."""
+    """A complex number as ``[re, im]``; the point at infinity (``complex(inf, 0)``) as ``"inf"``, and an
+    infinite multiplier along the negative real axis (``complex(-inf, 0)``) as ``["-inf", 0.0]``, which
+    readers before it read as the same number."""
     z = complex(z)
+    if math.isinf(z.real) and z.real < 0 and z.imag == 0.0:
+        return [_enc_float(z.real), 0.0]
     if math.isinf(z.real) or math.isinf(z.imag):
         return "inf"
     return [_enc_float(z.real), _enc_float(z.imag)]
@@ -300,6 +306,9 @@ _ONE_SIDED_CODEC = _Codec(
         # written by name; read as a string, which OneSided parses (with the exponents files before
         # 2026-11-25 wrote into it)
         "limits": (lambda e: e.value, _dec("string")),
+        # optional keys (2026-12-06): files before them read as None, and readers before them skip them
+        "scenario": (lambda e: None if e is None else e.value, _nullable(_choice({k.value: k for k in BorderScenario}))),
+        "period_two": (lambda b: None if b is None else bool(b), _nullable(_dec("boolean"))),
     },
     old_names={"event_labels_minus": "events_minus", "event_labels_plus": "events_plus"},
 )
@@ -329,6 +338,9 @@ _SPECIAL_POINT_CODEC = _Codec(
         # files before 2027-01 do not have it: None
         "codimension_two": (lambda k: None if k is None else k.value,
                             _nullable(_choice({k.value: k for k in CodimensionTwoKind}))),
+        # an optional key (2026-12-06): files before it read as None, and readers before it skip it
+        "sensitivities": (lambda d: None if d is None else {str(k): _enc_float(v) for k, v in d.items()},
+                          _nullable(lambda f, v, field, done: _dec_fixed(f, v, field, done))),
     },
 )
 
@@ -498,6 +510,8 @@ _SHOWN: dict[str, Callable[[SpecialPoint], bool]] = {
     "growth": lambda sp: bool(sp.growth_exponents),
     "touch": lambda sp: bool(sp.touch_surface),
     "classified": lambda sp: bool(sp.classification),
+    "scenario": lambda sp: sp.scenario is not None,
+    "sensitivities": lambda sp: sp.sensitivities is not None,
 }
 
 #: The flat record after ``model``, ``kind`` and ``parameter`` (the parameter's name): each key, the
@@ -521,6 +535,9 @@ _FLAT_VIEW: tuple[tuple[str, str, str], ...] = (
     ("touch_mode", "touch_mode", "touch"),
     ("touch_time", "touch_time", "touch"),
     ("classification", "classification", "classified"),
+    ("scenario", "scenario", "scenario"),
+    ("period_two", "period_two", "scenario"),
+    ("sensitivities", "sensitivities", "sensitivities"),
 )
 
 #: The codec of every field and part's field by its flat name.
@@ -569,8 +586,11 @@ def special_point_record(sp: SpecialPoint, model: str, parameter: str) -> dict[s
         or ``""``), ``status`` (``"located"`` by a defining system, ``"bracketed"`` or ``"failed"``),
         ``growth_exponents`` where multipliers grow without bound towards the point; for a grazing or a sliding
         bifurcation also ``touch_surface``, ``touch_mode`` and ``touch_time`` (where the orbit meets
-        the surface, and whose field is tangent there). Multipliers are ``[re, im]`` pairs, an
-        infinite one the string ``"inf"``; absent values are ``null``.
+        the surface, and whose field is tangent there); where Feigin's classification was asked,
+        ``scenario`` (``"persistence"``, ``"nonsmooth_fold"`` or ``"undetermined"``) and
+        ``period_two``; where sensitivities were asked, ``sensitivities`` (``{parameter: d value / d
+        parameter}``). Multipliers are ``[re, im]`` pairs, an infinite one the string ``"inf"``
+        (``["-inf", 0.0]`` along the negative real axis); absent values are ``null``.
     """
     full = _flat(sp)
     return {"model": model, "kind": full["kind"], "parameter": parameter,

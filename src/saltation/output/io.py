@@ -27,7 +27,9 @@ Orbit JSON
 Numbers are written at full precision (Python's shortest round-trip ``repr``), so a round
 trip is lossless. JSON has no infinity or NaN: a non-finite real is written as the string
 ``"inf"``, ``"-inf"`` or ``"nan"``; a complex number is a pair ``[re, im]`` and an infinite
-multiplier (the point at infinity, stored as ``complex(inf, 0)``) is the string ``"inf"``.
+multiplier (the point at infinity, stored as ``complex(inf, 0)``) is the string ``"inf"``; one known to
+grow along the negative real axis (``complex(-inf, 0)``, the crossing side of an impact's grazing) is
+``["-inf", 0.0]``.
 In CSV, non-finite values are written ``inf``, ``-inf`` and ``nan``, which Python's
 ``float`` reads back.  Every file is written atomically and read checked
 (:mod:`saltation.output.files`); the records are encoded by :mod:`saltation.output.codecs`.

@@ -19,7 +19,9 @@ Modules:
 * :mod:`~saltation.special_points.codimension_two`: the smooth codimension-two points along fold,
   period-doubling and Neimark-Sacker curves (test functions, their location);
 * :mod:`~saltation.special_points.branch_switching`: the period-2 branch at a period doubling and the
-  asymmetric branches at a symmetry breaking.
+  asymmetric branches at a symmetry breaking;
 * :mod:`~saltation.special_points.follow`: a branch as far as it goes: the branches born on it, and the one
-  beyond a discontinuous fold.
+  beyond a discontinuous fold;
+* :mod:`~saltation.special_points.sensitivity`: how a located special point moves with every other parameter
+  (the implicit function theorem on its defining system).
 """

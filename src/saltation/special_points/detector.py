@@ -45,6 +45,7 @@ from saltation.branches.corrector import Solution, canonical_events
 from saltation.orbits.symmetry import SymmetricMultipliers
 from saltation.special_points import nonsmooth, smooth, symmetric
 from saltation.special_points.context import DetectionContext
+from saltation.special_points.points import with_border_scenario
 from saltation.special_points.smooth import smooth_points
 from saltation.special_points.symmetric import symmetry_breaking_corner
 
@@ -80,9 +81,10 @@ class SpecialPointDetector(DetectionContext):
         Returns
         -------
         tuple of (Solution, SpecialPoint) or None
-            The first solution across the grazing and the grazing's record, or None.
+            The first solution across the grazing and the grazing's record (with Feigin's scenario), or None.
         """
-        return nonsmooth.past_grazing(self, prev)
+        found = nonsmooth.past_grazing(self, prev)
+        return None if found is None else (found[0], self.with_scenario(found[1]))
 
     def at_failure(self, prev: Solution, failed: float) -> SpecialPoint | None:
         """The end of a branch whose last orbit comes to lie on a switching surface all round:
@@ -98,9 +100,26 @@ class SpecialPointDetector(DetectionContext):
         Returns
         -------
         SpecialPoint or None
-            A ``bracketed`` point between the last orbit and the first failure, or None.
+            A ``bracketed`` point between the last orbit and the first failure (with Feigin's scenario), or None.
         """
-        return nonsmooth.on_surface_end(self, prev, failed)
+        found = nonsmooth.on_surface_end(self, prev, failed)
+        return None if found is None else self.with_scenario(found)
+
+    def with_scenario(self, sp: SpecialPoint) -> SpecialPoint:
+        """A point with Feigin's prediction of its border collision, where it has one-sided multipliers:
+        :func:`~saltation.special_points.points.with_border_scenario`.
+
+        Parameters
+        ----------
+        sp : SpecialPoint
+            A special point found on the branch.
+
+        Returns
+        -------
+        SpecialPoint
+            The point, its ``scenario`` and ``period_two`` filled in where it has both sides' multipliers.
+        """
+        return with_border_scenario(sp, autonomous=self.autonomous)
 
     # -- sequencing -----------------------------------------------------------------------
     def check(self, a: Solution, b: Solution, index: int) -> list[SpecialPoint]:
@@ -121,14 +140,15 @@ class SpecialPointDetector(DetectionContext):
         Returns
         -------
         list of SpecialPoint
-            The located points (folds and multiplier crossings that fail their check are left out).
+            The located points (folds and multiplier crossings that fail their check are left out), the
+            non-smooth ones with Feigin's scenario (:meth:`with_scenario`).
 
         Raises
         ------
         SaltationError
             If the one-sided monodromies needed to classify a non-smooth point are missing.
         """
-        return self._check(a, b, index, None)
+        return [self.with_scenario(sp) for sp in self._check(a, b, index, None)]
 
     def _check(self, a: Solution, b: Solution, index: int,
                bracket: tuple[Solution, Solution] | None) -> list[SpecialPoint]:

@@ -61,7 +61,7 @@ from saltation.special_points.continuation import (
     canonical_events,
 )
 from saltation.special_points.grazing import locate_tangential_return
-from saltation.special_points.points import special_point_between
+from saltation.special_points.points import special_point_between, with_border_scenario
 
 #: A callback handed each new branch point (a progress bar's counter).
 Progress = Callable[[BranchPoint], None]
@@ -327,7 +327,8 @@ def follow_through_discontinuous_fold(
             "shooting; bracket from both branch ends"
         ),
     )
-    fold = _fold_by_tangential_return(prob_f, end, fold, forward.corrector)
+    fold = with_border_scenario(_fold_by_tangential_return(prob_f, end, fold, forward.corrector),
+                                autonomous=prob_f.autonomous)
     branch.special_points.insert(0, fold)
     # the two runs that stopped there (the corrector failed) say what they found: this fold, at their ends
     for run in (forward, near):

@@ -15,6 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from saltation.branches.branch import (
+    BorderScenario,
     Limits,
     OneSided,
     SpecialPoint,
@@ -26,6 +27,7 @@ from saltation.branches.corrector import Solution
 from saltation.engine.flow import EventKind
 from saltation.errors import SaltationError
 from saltation.model.system import PiecewiseSystem
+from saltation.orbits.border_collision import feigin_scenario
 from saltation.orbits.boundary import (
     corner_saltation_is_bounded,
     saltation_at_corner,
@@ -41,17 +43,89 @@ from saltation.special_points.sliding import (
 )
 
 __all__ = [
-    "two_sides",
-    "special_point_between",
     "grazing_point",
-    "unlocated_grazing",
+    "on_surface_point",
+    "period_doubling_of_half_point",
     "sliding_bifurcation_point",
     "smooth_point",
-    "period_doubling_of_half_point",
+    "special_point_between",
     "symmetry_breaking_point",
+    "two_sides",
+    "unbounded_limit",
+    "unlocated_grazing",
     "unlocated_symmetry_breaking",
-    "on_surface_point",
+    "with_border_scenario",
 ]
+
+
+def unbounded_limit(nearest: complex) -> complex:
+    """The limit of a multiplier that grows without bound towards a point, from its value on the nearest orbit.
+
+    Along the real axis where the nearest orbit's is real (the crossing side of an impact's grazing:
+    Nordmark's square-root map, whose large multiplier is real), with its sign: ``complex(-inf, 0)`` for a
+    negative one; the point at infinity ``complex(inf, 0)`` otherwise.
+
+    Parameters
+    ----------
+    nearest : complex
+        The multiplier of the nearest orbit that grows.
+
+    Returns
+    -------
+    complex
+        ``complex(+-inf, 0)``.
+
+    Raises
+    ------
+    TypeError
+        If ``nearest`` is not a number.
+    """
+    z = complex(nearest)
+    real = abs(z.imag) <= 1e-9 * abs(z)
+    return complex(-np.inf, 0.0) if real and z.real < 0 else complex(np.inf, 0.0)
+
+
+def with_border_scenario(sp: SpecialPoint, *, autonomous: bool) -> SpecialPoint:
+    """A non-smooth point with Feigin's prediction of its border collision filled in (``one_sided.scenario``
+    and ``period_two``), from its one-sided multipliers (:func:`saltation.orbits.border_collision.feigin_scenario`).
+
+    The tolerance within which a multiplier counts as on the unit circle is ten times the point's
+    ``multipliers_accuracy`` (at least ``1e-6``; ``1e-6`` where it is unknown).  A
+    ``discontinuous_symmetry_breaking`` point is ``undetermined``: the jump through -1 is the half-period
+    map's, which the whole period's multipliers (its squares) do not show.  Points without both sides'
+    multipliers are returned as they are.
+
+    Parameters
+    ----------
+    sp : SpecialPoint
+        A special point.
+    autonomous : bool
+        Whether its orbit is autonomous (the trivial multiplier is left out of the count).
+
+    Returns
+    -------
+    SpecialPoint
+        The point, with the scenario where it has both sides' multipliers.
+
+    Raises
+    ------
+    ValueError
+        If its two sides have different numbers of multipliers.
+
+    References
+    ----------
+    di Bernardo, Feigin, Hogan and Homer (1999), "Local analysis of C-bifurcations in n-dimensional
+    piecewise-smooth dynamical systems", Chaos, Solitons & Fractals 10.
+    """
+    if sp.one_sided is None or sp.multipliers_minus is None or sp.multipliers_plus is None:
+        return sp
+    accuracy = sp.multipliers_accuracy
+    tolerance = 10.0 * accuracy if np.isfinite(accuracy) else 0.0
+    found = feigin_scenario(sp.multipliers_minus, sp.multipliers_plus, autonomous=autonomous, tolerance=tolerance)
+    scenario, period_two = found.scenario, found.period_two
+    if sp.kind is SpecialPointKind.DISCONTINUOUS_SYMMETRY_BREAKING:
+        scenario, period_two = BorderScenario.UNDETERMINED, None
+    return replace(sp, one_sided=replace(sp.one_sided, scenario=scenario, period_two=period_two))
 
 
 def two_sides(lo: Solution, hi: Solution, **more) -> OneSided:
@@ -227,7 +301,8 @@ def grazing_point(problem, lo: Solution, hi: Solution, index: int) -> SpecialPoi
     is the grazing orbit with the crossing's saltation matrices inserted at
     the instant of tangency when they stay bounded (a continuous field), and
     unbounded otherwise (an impact: ``S = O(1/v)``): the largest multiplier
-    there is reported as ``inf``, the others are those of the nearest orbit.
+    there is reported as infinite (:func:`unbounded_limit`: ``-inf`` where the nearest crossing orbit's is
+    real and negative), the others are those of the nearest orbit.
 
     Parameters
     ----------
@@ -363,10 +438,11 @@ def _crossing_side_limit(problem, orbit, group: list, with_: Solution) -> _Cross
                 f"sqrt(distance) from two crossing orbits (to about {limit_error:.1e})")
         return _CrossingSide(None, mu_with, text, limit_error, Limits.EXTRAPOLATED, False)
     nearest = np.asarray(with_.summary.multipliers, dtype=complex)
-    keep = np.argsort(np.abs(nearest))[:-1]
-    mu_with = np.concatenate([[complex(np.inf, 0.0)], nearest[keep]])
+    order = np.argsort(np.abs(nearest))
+    mu_with = np.concatenate([[unbounded_limit(nearest[order[-1]])], nearest[order[:-1]]])
     text = ("unbounded: the crossing's saltation matrix grows like 1/sqrt(distance); the largest "
-            "multiplier on that side is infinite in the limit, the others are those of the nearest orbit")
+            "multiplier on that side is infinite in the limit (along the real axis where the nearest orbit's is "
+            "real: -inf for a negative one), the others are those of the nearest orbit")
     return _CrossingSide(None, mu_with, text, float("nan"), Limits.GRAZING, False)
 
 
@@ -395,7 +471,8 @@ def unlocated_grazing(problem, lo: Solution, hi: Solution, index: int, *, bracke
     Returns
     -------
     SpecialPoint or None
-        A ``grazing`` record, ``bracketed`` (not located), the crossing side's largest multiplier ``inf`` and
+        A ``grazing`` record, ``bracketed`` (not located), the crossing side's largest multiplier infinite
+        (:func:`unbounded_limit`) and
         the others those of the nearest orbit; None when the sides do not differ by such an excursion, or
         its saltation matrices stay bounded (then the set-valued multipliers classify it).
 
@@ -426,14 +503,15 @@ def unlocated_grazing(problem, lo: Solution, hi: Solution, index: int, *, bracke
                                    first.x_plus if problem.backward else first.x_minus, p, P):
         return None
     nearest = np.asarray(with_.summary.multipliers, dtype=complex)
-    mu_with = np.concatenate([[complex(np.inf, 0.0)], nearest[np.argsort(np.abs(nearest))[:-1]]])
+    order = np.argsort(np.abs(nearest))
+    mu_with = np.concatenate([[unbounded_limit(nearest[order[-1]])], nearest[order[:-1]]])
     mu_without = np.asarray(without.summary.multipliers, dtype=complex)
     mu_lo, mu_hi = (mu_without, mu_with) if lo_fewer else (mu_with, mu_without)
     side = "plus" if lo_fewer else "minus"
     why = (f"grazing of surface {first.surface!r} near t = {first.t:.10g}, bracketed (its defining system did not "
            f"converge); the side with the crossing is '{side}', unbounded: the crossing's saltation matrix grows "
-           "like 1/sqrt(distance), so the largest multiplier on that side is infinite in the limit, the others "
-           "are those of the nearest orbit")
+           "like 1/sqrt(distance), so the largest multiplier on that side is infinite in the limit (-inf where the "
+           "nearest orbit's is real and negative), the others are those of the nearest orbit")
     crossing = SetValuedCrossing(SpecialPointKind.GRAZING, None, None)
     sp = special_point_between(lo, hi, crossing, index=index, bracket=bracket, accuracy=accuracy,
                                monodromy_plus=None, note=(note + "; " if note else "") + why)
