@@ -105,6 +105,9 @@ def special_point_summary(point) -> str:
         rows.append(("events, other side", _sequence(point.event_labels_plus)))
     if point.scenario is not None:
         rows.append(("border collision (Feigin)", scenario_text(point)))
+    if getattr(point, "criticality", None) is not None:
+        coefficient, accuracy = point.normal_form
+        rows.append(("criticality", f"{point.criticality.value} (cubic coefficient {coefficient:.6g} +- {accuracy:.1g})"))
     if point.sensitivities:
         rows.append(("sensitivities", ", ".join(f"d/d{name} {value:.6g}" for name, value in point.sensitivities.items())))
     if point.touch_surface:

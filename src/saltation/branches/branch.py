@@ -15,6 +15,7 @@ from saltation.kinds import (  # noqa: F401  (the vocabulary's names here: where
     BorderScenario,
     BranchKind,
     CodimensionTwoKind,
+    Criticality,
     Limits,
     SpecialPointKind,
     SpecialPointStatus,
@@ -192,6 +193,14 @@ class SpecialPoint:
         (:func:`saltation.special_points.sensitivity.sensitivities`, which also gives the derivatives of
         the period and the state); None until they are asked for
         (:func:`saltation.special_points.sensitivity.add_sensitivities`).
+    criticality : Criticality or None
+        At a period doubling or a Neimark-Sacker point: whether the period-2 orbit or the torus is born stable
+        (``supercritical``), unstable (``subcritical``), or the cubic coefficient vanishes within its accuracy
+        (``degenerate``), from the normal form of the period map
+        (:func:`saltation.orbits.criticality.criticality`); None elsewhere, where it could not be computed (it
+        says why in the log), and in files written before 2026-12-05.
+    normal_form : (float, float) or None
+        The cubic normal-form coefficient behind ``criticality`` and its accuracy.
 
     Raises
     ------
@@ -222,8 +231,12 @@ class SpecialPoint:
     touch: Touch | None = None
     codimension_two: CodimensionTwoKind | None = None
     sensitivities: dict[str, float] | None = None
+    criticality: Criticality | None = None
+    normal_form: tuple[float, float] | None = None
 
     def __post_init__(self):
+        if self.criticality is not None and not isinstance(self.criticality, Criticality):
+            object.__setattr__(self, "criticality", Criticality(self.criticality))
         if self.codimension_two is not None and not isinstance(self.codimension_two, CodimensionTwoKind):
             object.__setattr__(self, "codimension_two", CodimensionTwoKind(self.codimension_two))
         if not isinstance(self.status, SpecialPointStatus):

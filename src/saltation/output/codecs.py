@@ -32,6 +32,7 @@ from saltation.branches.branch import (
     BranchKind,
     BranchPoint,
     CodimensionTwoKind,
+    Criticality,
     OneSided,
     SpecialPoint,
     SpecialPointKind,
@@ -341,6 +342,11 @@ _SPECIAL_POINT_CODEC = _Codec(
         # an optional key (2026-12-06): files before it read as None, and readers before it skip it
         "sensitivities": (lambda d: None if d is None else {str(k): _enc_float(v) for k, v in d.items()},
                           _nullable(lambda f, v, field, done: _dec_fixed(f, v, field, done))),
+        # optional keys (2026-12-05): files before them read as None, and readers before them skip them
+        "criticality": (lambda k: None if k is None else k.value,
+                        _nullable(_choice({k.value: k for k in Criticality}))),
+        "normal_form": (lambda c: None if c is None else [_enc_float(x) for x in c],
+                        _nullable(_as_tuple(_dec("reals", length=2)))),
     },
 )
 

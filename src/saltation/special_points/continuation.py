@@ -9,6 +9,7 @@ their set-valued multipliers) and cycle collapses, each located and recorded in 
 
 from __future__ import annotations
 
+import logging
 from dataclasses import replace
 
 import numpy as np
@@ -21,11 +22,14 @@ from saltation.branches.continuation import (
     Solution,
     canonical_events,
 )
-from saltation.errors import ModelError
+from saltation.errors import ModelError, SaltationError
+from saltation.kinds import SpecialPointKind
 from saltation.orbits.multiple import MultipleShootingProblem
 from saltation.orbits.records import PeriodicOrbit
 from saltation.orbits.single import ShootingProblem
 from saltation.special_points.detector import SpecialPointDetector
+
+_log = logging.getLogger(__name__)
 
 
 class Continuation(engine.Continuation):
@@ -109,8 +113,55 @@ def continue_branch(
     continuation).  Leine and Van Campen, "Fold bifurcations in discontinuous systems"
     (set-valued multipliers at the corners).
     """
-    return engine.continue_branch(problem, u0, lam0, settings=settings, directions=directions, label=label,
-                                  progress=progress, detector=detector)
+    branch = engine.continue_branch(problem, u0, lam0, settings=settings, directions=directions, label=label,
+                                    progress=progress, detector=detector)
+    if detector is not None:
+        add_criticality(branch)
+    return branch
+
+
+def add_criticality(branch: Branch) -> Branch:
+    """Give the period doublings and Neimark-Sacker points of a branch their criticality.
+
+    Each point's orbit is solved again and the cubic coefficient of its period map's normal form computed
+    (:func:`saltation.orbits.criticality.special_point_criticality`): ``SpecialPoint.criticality`` and
+    ``SpecialPoint.normal_form``.  Where it cannot be computed (a model of compiled callables, a strong
+    resonance, an event sequence that changes within the differences' steps, a branch without its problem),
+    the point keeps None and the log says why.
+
+    Parameters
+    ----------
+    branch : Branch
+        A branch with the problem it was computed with.
+
+    Returns
+    -------
+    Branch
+        The same branch, its special points replaced.
+
+    Raises
+    ------
+    None
+        A point whose criticality cannot be computed keeps None (its reason is logged).
+    """
+    from saltation.orbits.criticality import special_point_criticality
+
+    kinds = (SpecialPointKind.PERIOD_DOUBLING, SpecialPointKind.NEIMARK_SACKER)
+    if branch.problem is None or not any(sp.kind in kinds for sp in branch.special_points):
+        return branch
+    points = []
+    for sp in branch.special_points:
+        if sp.kind in kinds and sp.criticality is None:
+            try:
+                nf = special_point_criticality(branch, sp)
+            except SaltationError as exc:
+                _log.info("the criticality of the %s at %s = %.10g is not known: %s", sp.kind.value,
+                          branch.parameter_name, sp.parameter, exc)
+            else:
+                sp = replace(sp, criticality=nf.criticality, normal_form=(nf.coefficient, nf.accuracy))
+        points.append(sp)
+    branch.special_points = points
+    return branch
 
 
 def continue_orbit(
@@ -198,6 +249,6 @@ def continue_orbit(
 
 
 __all__ = [
-    "Continuation", "ContinuationSettings", "Corrector", "Solution", "canonical_events", "continue_branch",
-    "continue_orbit",
+    "Continuation", "ContinuationSettings", "Corrector", "Solution", "add_criticality", "canonical_events",
+    "continue_branch", "continue_orbit",
 ]
