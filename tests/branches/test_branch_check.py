@@ -180,3 +180,22 @@ def test_a_multiplier_through_plus_one_without_a_turning_point_is_a_branch_point
     assert min(abs(np.asarray(bp.multipliers) - 1.0)) <= bp.multipliers_accuracy
     assert bool(np.any(branch.stable)) and not bool(np.all(branch.stable))
     assert check_branch(branch).ok
+
+
+def test_a_nonsmooth_point_where_nothing_changes_is_a_violation():
+    """Two sides with the same events up to where the orbit starts (the section moved through an impact or a
+    stick phase) and the same stability: not a special point.  A change of the events, or a tangency, is."""
+    from saltation.branches.branch import OneSided
+
+    def corner(kind, minus, plus):
+        sides = OneSided(multipliers_minus=np.array([0.5, 0.2], dtype=complex),
+                         multipliers_plus=np.array([0.4, 0.3], dtype=complex),
+                         event_labels_minus=minus, event_labels_plus=plus)
+        return _sp(kind, 0.15, 1, one_sided=sides)
+
+    rotated = corner(SpecialPointKind.NONSMOOTH_NO_CROSSING, ("a", "b", "c"), ("b", "c", "a"))
+    assert rules(_branch([[0.5, 0.2]] * 4, [rotated])) == ["no_change"]
+    changed = corner(SpecialPointKind.NONSMOOTH_NO_CROSSING, ("a", "b"), ("a", "b", "c"))
+    assert rules(_branch([[0.5, 0.2]] * 4, [changed])) == []
+    touched = corner(SpecialPointKind.GRAZING, ("a", "b"), ("b", "a"))
+    assert "no_change" not in rules(_branch([[0.5, 0.2]] * 4, [touched]))

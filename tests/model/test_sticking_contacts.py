@@ -144,3 +144,24 @@ def test_a_ball_on_a_fixed_floor_comes_to_rest_and_stays():
     assert [e.mode_to for e in run.events] == ["flight@floor"]
     assert run.events[0].t == pytest.approx(math.sqrt(2 / 9.81), abs=1e-12)
     assert run.x1 == pytest.approx([0.0, 0.0], abs=1e-12)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# resets that forget
+
+
+def test_backward_shooting_through_a_reset_that_forgets_is_refused_naming_the_transition():
+    """Backward in time a plastic landing cannot be undone: no infinitely unstable orbit lies behind it."""
+    orbit = find_periodic_orbit(ball(A=0.26), [0.0, 0.0])
+    with pytest.raises(ModelError, match=r"transition \d+ \(flight -\[table-\]-> flight@table\).*forgets"):
+        find_periodic_orbit(ball(A=0.26), orbit.state0, backward=True)
+
+
+def test_an_elastic_impact_still_runs_backwards():
+    """A reset with a regular saltation matrix (``e = 0.5``) is not refused backward in time."""
+    from saltation.orbits.single import check_resets_run_backwards
+
+    system = ball(e=0.5, A=0.3)
+    run = Flow(system).run([0.05, 3.0], 0.0, -0.1, system.parameter_vector(), variational=True)
+    assert any(e.surface == "table" for e in run.events)
+    check_resets_run_backwards(system, run)  # does not raise

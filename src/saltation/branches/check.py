@@ -16,6 +16,9 @@ hold of it, whatever the model:
   branch through it: at a ``nonsmooth_fold`` the branch turns back (the points before and after it lie on
   the same side of its parameter), at ``persistence`` it goes on (on opposite sides).  Checked where the
   step holds that point alone and both points lie farther from it than its accuracy;
+- a non-smooth point marks a change: its two sides differ in their event sequences (up to where the orbit
+  starts: a rotation of the sequence as the section moves through an event is no change), in their
+  stability, or it is a tangency;
 - a branch that stopped because its corrector failed says what it found there: a special point at that
   end, or the corrector's named failure (``stop_detail``).
 
@@ -43,8 +46,8 @@ class Violation:
     Attributes
     ----------
     rule : str
-        ``trivial_multiplier``, ``uncovered_change``, ``kind_mismatch``, ``bracket``, ``border_scenario`` or
-        ``silent_stop``.
+        ``trivial_multiplier``, ``uncovered_change``, ``kind_mismatch``, ``bracket``, ``border_scenario``,
+        ``no_change`` or ``silent_stop``.
     index : int or None
         The branch point (or the step from it to the next) where it is broken.
     message : str
@@ -252,6 +255,36 @@ def _scenario_violations(branch) -> list[Violation]:
     return out
 
 
+#: the kinds that are a tangency: something changes at them (a surface is touched) even where the event
+#: sequences of their two sides read alike
+_TANGENCY_KINDS = ("grazing", "grazing_sliding", "crossing_sliding", "switching_sliding", "adding_sliding")
+
+
+def _unchanged_violations(branch, autonomous: bool) -> list[Violation]:
+    """Non-smooth points whose two sides differ in nothing: the same event sequence up to where the orbit
+    starts, the same stability, and no tangency (see the module)."""
+    from saltation.branches.corrector import canonical_events
+
+    out = []
+    for sp in branch.special_points:
+        kind = sp.kind.value
+        if sp.one_sided is None or kind in _TANGENCY_KINDS or not sp.kind.is_nonsmooth:
+            continue
+        minus = sp.one_sided.event_ids_minus or sp.one_sided.event_labels_minus
+        plus = sp.one_sided.event_ids_plus or sp.one_sided.event_labels_plus
+        if not minus or not plus or canonical_events(tuple(minus)) != canonical_events(tuple(plus)):
+            continue
+        mu_a, mu_b = sp.one_sided.multipliers_minus, sp.one_sided.multipliers_plus
+        if mu_a is None or mu_b is None:
+            continue
+        if unstable_count(mu_a, autonomous=autonomous) != unstable_count(mu_b, autonomous=autonomous):
+            continue
+        out.append(Violation("no_change", sp.index,
+                             f"{kind} at {sp.parameter:.10g}: its two sides have the same events (up to where the orbit "
+                             "starts) and the same stability, and it is no tangency: nothing changes there"))
+    return out
+
+
 # ---------------------------------------------------------------------------------------------------
 def check_branch(branch, *, trivial_tol: float = 1e-6) -> BranchCheck:
     """The invariants of a computed branch (see the module's description).
@@ -308,6 +341,7 @@ def check_branch(branch, *, trivial_tol: float = 1e-6) -> BranchCheck:
 
     if not curve:
         out.extend(_scenario_violations(branch))
+        out.extend(_unchanged_violations(branch, autonomous))
         ranges = [count_range(p.multipliers, autonomous=autonomous, equilibrium=equilibrium) for p in pts]
         by_index: dict[int, list] = {}
         for sp in branch.special_points:

@@ -111,6 +111,51 @@ def stationary_floor(tolerances: Tolerances, size: float) -> float:
     return min(STATIONARY_FACTOR * (tolerances.atol + tolerances.rtol * scale), STATIONARY_FRACTION * scale)
 
 
+#: an event's saltation matrix is singular (its reset forgets) where ``|det S|`` is below this fraction of
+#: ``max(1, |S|)^n``
+SINGULAR_SALTATION = 1e-12
+
+
+def check_resets_run_backwards(system, traj: Trajectory) -> None:
+    """Refuse a backward-time run that passes a reset that forgets.
+
+    Backward in time the engine applies each transition's reset as written (see the user guide on
+    backward time).  A reset whose saltation matrix is singular (a plastic impact, a landing that sticks,
+    a neuron's voltage reset, a latch that forgets) maps a whole direction of states to one: it cannot be
+    run backwards, and the backward map's zero multiplier would read as an infinitely unstable orbit in
+    forward time, which does not exist.
+
+    Parameters
+    ----------
+    system : PiecewiseSystem or CompiledSystem
+        The model (its resets).
+    traj : Trajectory
+        A backward-time run.
+
+    Raises
+    ------
+    ModelError
+        Naming the first transition with a reset whose saltation matrix is singular at its event.
+    """
+    resets = getattr(system, "resets", None)
+    if resets is None:
+        return
+    for event in traj.events:
+        k = int(event.transition)
+        if event.kind is not EventKind.TRANSITION or not 0 <= k < len(resets) or resets[k] is None:
+            continue
+        S = np.asarray(event.saltation, dtype=float)
+        scale = max(1.0, float(np.linalg.norm(S))) ** S.shape[0]
+        det = float(np.linalg.det(S))
+        if abs(det) <= SINGULAR_SALTATION * scale:
+            tr = system.transitions[k]
+            raise ModelError(
+                f"backward-time shooting passes transition {k} ({tr.label}) at t = {event.t:.10g}, whose reset forgets "
+                f"(its saltation matrix is singular, det S = {det:.3g}): a reset that forgets cannot be run backwards, "
+                "and no infinitely unstable orbit lies behind it; shoot in forward time"
+            )
+
+
 class ShootingProblem(BranchProblem):
     """Periodic orbits of a model by single shooting.
 
@@ -790,6 +835,8 @@ class ShootingProblem(BranchProblem):
         ------
         StationaryStateError
             If the state does not move over the period (see :meth:`stationary_reason`).
+        ModelError
+            In backward time, if the orbit passes a reset that forgets (:func:`check_resets_run_backwards`).
         InconsistentResultError
             If an autonomous orbit's monodromy does not map the flow direction to itself within
             :data:`TRIVIAL_MULTIPLIER_ACCURACY`, or (with :attr:`mode0`) its shot ends in another mode
@@ -799,6 +846,8 @@ class ShootingProblem(BranchProblem):
         if reason is not None:
             raise StationaryStateError(reason, u[: self.system.n], self.period_of(u, lam))
         self.check_mode_closes(traj)
+        if self.backward:
+            check_resets_run_backwards(self.system, traj)
         if not self.autonomous:
             return multipliers_from_monodromy(traj.monodromy, backward=self.backward), float("nan")
         found = autonomous_multipliers(traj.monodromy, traj.velocity_end, backward=self.backward)
@@ -1134,4 +1183,5 @@ class ShootingProblem(BranchProblem):
         )
 
 
-__all__ = ["PERIOD_GROWTH", "SEAM_MARGIN", "STATIONARY_FACTOR", "STATIONARY_FRACTION", "TRIVIAL_MULTIPLIER_ACCURACY", "ShootingProblem", "stationary_floor"]
+__all__ = ["PERIOD_GROWTH", "SEAM_MARGIN", "SINGULAR_SALTATION", "STATIONARY_FACTOR", "STATIONARY_FRACTION",
+           "TRIVIAL_MULTIPLIER_ACCURACY", "ShootingProblem", "check_resets_run_backwards", "stationary_floor"]

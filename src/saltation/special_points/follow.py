@@ -243,6 +243,24 @@ def find_backward_seed(
     return None
 
 
+def _check_no_resets(problem, end) -> None:
+    """Refuse the backward-time branch beyond a fold whose orbits pass a reset: backward in time the engine
+    applies resets as written, so its orbits would be another model's (and a reset that forgets cannot be run
+    backwards at all)."""
+    resets = getattr(problem.system, "resets", None)
+    ids = getattr(getattr(end, "summary", None), "event_ids", ()) or ()
+    if resets is None:
+        return
+    with_reset = sorted({int(k) for kind, k, _ in ids
+                         if kind == int(EventKind.TRANSITION) and 0 <= int(k) < len(resets) and resets[int(k)] is not None})
+    if with_reset:
+        labels = ", ".join(f"{k} ({problem.system.transitions[k].label})" for k in with_reset)
+        raise SaltationError(
+            f"the orbits at the end of the branch pass transitions with a reset ({labels}): backward-time shooting "
+            "applies resets as written, so the branch beyond the fold in backward time would not be this model's "
+            "(a Filippov model's, without resets, is)")
+
+
 def follow_through_discontinuous_fold(
     forward: Continuation,
     *,
@@ -291,6 +309,7 @@ def follow_through_discontinuous_fold(
         raise SaltationError("follow_through_discontinuous_fold needs a forward-time shooting continuation")
     settings = settings or forward.settings
     end, bad = _branch_end(forward)
+    _check_no_resets(prob_f, end)
     towards = float(np.sign(bad - end.lam)) or 1.0
     lam_in = end.lam - towards * offset * (1.0 + abs(end.lam))
     stable_in = forward.corrector.solve_fixed(end.u, lam_in)
