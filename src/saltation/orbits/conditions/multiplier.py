@@ -7,7 +7,7 @@ system is solved by :func:`saltation.orbits.problem.bordered_solve`.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -172,24 +172,7 @@ class MultiplierCondition(Condition):
         if kept is not None:
             out.d_x0[:], out.d_period[:], out.d_parameters[:] = kept.d_x0, kept.d_period, kept.d_parameters
             return out
-        for i in range(n):
-            d = self.h * max(1.0, abs(shot.x0[i]))
-            e = np.zeros(n)
-            e[i] = d
-            out.d_x0[0, i] = (self.g(shot.monodromy(shot.x0 + e, shot.period, shot.parameters))
-                              - self.g(shot.monodromy(shot.x0 - e, shot.period, shot.parameters))) / (2 * d)
-        if shot.autonomous:
-            d = self.h * max(1.0, shot.period)
-            out.d_period[0] = (self.g(shot.monodromy(shot.x0, shot.period + d, shot.parameters))
-                               - self.g(shot.monodromy(shot.x0, shot.period - d, shot.parameters))) / (2 * d)
-        for c, j in enumerate(params):
-            d = self.h * max(1.0, abs(shot.parameters[j]))
-            q = shot.parameters.copy()
-            q[j] += d
-            up = self.g(shot.monodromy(shot.x0, shot.period_at(q), q))
-            q[j] -= 2 * d
-            down = self.g(shot.monodromy(shot.x0, shot.period_at(q), q))
-            out.d_parameters[0, c] = (up - down) / (2 * d)
+        monodromy_differences(shot, lambda M: [self.g(M)], self.h, params, out)
         self.keep_derivatives(point, params, out)
         return out
 
@@ -222,44 +205,114 @@ class MultiplierCondition(Condition):
             If a bordered matrix is singular, or a run of the differences fails (an
             :class:`IntegrationError`).
         """
-        shot, U, times, segs = segments.whole, segments.nodes, segments.times, segments.trajectories
+        shot, U, segs = segments.whole, segments.nodes, segments.trajectories
         n, m, T, p = len(shot.x0), len(segs), shot.period, shot.parameters
         out = Rows.zeros(1, m * n, len(params), 0)
-        factors = [seg.monodromy for seg in segs]
-
-        def whole(TT: float, q: np.ndarray) -> np.ndarray:
-            ts = shot.t0 + shot.sign * TT * np.arange(m + 1) / m
-            return _product([segments.transfer(i, U[i * n:(i + 1) * n], ts[i], ts[i + 1], q) for i in range(m)])
-
-        out.value[0] = self.g(_product(factors))
+        out.value[0] = self.g(_product([seg.monodromy for seg in segs]))
         point = np.concatenate([U[: m * n], [T], p])
         kept = self.kept_derivatives(point, params, out.value[0], m * n)
         if kept is not None:
             out.d_x0[:], out.d_period[:], out.d_parameters[:] = kept.d_x0, kept.d_period, kept.d_parameters
             return None, out
-        for i in range(m):
-            x = U[i * n:(i + 1) * n]
-            for a in range(n):
-                d = self.h * max(1.0, abs(x[a]))
-                e = np.zeros(n)
-                e[a] = d
-                up, down = list(factors), list(factors)
-                up[i] = segments.transfer(i, x + e, times[i], times[i + 1], p)
-                down[i] = segments.transfer(i, x - e, times[i], times[i + 1], p)
-                out.d_x0[0, i * n + a] = (self.g(_product(up)) - self.g(_product(down))) / (2 * d)
-        if shot.autonomous:
-            d = self.h * max(1.0, T)
-            out.d_period[0] = (self.g(whole(T + d, p)) - self.g(whole(T - d, p))) / (2 * d)
-        for cc, j in enumerate(params):
-            d = self.h * max(1.0, abs(p[j]))
-            q = p.copy()
-            q[j] += d
-            up = self.g(whole(shot.period_at(q), q))
-            q[j] -= 2 * d
-            down = self.g(whole(shot.period_at(q), q))
-            out.d_parameters[0, cc] = (up - down) / (2 * d)
+        segmented_monodromy_differences(segments, lambda M: [self.g(M)], self.h, params, out)
         self.keep_derivatives(point, params, out)
         return None, out
+
+
+def monodromy_differences(shot: Shot, g: Callable[[np.ndarray], Sequence[float]], h: float, params: Sequence[int],
+                          out: Rows) -> None:
+    """Central differences of ``g(M)`` (``M`` the shot's monodromy) by the state, the period (autonomous) and
+    the parameters ``params``, written into ``out``'s derivative rows.
+
+    Parameters
+    ----------
+    shot : Shot
+        The shot of the period; :meth:`Shot.monodromy` shoots the differences.
+    g : callable
+        ``M -> values``, one per row of ``out``.
+    h : float
+        Relative step.
+    params : sequence of int
+        The parameter indices of the derivative columns.
+    out : Rows
+        Its ``d_x0``, ``d_period`` and ``d_parameters`` are filled.
+
+    Raises
+    ------
+    SaltationError
+        If a shot of the differences fails (an :class:`IntegrationError`), or as ``g``.
+    """
+    n = len(shot.x0)
+    G = lambda x, T, q: np.asarray(g(shot.monodromy(x, T, q)), dtype=float)  # noqa: E731
+    for i in range(n):
+        d = h * max(1.0, abs(shot.x0[i]))
+        e = np.zeros(n)
+        e[i] = d
+        out.d_x0[:, i] = (G(shot.x0 + e, shot.period, shot.parameters) - G(shot.x0 - e, shot.period, shot.parameters)) / (2 * d)
+    if shot.autonomous:
+        d = h * max(1.0, shot.period)
+        out.d_period[:] = (G(shot.x0, shot.period + d, shot.parameters) - G(shot.x0, shot.period - d, shot.parameters)) / (2 * d)
+    for c, j in enumerate(params):
+        d = h * max(1.0, abs(shot.parameters[j]))
+        q = shot.parameters.copy()
+        q[j] += d
+        up = G(shot.x0, shot.period_at(q), q)
+        q[j] -= 2 * d
+        out.d_parameters[:, c] = (up - G(shot.x0, shot.period_at(q), q)) / (2 * d)
+
+
+def segmented_monodromy_differences(segments: Segments, g: Callable[[np.ndarray], Sequence[float]], h: float,
+                                    params: Sequence[int], out: Rows) -> None:
+    """:func:`monodromy_differences` for a period shot in segments: a node's differences rerun its segment
+    only, those by the period and the parameters every segment.
+
+    Parameters
+    ----------
+    segments : Segments
+        The period shot in segments.
+    g : callable
+        ``M -> values``, one per row of ``out`` (``M`` the product of the segments' transfer matrices).
+    h : float
+        Relative step.
+    params : sequence of int
+        The parameter indices of the derivative columns.
+    out : Rows
+        Its ``d_x0`` (by every node), ``d_period`` and ``d_parameters`` are filled.
+
+    Raises
+    ------
+    SaltationError
+        If a run of the differences fails (an :class:`IntegrationError`), or as ``g``.
+    """
+    shot, U, times, segs = segments.whole, segments.nodes, segments.times, segments.trajectories
+    n, m, T, p = len(shot.x0), len(segs), shot.period, shot.parameters
+    factors = [seg.monodromy for seg in segs]
+    G = lambda M: np.asarray(g(M), dtype=float)  # noqa: E731
+
+    def whole(TT: float, q: np.ndarray) -> np.ndarray:
+        ts = shot.t0 + shot.sign * TT * np.arange(m + 1) / m
+        return _product([segments.transfer(i, U[i * n:(i + 1) * n], ts[i], ts[i + 1], q) for i in range(m)])
+
+    for i in range(m):
+        x = U[i * n:(i + 1) * n]
+        for a in range(n):
+            d = h * max(1.0, abs(x[a]))
+            e = np.zeros(n)
+            e[a] = d
+            up, down = list(factors), list(factors)
+            up[i] = segments.transfer(i, x + e, times[i], times[i + 1], p)
+            down[i] = segments.transfer(i, x - e, times[i], times[i + 1], p)
+            out.d_x0[:, i * n + a] = (G(_product(up)) - G(_product(down))) / (2 * d)
+    if shot.autonomous:
+        d = h * max(1.0, T)
+        out.d_period[:] = (G(whole(T + d, p)) - G(whole(T - d, p))) / (2 * d)
+    for c, j in enumerate(params):
+        d = h * max(1.0, abs(p[j]))
+        q = p.copy()
+        q[j] += d
+        up = G(whole(shot.period_at(q), q))
+        q[j] -= 2 * d
+        out.d_parameters[:, c] = (up - G(whole(shot.period_at(q), q))) / (2 * d)
 
 
 def _product(factors: Sequence[np.ndarray]) -> np.ndarray:
@@ -270,4 +323,4 @@ def _product(factors: Sequence[np.ndarray]) -> np.ndarray:
     return M
 
 
-__all__ = ["MultiplierCondition"]
+__all__ = ["MultiplierCondition", "monodromy_differences", "segmented_monodromy_differences"]

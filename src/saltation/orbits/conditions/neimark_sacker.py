@@ -16,6 +16,11 @@ import numpy as np
 
 from saltation.errors import SaltationError
 from saltation.orbits.conditions.base import Condition
+from saltation.orbits.conditions.multiplier import (
+    _product,
+    monodromy_differences,
+    segmented_monodromy_differences,
+)
 from saltation.orbits.conditions.shot import Rows, Segments, Shot
 
 #: The bordered matrix counts as singular above this condition number.
@@ -317,25 +322,7 @@ class NeimarkSackerCondition(Condition):
         if kept is not None:
             out.d_x0[:], out.d_period[:], out.d_parameters[:] = kept.d_x0, kept.d_period, kept.d_parameters
             return out
-        g = lambda M: self._g(M, kappa)
-        for i in range(n):
-            d = self.h * max(1.0, abs(shot.x0[i]))
-            e = np.zeros(n)
-            e[i] = d
-            out.d_x0[:, i] = (g(shot.monodromy(shot.x0 + e, shot.period, shot.parameters))
-                              - g(shot.monodromy(shot.x0 - e, shot.period, shot.parameters))) / (2 * d)
-        if shot.autonomous:
-            d = self.h * max(1.0, shot.period)
-            out.d_period[:] = (g(shot.monodromy(shot.x0, shot.period + d, shot.parameters))
-                               - g(shot.monodromy(shot.x0, shot.period - d, shot.parameters))) / (2 * d)
-        for c, j in enumerate(params):
-            d = self.h * max(1.0, abs(shot.parameters[j]))
-            q = shot.parameters.copy()
-            q[j] += d
-            up = g(shot.monodromy(shot.x0, shot.period_at(q), q))
-            q[j] -= 2 * d
-            down = g(shot.monodromy(shot.x0, shot.period_at(q), q))
-            out.d_parameters[:, c] = (up - down) / (2 * d)
+        monodromy_differences(shot, lambda M: self._g(M, kappa), self.h, params, out)
         self._keep(point, params, out)
         return out
 
@@ -368,45 +355,16 @@ class NeimarkSackerCondition(Condition):
             If a bordered matrix is singular, or a run of the differences fails (an
             :class:`IntegrationError`).
         """
-        from saltation.orbits.conditions.multiplier import _product
-
         kappa = float(extra[0])
-        shot, U, times, segs = segments.whole, segments.nodes, segments.times, segments.trajectories
+        shot, U, segs = segments.whole, segments.nodes, segments.trajectories
         n, m, T, p = len(shot.x0), len(segs), shot.period, shot.parameters
-        factors = [seg.monodromy for seg in segs]
-        out = self._head(_product(factors), kappa, m * n, len(params))
-        g = lambda M: self._g(M, kappa)
-
-        def whole(TT: float, q: np.ndarray) -> np.ndarray:
-            ts = shot.t0 + shot.sign * TT * np.arange(m + 1) / m
-            return _product([segments.transfer(i, U[i * n:(i + 1) * n], ts[i], ts[i + 1], q) for i in range(m)])
-
+        out = self._head(_product([seg.monodromy for seg in segs]), kappa, m * n, len(params))
         point = np.concatenate([U[: m * n], [T], p, [kappa]])
         kept = self._kept_rows(point, params, out.value, m * n)
         if kept is not None:
             out.d_x0[:], out.d_period[:], out.d_parameters[:] = kept.d_x0, kept.d_period, kept.d_parameters
             return None, out
-        for i in range(m):
-            x = U[i * n:(i + 1) * n]
-            for a in range(n):
-                d = self.h * max(1.0, abs(x[a]))
-                e = np.zeros(n)
-                e[a] = d
-                up, down = list(factors), list(factors)
-                up[i] = segments.transfer(i, x + e, times[i], times[i + 1], p)
-                down[i] = segments.transfer(i, x - e, times[i], times[i + 1], p)
-                out.d_x0[:, i * n + a] = (g(_product(up)) - g(_product(down))) / (2 * d)
-        if shot.autonomous:
-            d = self.h * max(1.0, T)
-            out.d_period[:] = (g(whole(T + d, p)) - g(whole(T - d, p))) / (2 * d)
-        for cc, j in enumerate(params):
-            d = self.h * max(1.0, abs(p[j]))
-            q = p.copy()
-            q[j] += d
-            up = g(whole(shot.period_at(q), q))
-            q[j] -= 2 * d
-            down = g(whole(shot.period_at(q), q))
-            out.d_parameters[:, cc] = (up - down) / (2 * d)
+        segmented_monodromy_differences(segments, lambda M: self._g(M, kappa), self.h, params, out)
         self._keep(point, params, out)
         return None, out
 
