@@ -62,6 +62,7 @@ from saltation.orbits.conditions import (
 from saltation.special_points.grazing import location_tolerances
 from saltation.special_points.loci import (
     SLIDING_KINDS,
+    _touch_of,
     arrival_identity,
     grazed_transitions,
 )
@@ -127,16 +128,6 @@ class PointSensitivities:
         for q, value in self.d_parameter.items():
             lines.append(f"  d {self.parameter_name} / d {q:<{width}} = {value: .10g}  (to {self.accuracy[q]:.1e})")
         return "\n".join(lines)
-
-
-def _touch_transition(problem, point: SpecialPoint) -> tuple[int, float] | None:
-    """``(transition, instant)`` of the touch a point records (its surface and the mode whose field is tangent)."""
-    if not point.touch_surface or not np.isfinite(point.touch_time):
-        return None
-    for k, tr in enumerate(problem.system.transitions):
-        if tr.surface == point.touch_surface and tr.source == point.touch_mode:
-            return k, float(point.touch_time)
-    return None
 
 
 def _own_copy(problem):
@@ -218,7 +209,7 @@ def defining_system(problem, point: SpecialPoint) -> tuple[ConditionedProblem, n
             raise ModelError(f"no defining system for the sensitivities of the {kind.value} of {what}: its arrival is "
                              "named for forced orbits in forward time over one forcing period")
     elif kind.is_nonsmooth:
-        touched = _touch_transition(single, point)
+        touched = _touch_of(single, point)
         if touched is not None and (kind is SpecialPointKind.GRAZING_SLIDING or not plain):
             transition, t_g, others = *touched, []  # (a grazing-sliding's run may slide for a rounding at the touch)
         elif plain:
