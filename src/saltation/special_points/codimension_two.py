@@ -19,11 +19,15 @@ curve's kind has its list (:data:`TESTS`):
 
 The multipliers other than the curve's own (the one nearest ``+1`` or ``-1``, or the pair nearest
 ``exp(+-i theta)``) enter as products ``prod (mu - 1)``, ``prod (mu + 1)`` and ``prod_{i<j} (mu_i mu_j -
-1)``, real for a real matrix.  A sign change between two curve points is located on the curve (the curve's
-own corrector on the hyperplanes across the chord between them) by the Illinois variant of regula falsi,
-to ``tol`` in the two parameters; a location that does not converge is left bracketed between the two
-points.  A zero of ``prod (mu_i mu_j - 1)`` at a real pair (a neutral saddle among the other multipliers)
-is not a bifurcation and is dropped.
+1)``, real for a real matrix.  For a second multiplier at the curve's own ``+-1`` (1:1 on a fold curve, 1:2
+on a period-doubling curve) the factor of the next nearest has the curve's own added, ``(mu_1 -+ 1) + (mu_2
+-+ 1)``: near the double multiplier (a Jordan block) each eigenvalue is known only to the square root of the
+monodromy's rounding, their sum to the rounding itself.  A sign change between two curve points is located on
+the curve (the curve's own corrector on the hyperplanes across the chord between them) by the Illinois
+variant of regula falsi, to ``tol`` in the two parameters, at the end of the final bracket where the test
+function is smaller; a location that does not converge is left bracketed between the two points.  A zero of
+``prod (mu_i mu_j - 1)`` at a real pair (a neutral saddle among the other multipliers) is not a bifurcation
+and is dropped.
 
 References
 ----------
@@ -105,6 +109,24 @@ class TestFunction:
 def _prod_minus(others: np.ndarray, target: float) -> float:
     """``prod (mu - target)`` over the other multipliers (real: they come in conjugate pairs)."""
     return float(np.real(np.prod(others - target))) if others.size else 1.0
+
+
+def _second_at(multipliers: np.ndarray, target: float) -> float:
+    """``prod (mu - target)`` over the other multipliers, with the curve's own multiplier (the nearest ``target``)
+    added to the next nearest's factor: ``(mu_1 - target) + (mu_2 - target)``.
+
+    On the curve the first term is zero to the corrector's tolerance, so this is the product over the others;
+    but near a double multiplier (a 1:1 or 1:2 resonance, a Jordan block) each of the two eigenvalues is known
+    only to the square root of the monodromy's rounding (1e-7 for 1e-14), and which of them is the curve's own
+    is a toss-up, while their sum (the trace of the monodromy on their invariant plane) is as accurate as the
+    monodromy.  Real: the rest come in conjugate pairs.
+    """
+    mu = np.asarray(multipliers, dtype=complex)
+    if mu.size < 2:
+        return 1.0
+    order = np.argsort(np.abs(mu - target), kind="stable")
+    pair = (mu[order[0]] - target) + (mu[order[1]] - target)
+    return float(np.real(pair * np.prod(mu[order[2:]] - target)))
 
 
 def _prod_pairs(others: np.ndarray) -> float:
@@ -261,13 +283,13 @@ NORMAL_FORM_TESTS = {CodimensionTwoKind.GENERALIZED_PERIOD_DOUBLING: _flip_coeff
 TESTS: dict[SpecialPointKind, tuple[TestFunction, ...]] = {
     SpecialPointKind.FOLD: (
         TestFunction(_C2.CUSP, "fold", _cusp),
-        TestFunction(_C2.STRONG_RESONANCE_1_1, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0)),
+        TestFunction(_C2.STRONG_RESONANCE_1_1, "fold", lambda c, pt, r: _second_at(pt.multipliers, 1.0)),
         TestFunction(_C2.FOLD_FLIP, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0)),
         TestFunction(_C2.FOLD_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
     ),
     SpecialPointKind.PERIOD_DOUBLING: (
         TestFunction(_C2.FOLD_FLIP, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0)),
-        TestFunction(_C2.STRONG_RESONANCE_1_2, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0)),
+        TestFunction(_C2.STRONG_RESONANCE_1_2, "period_doubling", lambda c, pt, r: _second_at(pt.multipliers, -1.0)),
         TestFunction(_C2.FLIP_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
         # the cubic normal-form coefficient of the flip changes sign (with normal_forms=True)
         TestFunction(_C2.GENERALIZED_PERIOD_DOUBLING, "period_doubling", None),
@@ -466,6 +488,8 @@ class CodimensionTwoSearch:
         q_ref = ea.q
         status, side = SpecialPointStatus.BRACKETED, 0
         best_z, best_point, f_best = None, None, None
+        # the bracket's ends as (z, point, |f|), with the test function's own values (Illinois halves f_lo or f_hi)
+        end_lo, end_hi = (za, ea.point, abs(f_lo)), (zb, eb.point, abs(f_hi))
         try:
             for _ in range(self.max_iter):
                 s = (s_lo * f_hi - s_hi * f_lo) / (f_hi - f_lo) if f_hi != f_lo else 0.5 * (s_lo + s_hi)
@@ -482,14 +506,19 @@ class CodimensionTwoSearch:
                     break
                 if (f > 0) == (f_lo > 0):
                     s_lo, f_lo, lo_z = s, f, z
+                    end_lo = (z, point, abs(f))
                     f_hi = f_hi * 0.5 if side == -1 else f_hi
                     side = -1
                 else:
                     s_hi, f_hi, hi_z = s, f, z
+                    end_hi = (z, point, abs(f))
                     f_lo = f_lo * 0.5 if side == 1 else f_lo
                     side = 1
                 if np.max(np.abs(params(hi_z) - params(lo_z))) <= self.tol * (1.0 + np.max(np.abs(params(z)))):
                     status = SpecialPointStatus.LOCATED
+                    # the point is the bracket's end where the test function is smaller (Illinois leaves its last
+                    # iterate at either end, at times the far one)
+                    best_z, best_point = min(end_lo, end_hi, key=lambda end: end[2])[:2]
                     break
         except (SaltationError, np.linalg.LinAlgError) as exc:
             _log.info("%s between curve points %d and %d not located: %s", test.name.value, index, index + 1, exc)

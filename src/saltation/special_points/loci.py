@@ -52,6 +52,7 @@ curve (:mod:`saltation.special_points.codimension_two`); their
 
 from __future__ import annotations
 
+import logging
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -95,6 +96,8 @@ from saltation.special_points.grazing import (
     locate_grazing,
     tangency_time,
 )
+
+_log = logging.getLogger(__name__)
 
 #: Special points continued by the defining systems of :mod:`saltation.special_points.sliding`.
 SLIDING_KINDS = frozenset(
@@ -672,7 +675,10 @@ def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: Spe
     curve ends on the corner curve.  Of its last points, the one whose orbit comes nearest to a surface
     (within ``gap`` of the state's size) is taken; the corner at its value of the second parameter is
     located by the grazing defining system in the first.  That corner is the label's position, and the
-    distance from the curve point to it the label's accuracy."""
+    distance from the curve point to it the label's accuracy.  The grazing system's virtual orbit passes
+    the transition without firing it for the whole period: where the orbit passes that transition
+    elsewhere too (a second contact with the same stop), the virtual orbit misses that passage as well and
+    its grazing is another orbit's, so no end is labelled (None)."""
     n = problem.system.n
     best = None
     for z, record in zip(zs[-last:], records[-last:]):
@@ -683,17 +689,27 @@ def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: Spe
                                                        tolerances=problem.tolerances)
             surface = problem.system.transitions[transition].surface
             x = problem.flow.run(z[:n], problem.t0, t_g, p, tolerances=problem.tolerances).x1
+            # a near miss: the orbit does not pass the transition there
             touches.append((abs(problem.flow.indicator(surface, t_g, x, p)) / (1.0 + float(np.linalg.norm(x))),
-                            transition, t_g))
+                            transition, t_g, 0))
         except SaltationError:
             pass
-        touches += short_excursions(problem.flow, z[:n], p, t0=problem.t0, tolerances=problem.tolerances)
-        for g, transition, t_g in touches:
+        # a vanishing excursion: the orbit passes the transition once there, on its way in
+        touches += [(*e, 1) for e in short_excursions(problem.flow, z[:n], p, t0=problem.t0,
+                                                      tolerances=problem.tolerances)]
+        for g, transition, t_g, own in touches:
             if g <= gap and (best is None or g < best[0]):
-                best = (g, z, p, transition, t_g, record)
+                best = (g, z, p, transition, t_g, record, own)
     if best is None:
         return None
-    _, z, p, transition, t_g, record = best
+    _, z, p, transition, t_g, record, own = best
+    passes = _passages(problem, z[:n], p, transition)
+    if passes is None or passes > own:
+        _log.info("the %s curve ends where its orbit touches the surface of transition %d, which it passes %s "
+                  "elsewhere in the period: the grazing's virtual orbit (that transition disabled) would miss "
+                  "that passage too, so the end is not located", kind.value, transition,
+                  "(a run failed)" if passes is None else f"{passes - own} more time(s)")
+        return None
     try:
         corner = locate_grazing(problem.flow, z[:n], float(z[n]), problem.lam_name, transition, t_g, parameters=p,
                                 t0=problem.t0, tolerances=problem.tolerances)
@@ -703,6 +719,17 @@ def _end_at_a_corner(problem: ShootingProblem, curve: MultiplierCurve, kind: Spe
     return _codimension_two((kind.value, _touch_kind(problem, curve, at)), (corner.parameter, float(z[-1])),
                             max(abs(corner.parameter - float(z[n])), corner.accuracy), 0, record,
                             status=SpecialPointStatus.LOCATED)
+
+
+def _passages(problem: ShootingProblem, state: np.ndarray, p: np.ndarray, transition: int) -> int | None:
+    """How many times the orbit from ``state`` fires ``transition`` in one forcing period (None: the run
+    fails)."""
+    T = problem.system.forcing_period(p)
+    try:
+        traj = problem.flow.run(state, problem.t0, problem.t0 + T, p, tolerances=problem.tolerances)
+    except SaltationError:
+        return None
+    return sum(1 for e in traj.events if e.kind is EventKind.TRANSITION and e.transition == transition)
 
 
 def short_excursions(flow: Flow, state: np.ndarray, p: np.ndarray, *, t0: float = 0.0, tolerances=None,
