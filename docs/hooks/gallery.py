@@ -35,6 +35,7 @@ import time
 from pathlib import Path
 
 from gallery_chaos import figure_impact_chaos  # noqa: F401  (compute() finds figure_<model> in globals())
+from gallery_criticality import figure_criticality  # noqa: F401
 from gallery_rotor import figure_neimark_sacker  # noqa: F401
 from gallery_sliding import figure_sliding_mode  # noqa: F401
 
@@ -45,7 +46,7 @@ SRC = REPO / "src"
 
 #: Gallery models, each a function below that returns ``(Figure, special points)``.
 MODELS = ("impact_oscillator", "impact_chaos", "bouncing_ball", "friction_oscillator", "relay_feedback", "buck_converter",
-          "two_mass_stops", "tilted_relay", "sliding_mode", "phase_response", "neimark_sacker")
+          "two_mass_stops", "tilted_relay", "sliding_mode", "phase_response", "neimark_sacker", "criticality")
 
 _RESULTS: dict[str, dict] = {}
 
