@@ -35,7 +35,10 @@ import time
 from pathlib import Path
 
 from gallery_chaos import figure_impact_chaos  # noqa: F401  (compute() finds figure_<model> in globals())
+from gallery_criticality import figure_criticality  # noqa: F401
+from gallery_rotor import figure_neimark_sacker  # noqa: F401
 from gallery_sliding import figure_sliding_mode  # noqa: F401
+from gallery_sticking import figure_ball_on_table  # noqa: F401
 
 log = logging.getLogger("mkdocs.hooks.gallery")
 
@@ -44,7 +47,8 @@ SRC = REPO / "src"
 
 #: Gallery models, each a function below that returns ``(Figure, special points)``.
 MODELS = ("impact_oscillator", "impact_chaos", "bouncing_ball", "friction_oscillator", "relay_feedback", "buck_converter",
-          "two_mass_stops", "tilted_relay", "sliding_mode", "phase_response")
+          "two_mass_stops", "tilted_relay", "sliding_mode", "phase_response", "neimark_sacker", "criticality",
+          "ball_on_table")
 
 _RESULTS: dict[str, dict] = {}
 
