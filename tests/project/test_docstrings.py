@@ -134,6 +134,7 @@ RAISES_EXEMPT = {
     "saltation.orbits.records.event_labels": "reads a trajectory's event log",
     "saltation.engine.flow.dense_evaluate": "array arithmetic on the given steps",
     "saltation.engine.chatter.accumulation_time": "arithmetic on the given times",
+    "saltation.model.contacts.sticking_twins": "reads the model's transitions",
     "saltation.engine.buildtime.estimate_build": "an unreadable record or a failed test compile gives no estimate",
     "saltation.engine.buildtime.record_build": "a folder that cannot be written is left alone",
     "saltation.engine.buildtime.timed": "records through record_build; the block's own errors pass through",

@@ -312,8 +312,15 @@ def run_through_accumulations(flow: _Flow, first: Trajectory, *, t1: float, p: n
     Raises
     ------
     IntegrationError
-        As :meth:`~saltation.engine.flow.Flow.run`, from any piece; :class:`ChatteringError` where an
-        accumulation is not a complete chatter, or the run ends too close before one to resolve the impacts left.
+        As :meth:`~saltation.engine.flow.Flow.run`, from any piece; :class:`ChatteringError` where the
+        contact force vanishes along its direction or the projection onto the surface is degenerate, or the run
+        ends too close before an accumulation point to resolve the impacts left.
+
+    References
+    ----------
+    Nordmark and Piiroinen (2009), "Simulation and stability analysis of impacting systems with complete
+    chattering", *Nonlinear Dynamics* 58.  Budd and Dux (1994), "Chattering and related behaviour in impact
+    oscillators", *Philosophical Transactions of the Royal Society A* 347.
     """
     parts: list[Trajectory] = []
     rows: list[tuple | None] = []  # the event after each part (None: none)
