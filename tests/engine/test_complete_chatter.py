@@ -309,3 +309,20 @@ def test_the_monodromy_through_a_coupled_chatter_against_finite_differences():
     h = 1e-4
     dF = (4 * (at(61.0 + h / 2) - at(61.0 - h / 2)) / h - (at(61.0 + h) - at(61.0 - h)) / (2 * h)) / 3
     np.testing.assert_allclose(run.parameter_sensitivity, dF, rtol=0, atol=1e-7)
+
+
+def test_the_chattering_orbit_is_followed_in_the_amplitude():
+    """Continuation in A from 0.26 to 0.28: every orbit chatters to rest once a period (the kernel's corrector hands
+    the shots that stop at the accumulation to the Python iteration), both multipliers 0 all along, no special
+    point.  (Farther on, the number of impacts kept before the jump changes with A, which the event-sequence
+    detectors still take for a change of the orbit.)"""
+    from saltation import ContinuationSettings, continue_orbit
+
+    start = find_periodic_orbit(bouncing_ball(e=E, A=A), [0.0, 0.0])
+    branch = continue_orbit(start, "A", bounds=(0.26, 0.28), directions=(1,),
+                            settings=ContinuationSettings(ds=0.005, ds_max=0.01))
+    assert branch.points[-1].parameter == pytest.approx(0.28, abs=1e-12)
+    assert not branch.special_points
+    for point in branch.points:
+        assert np.all(np.abs(point.multipliers) <= 1e-12)
+        assert point.event_labels[-1] == "flight -[table-]-> flight@table"

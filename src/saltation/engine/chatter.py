@@ -21,16 +21,17 @@ and :func:`run_through_accumulations` goes on from there:
   event;
 * the run goes on in the stuck mode from ``t_inf``.
 
-The chatter's Jacobian (Nordmark and Piiroinen 2009): to first order in ``w_n`` the sequence of impacts
-from ``(t_n, x_n)`` and the plastic projection at ``t_n`` followed by the stuck motion arrive at the
-same state at any time after ``t_inf``: over the remaining time ``2 w_n / ((1 - e) |a|)`` (``a`` the
-relative acceleration of the free motion) the impacts' impulses, ``(1 + e) w_n / (1 - e)`` in all, and
-the contact force of the stuck motion change the state along ``b`` by the same amount, and neither
-depends on ``t_inf`` itself.  So the monodromy through the chatter is ``Phi_stuck(t, t_n) P_x
+The chatter's Jacobian (Nordmark and Piiroinen 2009): the impacts left after ``(t_n, x_n)`` and the
+plastic projection at ``t_n`` followed by the stuck motion arrive at the same state at any time after
+``t_inf``, up to terms of second order in ``w_n``: both take the relative velocity from ``w_n`` to 0
+while the free motion's relative acceleration ``a`` acts, so the impulses of the impacts (``(1 + e) w_n /
+(1 - e)`` in all, over the remaining time ``2 w_n / ((1 - e) |a|)``) and the projection with the contact
+force move the state along ``b`` by the same amount, whatever ``t_inf``.  So the monodromy through the chatter is ``Phi_stuck(t, t_n) P_x
 Phi(t_n+)``, exact where the stuck state does not depend on the state before (the ball on a table:
 the period map forgets it) or the contact is decoupled from the other states, and with an error of
-order ``w_n`` (the relative velocity at the last impact kept, ``~1e-4`` of the first one's) where the
-skipped motion's distance from the surface feeds back into the others.
+order ``w_n`` (the relative velocity at the last impact kept) where the skipped motion feeds back into
+the others: on a ball on a sprung table (``w_n = 4e-4``) it matches central differences of the period
+map to their accuracy, ``2e-8`` (``tests/engine/test_complete_chatter.py``).
 
 References
 ----------
