@@ -7,6 +7,7 @@ Modules:
 
 * :mod:`~saltation.engine.flow`: :class:`~saltation.engine.flow.Flow`, integration and the model's functions.
 * :mod:`~saltation.engine.trajectory`: :class:`~saltation.engine.trajectory.Trajectory`, its events, a run's errors.
+* :mod:`~saltation.engine.chatter`: complete chatter, impacts that accumulate where the contact sticks, jumped to their limit.
 * :mod:`~saltation.engine.kernel_newton`: the engine's Newton on periodic orbits, run from a flow.
 * :mod:`~saltation.engine.codegen`: writes a model's functions and the engine, and caches them per machine.
 * :mod:`~saltation.engine.precompile`: compiling several models and engines at once, in parallel.

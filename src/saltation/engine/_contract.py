@@ -9,6 +9,7 @@ functions the engine calls, with their signatures.  Keep it free of package
 imports: it is copied verbatim.
 """
 
+import math as _math
 import warnings as _warnings
 
 from numba import types as _t
@@ -28,6 +29,8 @@ STATUS_SLIDING_UNDEFINED = 5
 STATUS_MAX_STEPS = 6
 STATUS_TANGENTIAL = 7
 STATUS_OUTSIDE_DOMAIN = 8
+STATUS_ACCUMULATION = 9  # (not an error) the impacts of a transition that can stick accumulate: the run stops after
+#                          the last one kept, and saltation.engine.flow.Flow.run jumps to their limit (complete chatter)
 
 # Kinds of switching events (saltation.engine.flow.EventKind).
 EVENT_TRANSITION = 0
@@ -108,6 +111,42 @@ def step_record_width(n):
     """Floats in a recorded step's row, for ``n`` states: start, size, end fraction, start state (its
     DENSE_ROWS x n dense-output coefficients follow all the rows in the packed result)."""
     return 3 + n
+
+
+#: impacts of one transition in a row, at least, before their times are extrapolated to their accumulation point
+ACCUMULATION_IMPACTS = 6
+
+
+def accumulation_point(t0, t1, t2, t3, t4, lam):
+    """The accumulation point of impact times ``t0 < t1 < ... < t4`` (the last five of a chattering sequence)
+    whose intervals shrink by the ratio ``lam`` (``0 < lam < 1``, the restitution the impacts apply to the
+    relative velocity), and a bound on its error.
+
+    Near a complete chatter the times are ``t_k = T + sum_j c_j lam^(j k)`` (the relative velocity after
+    impact ``k`` is an analytic function of ``lam^k``): Richardson's elimination of the powers ``lam``,
+    ``lam^2``, ``lam^3``, ``lam^4`` leaves ``T``; the error is bounded by the difference between the last two
+    levels.  Returns ``(T, error)``, the error infinite where the intervals do not shrink (not an
+    accumulation).
+    """
+    d1, d2, d3, d4 = t1 - t0, t2 - t1, t3 - t2, t4 - t3
+    if not (lam > 0.0 and lam < 1.0 and d4 > 0.0 and d3 > d4 and d2 > d3 and d1 > d2):
+        return t4, _math.inf
+    a0 = (t1 - lam * t0) / (1.0 - lam)  # level 1: lam^k eliminated
+    a1 = (t2 - lam * t1) / (1.0 - lam)
+    a2 = (t3 - lam * t2) / (1.0 - lam)
+    a3 = (t4 - lam * t3) / (1.0 - lam)
+    q = lam * lam
+    b0 = (a1 - q * a0) / (1.0 - q)  # level 2
+    b1 = (a2 - q * a1) / (1.0 - q)
+    b2 = (a3 - q * a2) / (1.0 - q)
+    q = q * lam
+    c0 = (b1 - q * b0) / (1.0 - q)  # level 3
+    c1 = (b2 - q * b1) / (1.0 - q)
+    q = q * lam
+    d0 = (c1 - q * c0) / (1.0 - q)  # level 4
+    if not d0 > t4:
+        return t4, _math.inf
+    return d0, abs(d0 - c1)
 
 
 def newton_layout(m_z, m_u, n_history, bordered):

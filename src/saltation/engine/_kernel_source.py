@@ -66,6 +66,7 @@ from saltation.engine._records import (
 # here for the engine's own use.
 if False:  # never runs: these names come from saltation/_contract.py, which the generated module starts with
     from saltation.engine._contract import (
+        ACCUMULATION_IMPACTS,
         AFFINE_MODES,
         AFFINE_PARTS,
         AFFINE_PARTS_DP,
@@ -134,6 +135,7 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         SLIDE_RESET_INTO,
         SLIDE_WIDTH,
         SLIDING_EVENTS_ROW,
+        STATUS_ACCUMULATION,
         STATUS_CHATTERING,
         STATUS_MAX_EVENTS,
         STATUS_MAX_STEPS,
@@ -149,6 +151,7 @@ if False:  # never runs: these names come from saltation/_contract.py, which the
         VECTOR_FIELD,
         VECTOR_FIELD_DP,
         VECTOR_FIELD_JAC,
+        accumulation_point,
         event_row_offsets,
         newton_layout,
         result_offsets,
@@ -159,6 +162,7 @@ result_offsets_c = njit(cache=True, inline="always")(result_offsets)
 event_row_offsets_c = njit(cache=True, inline="always")(event_row_offsets)
 step_record_width_c = njit(cache=True, inline="always")(step_record_width)
 newton_layout_c = njit(cache=True, inline="always")(newton_layout)
+accumulation_point_c = njit(cache=True, inline="always")(accumulation_point)
 
 # The signatures of the engine's two entry points, compiled when the engine is imported: the model (see
 # ``model_from_addresses``), then the arguments as :mod:`saltation.engine.flow` passes them (C-contiguous
@@ -1385,6 +1389,47 @@ def _reset_landing(model, k, s, mode_to, t_e, xplus, p, tr_table, direction, cro
     return STATUS_OK, back
 
 
+#: the longest run of impacts whose span sets the tolerance of their accumulation point (see _accumulates)
+ACCUMULATION_SPAN = 64
+
+
+@njit(cache=True, _nrt=False)  # not inlined: called only after an impact of a transition that can stick
+def _accumulates(model, k, s, t_e, xplus, fplus, den, p, ev, ev_int, n_ev, rtol, wn, wp):
+    """Whether the impacts of transition ``k`` (on surface ``s``, which can stick: a transition from the same
+    mode on the same surface leads into a stuck mode) accumulate: the last ``ACCUMULATION_IMPACTS`` events
+    are its impacts, their intervals shrink by the ratio ``lam = -w+ / w-`` of the relative velocities
+    across the last one (``den = w-``; ``w+`` along the field ``fplus`` after it, at ``xplus``), and the
+    times' accumulation point (``accumulation_point``) is known to ``rtol`` of the impacts' span (or no
+    better: the estimate has stopped improving near that, or the last interval is 1e-4 of the span).  Then
+    the run stops (STATUS_ACCUMULATION) and the flow jumps to the accumulation point."""
+    if not den < 0.0 and not den > 0.0:
+        return False
+    lam = -model[INDICATOR_RATE](s, t_e, xplus, fplus, p, wn, wp) / den
+    if not (lam > 0.0 and lam < 1.0):
+        return False
+    chain = 0
+    while chain < ACCUMULATION_SPAN and chain < n_ev:
+        r = n_ev - 1 - chain
+        if ev_int[r, LOG_TRANSITION] != k or ev_int[r, LOG_KIND] != EVENT_TRANSITION:
+            break
+        chain += 1
+    if chain < ACCUMULATION_IMPACTS:
+        return False
+    m = n_ev - 1
+    estimate, error = accumulation_point_c(ev[m - 4, 0], ev[m - 3, 0], ev[m - 2, 0], ev[m - 1, 0], ev[m, 0], lam)
+    before, error_before = accumulation_point_c(ev[m - 5, 0], ev[m - 4, 0], ev[m - 3, 0], ev[m - 2, 0], ev[m - 1, 0],
+                                                lam)
+    if not error < math.inf:
+        return False
+    span = ev[m, 0] - ev[n_ev - chain, 0]
+    tol = rtol * span + 64.0 * EPS * abs(ev[m, 0])
+    if error <= tol:
+        return True
+    if error_before <= 1e3 * tol and error >= error_before:
+        return True  # the estimate no longer improves: the impacts' times are as precise as they get
+    return ev[m, 0] - ev[m - 1, 0] <= 1e-4 * span
+
+
 @njit(cache=True, _nrt=False)  # once per event; not inlined, no reference counting
 def _apply_transition(model, k, s, mode, t_e, x_e, p, tr_table, direction, known_side, n_ev, chatter_ring, hx, hp, fa,
                       fb, fplus, xplus, gx, gt, gp, slide, surf_sign, fixed_sign, from_sliding, h_scale, xn, fn, wn,
@@ -2321,6 +2366,17 @@ def _integrate_steps(model, surface_step, sliding_events, run, arrays, log, loop
             xmax[i] = max(xmax[i], x_e[i], xplus[i])
         if n_ev >= max_events:
             status = STATUS_MAX_EVENTS
+            info_mode = mode
+            info_surface = best_idx
+            t = t_e
+            break
+        if (direction > 0.0 and best_kind == KIND_INDICATOR and kind_logged == EVENT_TRANSITION
+                and tr_table[best_tr, 6] >= 0 and tr_table[best_tr, 5] != 0
+                and _accumulates(model, best_tr, best_idx, t_e, xplus, fplus, den, p, ev, ev_int, n_ev, rtol, gtmp,
+                                 gptmp)):
+            # impacts that accumulate where the contact can stick (complete chatter): the run stops after this
+            # one, and the flow (saltation.engine.flow) jumps to their limit, into the stuck mode
+            status = STATUS_ACCUMULATION
             info_mode = mode
             info_surface = best_idx
             t = t_e

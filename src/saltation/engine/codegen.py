@@ -85,6 +85,7 @@ from saltation.engine._contract import MODEL_FUNCTIONS, MODEL_SIGNATURES
 from saltation.engine.affine import affine_form
 from saltation.engine.buildtime import BuildEstimate, estimate_build, timed
 from saltation.errors import SaltationError
+from saltation.model.contacts import sticking_twins
 from saltation.model.sides import on_its_side
 from saltation.model.system import TIME, PiecewiseSystem
 
@@ -473,12 +474,15 @@ def _margin_cases(em: _Emitter, condition_lists, ind: str) -> list[tuple[int, li
 
 
 def transition_table(system: PiecewiseSystem) -> np.ndarray:
-    """Integer table of transitions: source, surface, direction, target, has_reset, is_impact.
+    """Integer table of transitions: source, surface, direction, target, has_reset, is_impact, sticks.
 
     ``is_impact``: the reset moves a state that the modes move (:attr:`PiecewiseSystem.impacts`); a reset of
     logic states only is a mode switch for the geometry of the crossing.  Models without expressions (compiled
-    callables) count every reset as an impact."""
+    callables) count every reset as an impact.  ``sticks``: for an impact, the index of its sticking twin (the
+    transition from the same mode on the same surface into the stuck mode that ``sticks=True`` added,
+    :mod:`saltation.model.contacts`), whose impacts may accumulate into it (complete chatter); -1 for none."""
     impacts = getattr(system, "impacts", None)
+    twins = sticking_twins(system)
     rows = [
         (
             system.mode_index(tr.source),
@@ -487,10 +491,11 @@ def transition_table(system: PiecewiseSystem) -> np.ndarray:
             system.mode_index(tr.target),
             int(system.resets[k] is not None),
             int(system.resets[k] is not None if impacts is None else impacts[k]),
+            twins.get(k, -1),
         )
         for k, tr in enumerate(system.transitions)
     ]
-    return np.array(rows, dtype=np.int64).reshape(len(rows), 6)
+    return np.array(rows, dtype=np.int64).reshape(len(rows), 7)
 
 
 SPECIALIZED_DIMENSIONS = range(1, 5)

@@ -16,7 +16,7 @@ import numpy as np
 
 from saltation._moved import forward_names
 from saltation.engine import _contract as kc
-from saltation.engine import _no_terminal_reset_at_exit, kernel_newton
+from saltation.engine import _no_terminal_reset_at_exit, chatter, kernel_newton
 from saltation.engine.codegen import (
     is_engine_compiled,
     load_engine,
@@ -637,7 +637,9 @@ class Flow:
 
         Between events the compiled engine steps with DOP853 (or with the exact flow of an affine mode);
         it locates every event, applies its reset and saltation matrix, and slides along a surface with
-        Filippov's convex combination where both fields push into it.
+        Filippov's convex combination where both fields push into it.  Impacts that accumulate where the
+        contact sticks (``sticks=True``, restitution ``0 < e < 1``: complete chatter) are jumped to their
+        accumulation point, and the run goes on in the stuck mode (:mod:`saltation.engine.chatter`).
 
         Parameters
         ----------
@@ -671,7 +673,9 @@ class Flow:
         -------
         Trajectory
             The end state and mode, the events with their saltation matrices, and the monodromy
-            (with ``variational``) and dense output (with ``dense``).
+            (with ``variational``) and dense output (with ``dense``); each complete chatter jumped is one
+            event into the stuck mode at its accumulation point, recorded in
+            :attr:`Trajectory.accumulations`.
 
         Raises
         ------
@@ -683,8 +687,9 @@ class Flow:
         InitialModeError
             If ``mode0`` is not given and ``x0`` lies in no mode's domain.
         IntegrationError
-            If the integration fails: :class:`ChatteringError` (too many events, or events closer than
-            the time axis resolves), :class:`StepSizeError`, :class:`NonFiniteError`,
+            If the integration fails: :class:`ChatteringError` (too many events, events closer than
+            the time axis resolves, a Zeno accumulation of impacts that do not stick, or a run that ends
+            too shortly before an accumulation point to resolve the impacts left), :class:`StepSizeError`, :class:`NonFiniteError`,
             :class:`SlidingError` (a sliding motion the model does not define), or an
             :class:`IntegrationError` itself (a tangential event, too many steps, a degenerate case).
             The message names the mode and surface involved.
@@ -694,7 +699,8 @@ class Flow:
         Hairer, Norsett and Wanner (1993), *Solving Ordinary Differential Equations I: Nonstiff Problems*,
         2nd ed., Springer (DOP853).  Filippov (1988), *Differential Equations with Discontinuous
         Righthand Sides*, Kluwer (sliding).  Leine and Van Campen, "Fold bifurcations in discontinuous
-        systems", eq. (9) (saltation matrices).
+        systems", eq. (9) (saltation matrices).  Nordmark and Piiroinen (2009), "Simulation and stability
+        analysis of impacting systems with complete chattering", *Nonlinear Dynamics* 58 (complete chatter).
         """
         sys_ = self.system
         tol = tolerances or self.tolerances
@@ -722,23 +728,41 @@ class Flow:
         psi = self._zeros if psi0 is None else _c_array(psi0)
         if psi.shape != (sys_.n,):
             raise ModelError(f"initial parameter sensitivity must have shape ({sys_.n},), got {psi.shape}")
-        steps, limits, flags = self._kernel_tolerances(tol, p)
         table = self._table
         if len(disabled):
             table = table.copy()
             for k in disabled:
                 table[int(k), 0] = -1  # a source mode that is never current
+        traj, accumulates = self._piece(x0, t0, t1, m0, p, variational, sens, dense, tol, phi, psi, table)
+        if accumulates:  # impacts that accumulate where the contact sticks: jumped to their limit
+            return chatter.run_through_accumulations(self, traj, t1=t1, p=p, variational=bool(variational),
+                                                     sensitivity=sens, dense=bool(dense), tolerances=tol, table=table)
+        return traj
+
+    def _piece(self, x0: np.ndarray, t0: float, t1: float, m0: int, p: np.ndarray, variational: bool, sens: int,
+               dense: bool, tol: Tolerances, phi: np.ndarray | None, psi: np.ndarray | None,
+               table: np.ndarray) -> tuple[Trajectory, bool]:
+        """One run of the engine (arguments checked by :meth:`run`), and whether it stopped where impacts
+        accumulate (then the trajectory ends just after the last impact kept)."""
+        sys_ = self.system
+        steps, limits, flags = self._kernel_tolerances(tol, p)
+        phi = self._identity if phi is None else _c_array(phi)
+        psi = self._zeros if psi is None else _c_array(psi)
+        x0 = _c_array(x0)
         try:
             out = self._engine.integrate_kernel(
-                self._addresses, self._affine_modes, t0, t1, x0, int(m0), p, bool(variational), sens, *steps, 0.0,
-                *limits, table, self._n_surfaces, bool(dense), phi, psi, *flags,
+                self._addresses, self._affine_modes, float(t0), float(t1), x0, int(m0), p, bool(variational), int(sens),
+                *steps, 0.0, *limits, table, self._n_surfaces, bool(dense), phi, psi, *flags,
             )
         except ArithmeticError as exc:  # the compiled engine raises Python's errors for a division by zero
             raise IntegrationError(
                 f"the engine failed ({type(exc).__name__}: {exc}) integrating {sys_.name!r} from t = {t0:.12g} to "
                 f"{t1:.12g}, x0 = {x0.tolist()}, parameters {p.tolist()}: a degenerate case it does not resolve"
             ) from None
-        return self._unpack(out, x0, float(t0), m0, variational, sens, dense)
+        accumulates = int(out[0][kc.INFO_STATUS]) == kc.STATUS_ACCUMULATION
+        traj = unpack_result(sys_, out, x0, float(t0), int(m0), variational, sens, dense, self._offsets,
+                             accumulation=accumulates)
+        return traj, accumulates
 
     def compiled_newton(
         self, z0: np.ndarray, normal: np.ndarray | None, p: np.ndarray, *, t0: float, sign: float, lam_index: int,

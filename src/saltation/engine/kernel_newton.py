@@ -60,8 +60,11 @@ class CompiledNewton:
 
     @property
     def unsupported(self) -> bool:
-        """A period that is not positive, or a singular Newton matrix: iterate in Python for the reason."""
-        return self.code in (kc.SHOOT_BAD_PERIOD, kc.SHOOT_SINGULAR)
+        """A period that is not positive, a singular Newton matrix, or a shot that stopped where impacts accumulate
+        (complete chatter, which :meth:`~saltation.engine.flow.Flow.run` jumps and the kernel's loop does not):
+        iterate in Python (for the reason, or through the accumulation)."""
+        return (self.code in (kc.SHOOT_BAD_PERIOD, kc.SHOOT_SINGULAR)
+                or int(self.shot[0][kc.INFO_STATUS]) == kc.STATUS_ACCUMULATION)
 
 
 def compiled_newton(

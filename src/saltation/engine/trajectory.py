@@ -9,6 +9,7 @@ arrays (laid out as :mod:`saltation.engine._contract` says), raising the error i
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -25,6 +26,7 @@ from saltation.errors import (
     SlidingError,
     StepSizeError,
 )
+from saltation.model.contacts import sticking_twins
 from saltation.model.system import PiecewiseSystem
 
 
@@ -40,6 +42,7 @@ class Status(enum.IntEnum):
     MAX_STEPS = kc.STATUS_MAX_STEPS
     TANGENTIAL = kc.STATUS_TANGENTIAL
     OUTSIDE_DOMAIN = kc.STATUS_OUTSIDE_DOMAIN
+    ACCUMULATION = kc.STATUS_ACCUMULATION
 
 
 # Status.OK as a plain int (an enum member costs a class attribute lookup per integration)
@@ -119,6 +122,44 @@ class LoggedEvent(NamedTuple):
 
 
 @dataclass(frozen=True)
+class Accumulation:
+    """Impacts that accumulate where the contact sticks (complete chatter), jumped to their limit.
+
+    The run keeps the impacts until their times extrapolate to the accumulation point to the integration
+    tolerance, then logs one event at that point into the stuck mode (:mod:`saltation.engine.chatter`).
+
+    Attributes
+    ----------
+    t : float
+        The accumulation time ``t_inf``, where the relative velocity vanishes.
+    accuracy : float
+        A bound on the error of ``t`` (the last two levels of its extrapolation differ by this much).
+    impacts : int
+        The impacts of the sequence kept in the event log (the last before the jump included).
+    transition : int
+        Index of the impact that accumulates.
+    surface : str
+        Its surface.
+    mode : str
+        The stuck mode the motion continues in.
+    relative_speed : float
+        The relative velocity after the last impact kept; the motion skipped stays within about
+        ``relative_speed^2 / |a|`` of the surface (``a`` the relative acceleration of the free motion).
+    x : ndarray, shape (n,)
+        The state at ``t``, on the surface at zero relative velocity.
+    """
+
+    t: float
+    accuracy: float
+    impacts: int
+    transition: int
+    surface: str
+    mode: str
+    relative_speed: float
+    x: np.ndarray = field(repr=False)
+
+
+@dataclass(frozen=True)
 class Trajectory:
     """Result of :func:`simulate`.
 
@@ -149,6 +190,9 @@ class Trajectory:
         field when the trajectory ends on a sliding motion.
     n_steps, n_rejected : int
         Accepted and rejected steps.
+    accumulations : tuple of Accumulation
+        The impact sequences that accumulated into a stuck mode (complete chatter) and were jumped to their
+        limit, each with its event in :attr:`events` (a transition into the stuck mode at its time).
     """
 
     system: PiecewiseSystem
@@ -168,6 +212,7 @@ class Trajectory:
     n_steps: int
     n_rejected: int
     _steps: tuple[np.ndarray, ...] | None = field(default=None, repr=False)
+    accumulations: tuple[Accumulation, ...] = field(default=(), repr=False)
 
     @cached_property
     def events(self) -> list[SwitchingEvent]:
@@ -410,9 +455,15 @@ def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, 
         )
     if status == Status.CHATTERING:
         recent = ", ".join(f"{e.surface}@{e.t:.6g}" for e in events[-5:])
+        rest = _comes_to_rest(system, events)
         return ChatteringError(
             f"chattering {where}: many switching events on surface {surface!r} in a vanishing time interval "
-            f"(last events: {recent}); the model may need a sliding mode or a different transition"
+            f"(last events: {recent}); " + (rest or "the model may need a sliding mode or a different transition")
+        )
+    if status == Status.ACCUMULATION:
+        return IntegrationError(
+            f"the impacts on surface {surface!r} accumulate {where} (complete chatter): Flow.run jumps to their limit "
+            "and goes on in the stuck mode; this caller reads the engine's result without it"
         )
     if status == Status.MAX_EVENTS:
         return ChatteringError(f"more switching events than max_events {where} (last surface {surface!r})")
@@ -477,8 +528,40 @@ def _error(status: Status, system: PiecewiseSystem, info: np.ndarray, t: float, 
     return IntegrationError(f"integration failed with status {status.name} {where}")
 
 
+def _comes_to_rest(system: PiecewiseSystem, events: Sequence[SwitchingEvent]) -> str | None:
+    """Where a run that stopped chattering comes to rest, if its last events are impacts of one transition whose
+    times accumulate (Zeno): the accumulation time (extrapolated from the impacts resolved best) and the last
+    state, as a sentence; None otherwise."""
+    last = events[-1] if events else None
+    if last is None or last.kind != EventKind.TRANSITION or np.allclose(last.x_minus, last.x_plus, rtol=0, atol=0):
+        return None
+    k = len(events) - 1
+    while k >= 0 and events[k].transition == last.transition and events[k].kind == EventKind.TRANSITION:
+        k -= 1
+    chain = [e.t for e in events[k + 1:]]
+    best = (math.inf, math.nan)
+    for i in range(5, len(chain)):
+        d = np.diff(chain[i - 5 : i + 1])
+        lam = d[-1] / d[-2] if d[-2] > 0 else math.nan  # the ratio of the intervals: the restitution's estimate
+        estimate, error = kc.accumulation_point(*chain[i - 4 : i + 1], lam)
+        if error < best[0]:
+            best = (error, estimate)
+    if not best[0] < math.inf:
+        return None
+    x = np.array2string(np.asarray(last.x_plus), precision=6)
+    where = (f"the impacts on surface {last.surface!r} accumulate (Zeno) at t = {best[1]:.10g} (to about "
+             f"{max(best[0], 1e-15):.0e}), where the state comes to rest on the surface, at about x = {x}")
+    twin = sticking_twins(system).get(last.transition)
+    if twin is not None:
+        return (f"{where}, but mode {system.transitions[twin].target!r} does not hold it there (the contact force "
+                "vanishes, or another event comes first): the chatter is not complete")
+    return (f"{where}: declare the impact sticks=True (transition {last.transition}, {last.mode_from} -> "
+            f"{last.mode_to}) to go on in the motion on the surface there")
+
+
 def unpack_result(system: PiecewiseSystem, out: tuple[np.ndarray, np.ndarray], x0: np.ndarray, t0: float, mode0: int,
-                  variational: bool, sensitivity: int, dense: bool, offsets: tuple[int, ...] | None = None) -> Trajectory:
+                  variational: bool, sensitivity: int, dense: bool, offsets: tuple[int, ...] | None = None, *,
+                  accumulation: bool = False) -> Trajectory:
     """The trajectory of the engine's packed result (``integrate_kernel``, laid out as ``_contract.py`` says).
 
     Parameters
@@ -501,6 +584,9 @@ def unpack_result(system: PiecewiseSystem, out: tuple[np.ndarray, np.ndarray], x
         Whether the run recorded its steps.
     offsets : tuple of int, optional
         ``result_offsets(n)`` of the contract, if the caller keeps them.
+    accumulation : bool
+        Read a run that stopped at impacts that accumulate (``Status.ACCUMULATION``) as the trajectory up to
+        the last impact kept (its end state and matrices just after it), instead of raising.
 
     Returns
     -------
@@ -523,7 +609,7 @@ def unpack_result(system: PiecewiseSystem, out: tuple[np.ndarray, np.ndarray], x
     t = res[0]
     x = res[o_x : o_x + n]
     event_log = (ev[:, 0], ev_int, ev[:, o_xm:o_xp], ev[:, o_xp:o_s], ev[:, o_s:].reshape(-1, n, n))
-    if info[kc.INFO_STATUS] != _STATUS_OK:
+    if info[kc.INFO_STATUS] != _STATUS_OK and not (accumulation and info[kc.INFO_STATUS] == kc.STATUS_ACCUMULATION):
         raise _error(Status(int(info[kc.INFO_STATUS])), system, info, float(t), x, _switching_events(system, event_log))
     names = system.mode_names
     return Trajectory(
@@ -581,6 +667,7 @@ def join(segs: Sequence[Trajectory]) -> Trajectory:
         x_max=np.max([s.x_max for s in segs], axis=0), sliding_at_end=last.sliding_at_end,
         velocity_end=last.velocity_end, n_steps=sum(s.n_steps for s in segs),
         n_rejected=sum(s.n_rejected for s in segs), _steps=None,
+        accumulations=tuple(a for s in segs for a in s.accumulations),
     )
 
 
@@ -601,7 +688,7 @@ def continued(a: Trajectory, b: Trajectory) -> Trajectory:
     event_log = tuple(np.concatenate([x, y]) for x, y in zip(a.event_log, b.event_log))
     return replace(b, t0=a.t0, x0=a.x0, mode0=a.mode0, event_log=event_log, x_min=np.minimum(a.x_min, b.x_min),
                    x_max=np.maximum(a.x_max, b.x_max), n_steps=a.n_steps + b.n_steps,
-                   n_rejected=a.n_rejected + b.n_rejected, _steps=None)
+                   n_rejected=a.n_rejected + b.n_rejected, _steps=None, accumulations=a.accumulations + b.accumulations)
 
 
 def log_with_event(traj: Trajectory, kind: EventKind, transition: int, surface: str, mode_from: str, mode_to: str,
@@ -645,5 +732,5 @@ def log_with_event(traj: Trajectory, kind: EventKind, transition: int, surface: 
             np.vstack([ev_xp, x_plus[None, :]]), np.concatenate([ev_S, S[None, :, :]]))
 
 
-__all__ = ["EventKind", "LoggedEvent", "Status", "SwitchingEvent", "Trajectory", "continued", "join", "log_with_event",
+__all__ = ["Accumulation", "EventKind", "LoggedEvent", "Status", "SwitchingEvent", "Trajectory", "continued", "join", "log_with_event",
            "unpack_result"]

@@ -24,7 +24,9 @@ sticks=True)``, the model gets, for that impact from mode ``S`` to mode ``T`` on
 Both are ordinary transitions, so eq. (9) gives their saltation matrices: the landing's is singular
 (the reset forgets the velocity: a multiplier 0), the release's is the identity (``f_c = f`` where
 ``lambda = 0``).  A restitution ``e > 0`` ends in the same sticking phase after infinitely many impacts
-of decreasing height (complete chatter), which the integrator reports as chattering.
+of decreasing height (complete chatter): the integrator jumps to their accumulation point and goes on
+in ``T@h`` (:mod:`saltation.engine.chatter`; :func:`sticking_twins` pairs each impact with the transition
+into its stuck mode).
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ import sympy as sp
 
 from saltation.errors import ModelError
 
-__all__ = ["ON_SURFACE", "Sticking", "expand_sticking"]
+__all__ = ["ON_SURFACE", "Sticking", "expand_sticking", "sticking_twins"]
 
 #: a state within this distance of a sticking surface (relative to ``1 + |x|``), at a relative velocity as small, is
 #: on the surface: the stuck mode is its initial mode
@@ -138,6 +140,40 @@ def expand_sticking(modes: Sequence, surfaces: dict, transitions: Sequence, pars
                                               guard=bounces))
     new_modes = [by_name[m.name] if isinstance(m, Mode) else m for m in modes] + stuck_modes
     return new_modes, new_surfaces, new_transitions, added
+
+
+def sticking_twins(system) -> dict[int, int]:
+    """The impacts that can stick, each with its sticking twin: ``{impact: twin}``.
+
+    The twin of an impact from mode ``S`` to mode ``T`` on surface ``h`` is the transition from ``S`` on ``h``,
+    in the same direction, into the stuck mode ``T@h`` that ``sticks=True`` added; the impact's repetitions
+    may accumulate into it (complete chatter, :mod:`saltation.engine.chatter`).
+
+    Parameters
+    ----------
+    system : PiecewiseSystem
+        The model (one without ``sticking``, such as compiled callables, has none).
+
+    Returns
+    -------
+    dict of int to int
+        Indices of the transitions.
+    """
+    stuck = getattr(system, "sticking", None) or {}
+    if not stuck:
+        return {}
+    transitions = system.transitions
+    twins = {}
+    for k, tr in enumerate(transitions):
+        name = f"{tr.target}@{tr.surface}"
+        if system.resets[k] is None or tr.target in stuck or name not in stuck:
+            continue
+        for j, other in enumerate(transitions):
+            if (other.source == tr.source and other.surface == tr.surface and other.target == name
+                    and int(other.direction) == int(tr.direction)):
+                twins[k] = j
+                break
+    return twins
 
 
 def _relative_speed(mode, indicator, parse, x, t, where: str) -> sp.Expr:
