@@ -225,8 +225,31 @@ def event_ids(traj: Trajectory) -> tuple[tuple[int, int, int], ...]:
     """
     ids = tuple((kind, transition, mode_to) for kind, transition, _, _, mode_to in _orbit_event_rows(traj))
     if ids:
-        return ids
+        return _chatter_as_one(traj.system, ids)
     return ((STAYS_IN_MODE, -1, list(traj.system.mode_names).index(traj.mode0)),)
+
+
+def _chatter_as_one(system, ids: tuple) -> tuple:
+    """``ids`` with each run of equal impacts that ends in the entry into a stuck mode (complete chatter:
+    :mod:`saltation.engine.chatter`) kept once.  How many of its infinitely many impacts the integrator
+    resolved before it jumped to their accumulation point depends on the tolerance and the parameters, not
+    on the orbit: counted, it would make a change of the event sequence at every step of a branch."""
+    stuck = getattr(system, "sticking", None)
+    if not stuck:
+        return ids
+    names = list(system.mode_names)
+    stuck_modes = {names.index(name) for name in stuck if name in names}
+    n = len(ids)
+    drop = set()
+    for j, (kind, _, mode_to) in enumerate(ids):
+        if mode_to not in stuck_modes or n < 3:
+            continue
+        impact = ids[(j - 1) % n]
+        i = (j - 2) % n
+        while i != j and ids[i] == impact and i not in drop and (i + 1) % n != j:
+            drop.add(i)
+            i = (i - 1) % n
+    return tuple(e for k, e in enumerate(ids) if k not in drop)
 
 
 def event_labels(traj: Trajectory) -> tuple[str, ...]:
