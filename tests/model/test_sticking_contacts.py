@@ -165,3 +165,18 @@ def test_an_elastic_impact_still_runs_backwards():
     run = Flow(system).run([0.05, 3.0], 0.0, -0.1, system.parameter_vector(), variational=True)
     assert any(e.surface == "table" for e in run.events)
     check_resets_run_backwards(system, run)  # does not raise
+
+
+def test_a_complete_chatter_counts_once_in_the_event_identities():
+    """How many of the chatter's impacts were resolved before the jump is the integrator's business: the orbit's
+    identities keep the run once, also where it wraps round the start of the period."""
+    from saltation.orbits.records import _chatter_as_one
+
+    system = ball(e=0.5)
+    stuck = system.mode_names.index("flight@table")
+    release, impact, land = (0, 0, 0), (0, 2, 0), (0, 1, stuck)
+    assert _chatter_as_one(system, (release, impact, impact, impact, land)) == (release, impact, land)
+    assert _chatter_as_one(system, (release, impact, land)) == (release, impact, land)
+    assert _chatter_as_one(system, (impact, impact, land, release, impact)) == (impact, land, release)
+    # two bounces that do not end in a chatter are two events
+    assert _chatter_as_one(system, (release, impact, impact)) == (release, impact, impact)
