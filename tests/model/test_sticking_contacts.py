@@ -180,3 +180,23 @@ def test_a_complete_chatter_counts_once_in_the_event_identities():
     assert _chatter_as_one(system, (impact, impact, land, release, impact)) == (impact, land, release)
     # two bounces that do not end in a chatter are two events
     assert _chatter_as_one(system, (release, impact, impact)) == (release, impact, impact)
+
+
+def test_a_chattering_branch_passes_the_section_without_a_false_point():
+    """e = 0.5: along A the accumulation point drifts onto the section t0 = 0 (near A = 0.392); the branch moves
+    its section off it (where Newton stalls there), and the chatter counts once in the orbits' identities, so no
+    change of the event sequence is read as a bifurcation: every orbit sticks (multipliers 0) and no special point
+    is reported up to A = 0.394."""
+    from saltation import ContinuationSettings, continue_orbit
+    from saltation.models import bouncing_ball
+
+    start = find_periodic_orbit(bouncing_ball(e=0.5, A=0.36), [0.0, 0.36 * OMEGA])
+    branch = continue_orbit(start, "A", bounds=(0.36, 0.394), directions=(1,),
+                            settings=ContinuationSettings(ds=0.004, ds_max=0.004))
+    assert branch.special_points == []
+    assert branch.points[-1].parameter == pytest.approx(0.394)
+    assert any(p.t0 != 0.0 for p in branch.points)  # the section moved
+    for p in branch.points:
+        assert np.all(np.abs(p.multipliers) <= 1e-10)
+        assert any("table@release" in label for label in p.event_labels)
+    assert branch.check().ok
