@@ -33,6 +33,7 @@ Degenerate cases, each with its rule (see the orbits page of the user guide):
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Mapping, Sequence
 
@@ -44,6 +45,7 @@ from saltation.engine.flow import (
     Tolerances,
     Trajectory,
 )
+from saltation.engine.trajectory import SwitchingEvent
 from saltation.errors import (
     ConvergenceError,
     InconsistentResultError,
@@ -111,9 +113,56 @@ def stationary_floor(tolerances: Tolerances, size: float) -> float:
     return min(STATIONARY_FACTOR * (tolerances.atol + tolerances.rtol * scale), STATIONARY_FRACTION * scale)
 
 
+_log = logging.getLogger(__name__)
+
+#: an autonomous orbit covers its closed curve ``k`` times when the flow from its state over ``T / k`` closes to
+#: within this many times the integration tolerance (:meth:`ShootingProblem.repetitions`)
+REPEAT_CLOSURE = 100.0
+
 #: an event's saltation matrix is singular (its reset forgets) where ``|det S|`` is below this fraction of
 #: ``max(1, |S|)^n``
 SINGULAR_SALTATION = 1e-12
+
+
+def forgetting_event(system, traj: Trajectory) -> tuple[int, SwitchingEvent, float] | None:
+    """The first event of a run whose reset forgets: a transition with a reset whose saltation matrix is singular.
+
+    A reset that forgets (a plastic impact, a landing that sticks, a neuron's voltage reset, a latch) maps a
+    whole direction of states to one, so its saltation matrix (eq. (9)) has ``|det S|`` below
+    :data:`SINGULAR_SALTATION` times ``max(1, |S|)^n``.
+
+    Parameters
+    ----------
+    system : PiecewiseSystem or CompiledSystem
+        The model (its resets).
+    traj : Trajectory
+        A run with its events and their saltation matrices.
+
+    Returns
+    -------
+    tuple of (int, SwitchingEvent, float) or None
+        The transition's index, the event and ``det S``; None if no event of the run forgets.
+
+    Raises
+    ------
+    ValueError
+        If an event's saltation matrix is not square (never for the engine's runs).
+    """
+    resets = getattr(system, "resets", None)
+    if resets is None:
+        return None
+    for event in traj.events:
+        k = int(event.transition)
+        if event.kind is not EventKind.TRANSITION or not 0 <= k < len(resets) or resets[k] is None:
+            continue
+        S = np.asarray(event.saltation, dtype=float)
+        if S.ndim != 2 or S.shape[0] != S.shape[1]:
+            raise ValueError(f"the saltation matrix of event {event!r} is not square: shape {S.shape}")
+        scale = max(1.0, float(np.linalg.norm(S))) ** S.shape[0]
+        det = float(np.linalg.det(S))
+        if abs(det) <= SINGULAR_SALTATION * scale:
+            return k, event, det
+    return None
 
 
 def check_resets_run_backwards(system, traj: Trajectory) -> None:
@@ -135,25 +184,18 @@ def check_resets_run_backwards(system, traj: Trajectory) -> None:
     Raises
     ------
     ModelError
-        Naming the first transition with a reset whose saltation matrix is singular at its event.
+        Naming the first transition with a reset whose saltation matrix is singular at its event
+        (:func:`forgetting_event`).
     """
-    resets = getattr(system, "resets", None)
-    if resets is None:
-        return
-    for event in traj.events:
-        k = int(event.transition)
-        if event.kind is not EventKind.TRANSITION or not 0 <= k < len(resets) or resets[k] is None:
-            continue
-        S = np.asarray(event.saltation, dtype=float)
-        scale = max(1.0, float(np.linalg.norm(S))) ** S.shape[0]
-        det = float(np.linalg.det(S))
-        if abs(det) <= SINGULAR_SALTATION * scale:
-            tr = system.transitions[k]
-            raise ModelError(
-                f"backward-time shooting passes transition {k} ({tr.label}) at t = {event.t:.10g}, whose reset forgets "
-                f"(its saltation matrix is singular, det S = {det:.3g}): a reset that forgets cannot be run backwards, "
-                "and no infinitely unstable orbit lies behind it; shoot in forward time"
-            )
+    found = forgetting_event(system, traj)
+    if found is not None:
+        k, event, det = found
+        tr = system.transitions[k]
+        raise ModelError(
+            f"backward-time shooting passes transition {k} ({tr.label}) at t = {event.t:.10g}, whose reset forgets "
+            f"(its saltation matrix is singular, det S = {det:.3g}): a reset that forgets cannot be run backwards, "
+            "and no infinitely unstable orbit lies behind it; shoot in forward time"
+        )
 
 
 class ShootingProblem(BranchProblem):
@@ -1038,6 +1080,9 @@ class ShootingProblem(BranchProblem):
         ConvergenceError
             With the residual history when Newton fails; a :class:`NoOrbitNearGuessError` when, in
             addition, the flow from an autonomous guess comes to rest.
+        ModelError
+            In backward time, when Newton fails and the forward run from the guess passes a reset that forgets
+            (:meth:`forward_run_forgets`), or when the orbit's run passes one (:func:`check_resets_run_backwards`).
         StationaryStateError
             When it converges to a state that does not move (an equilibrium, a pseudo-equilibrium, a
             period shrunk to zero).
@@ -1080,12 +1125,128 @@ class ShootingProblem(BranchProblem):
                 damped=True,
             )
         except ConvergenceError as exc:
+            forgets = self.forward_run_forgets(u0, lam)
+            if forgets is not None:
+                raise ModelError(f"shooting (backward time) for {self.system.name!r} found no orbit: {forgets}") from exc
             rest = self.comes_to_rest(u0, lam)
             if rest is not None:
                 message = str(exc).split(" (residual history")[0]
                 raise NoOrbitNearGuessError(f"{message}; {rest[1]}", exc.residuals, rest[0], float(u0[-1])) from exc
             raise
+        if self.autonomous:
+            k = self.repetitions(u, lam, ev.trajectory)
+            if k > 1:  # a closed curve covered k times: the orbit is the curve once, with the period T / k
+                T = self.period_of(u, lam)
+                _log.info("shooting for %r converged to an orbit covered %d times (period %.10g): solving again with "
+                          "the period %.10g", self.system.name, k, T, T / k)
+                return self.solve(self.pack(u[: self.system.n], T / k), lam, tol=tol, max_iter=max_iter)
         return self.orbit(u, lam, ev.trajectory, history)
+
+    def repetitions(self, u: np.ndarray, lam: float | None, trajectory: Trajectory) -> int:
+        """How many times a converged autonomous orbit covers its closed curve over its period (1 for a minimal one).
+
+        Newton on ``(x0, T)`` also solves for an orbit covered twice or more, ``phi(k T') = x0`` with ``T = k T'``,
+        and from a poor guess (a reset that forgets, a period guess a multiple of the true one) it can converge
+        there.  Candidates ``k`` come from the orbit's events: a sequence of ``N`` events that repeats with lag
+        ``N / k``, at the same states and at time lags ``T / k``; an orbit without events tries ``k = 2, 3``.
+        A candidate is confirmed when the flow from ``x0`` over ``T / k`` closes to within
+        :data:`REPEAT_CLOSURE` times the integration tolerance.
+
+        Parameters
+        ----------
+        u : ndarray
+            The converged unknowns ``(x0, T)``.
+        lam : float or None
+            Value of the continuation parameter.
+        trajectory : Trajectory
+            The orbit's shot over its period.
+
+        Returns
+        -------
+        int
+            The number of times ``k >= 1``; always 1 for a forced orbit.
+
+        Raises
+        ------
+        ValueError
+            If the trajectory's event states do not have the model's dimension (never for the engine's runs).
+        """
+        if not self.autonomous:
+            return 1
+        n = self.system.n
+        x0 = np.asarray(u[:n], dtype=float)
+        T = float(self.period_of(u, lam))
+        tol = self.tolerances or self.flow.tolerances
+        close = REPEAT_CLOSURE * (tol.atol + tol.rtol * (1.0 + float(np.abs(x0).max())))
+        events = trajectory.events
+        count = len(events)
+        if count:
+            candidates = []
+            for k in range(count, 1, -1):
+                lag = count // k
+                if count % k or not all(events[j].signature == events[j + lag].signature for j in range(count - lag)):
+                    continue
+                if all(np.shape(events[j].x_plus) == (n,) and float(np.abs(events[j].x_plus - events[j + lag].x_plus).max())
+                       <= 1e3 * close and abs(abs(events[j + lag].t - events[j].t) - T / k) <= 1e-6 * T
+                       for j in range(count - lag)):
+                    candidates.append(k)
+        else:
+            candidates = [3, 2]
+        p = self.parameters_at(lam)
+        for k in candidates:  # the largest first: the shortest period
+            try:
+                run = self.flow.run(x0, self.t0, self.t0 + self.sign * T / k, p, mode0=trajectory.mode0,
+                                    tolerances=self.tolerances)
+            except SaltationError:
+                continue
+            if float(np.abs(run.x1 - x0).max()) <= close:
+                return k
+        return 1
+
+    def forward_run_forgets(self, u: np.ndarray, lam: float | None = None) -> str | None:
+        """Why a backward-time shooting from the guess ``u`` cannot find the forward orbit through it, or None.
+
+        The forward run from the guess over its period is asked for a reset that forgets
+        (:func:`forgetting_event`).  Such a reset maps a whole direction of states to one, so the forward orbit
+        through it has no counterpart in backward time: the backward flow from the state after the reset does
+        not return to the states before it, whatever the guess.
+
+        Parameters
+        ----------
+        u : ndarray
+            The guess ``(x0, T)`` (``x0`` alone for a forced model).
+        lam : float, optional
+            Value of the continuation parameter.
+
+        Returns
+        -------
+        str or None
+            The explanation, naming the transition; None in forward time, or when the forward run passes no
+            reset that forgets (or cannot be integrated).
+
+        Raises
+        ------
+        ValueError
+            If an event's saltation matrix is not square (never for the engine's runs).
+        """
+        if not self.backward:
+            return None
+        p = self.parameters_at(lam)
+        T = self.period_of(u, lam)
+        if not (math.isfinite(T) and T > 0):
+            return None
+        try:
+            traj = self.flow.run(np.asarray(u[: self.system.n], dtype=float), self.t0, self.t0 + T, p,
+                                 mode0=self.mode0, variational=True, tolerances=self.tolerances)
+        except SaltationError:
+            return None
+        found = forgetting_event(self.system, traj)
+        if found is None:
+            return None
+        k, event, det = found
+        return (f"the forward run from the guess passes transition {k} ({self.system.transitions[k].label}) at "
+                f"t = {event.t:.10g}, whose reset forgets (its saltation matrix is singular, det S = {det:.3g}): the "
+                "forward orbit through it has no backward-time counterpart; shoot in forward time")
 
     def comes_to_rest(self, u: np.ndarray, lam: float | None = None, periods: int = 100) -> tuple[np.ndarray, str] | None:
         """Where the flow from an autonomous guess comes to rest within ``periods`` guessed periods, or None.
@@ -1183,5 +1344,5 @@ class ShootingProblem(BranchProblem):
         )
 
 
-__all__ = ["PERIOD_GROWTH", "SEAM_MARGIN", "SINGULAR_SALTATION", "STATIONARY_FACTOR", "STATIONARY_FRACTION",
-           "TRIVIAL_MULTIPLIER_ACCURACY", "ShootingProblem", "check_resets_run_backwards", "stationary_floor"]
+__all__ = ["PERIOD_GROWTH", "REPEAT_CLOSURE", "SEAM_MARGIN", "SINGULAR_SALTATION", "STATIONARY_FACTOR", "STATIONARY_FRACTION",
+           "TRIVIAL_MULTIPLIER_ACCURACY", "ShootingProblem", "check_resets_run_backwards", "forgetting_event", "stationary_floor"]
