@@ -921,11 +921,20 @@ def _surface_crossings(model, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 
     # it crosses: the dip's bottom itself, where the step's own solution is checked against it
     smin, vmin = _dip_search(model, KIND_INDICATOR, idx, slide, sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, 1.0, exact, TC,
                              True)
-    s1 = _bracket_root(model, KIND_INDICATOR, idx, slide, sg, t, h, F, y, 0.0, smin, min(vmin, -1e-300), p, xtmp, gtmp,
+    s_lo = 0.0
+    if abs(v_start) <= res and sg * slope_start >= 0.0:
+        # a step from the surface (after an event) that goes back through it and out again: the way in is
+        # bracketed from the top of the excursion before the dip, not from the start, where the value is rounding
+        s_top, v_top = _dip_search(model, KIND_INDICATOR, idx, slide, -sg, t, h, F, y, p, xtmp, gtmp, gptmp, 0.0, smin,
+                                   exact, TC, True)
+        if not v_top < -res:
+            return 2.0, 2.0, 0.0, 2.0, False  # no excursion beyond rounding before the dip: the dip is the departure's
+        s_lo = s_top
+    s1 = _bracket_root(model, KIND_INDICATOR, idx, slide, sg, t, h, F, y, s_lo, smin, min(vmin, -1e-300), p, xtmp, gtmp,
                        gptmp, exact, TC)
     s2 = _bracket_root(model, KIND_INDICATOR, idx, slide, -sg, t, h, F, y, smin, 1.0, min(-sg * v_end, -1e-300), p, xtmp,
                        gtmp, gptmp, exact, TC)
-    return s1, s2, 0.0, smin, False
+    return s1, s2, s_lo, smin, False
 
 
 @njit(cache=True, _nrt=False)
@@ -1915,7 +1924,12 @@ def _surface_step(model, exact, mode, slide, s, t, h, y, ynew, t_new, K, F, xtmp
     sg = surf_sign[s]
     to_other = (fires[s] & (1 if sg > 0.0 else 2)) != 0  # a transition crosses to side -sg
     to_own = (fires[s] & (2 if sg > 0.0 else 1)) != 0
-    dip = (to_other or to_own) and not no_dip[s] and sg * slope_old[s] < 0.0 and sg * sl > 0.0
+    # a dip: the slope turns within the step from towards the surface to away from it; or a step from the surface
+    # (after an event on it) moving away that ends on its side moving away, within which the motion may have
+    # turned back through the surface and out again (an impact's short flight while the relative acceleration
+    # changes sign)
+    dip = (to_other or to_own) and not no_dip[s] and sg * sl > 0.0 and (
+        sg * slope_old[s] < 0.0 or (abs(surf_old[s]) <= surf_res[s] and sg * slope_old[s] > 0.0 and sg * v > 0.0))
     if not (to_other and sg * v <= 0.0) and not dip:
         return False, 2.0, 2.0, 0.0, 1.0, False, have_dense
     if not have_dense:
