@@ -97,7 +97,7 @@ from saltation.orbits.conditions import (
 from saltation.orbits.conditions.neimark_sacker import nearest_pair_kappa
 from saltation.orbits.records import BranchPoint
 from saltation.orbits.single import ShootingProblem
-from saltation.special_points.codimension_two import CodimensionTwoSearch
+from saltation.special_points.codimension_two import CodimensionTwoSearch, TestFunction
 from saltation.special_points.continuation import (
     Continuation,
     ContinuationSettings,
@@ -659,8 +659,6 @@ def _meets_sliding(single: ShootingProblem, curve: MultiplierCurve, kind: Specia
     curve (:class:`~saltation.special_points.codimension_two.CodimensionTwoSearch`); an adding-sliding is only
     named (its kind is returned, for a bracketed label).  None where the change is not a sliding bifurcation or
     the location fails."""
-    from saltation.special_points.codimension_two import TestFunction
-
     n = single.system.n
     flow = single.flow
     try:
