@@ -15,7 +15,15 @@ curve's kind has its list (:data:`TESTS`):
   normal-form coefficient of the flip, which this module does not compute yet);
 * a Neimark-Sacker curve (``exp(+-i theta)``, ``kappa = cos theta``): the strong resonances 1:1
   (``kappa = 1``), 1:2 (``kappa = -1``), 1:3 (``kappa = -1/2``) and 1:4 (``kappa = 0``), fold- and
-  flip-Neimark-Sacker, and Chenciner (a slot: it needs the first Lyapunov coefficient of the torus).
+  flip-Neimark-Sacker, and Chenciner (a slot: it needs the first Lyapunov coefficient of the torus);
+* a crossing-, switching- or adding-sliding curve: its orbit's period map is continuously differentiable
+  across the bifurcation (its corrections are of second or third order, di Bernardo, Kowalczyk and Nordmark
+  2002), so both sides share the curve's multipliers, and the curve meets a fold, period-doubling or
+  Neimark-Sacker curve of the orbits where ``prod (mu - 1)``, ``prod (mu + 1)`` or ``prod_{i<j} (mu_i mu_j - 1)``
+  over all of them vanishes (a sliding orbit's multipliers 0 are factors -1, 1 and -1, never a zero); along a
+  crossing- or switching-sliding curve also the far field's curvature at the arrival, signed positive where
+  visible, whose zero (a cubic tangency) turns one kind into the other.  These have no
+  :class:`~saltation.kinds.CodimensionTwoKind`: ``sides`` and ``note`` say what they are.
 
 The multipliers other than the curve's own (the one nearest ``+1`` or ``-1``, or the pair nearest
 ``exp(+-i theta)``) enter as products ``prod (mu - 1)``, ``prod (mu + 1)`` and ``prod_{i<j} (mu_i mu_j -
@@ -34,6 +42,8 @@ References
 Kuznetsov (2004), *Elements of Applied Bifurcation Theory*, 3rd ed., Springer: section 9.1 (the
 codimension-two bifurcations of maps), section 10.3 (their test functions along fold, flip and
 Neimark-Sacker curves).  Govaerts (2000), *Numerical Methods for Bifurcations of Dynamical Equilibria*, SIAM.
+di Bernardo, Kowalczyk and Nordmark (2002), "Bifurcations of dynamical systems with sliding: derivation of
+normal-form mappings", Physica D 170 (the sliding bifurcations' maps).
 """
 
 from __future__ import annotations
@@ -88,8 +98,9 @@ class TestFunction:
 
     Attributes
     ----------
-    name : CodimensionTwoKind
-        The point it finds.
+    name : CodimensionTwoKind or None
+        The point it finds; None where it has no name of a smooth point (along a sliding bifurcation's curve,
+        where ``label`` says what it finds).
     meets : str
         The kind of special point the curve meets there (the second of its ``sides``).
     value : callable or None
@@ -98,12 +109,22 @@ class TestFunction:
         None: a slot whose test function is not computed yet (the normal-form coefficients it needs).
     circle_only : bool
         On a Neimark-Sacker curve: only between two points whose pair lies on the unit circle (``|kappa| < 1``).
+    pair : bool
+        A zero of ``prod (mu_i mu_j - 1)``: dropped where the pair with product 1 is real (a neutral saddle).
+    label : str
+        What a zero means, in words (the record's note); the name's words where empty.
+    changes_kind : bool
+        The test's sign is the curve's kind (crossing- or switching-sliding): its zero's ``sides`` are the kinds
+        before and after it along the curve.
     """
 
-    name: CodimensionTwoKind
+    name: CodimensionTwoKind | None
     meets: str
     value: Callable | None
     circle_only: bool = False
+    pair: bool = False
+    label: str = ""
+    changes_kind: bool = False
 
 
 def _prod_minus(others: np.ndarray, target: float) -> float:
@@ -285,12 +306,12 @@ TESTS: dict[SpecialPointKind, tuple[TestFunction, ...]] = {
         TestFunction(_C2.CUSP, "fold", _cusp),
         TestFunction(_C2.STRONG_RESONANCE_1_1, "fold", lambda c, pt, r: _second_at(pt.multipliers, 1.0)),
         TestFunction(_C2.FOLD_FLIP, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0)),
-        TestFunction(_C2.FOLD_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
+        TestFunction(_C2.FOLD_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others), pair=True),
     ),
     SpecialPointKind.PERIOD_DOUBLING: (
         TestFunction(_C2.FOLD_FLIP, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0)),
         TestFunction(_C2.STRONG_RESONANCE_1_2, "period_doubling", lambda c, pt, r: _second_at(pt.multipliers, -1.0)),
-        TestFunction(_C2.FLIP_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others)),
+        TestFunction(_C2.FLIP_NEIMARK_SACKER, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others), pair=True),
         # the cubic normal-form coefficient of the flip changes sign (with normal_forms=True)
         TestFunction(_C2.GENERALIZED_PERIOD_DOUBLING, "period_doubling", None),
     ),
@@ -308,17 +329,45 @@ TESTS: dict[SpecialPointKind, tuple[TestFunction, ...]] = {
 }
 
 
+def _visibility(curve, point: CurvePoint, reference) -> float:
+    return curve.arrival_visibility(point.z)
+
+
+#: The tests along a sliding bifurcation's curve: the multipliers of its orbit (the same on both sides: the period
+#: map is continuously differentiable across a crossing-, switching- or adding-sliding) at ``+1``, ``-1`` or a pair
+#: on the unit circle; each product runs over all of them (a sliding orbit's multipliers 0 give factors ``-1``, ``1``
+#: and ``-1``, never a zero).
+_SLIDING_MULTIPLIER_TESTS = (
+    TestFunction(None, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0),
+                 label="a multiplier of its orbits passes +1 (a fold curve of the orbits on both sides crosses it)"),
+    TestFunction(None, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0),
+                 label="a multiplier of its orbits passes -1 (a period-doubling curve of the orbits on both sides "
+                       "crosses it)"),
+    TestFunction(None, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others), pair=True,
+                 label="a pair of multipliers of its orbits crosses the unit circle (a Neimark-Sacker curve of the "
+                       "orbits on both sides crosses it)"),
+)
+#: crossing- and switching-sliding: the far field's curvature at the arrival, signed positive where it is visible
+#: (its orbit leaves the surface to its own side: crossing-sliding), changes sign where it has a cubic tangency
+_VISIBILITY_TEST = TestFunction(None, "", _visibility, changes_kind=True,
+                                label="the far field's tangency at the arrival changes from visible to invisible "
+                                      "or back (a cubic tangency there: crossing- and switching-sliding meet)")
+TESTS[SpecialPointKind.CROSSING_SLIDING] = _SLIDING_MULTIPLIER_TESTS + (_VISIBILITY_TEST,)
+TESTS[SpecialPointKind.SWITCHING_SLIDING] = _SLIDING_MULTIPLIER_TESTS + (_VISIBILITY_TEST,)
+TESTS[SpecialPointKind.ADDING_SLIDING] = _SLIDING_MULTIPLIER_TESTS
+
+
 def others_of(multipliers: np.ndarray, kind: SpecialPointKind, kappa: float | None) -> np.ndarray:
     """The multipliers without the curve's own: the one nearest ``+1`` (fold) or ``-1`` (period doubling), or
     the two nearest the pair of ``kappa`` (Neimark-Sacker: ``kappa +- i sqrt(1 - kappa^2)``, or the real pair
-    ``kappa +- sqrt(kappa^2 - 1)`` of a neutral saddle).
+    ``kappa +- sqrt(kappa^2 - 1)`` of a neutral saddle); all of them on a sliding bifurcation's curve.
 
     Parameters
     ----------
     multipliers : ndarray
         The orbit's multipliers.
     kind : SpecialPointKind
-        FOLD, PERIOD_DOUBLING or NEIMARK_SACKER.
+        FOLD, PERIOD_DOUBLING or NEIMARK_SACKER (or the kind of a sliding bifurcation).
     kappa : float or None
         The Neimark-Sacker curve's ``kappa``.
 
@@ -328,6 +377,8 @@ def others_of(multipliers: np.ndarray, kind: SpecialPointKind, kappa: float | No
         The other multipliers.
     """
     mu = np.asarray(multipliers, dtype=complex)
+    if kind not in (SpecialPointKind.FOLD, SpecialPointKind.PERIOD_DOUBLING, SpecialPointKind.NEIMARK_SACKER):
+        return mu  # a sliding bifurcation's curve: no multiplier is the curve's own
     if kind is SpecialPointKind.NEIMARK_SACKER:
         root = np.sqrt(complex(kappa * kappa - 1.0))
         own = [kappa + root, kappa - root]
@@ -350,15 +401,22 @@ class _Evaluated:
 
 
 class CodimensionTwoSearch:
-    """Test functions along a fold, period-doubling or Neimark-Sacker curve, and the location of their zeros.
+    """Test functions along a fold, period-doubling, Neimark-Sacker or sliding bifurcation's curve, and the
+    location of their zeros.
+
+    A located point's ``accuracy`` is the final bracket in the two parameters (plus, for a cusp, the central
+    difference's error through the test function's slope; for the tests without a name, those of a sliding
+    bifurcation's curve, the curve point's own error: the next Newton correction and the integration error
+    carried to the parameters).
 
     Parameters
     ----------
     curve
-        The curve's problem (:class:`~saltation.special_points.loci.MultiplierCurve` or
-        :class:`~saltation.special_points.loci.NeimarkSackerCurve`).
+        The curve's problem (:class:`~saltation.special_points.loci.MultiplierCurve`,
+        :class:`~saltation.special_points.loci.NeimarkSackerCurve` or
+        :class:`~saltation.special_points.loci.SlidingCurve`).
     kind : SpecialPointKind
-        FOLD, PERIOD_DOUBLING or NEIMARK_SACKER.
+        FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, CROSSING_SLIDING, SWITCHING_SLIDING or ADDING_SLIDING.
     corrector : Corrector
         The curve's corrector (:class:`~saltation.branches.corrector.Corrector`).
     tol : float
@@ -421,7 +479,7 @@ class CodimensionTwoSearch:
             try:
                 v = test.value(self.curve, point, reference)
             except (SaltationError, np.linalg.LinAlgError) as exc:
-                _log.debug("%s test function failed at %s: %s", test.name.value, point.z[-1], exc)
+                _log.debug("%s test function failed at %s: %s", _what(test), point.z[-1], exc)
                 values.append(None)
                 continue
             if isinstance(v, tuple):
@@ -480,9 +538,11 @@ class CodimensionTwoSearch:
         za, zb = ea.point.z, eb.point.z
         first = curve.n_base  # the first parameter's place in z
         params = lambda z: np.array([z[first], z[-1]])
-        reborder = getattr(curve, "reborder_at", None)
-        if reborder is not None:
-            reborder(za)
+        # the condition's guesses (a Neimark-Sacker curve's borders, a sliding curve's arrival) moved to the
+        # bracket's start, from wherever the search's evaluations left them
+        anchor = getattr(curve, "anchor_at", None) or getattr(curve, "reborder_at", None)
+        if anchor is not None:
+            anchor(za)
         s_lo, s_hi, f_lo, f_hi = 0.0, 1.0, ea.values[k], eb.values[k]
         lo_z, hi_z = za, zb
         q_ref = ea.q
@@ -521,31 +581,63 @@ class CodimensionTwoSearch:
                     best_z, best_point = min(end_lo, end_hi, key=lambda end: end[2])[:2]
                     break
         except (SaltationError, np.linalg.LinAlgError) as exc:
-            _log.info("%s between curve points %d and %d not located: %s", test.name.value, index, index + 1, exc)
+            _log.info("%s between curve points %d and %d not located: %s", _what(test), index, index + 1, exc)
         if best_point is None:
             best_z, best_point = (za, ea.point) if abs(ea.values[k]) <= abs(eb.values[k]) else (zb, eb.point)
         if f_best is not None and abs(f_best) > max(abs(ea.values[k]), abs(eb.values[k])):
             # the test function grew where it changed sign: it passed through infinity (the cubic coefficient at a
             # strong resonance), not through zero
             _log.info("%s test changes sign through a pole between curve points %d and %d: not a bifurcation",
-                      test.name.value, index, index + 1)
+                      _what(test), index, index + 1)
             return None
-        pairs = (_C2.FOLD_NEIMARK_SACKER, _C2.FLIP_NEIMARK_SACKER)
-        if (test.name in pairs and self.kind is not SpecialPointKind.NEIMARK_SACKER
-                and not _pair_on_circle(best_point.others)):
+        if test.pair and not _pair_on_circle(best_point.others):
             _log.info("%s test vanishes at a real pair with product 1 (a neutral saddle): not a bifurcation",
-                      test.name.value)
+                      _what(test))
             return None
         if status is SpecialPointStatus.LOCATED:
             where = params(best_z)
             accuracy = float(np.max(np.abs(params(hi_z) - params(lo_z))))
             if test.name is _C2.CUSP:  # the central difference's error, through the test function's slope
                 accuracy += self._cusp_error(best_point, q_ref, ea, eb, k)
+            if test.name is None:  # (a sliding bifurcation's curve, or where a curve crosses one)
+                accuracy += self._curve_error(best_z, (zb - za) / np.linalg.norm(zb - za))
         else:
             where, accuracy = params(best_z), float(np.max(np.abs(params(zb) - params(za))))
-        return _record(self.kind, test, where, accuracy, index, near, status,
+        try:
+            sides = self._sides(test, za, zb, best_z)
+        except SaltationError as exc:
+            _log.info("the kind of the sliding bifurcation is not known at the point: %s", exc)
+            sides = (self.kind.value, test.meets)
+        return _record(sides, test, where, accuracy, index, near, status,
                        (float(params(lo_z)[0]), float(params(hi_z)[0])), best_point, curve)
 
+
+    def _sides(self, test: TestFunction, za: np.ndarray, zb: np.ndarray, z: np.ndarray) -> tuple[str, str]:
+        """A zero's ``sides``: the curve's kinds at the bracket's two points (a test whose sign is the kind), or
+        the curve's kind at the zero ``z`` (a sliding bifurcation's, which may change along its curve) and the kind
+        the curve meets there."""
+        kind_at = getattr(self.curve, "kind_at", None)
+        if test.changes_kind and kind_at is not None:
+            return kind_at(za).value, kind_at(zb).value
+        return (self.kind if kind_at is None else kind_at(z)).value, test.meets
+
+    def _curve_error(self, z: np.ndarray, normal: np.ndarray) -> float:
+        """The error of a corrected curve point in the two parameters, as a located point's
+        (:func:`saltation.orbits.problem.accuracy`): the next Newton correction on the hyperplane through it
+        across the chord, plus the integration error carried to the parameters through the inverse of the
+        bordered Jacobian; ``inf`` where it cannot be computed."""
+        curve = self.curve
+        first = curve.n_base
+        try:
+            ev = curve.evaluate(z[:-1], float(z[-1]))
+            B = np.block([[ev.jac_u, ev.jac_lam[:, None]], [normal[None, :]]])
+            inverse = np.linalg.inv(B)
+        except (SaltationError, np.linalg.LinAlgError):
+            return float("inf")
+        error = curve.flow.integration_error(ev.trajectory, curve.tolerances)
+        dz = inverse @ np.append(ev.residual, 0.0)
+        carried = np.abs(inverse[:, :-1]).sum(axis=1) * error
+        return float(max(abs(dz[first]) + carried[first], abs(dz[-1]) + carried[-1]))
 
     def _cusp_error(self, point: CurvePoint, q_ref, ea: _Evaluated, eb: _Evaluated, k: int) -> float:
         """The cusp's location error from that of its test function: ``4/3 |f(h) - f(h/2)|`` (the ``O(h^2)``
@@ -570,18 +662,29 @@ def _pair_on_circle(others: np.ndarray, tol: float = 1e-3) -> bool:
     return False
 
 
-def _record(kind: SpecialPointKind, test: TestFunction, where: np.ndarray, accuracy: float, index: int, near,
+def _what(test: TestFunction) -> str:
+    """A test's name in words (its label where it has no name)."""
+    return test.name.value.replace("_", " ") if test.name is not None else test.label
+
+
+def _record(sides: tuple[str, str], test: TestFunction, where: np.ndarray, accuracy: float, index: int, near,
             status: SpecialPointStatus, bracket: tuple[float, float], point: CurvePoint, curve) -> SpecialPoint:
-    """The record of a located (or bracketed) codimension-two point."""
+    """The record of a located (or bracketed) codimension-two point (``sides``: the curve's kind and the kind it
+    meets, or the curve's kinds before and after it)."""
     n = curve.system.n
-    name = test.name.value.replace("_", " ")
     lo, hi = sorted(bracket)
+    if test.name is not None:
+        note = f"{_what(test)} on the {sides[0]} curve (a zero of its test function, {status.value})"
+    elif test.changes_kind:
+        note = f"{sides[0]} -> {sides[1]}: {test.label} (a zero of its test function, {status.value})"
+    else:
+        note = f"on the {sides[0]} curve {test.label} (a zero of its test function, {status.value})"
     return SpecialPoint(
         kind=SpecialPointKind.CODIMENSION_TWO, parameter=float(where[0]), second_parameter=float(where[1]),
         bracket=(lo, hi), accuracy=accuracy, index=int(index), state=np.array(point.z[:n]),
         period=float(near.period), amplitude=float(near.amplitude), status=status,
-        sides=(kind.value, test.meets), codimension_two=test.name, multipliers=np.array(point.multipliers),
-        note=f"{name} on the {kind.value} curve (a zero of its test function, {status.value})",
+        sides=tuple(sides), codimension_two=test.name, multipliers=np.array(point.multipliers),
+        note=note,
     )
 
 

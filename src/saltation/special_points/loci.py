@@ -47,7 +47,19 @@ Along fold, period-doubling and Neimark-Sacker curves the smooth
 codimension-two points (cusp, the strong resonances 1:1 to 1:4, fold-flip,
 fold- and flip-Neimark-Sacker) are found by test functions and located on the
 curve (:mod:`saltation.special_points.codimension_two`); their
-``codimension_two`` names them.
+``codimension_two`` names them.  Where such a curve's orbits change their events
+by a crossing- or switching-sliding, the crossing is located on it too (the far
+field's rate at the orbit's arrival vanishes there).
+
+Along a crossing-, switching- or adding-sliding curve the period map is
+continuously differentiable across the bifurcation, so the orbits on both sides
+share the curve's multipliers: where one passes +1 or -1, or a pair the unit
+circle, the curve meets a fold, period-doubling or Neimark-Sacker curve of the
+orbits (``sides`` ``("switching_sliding", "fold")``...), and where the far
+field's tangency at the arrival turns from visible to invisible (a cubic
+tangency) crossing-sliding turns into switching-sliding (``sides`` the kinds
+before and after; each point's kind is its ``curve_kind``).  These are located
+by the same test functions' search; their ``codimension_two`` is None.
 """
 
 from __future__ import annotations
@@ -85,7 +97,7 @@ from saltation.orbits.conditions import (
 from saltation.orbits.conditions.neimark_sacker import nearest_pair_kappa
 from saltation.orbits.records import BranchPoint
 from saltation.orbits.single import ShootingProblem
-from saltation.special_points.codimension_two import CodimensionTwoSearch
+from saltation.special_points.codimension_two import CodimensionTwoSearch, TestFunction
 from saltation.special_points.continuation import (
     Continuation,
     ContinuationSettings,
@@ -96,6 +108,7 @@ from saltation.special_points.grazing import (
     locate_grazing,
     tangency_time,
 )
+from saltation.special_points.sliding import sliding_change
 
 _log = logging.getLogger(__name__)
 
@@ -468,6 +481,8 @@ def follow_locus(
     -------
     Locus
         ``stop_reason`` and ``stop_reasons[0]`` say why the increasing and the decreasing run stopped, ``stop_detail`` both in words.
+        Its special points are the codimension-two points along it (see the module's docstring); on a sliding
+        bifurcation's curve each point's ``curve_kind`` is its kind.
 
     Raises
     ------
@@ -514,6 +529,9 @@ def follow_locus(
             f"the {point.kind.value} curve in {second} cannot start from the point at "
             f"{problem.lam_name} = {point.parameter:.10g}", second=second,
         )
+        # the run's own branch is the curve (in its second parameter): its orbits' multipliers may pass the unit
+        # circle at a codimension-two point, which is not a change of stability of a branch of orbits
+        cont.branch.curve_of = point.kind
         # the curve's points in the single-shooting layout (x0, the first parameter, extras, the second)
         runs.append([np.concatenate([sol.z[:n], sol.z[curve.n_base:]]) for sol in cont.solutions])
         # the curve's points carry both parameters: the first (an unknown of the curve) and the second
@@ -541,18 +559,30 @@ def follow_locus(
         curve_of=point.kind, state_names=tuple(problem.system.state_names), **curve_stops(results),
     )
     _mark_codimension_two(locus, zs, joined(kinds_by_run) if classify else None, joined(events_by_run),
-                          curve, single, point.kind)
+                          curve, single, point.kind, raw=joined(raw), summaries=joined(summaries),
+                          corrector=Corrector(curve, settings))
     if isinstance(curve, NeimarkSackerCurve):  # a neutral saddle's points are not Neimark-Sacker points
         locus.points = [replace(bp, curve_kind=SpecialPointKind.NEIMARK_SACKER if abs(z[-2]) < 1 else None)
                         for bp, z in zip(locus.points, joined(raw))]
-    if isinstance(curve, (MultiplierCurve, NeimarkSackerCurve)):
+    if isinstance(curve, (MultiplierCurve, NeimarkSackerCurve, SlidingCurve)):
         search = CodimensionTwoSearch(curve, point.kind, Corrector(curve, settings), normal_forms=normal_forms)
         for index, sp in search.search(joined(raw), joined(summaries)):
             locus.special_points.append(sp)
         locus.special_points.sort(key=lambda sp: sp.index)
+    if isinstance(curve, SlidingCurve):  # the kind at every point (crossing- or switching-sliding may change)
+        locus.points = [replace(bp, curve_kind=_kind_or_none(curve, z)) for bp, z in zip(locus.points, joined(raw))]
     # a corner that ends a run lies beyond its last point: the curve's last (increasing) or first (decreasing)
     locus.special_points.extend(replace(e, index=(len(zs) - 1 if run == 0 else 0)) for run, e in ends)
     return locus
+
+
+def _kind_or_none(curve: SlidingCurve, z: np.ndarray) -> SpecialPointKind | None:
+    """The sliding bifurcation at a curve point (None where its shot fails)."""
+    try:
+        return curve.kind_at(z)
+    except SaltationError as exc:
+        _log.info("the kind of the sliding bifurcation at %s = %.10g is not known: %s", curve.lam_name, z[-1], exc)
+        return None
 
 
 def _curve_for(problem: ShootingProblem, single: ShootingProblem, point: SpecialPoint, p: np.ndarray,
@@ -588,10 +618,13 @@ def _curve_for(problem: ShootingProblem, single: ShootingProblem, point: Special
 
 
 def _mark_codimension_two(locus: Locus, zs: list, kinds: list | None, events: list, curve: _Curve,
-                          single: ShootingProblem, kind: SpecialPointKind) -> None:
+                          single: ShootingProblem, kind: SpecialPointKind, *, raw: list | None = None,
+                          summaries: list | None = None, corrector: Corrector | None = None) -> None:
     """The codimension-two points along a curve: where a corner's kind changes (``kinds``), and where a fold or
     period-doubling curve's orbits change their event sequence; each between two curve points, at their
-    midpoint."""
+    midpoint.  A change by a crossing- or switching-sliding is located on the curve (:func:`_meets_sliding`;
+    ``raw``, ``summaries`` and ``corrector`` are the curve's points in its own layout, their records and its
+    corrector)."""
     points = locus.values
 
     def label(a: int, sides: tuple[str, str]) -> SpecialPoint:
@@ -606,8 +639,76 @@ def _mark_codimension_two(locus: Locus, zs: list, kinds: list | None, events: li
     if isinstance(curve, MultiplierCurve) and len(events) == len(zs):  # (a fold curve follows its orbits' events)
         for a in range(len(zs) - 1):
             if events[a] != events[a + 1]:
-                touch = _touch_kind(single, curve, zs[a] if len(events[a]) <= len(events[a + 1]) else zs[a + 1])
+                sliding = None if raw is None else _meets_sliding(single, curve, kind, zs[a], zs[a + 1], a,
+                                                                  raw, summaries, corrector)
+                if isinstance(sliding, SpecialPoint):
+                    locus.special_points.append(sliding)
+                    continue
+                touch = sliding or _touch_kind(single, curve, zs[a] if len(events[a]) <= len(events[a + 1])
+                                               else zs[a + 1])
                 locus.special_points.append(label(a, (kind.value, touch)))
+
+
+def _meets_sliding(single: ShootingProblem, curve: MultiplierCurve, kind: SpecialPointKind, za: np.ndarray,
+                   zb: np.ndarray, a: int, raw: list, summaries: list, corrector: Corrector
+                   ) -> SpecialPoint | str | None:
+    """Where a fold or period-doubling curve's orbits change their events between curve points ``a`` and ``a +
+    1`` by a sliding bifurcation (:func:`saltation.special_points.sliding.sliding_change`): the curve crosses that
+    sliding bifurcation's curve.  A crossing- or switching-sliding is located on the curve where the far field's
+    rate ``h_x f_B + h_t`` at the orbit's arrival (named by identity) vanishes, by the search's Illinois on the
+    curve (:class:`~saltation.special_points.codimension_two.CodimensionTwoSearch`); an adding-sliding is only
+    named (its kind is returned, for a bracketed label).  None where the change is not a sliding bifurcation or
+    the location fails."""
+    n = single.system.n
+    flow = single.flow
+    try:
+        trajs, ps = [], []
+        for z in (za, zb):
+            p = _parameters_of(curve, z)
+            trajs.append(flow.run(z[:n], single.t0, single.t0 + single.system.forcing_period(p), p,
+                                  tolerances=single.tolerances))
+            ps.append(p)
+        change, without = sliding_change(flow, trajs[0], trajs[1], ps[1], ps[0]), 0
+        if change is None:
+            change, without = sliding_change(flow, trajs[1], trajs[0], ps[0], ps[1]), 1
+    except SaltationError:
+        return None
+    if change is None:
+        return None
+    if change.kind is SpecialPointKind.ADDING_SLIDING or change.count != 1:
+        return change.kind.value
+    arrival = trajs[without].events[change.index]
+    same = [e for e in trajs[without].events if e.kind in (EventKind.TRANSITION, EventKind.SLIDING_START)
+            and e.surface == arrival.surface and e.mode_from == arrival.mode_from]
+    identity = EventIdentity(surface=arrival.surface, mode_from=arrival.mode_from, ordinal=same.index(arrival))
+    surface = single.system.surface_index(arrival.surface)
+    last = [arrival.t]
+
+    def far_rate(c, point, reference) -> float:
+        p = c.parameters_at(float(point.z[-1]), point.z[:-1])
+        T = single.system.forcing_period(p)
+        traj = flow.run(np.asarray(point.z[:n], dtype=float), single.t0, single.t0 + T, p,
+                        tolerances=single.tolerances)
+        e = identity.find(traj.events, last[0], T)
+        last[0] = e.t
+        return float(flow.lie_derivative(change.mode, surface, e.t, e.x_minus, p)[0])
+
+    test = TestFunction(None, change.kind.value, far_rate,
+                        label=f"its orbits' events change by a {change.kind.value.replace('_', '-')} (the field of "
+                              f"{change.mode!r} turns tangent to surface {arrival.surface!r} where the orbit arrives "
+                              "there)")
+    search = CodimensionTwoSearch(curve, kind, corrector)
+    search.tests = (test,)
+    try:
+        ea, eb = (search.evaluate(search.point(raw[i], summaries[i].multipliers, summaries[i].monodromy), None)
+                  for i in (a, a + 1))
+        if ea.values[0] is None or eb.values[0] is None or ea.values[0] * eb.values[0] > 0:
+            return change.kind.value
+        found = search._locate(test, 0, ea, eb, a, summaries[a])
+    except (SaltationError, np.linalg.LinAlgError) as exc:
+        _log.info("the %s on the %s curve not located: %s", change.kind.value, kind.value, exc)
+        return change.kind.value
+    return found if found is not None else change.kind.value
 
 
 def run_curve(curve, settings: ContinuationSettings, u0: np.ndarray, lam0: float, direction: int,
@@ -885,7 +986,91 @@ class SlidingCurve(_Curve):
                                              float(point.touch_time), t0=problem.t0, tolerances=problem.tolerances)
             condition = ArrivalTangency(flow, identity, point.touch_mode, t_e)
         self.condition = condition
+        self._visibility: dict[bytes, float] = {}  # arrival_visibility by curve point
         super().__init__(problem, [condition], parameters, problem.lam_name, second)
+
+    def arrival_visibility(self, z: np.ndarray) -> float:
+        """The far field's curvature at the arrival of a curve point ``z = (u, lam)``, signed positive where its
+        tangency is visible from its own side (crossing-sliding) and negative where invisible (switching-sliding).
+
+        ``d2h/dt2 = L_B,x f_B + L_B,t`` along the far field ``f_B`` (``L_B = h_x f_B + h_t``, exact derivatives of
+        the model), times the sign of the arriving field's rate ``h_x f_A + h_t`` (the side of the surface the
+        far mode lies on).  A zero is a cubic tangency at the arrival, where the curve's kind changes.
+
+        Parameters
+        ----------
+        z : ndarray
+            A point of the curve, in its layout.
+
+        Returns
+        -------
+        float
+            The signed curvature.
+
+        Raises
+        ------
+        ModelError
+            On an adding-sliding curve (no arrival).
+        SaltationError
+            If the point's shot fails or the orbit no longer arrives there.
+        """
+        if self.adding:
+            raise ModelError("an adding-sliding curve has no arrival whose visibility could change")
+        z = np.asarray(z, dtype=float)
+        key = z.tobytes()
+        if key not in self._visibility:
+            u, lam = z[:-1], float(z[-1])
+            self.equations(u, lam, need_lam=False)
+            e = self.condition.event
+            p = self.parameters_at(lam, u)
+            flow, surface = self.flow, self.system.surface_index(e.surface)
+            _, Lx, _, Lt = flow.lie_derivative(self.condition.far_mode, surface, e.t, e.x_minus, p)
+            curvature = float(Lx @ flow.vector_field(self.condition.far_mode, e.t, e.x_minus, p)) + float(Lt)
+            hx, ht, _ = flow.indicator_gradient(surface, e.t, e.x_minus, p)
+            rate_a = float(hx @ flow.vector_field(e.mode_from, e.t, e.x_minus, p)) + float(ht)
+            self._visibility[key] = curvature if rate_a > 0 else -curvature
+        return self._visibility[key]
+
+    def anchor_at(self, z: np.ndarray) -> None:
+        """Move the arrival's time the condition looks near to a curve point ``z = (u, lam)``, before a location
+        that starts there.
+
+        Parameters
+        ----------
+        z : ndarray
+            A point of the curve, in its layout.
+
+        Raises
+        ------
+        SaltationError
+            If the point's shot fails.
+        """
+        z = np.asarray(z, dtype=float)
+        self.equations(z[:-1], float(z[-1]), need_lam=False)
+
+    def kind_at(self, z: np.ndarray) -> SpecialPointKind:
+        """The sliding bifurcation at a curve point ``z = (u, lam)``: crossing- or switching-sliding as the far
+        field's tangency at the arrival is visible or not (:meth:`arrival_visibility`); adding-sliding on its
+        curve.
+
+        Parameters
+        ----------
+        z : ndarray
+            A point of the curve, in its layout.
+
+        Returns
+        -------
+        SpecialPointKind
+
+        Raises
+        ------
+        SaltationError
+            If the point's shot fails or the orbit no longer arrives there.
+        """
+        if self.adding:
+            return SpecialPointKind.ADDING_SLIDING
+        return SpecialPointKind.CROSSING_SLIDING if self.arrival_visibility(z) > 0 \
+            else SpecialPointKind.SWITCHING_SLIDING
 
     def snapshot(self) -> dict:
         """The state that :meth:`accept` moves along a run, with the arrival's time.
