@@ -143,6 +143,7 @@ RAISES_EXEMPT = {
     "saltation.engine.buildtime.probe_seconds": "a compile that fails gives None",
     "saltation.orbits.floquet.reciprocal": "array arithmetic on the given multipliers",
     "saltation.orbits.second_order.compose": "array arithmetic on the given jets",
+    "saltation.orbits.second_order.chatter_errors": "array arithmetic on the given derivatives",
     "saltation.orbits.floquet.sort_multipliers": "sorts the given values",
     "saltation.orbits.floquet.trivial_multiplier_error": "array arithmetic on the given multipliers",
     "saltation.orbits.floquet.is_stable": "array arithmetic on the given multipliers",
@@ -173,6 +174,7 @@ RAISES_EXEMPT = {
 #: Callables whose algorithm comes from the literature: they cite it.
 REFERENCES_REQUIRED = (
     "saltation.orbits.second_order.period_map_derivatives",
+    "saltation.orbits.second_order.run_jets",
     "saltation.orbits.criticality.criticality",
     "saltation.engine.flow.Flow.run",
     "saltation.engine.chatter.run_through_accumulations",

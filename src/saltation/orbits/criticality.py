@@ -7,7 +7,9 @@ unstable one on the side where it is stable (*subcritical*).  The coefficients n
 to the third at the orbit: the first two are exact through every event
 (:mod:`saltation.orbits.second_order`); the third, along the critical eigenvectors only, is the central
 difference of the exact second derivative at the orbit's state moved along them, with Richardson
-extrapolation.
+extrapolation.  Through a complete chatter (:mod:`saltation.engine.chatter`) the map is the engine's jump from
+one of its impacts onto the stuck motion, from the same impact at the orbit and at every state moved off it
+(however many impacts each run resolved), and the accuracy says how far that is from the chatter's limit.
 
 For a map ``x -> A x + B(x, x)/2 + C(x, x, x)/6 + ...`` (Kuznetsov, *Elements of Applied Bifurcation
 Theory*, 3rd ed., 2004, sec. 5.4; Kuznetsov and Meijer, SIAM J. Sci. Comput. 26, 2005, sec. 2):
@@ -47,11 +49,11 @@ from saltation.engine.flow import Flow, Trajectory
 from saltation.errors import InconsistentResultError, ModelError, SaltationError
 from saltation.kinds import Criticality, SpecialPointKind
 from saltation.orbits.second_order import (
-    _check_first_derivative,
     _field_at,
     _segments,
     _symbolic_model,
-    extended_jets,
+    chatter_impacts,
+    run_map_derivatives,
     section_basis,
     section_map_derivatives,
 )
@@ -85,7 +87,9 @@ class NormalFormCoefficient:
         (Neimark-Sacker), with the critical eigenvector of unit length in the map's coordinates.
     accuracy : float
         An estimate of its error: the Richardson estimate of the central differences of the third
-        derivative, plus the integration error carried by the differences.
+        derivative, plus the integration error carried by the differences, plus, on an orbit that chatters to
+        rest, the distance from the chatter's limit (the coefficient with each chatter jumped one impact
+        earlier, :func:`saltation.orbits.second_order.chatter_errors`).
     criticality : Criticality
         Supercritical (``b > 0``, ``d < 0``: a stable period-2 orbit or invariant circle), subcritical, or
         degenerate (``|coefficient| <= accuracy``).
@@ -150,7 +154,7 @@ class _ReturnMap:
         self.t0 = float(self.trajectory.t0)
         self.state = np.asarray(self.trajectory.x0, dtype=float)
         self.mode0 = self.trajectory.mode0
-        self.signature = [e.signature for e in self.trajectory.events]
+        self.signature, self.kept = _sequence(self.trajectory)
         excursion = float(np.max(self.trajectory.x_max - self.trajectory.x_min))
         self.scale = excursion if excursion > 0.0 else 1.0 + float(np.max(np.abs(self.state)))
         self.normal = self.basis = None
@@ -186,21 +190,36 @@ class _ReturnMap:
         _log.debug("criticality: the map is expanded at t = %.10g, off the events", middle)
         return moved
 
-    def jets(self, y: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """``(A, B)`` at the state moved by ``y`` (None: at the state itself)."""
-        if y is None:
-            traj, x = self.trajectory, self.state
-        else:
-            x = self.state + (self.basis @ y if self.autonomous else y)
-            traj = self._run(x, self.t0, self.span, self.mode0)
-            if [e.signature for e in traj.events] != self.signature:
-                raise _SequenceChanged(f"the run from {x} has other events than the orbit")
+    def run(self, y: np.ndarray) -> Trajectory:
+        """The run from the state moved by ``y`` (in the map's coordinates), with the orbit's events."""
+        x = self.state + (self.basis @ y if self.autonomous else y)
+        traj = self._run(x, self.t0, self.span, self.mode0)
+        signature, kept = _sequence(traj)
+        if signature != self.signature:
+            raise _SequenceChanged(f"the run from {x} has other events than the orbit")
+        self.kept = tuple(min(a, b) for a, b in zip(self.kept, kept))
+        return traj
+
+    def jets(self, traj: Trajectory | None = None):
+        """The map's derivatives (``first``, ``second``, and the chatters' ``earlier`` ones) from a run (None: the
+        orbit's), each complete chatter jumped from the impact all the runs so far kept (:attr:`kept`): the same
+        map at every state, whatever impacts the integrator resolved before its jumps."""
+        traj = self.trajectory if traj is None else traj
+        levels = dict(enumerate(self.kept))
         if self.autonomous:
-            d = section_map_derivatives(traj, self.p, traj.monodromy, normal=self.normal, point=self.state)
-            return d.first, d.second
-        J, K, _, _ = extended_jets(traj, self.p)
-        _check_first_derivative(J[1:, 1:], traj.monodromy, f"the period map of {self.system.name!r}")
-        return J[1:, 1:], K[1:, 1:, 1:]
+            return section_map_derivatives(traj, self.p, traj.monodromy, normal=self.normal, point=self.state,
+                                           levels=levels)
+        return run_map_derivatives(traj, self.p, traj.monodromy, levels=levels)
+
+
+def _sequence(traj: Trajectory) -> tuple[list, tuple[int, ...]]:
+    """A run's events by signature, each complete chatter's impacts counted once (how many of them the integrator
+    resolved before it jumped to their accumulation point depends on the state, not on the orbit), and how many
+    each chatter kept."""
+    chatters = chatter_impacts(traj)
+    extra = {i for _, chain in chatters for i in chain[1:]}
+    return ([e.signature for i, e in enumerate(traj.events) if i not in extra],
+            tuple(len(chain) for _, chain in chatters))
 
 
 def _parse_kind(kind) -> SpecialPointKind | None:
@@ -287,27 +306,48 @@ def _ns_coefficient(A, B, D, q, p, mu) -> float:
 
 def _differences(the_map: _ReturnMap, q: np.ndarray, step: float) -> tuple[list, float]:
     """The exact first and second derivatives at the state moved by ``+-s v`` and ``+-s v / 2``, for the real
-    and imaginary parts ``v`` of ``q``: ``[(v, ((A+, A-, B+, B-) at s, the same at s/2)), ...]`` and ``s``.
-    A step whose runs change the event sequence is quartered (a grazing or a corner nearby)."""
+    and imaginary parts ``v`` of ``q``: ``[(v, ((d+, d-) at s, the same at s/2)), ...]`` (each ``d`` a
+    :class:`~saltation.orbits.second_order.MapDerivatives`) and ``s``.  A step whose runs change the event
+    sequence is quartered (a grazing or a corner nearby).  The runs are made first, so that every complete chatter
+    is jumped from the same impact in all of them."""
     parts = [v for v in ((q.real, q.imag) if np.iscomplexobj(q) else (q,))]
     for _ in range(4):
         try:
-            out = []
+            runs = []
             for v in parts:
                 if not np.any(v):
-                    out.append((v, None))
+                    runs.append((v, None))
                     continue
-                runs = []
-                for s in (step, step / 2):
-                    (A_plus, B_plus), (A_minus, B_minus) = the_map.jets(s * v), the_map.jets(-s * v)
-                    runs.append((A_plus, A_minus, B_plus, B_minus))
-                out.append((v, runs))
-            return out, step
+                runs.append((v, [(the_map.run(s * v), the_map.run(-s * v)) for s in (step, step / 2)]))
+            break
         except _SequenceChanged:
             step /= 4.0
-    raise SaltationError("the orbit's event sequence changes within "
-                         f"{4 * step:.2g} of its state along the critical eigenvector: a grazing or corner is too "
-                         "near for the normal form of a smooth map")
+    else:
+        raise SaltationError("the orbit's event sequence changes within "
+                             f"{4 * step:.2g} of its state along the critical eigenvector: a grazing or corner is too "
+                             "near for the normal form of a smooth map")
+    out = [(v, None if pairs is None else [(the_map.jets(plus), the_map.jets(minus)) for plus, minus in pairs])
+           for v, pairs in runs]
+    return out, step
+
+
+def _arrays(differences: list, chatter: int | None = None) -> list:
+    """``differences`` as ``[(v, ((A+, A-, B+, B-) at s, the same at s/2)), ...]``: the derivatives themselves, or
+    (``chatter``) those with that complete chatter jumped one impact earlier."""
+    def pick(d):
+        return (d.first, d.second) if chatter is None else d.earlier[chatter][1:]
+
+    out = []
+    for v, runs in differences:
+        if runs is None:
+            out.append((v, None))
+            continue
+        rows = []
+        for plus, minus in runs:
+            (A_plus, B_plus), (A_minus, B_minus) = pick(plus), pick(minus)
+            rows.append((A_plus, A_minus, B_plus, B_minus))
+        out.append((v, rows))
+    return out
 
 
 def _third_derivative(differences: list, step: float, n: int, complex_: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -323,6 +363,16 @@ def _third_derivative(differences: list, step: float, n: int, complex_: bool) ->
             total = total + (1j if i == 1 else 1.0) * (B_plus - B_minus) / (2.0 * s)
         estimates.append(total)
     return (4.0 * estimates[1] - estimates[0]) / 3.0, estimates[1]
+
+
+def _coefficients(kind: SpecialPointKind, A: np.ndarray, B: np.ndarray, arrays: list, step: float, q: np.ndarray,
+                  p: np.ndarray, mu: complex) -> tuple[float, float]:
+    """The normal-form coefficient with the third derivative's Richardson extrapolation, and with its plain
+    difference at ``s/2``."""
+    D, D_half = _third_derivative(arrays, step, len(q), np.iscomplexobj(q))
+    if kind is SpecialPointKind.PERIOD_DOUBLING:
+        return _flip_coefficient(A, B, D.real, q, p), _flip_coefficient(A, B, D_half.real, q, p)
+    return _ns_coefficient(A, B, D, q, p, mu), _ns_coefficient(A, B, D_half, q, p, mu)
 
 
 def _integration_error(differences: list, B: np.ndarray, step: float) -> float:
@@ -388,22 +438,30 @@ def criticality(orbit, kind: SpecialPointKind | str | None = None, *, tolerance:
     """
     kind = _parse_kind(kind)
     the_map = _ReturnMap(orbit)
-    A, B = the_map.jets()
-    kind, mu, q, p = _critical(A, kind, tolerance)
+    kept = the_map.kept
+    at_orbit = the_map.jets()
+    kind, mu, q, p = _critical(at_orbit.first, kind, tolerance)
     h = STEP_FRACTION * the_map.scale if step is None else float(step)
     if not (h > 0.0 and math.isfinite(h)):
         raise ModelError(f"the step of the differences must be positive, got {step!r}")
     differences, h = _differences(the_map, q, h)
-    D, D_half = _third_derivative(differences, h, len(q), np.iscomplexobj(q))
-    if kind is SpecialPointKind.PERIOD_DOUBLING:
-        value = _flip_coefficient(A, B, D.real, q, p)
-        rough = _flip_coefficient(A, B, D_half.real, q, p)
-    else:
-        value = _ns_coefficient(A, B, D, q, p, mu)
-        rough = _ns_coefficient(A, B, D_half, q, p, mu)
+    if the_map.kept != kept:  # a nearby run resolved fewer impacts of a chatter: the orbit's map jumps from there too
+        at_orbit = the_map.jets()
+    A, B = at_orbit.first, at_orbit.second
+    arrays = _arrays(differences)
+    value, rough = _coefficients(kind, A, B, arrays, h, q, p, mu)
     # the error of the plain differences at s/2 (an upper bound of the extrapolated value's), and the
     # integration error the differences carry (C's entries err by about what A's differences do)
-    accuracy = abs(value - rough) + float(np.linalg.norm(p)) * _integration_error(differences, B, h)
+    accuracy = abs(value - rough) + float(np.linalg.norm(p)) * _integration_error(arrays, B, h)
+    # on an orbit that chatters to rest: the coefficient's distance from the chatter's limit, from the map with
+    # each chatter jumped one impact earlier (geometric convergence, as second_order.chatter_errors)
+    for c, (r, A_c, B_c) in enumerate(at_orbit.earlier):
+        factor = r / (1.0 - r) if 0.0 <= r < 1.0 else math.inf
+        if not math.isfinite(factor):
+            accuracy = math.inf
+            continue
+        earlier, _ = _coefficients(kind, A_c, B_c, _arrays(differences, c), h, q, p, mu)
+        accuracy += factor * abs(earlier - value)
     if the_map.backward:
         value = -value  # the inverse map's coefficient: the forward-time orbit's is its negative
         mu = 1.0 / mu
