@@ -360,3 +360,74 @@ def test_a_chatter_that_ends_where_the_table_nearly_lets_go_loses_no_impact(ampl
     np.testing.assert_allclose(run.x1, start, rtol=0, atol=1e-9)  # the period-1 orbit: back where it started
     t, x = run.sample(16)
     assert np.min(x[:, 0] - amplitude * np.sin(OMEGA * t)) >= -1e-12  # never through the table
+
+
+def stick_length(amplitude: float) -> float | None:
+    """The stuck phase of the period-1 orbit that sticks, from the flights in closed form: from rest on the table at
+    the release ``t_r``, flight by flight to a relative velocity of 1e-13 and the tail ``2 w / ((1 - e) a)``; the
+    phase lasts from that accumulation point to the next release, ``t_r + 1``.  None where the impacts escape
+    (the table's deceleration reaches ``g`` first): no such orbit."""
+    t_r = release_time(amplitude)
+    t, w = t_r, 0.0
+    while True:
+        try:
+            tau = _flight(t, w, amplitude)
+        except ValueError:  # the flight does not come back where a bounce of its size would: it escapes
+            return None
+        w = -E * _relative_velocity(t, w, tau, amplitude)
+        t += tau
+        decel = G - amplitude * OMEGA**2 * math.sin(OMEGA * t)
+        if not decel > 0 or t > t_r + 1:
+            return None
+        if w < 1e-13:
+            rest = t_r + 1 - (t + 2 * w / ((1 - E) * decel))
+            return rest if rest > 0 else None
+
+
+def sticking_ends() -> float:
+    """Where the stuck phase vanishes (the chatter's accumulation point reaches the release), by bisection on the
+    existence of the orbit that sticks; the stuck phase there shrinks like ``0.2 sqrt(A* - A)``."""
+    lo, hi = 0.3965, 0.3975
+    assert stick_length(lo) is not None and stick_length(hi) is None
+    while hi - lo > 1e-13:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if stick_length(mid) is not None else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def test_the_sticking_branch_ends_where_the_chatter_reaches_the_release():
+    """e = 0.5: along A the stuck phase shrinks, and vanishes where the accumulation point reaches the release
+    (A* = 0.39692553514 from the flights in closed form).  Beyond it the impacts escape before they accumulate
+    (the relative acceleration vanishes during the tail, which the jump to the accumulation point refuses), and
+    a cascade of grazings follows, each impact of the chatter in turn.  The branch's first special point is that
+    end, located within its accuracy of the reference, with multipliers 0 on the sticking side."""
+    from saltation import ContinuationSettings, continue_orbit
+
+    a_star = sticking_ends()
+    amplitude = 0.3965
+    t_r = release_time(amplitude)
+    s, ds = table(t_r, amplitude)
+    tau = 0.3
+    start = find_periodic_orbit(bouncing_ball(e=E, A=amplitude), [s + ds * tau - G * tau**2 / 2, ds - G * tau],
+                                t0=t_r + tau)
+    branch = continue_orbit(start, "A", bounds=(amplitude, a_star + 1e-8), directions=(1,),
+                            settings=ContinuationSettings(ds=0.0002, ds_max=0.0002))
+    end = branch.special_points[0]
+    assert end.parameter <= min(sp.parameter for sp in branch.special_points)
+    lo, hi = end.bracket
+    assert lo <= end.parameter <= hi
+    assert abs(end.parameter - a_star) <= end.accuracy + 1e-12
+    assert np.all(np.abs(end.one_sided.multipliers_minus) <= 1e-10)  # the sticking side
+    assert np.all(np.abs(end.one_sided.multipliers_plus) < 1)
+    for p in branch.points:
+        length = stick_length(p.parameter)
+        if p.parameter < end.parameter - end.accuracy:  # it sticks: the stuck phase against the reference
+            assert length is not None and np.all(np.abs(p.multipliers) <= 1e-10)
+            t_release = release_time(p.parameter)
+            events = find_periodic_orbit(bouncing_ball(e=E, A=p.parameter), p.state, t0=p.t0).trajectory.events
+            (landing,) = [e.t for e in events if e.mode_to == "flight@table"]
+            stuck = (t_release - landing) % 1.0
+            assert stuck == pytest.approx(length, abs=1e-9)
+        elif p.parameter > end.parameter + end.accuracy:
+            assert length is None
+            assert not any("table@release" in label for label in p.event_labels)

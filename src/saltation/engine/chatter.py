@@ -246,6 +246,12 @@ def _jump(flow: _Flow, piece: Trajectory, p: np.ndarray, t1: float, sensitivity:
     # the impacts' times extrapolate with a relative acceleration that does not change over the tail; where the
     # contact force changes by a fraction r of itself over it (near its release), the limit moves by about
     # (t_inf - t_n) r^2, which the accuracy takes in (tested against flights in closed form near the release)
+    if _tail_escapes(flow, free, s, t_n, x_n, t_inf, x_inf, p, -w_plus / w_minus):
+        # the relative acceleration vanishes before the impacts left accumulate (near the contact's release): they
+        # do not end in the stuck motion, and are integrated one by one
+        _log.debug("impacts of transition %d extrapolate to t = %.15g, but the relative acceleration that drives them "
+                   "back vanishes before they accumulate: integrated one by one", k, t_inf)
+        return None
     drift = _force_drift(flow, stuck, t_inf, x_inf, p, t_inf - t_n)
     accuracy = float(accuracy) + abs(t_inf - t_n) * min(drift, 1.0) ** 2
     Phi_s = stuck_run.monodromy
@@ -259,6 +265,51 @@ def _jump(flow: _Flow, piece: Trajectory, p: np.ndarray, t1: float, sensitivity:
                  accuracy, len(times), record.mode)
     row = (twin, s, free, stuck, x_free, x_inf, S)
     return record, row, replace(stuck_run, x1=x_inf), Phi, psi
+
+
+#: the relative velocity, as a fraction of the first, below which the tail of a model chatter is summed as a series
+TAIL_CUT = 1e-12
+
+
+def _tail_escapes(flow: _Flow, free: int, s: int, t_n: float, x_n: np.ndarray, t_inf: float, x_inf: np.ndarray,
+                  p: np.ndarray, lam: float) -> bool:
+    """Whether the impacts left after ``(t_n, x_n)`` escape before they accumulate, in a model of the tail.
+
+    The relative acceleration ``a = -(L_x f + L_t)`` that drives the motion back to the surface is taken
+    linear in time between the last impact kept and the extrapolated accumulation point ``(t_inf, x_inf)``;
+    the flights of ``z'' = -a(t)`` from ``z = 0`` at relative velocity ``w`` (cubics) and the impacts
+    ``w -> lam w`` are iterated.  Where ``a`` vanishes before the relative velocity does (the contact force
+    reaches its release during the tail), the impacts do not accumulate: the extrapolation of their times,
+    which assumes a relative acceleration that changes little, is refused.
+    """
+    def second(t: float, x: np.ndarray) -> tuple[float, float]:
+        rate, rate_x, _, rate_t = flow.lie_derivative(free, s, t, x, p)
+        return float(rate_x @ flow.vector_field(free, t, x, p) + rate_t), float(rate)
+
+    h2_n, w = second(t_n, x_n)
+    if not (w != 0.0 and 0.0 < lam < 1.0 and t_inf > t_n):
+        return False
+    sign = 1.0 if w > 0 else -1.0
+    w = abs(w)
+    a_n = -sign * h2_n
+    a_inf = -sign * second(t_inf, x_inf)[0]
+    slope = (a_inf - a_n) / (t_inf - t_n)
+    t, w0 = t_n, w
+    for _ in range(10000):
+        a0 = a_n + slope * (t - t_n)
+        if not a0 > 0.0:
+            return True
+        # the flight's end: w = a0 tau / 2 + slope tau^2 / 6 (its root near 2 w / a0)
+        b, c = a0 / 2.0, slope / 6.0
+        disc = b * b + 4.0 * c * w
+        if disc < 0.0:
+            return True  # the deceleration turns before the motion comes back
+        tau = 2.0 * w / (b + math.sqrt(disc))
+        w = lam * (a0 * tau + slope * tau * tau / 2.0 - w)
+        t += tau
+        if w <= TAIL_CUT * w0:
+            return not a_n + slope * (t + 2.0 * w / ((1.0 - lam) * a0) - t_n) > 0.0
+    return False
 
 
 def _force_drift(flow: _Flow, stuck: int, t: float, x: np.ndarray, p: np.ndarray, tail: float) -> float:
