@@ -386,7 +386,7 @@ def stick_length(amplitude: float) -> float | None:
 
 def sticking_ends() -> float:
     """Where the stuck phase vanishes (the chatter's accumulation point reaches the release), by bisection on the
-    existence of the orbit that sticks; the stuck phase there shrinks like ``0.2 sqrt(A* - A)``."""
+    existence of the orbit that sticks; the stuck phase there shrinks steeply, about like ``(A* - A)^0.6``."""
     lo, hi = 0.3965, 0.3975
     assert stick_length(lo) is not None and stick_length(hi) is None
     while hi - lo > 1e-13:
