@@ -51,6 +51,7 @@ from saltation.branches.branch import (
     SpecialPointStatus,
 )
 from saltation.errors import SaltationError
+from saltation.orbits.records import BranchPoint
 
 _log = logging.getLogger(__name__)
 
@@ -73,6 +74,8 @@ class CurvePoint:
         On a Neimark-Sacker curve: ``cos theta`` (the curve's unknown).
     others : ndarray
         The multipliers without the curve's own (the one nearest ``+1`` or ``-1``, the pair of ``kappa``).
+    summary : BranchPoint or None
+        The record of its orbit (period, amplitude), which a codimension-two point located here carries.
     """
 
     z: np.ndarray
@@ -80,6 +83,7 @@ class CurvePoint:
     monodromy: np.ndarray
     kappa: float | None
     others: np.ndarray
+    summary: BranchPoint | None = None
 
 
 @dataclass(frozen=True)
@@ -381,7 +385,8 @@ class CodimensionTwoSearch:
         self.max_iter = int(max_iter)
 
     # -- one point --------------------------------------------------------------------------------
-    def point(self, z: np.ndarray, multipliers: np.ndarray, monodromy: np.ndarray) -> CurvePoint:
+    def point(self, z: np.ndarray, multipliers: np.ndarray, monodromy: np.ndarray,
+              summary: BranchPoint | None = None) -> CurvePoint:
         """A curve point as the test functions read it.
 
         Parameters
@@ -390,6 +395,8 @@ class CodimensionTwoSearch:
             ``(u, lam)`` in the curve's layout.
         multipliers, monodromy : ndarray
             The orbit's.
+        summary : BranchPoint, optional
+            The record of the orbit (period, amplitude).
 
         Returns
         -------
@@ -398,7 +405,7 @@ class CodimensionTwoSearch:
         kappa = float(z[-2]) if self.kind is SpecialPointKind.NEIMARK_SACKER else None
         return CurvePoint(z=np.asarray(z, dtype=float), multipliers=np.asarray(multipliers),
                           monodromy=np.asarray(monodromy), kappa=kappa,
-                          others=others_of(multipliers, self.kind, kappa))
+                          others=others_of(multipliers, self.kind, kappa), summary=summary)
 
     def evaluate(self, point: CurvePoint, reference: np.ndarray | None) -> _Evaluated:
         """Every test function at a point (None for slots, and where one fails: a run, a Jordan block).
@@ -448,7 +455,7 @@ class CodimensionTwoSearch:
         evaluated: list[_Evaluated] = []
         q = None
         for z, bp in zip(zs, summaries):
-            e = self.evaluate(self.point(z, bp.multipliers, bp.monodromy), q)
+            e = self.evaluate(self.point(z, bp.multipliers, bp.monodromy, bp), q)
             q = e.q if e.q is not None else q
             evaluated.append(e)
         found = []
@@ -471,7 +478,7 @@ class CodimensionTwoSearch:
         normal = chord / np.linalg.norm(chord)
         sol = self.corrector.solve_bordered(za + s * chord, normal)
         bp = sol.summary
-        return sol.z, self.point(sol.z, bp.multipliers, bp.monodromy)
+        return sol.z, self.point(sol.z, bp.multipliers, bp.monodromy, bp)
 
     def _locate(self, test: TestFunction, k: int, ea: _Evaluated, eb: _Evaluated, index: int, near
                 ) -> SpecialPoint | None:
@@ -572,14 +579,16 @@ def _pair_on_circle(others: np.ndarray, tol: float = 1e-3) -> bool:
 
 def _record(kind: SpecialPointKind, test: TestFunction, where: np.ndarray, accuracy: float, index: int, near,
             status: SpecialPointStatus, bracket: tuple[float, float], point: CurvePoint, curve) -> SpecialPoint:
-    """The record of a located (or bracketed) codimension-two point."""
+    """The record of a located (or bracketed) codimension-two point: the state, period and amplitude of
+    ``point``'s orbit (those of the curve point ``near`` where ``point`` carries no record of its own)."""
     n = curve.system.n
     name = test.name.value.replace("_", " ")
     lo, hi = sorted(bracket)
+    own = point.summary if point.summary is not None else near
     return SpecialPoint(
         kind=SpecialPointKind.CODIMENSION_TWO, parameter=float(where[0]), second_parameter=float(where[1]),
         bracket=(lo, hi), accuracy=accuracy, index=int(index), state=np.array(point.z[:n]),
-        period=float(near.period), amplitude=float(near.amplitude), status=status,
+        period=float(own.period), amplitude=float(own.amplitude), status=status,
         sides=(kind.value, test.meets), codimension_two=test.name, multipliers=np.array(point.multipliers),
         note=f"{name} on the {kind.value} curve (a zero of its test function, {status.value})",
     )
