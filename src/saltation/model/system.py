@@ -25,6 +25,7 @@ Semantics
 
 from __future__ import annotations
 
+import cmath
 import enum
 import math
 import threading
@@ -849,22 +850,25 @@ class PiecewiseSystem(NamedParts):
         ``x' = vx, vx' = 0``, is no logic state: resetting it changes the motion.)"""
         read = set().union(*(f.free_symbols for f in self.fields))
         return tuple(i for i in range(self.n)
-                     if self.x[i] not in read and all(sp.simplify(f[i]) == 0 for f in self.fields))
+                     if self.x[i] not in read and all(_vanishes(f[i]) for f in self.fields))
 
     @cached_property
     def impacts(self) -> tuple[bool, ...]:
         """For each transition, whether its reset is an impact: it moves a state that is not a logic state
         (:attr:`logic_states`), or one that its surface's indicator reads (the state may land on the surface
         and be sent back).  A reset of other logic states only is a mode switch: whether the motion crosses is
-        decided by the fields alone, as without a reset."""
+        decided by the fields alone, as without a reset.  No reset on a clock (an indicator of time alone,
+        ``h(t)``) is an impact: the state lies on the clock's surface at its instant whatever the reset makes of
+        it, and time alone crosses it (once), as without a reset."""
         logic = set(self.logic_states)
+        states = set(self.x)
         out = []
         for k, g in enumerate(self.resets):
-            if g is None:
+            indicator = self.indicators[self.surface_index(self.transitions[k].surface)]
+            if g is None or not indicator.free_symbols & states:
                 out.append(False)
                 continue
-            indicator = self.indicators[self.surface_index(self.transitions[k].surface)]
-            moved = [i for i in range(self.n) if sp.simplify(g[i] - self.x[i]) != 0]
+            moved = [i for i in range(self.n) if not _vanishes(g[i] - self.x[i])]
             out.append(any(i not in logic or self.x[i] in indicator.free_symbols for i in moved))
         return tuple(out)
 
@@ -972,6 +976,30 @@ class PiecewiseSystem(NamedParts):
             f"PiecewiseSystem({self.name!r}, states={list(self.state_names)}, modes={list(self.mode_names)}, "
             f"surfaces={list(self.surface_names)}, {len(self.transitions)} transitions, {kind})"
         )
+
+
+def _vanishes(expr: sp.Expr) -> bool:
+    """Whether an expression is identically zero.
+
+    A polynomial (in every symbol) is expanded, which is exact and fast.  Anything else is evaluated first at a
+    point of positive rationals, to 50 digits: a value clearly away from zero proves it is not zero; only where
+    the value is zero (or not a finite number) does ``sympy.simplify`` decide, which can take minutes on a large
+    expression (a polynomial reset with trigonometric coefficients in a parameter).
+    """
+    expr = sp.sympify(expr)
+    if expr == 0:
+        return True
+    if expr.is_polynomial():
+        return sp.expand(expr) == 0
+    symbols = sorted(expr.free_symbols, key=str)
+    point = {s: sp.Rational(3 + 7 * k, 11 + 2 * k) for k, s in enumerate(symbols)}
+    try:
+        value = complex(expr.evalf(50, subs=point))
+    except (TypeError, ValueError):
+        value = complex("nan")
+    if cmath.isfinite(value) and abs(value) > 1e-12:
+        return False
+    return sp.simplify(expr) == 0
 
 
 def _simplify_on_surface(S: sp.Matrix, h: sp.Expr, x: sp.Matrix, reduce=sp.simplify) -> sp.Matrix:

@@ -609,7 +609,7 @@ def follow_boundary_equilibrium_curve(
         cont, way, failure = run_curve(
             curve, settings, u0, lam0, direction, progress,
             f"the boundary_equilibrium curve in {second} cannot start from the point at {first} = {point.parameter:.10g}",
-            second=second,
+            second=second, curve_of=SpecialPointKind.BOUNDARY_EQUILIBRIUM,
         )
         n = flow.system.n  # the engine records the continuation parameter as ``parameter``: put both back
         runs.append([replace(bp, parameter=float(sol.z[n]), second_parameter=float(sol.z[-1]))

@@ -61,6 +61,7 @@ from saltation.branches.branch import (
     SpecialPointStatus,
 )
 from saltation.errors import SaltationError
+from saltation.orbits.records import BranchPoint
 
 _log = logging.getLogger(__name__)
 
@@ -83,6 +84,8 @@ class CurvePoint:
         On a Neimark-Sacker curve: ``cos theta`` (the curve's unknown).
     others : ndarray
         The multipliers without the curve's own (the one nearest ``+1`` or ``-1``, the pair of ``kappa``).
+    summary : BranchPoint or None
+        The record of its orbit (period, amplitude), which a codimension-two point located here carries.
     """
 
     z: np.ndarray
@@ -90,6 +93,7 @@ class CurvePoint:
     monodromy: np.ndarray
     kappa: float | None
     others: np.ndarray
+    summary: BranchPoint | None = None
 
 
 @dataclass(frozen=True)
@@ -439,7 +443,8 @@ class CodimensionTwoSearch:
         self.max_iter = int(max_iter)
 
     # -- one point --------------------------------------------------------------------------------
-    def point(self, z: np.ndarray, multipliers: np.ndarray, monodromy: np.ndarray) -> CurvePoint:
+    def point(self, z: np.ndarray, multipliers: np.ndarray, monodromy: np.ndarray,
+              summary: BranchPoint | None = None) -> CurvePoint:
         """A curve point as the test functions read it.
 
         Parameters
@@ -448,6 +453,8 @@ class CodimensionTwoSearch:
             ``(u, lam)`` in the curve's layout.
         multipliers, monodromy : ndarray
             The orbit's.
+        summary : BranchPoint, optional
+            The record of the orbit (period, amplitude).
 
         Returns
         -------
@@ -456,7 +463,7 @@ class CodimensionTwoSearch:
         kappa = float(z[-2]) if self.kind is SpecialPointKind.NEIMARK_SACKER else None
         return CurvePoint(z=np.asarray(z, dtype=float), multipliers=np.asarray(multipliers),
                           monodromy=np.asarray(monodromy), kappa=kappa,
-                          others=others_of(multipliers, self.kind, kappa))
+                          others=others_of(multipliers, self.kind, kappa), summary=summary)
 
     def evaluate(self, point: CurvePoint, reference: np.ndarray | None) -> _Evaluated:
         """Every test function at a point (None for slots, and where one fails: a run, a Jordan block).
@@ -506,7 +513,7 @@ class CodimensionTwoSearch:
         evaluated: list[_Evaluated] = []
         q = None
         for z, bp in zip(zs, summaries):
-            e = self.evaluate(self.point(z, bp.multipliers, bp.monodromy), q)
+            e = self.evaluate(self.point(z, bp.multipliers, bp.monodromy, bp), q)
             q = e.q if e.q is not None else q
             evaluated.append(e)
         found = []
@@ -529,7 +536,7 @@ class CodimensionTwoSearch:
         normal = chord / np.linalg.norm(chord)
         sol = self.corrector.solve_bordered(za + s * chord, normal)
         bp = sol.summary
-        return sol.z, self.point(sol.z, bp.multipliers, bp.monodromy)
+        return sol.z, self.point(sol.z, bp.multipliers, bp.monodromy, bp)
 
     def _locate(self, test: TestFunction, k: int, ea: _Evaluated, eb: _Evaluated, index: int, near
                 ) -> SpecialPoint | None:
@@ -599,8 +606,11 @@ class CodimensionTwoSearch:
             accuracy = float(np.max(np.abs(params(hi_z) - params(lo_z))))
             if test.name is _C2.CUSP:  # the central difference's error, through the test function's slope
                 accuracy += self._cusp_error(best_point, q_ref, ea, eb, k)
-            if test.name is None:  # (a sliding bifurcation's curve, or where a curve crosses one)
-                accuracy += self._curve_error(best_z, (zb - za) / np.linalg.norm(zb - za))
+            # the curve point's own error (its next Newton correction and the integration error, carried to the
+            # parameters): a point is no better known than the curve it lies on
+            own = self._curve_error(best_z, (zb - za) / np.linalg.norm(zb - za))
+            if test.name is None or math.isfinite(own):  # (a sliding curve's point says when it is not known)
+                accuracy += own
         else:
             where, accuracy = params(best_z), float(np.max(np.abs(params(zb) - params(za))))
         try:
@@ -670,7 +680,8 @@ def _what(test: TestFunction) -> str:
 def _record(sides: tuple[str, str], test: TestFunction, where: np.ndarray, accuracy: float, index: int, near,
             status: SpecialPointStatus, bracket: tuple[float, float], point: CurvePoint, curve) -> SpecialPoint:
     """The record of a located (or bracketed) codimension-two point (``sides``: the curve's kind and the kind it
-    meets, or the curve's kinds before and after it)."""
+    meets, or the curve's kinds before and after it): the state, period and amplitude of ``point``'s orbit (those
+    of the curve point ``near`` where ``point`` carries no record of its own)."""
     n = curve.system.n
     lo, hi = sorted(bracket)
     if test.name is not None:
@@ -679,10 +690,11 @@ def _record(sides: tuple[str, str], test: TestFunction, where: np.ndarray, accur
         note = f"{sides[0]} -> {sides[1]}: {test.label} (a zero of its test function, {status.value})"
     else:
         note = f"on the {sides[0]} curve {test.label} (a zero of its test function, {status.value})"
+    own = point.summary if point.summary is not None else near
     return SpecialPoint(
         kind=SpecialPointKind.CODIMENSION_TWO, parameter=float(where[0]), second_parameter=float(where[1]),
         bracket=(lo, hi), accuracy=accuracy, index=int(index), state=np.array(point.z[:n]),
-        period=float(near.period), amplitude=float(near.amplitude), status=status,
+        period=float(own.period), amplitude=float(own.amplitude), status=status,
         sides=tuple(sides), codimension_two=test.name, multipliers=np.array(point.multipliers),
         note=note,
     )

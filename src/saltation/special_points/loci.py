@@ -527,7 +527,7 @@ def follow_locus(
         cont, way, failure = run_curve(
             curve, settings, u0, lam0, direction, progress,
             f"the {point.kind.value} curve in {second} cannot start from the point at "
-            f"{problem.lam_name} = {point.parameter:.10g}", second=second,
+            f"{problem.lam_name} = {point.parameter:.10g}", second=second, curve_of=point.kind,
         )
         # the run's own branch is the curve (in its second parameter): its orbits' multipliers may pass the unit
         # circle at a codimension-two point, which is not a change of stability of a branch of orbits
@@ -712,7 +712,8 @@ def _meets_sliding(single: ShootingProblem, curve: MultiplierCurve, kind: Specia
 
 
 def run_curve(curve, settings: ContinuationSettings, u0: np.ndarray, lam0: float, direction: int,
-              progress: Callable | None, cannot_start: str, *, second: str) -> tuple[Continuation, str, str | None]:
+              progress: Callable | None, cannot_start: str, *, second: str,
+              curve_of: SpecialPointKind | None = None) -> tuple[Continuation, str, str | None]:
     """One direction of a two-parameter curve: ``(the continuation, "increasing NAME", the failure or None)``.
 
     Parameters
@@ -732,6 +733,11 @@ def run_curve(curve, settings: ContinuationSettings, u0: np.ndarray, lam0: float
         The message of the error raised when not even the first point is found.
     second : str
         The second parameter's name (for the direction in words).
+    curve_of : SpecialPointKind, optional
+        The kind of special point the curve continues: its continuation's branch is a curve
+        (:attr:`~saltation.branches.branch.Branch.curve_of`), checked as one (a second multiplier that crosses the
+        unit circle along it is a codimension-two point, which the curve's caller looks for, not a special point
+        of the continuation).
 
     Returns
     -------
@@ -745,6 +751,7 @@ def run_curve(curve, settings: ContinuationSettings, u0: np.ndarray, lam0: float
         If the curve cannot start (``cannot_start: <the error>``).
     """
     cont = Continuation(curve, settings)
+    cont.branch.curve_of = curve_of
     way = f"{'increasing' if direction > 0 else 'decreasing'} {second}"
     try:
         for pt in cont.run(u0, lam0, direction=direction):
