@@ -49,6 +49,7 @@ normal-form mappings", Physica D 170 (the sliding bifurcations' maps).
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
