@@ -326,3 +326,38 @@ def test_multipliers_zero_never_fake_a_zero(zeros, moduli, signs, kind):
         value = test.value(None, point, None)
         assert value == pytest.approx(expected[meets], rel=1e-12, abs=1e-300)
         assert abs(value) > 0.0
+
+
+# -- a grazing-sliding curve: the multipliers of the orbits that miss the sliding region ----------------------------
+def test_the_grazing_sliding_curve_meets_the_neimark_sacker_curve_of_the_orbits_that_miss_it():
+    """The tilted relay's grazing-sliding orbit is the harmonic response of mode ``minus`` touching the boundary of
+    the sliding region, ``v = kappa F + A sqrt(kappa^2 + omega^2)``, ``A = a / sqrt((1 - omega^2)^2 + (2 zeta
+    omega)^2)``; its multipliers are the linear oscillator's, ``exp((-zeta +- i sqrt(1 - zeta^2)) T)``,
+    ``T = 2 pi / omega``.  Along the curve in ``zeta`` through 0 they cross the unit circle at ``zeta = 0``, at
+    ``e^{+-i T} = +-i`` (``T = 2.5 pi``): a Neimark-Sacker curve of the orbits that miss the sliding region crosses
+    the grazing-sliding curve there."""
+    params = R.params()
+    kappa, F, a, omega = (params[k] for k in ("kappa", "F", "a", "omega"))
+    T = 2 * np.pi / omega
+    flow = Flow(tilted_relay())
+    problem = ShootingProblem(flow, {"v": 3.0}, continuation_parameter="v")
+    branch = continue_branch(problem, R.response(0.0, -1, R.params(v=3.0)), 3.0,
+                             settings=ContinuationSettings(ds=0.02, ds_max=0.05, bounds=(2.2, 3.0)), directions=(-1,))
+    (grazing,) = [sp for sp in branch.special_points if sp.kind is K.GRAZING_SLIDING]
+    locus = follow_locus(problem, grazing, "zeta", (-0.05, 0.15), settings=CURVE_SETTINGS)
+    for p in locus.points:  # the curve and its orbits' multipliers in closed form
+        zeta = p.second_parameter
+        amplitude = a / np.sqrt((1 - omega**2) ** 2 + (2 * zeta * omega) ** 2)
+        assert p.parameter == pytest.approx(kappa * F + amplitude * np.sqrt(kappa**2 + omega**2), abs=REFERENCE)
+        pair = np.exp((-zeta + 1j * np.sqrt(1 - zeta**2)) * T)
+        np.testing.assert_allclose(np.sort_complex(p.multipliers), np.sort_complex([pair.conjugate(), pair]),
+                                   rtol=0, atol=1e-7)
+    (point,) = locus.special_points
+    assert point.kind is K.CODIMENSION_TWO and point.status is SpecialPointStatus.LOCATED
+    assert point.sides == ("grazing_sliding", "neimark_sacker")
+    assert abs(point.second_parameter) <= point.accuracy + REFERENCE
+    assert abs(point.parameter - (kappa * F + a / abs(1 - omega**2) * np.sqrt(kappa**2 + omega**2))) <= (
+        point.accuracy + REFERENCE)
+    lo, hi = point.bracket
+    assert lo <= point.parameter <= hi
+    np.testing.assert_allclose(np.sort_complex(point.multipliers), [-1j, 1j], rtol=0, atol=1e-7)

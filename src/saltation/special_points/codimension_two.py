@@ -22,7 +22,9 @@ curve's kind has its list (:data:`TESTS`):
   Neimark-Sacker curve of the orbits where ``prod (mu - 1)``, ``prod (mu + 1)`` or ``prod_{i<j} (mu_i mu_j - 1)``
   over all of them vanishes (a sliding orbit's multipliers 0 are factors -1, 1 and -1, never a zero); along a
   crossing- or switching-sliding curve also the far field's curvature at the arrival, signed positive where
-  visible, whose zero (a cubic tangency) turns one kind into the other.  These have no
+  visible, whose zero (a cubic tangency) turns one kind into the other;
+* a grazing-sliding curve: the same products over its orbit's multipliers, those of the orbits that miss the
+  sliding region (one side's, where Feigin's scenario may change).  These have no
   :class:`~saltation.kinds.CodimensionTwoKind`: ``sides`` and ``note`` say what they are.
 
 The multipliers other than the curve's own (the one nearest ``+1`` or ``-1``, or the pair nearest
@@ -360,6 +362,21 @@ _VISIBILITY_TEST = TestFunction(None, "", _visibility, changes_kind=True,
 TESTS[SpecialPointKind.CROSSING_SLIDING] = _SLIDING_MULTIPLIER_TESTS + (_VISIBILITY_TEST,)
 TESTS[SpecialPointKind.SWITCHING_SLIDING] = _SLIDING_MULTIPLIER_TESTS + (_VISIBILITY_TEST,)
 TESTS[SpecialPointKind.ADDING_SLIDING] = _SLIDING_MULTIPLIER_TESTS
+#: a grazing-sliding curve: its orbit touches the boundary of the sliding region, so its multipliers are those of the
+#: orbits that miss it (the side without sliding, whose one-sided multipliers they are); one at ``+1``, ``-1`` or a
+#: pair on the unit circle is where a fold, period-doubling or Neimark-Sacker curve of those orbits crosses it, and
+#: Feigin's scenario at the grazing-sliding may change there (the sliding side's multipliers are not followed)
+TESTS[SpecialPointKind.GRAZING_SLIDING] = (
+    TestFunction(None, "fold", lambda c, pt, r: _prod_minus(pt.others, 1.0),
+                 label="a multiplier of the orbits that miss the sliding region passes +1 (a fold curve of those "
+                       "orbits crosses it)"),
+    TestFunction(None, "period_doubling", lambda c, pt, r: _prod_minus(pt.others, -1.0),
+                 label="a multiplier of the orbits that miss the sliding region passes -1 (a period-doubling curve of "
+                       "those orbits crosses it)"),
+    TestFunction(None, "neimark_sacker", lambda c, pt, r: _prod_pairs(pt.others), pair=True,
+                 label="a pair of multipliers of the orbits that miss the sliding region crosses the unit circle (a "
+                       "Neimark-Sacker curve of those orbits crosses it)"),
+)
 
 
 def others_of(multipliers: np.ndarray, kind: SpecialPointKind, kappa: float | None) -> np.ndarray:

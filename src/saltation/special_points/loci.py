@@ -564,7 +564,8 @@ def follow_locus(
     if isinstance(curve, NeimarkSackerCurve):  # a neutral saddle's points are not Neimark-Sacker points
         locus.points = [replace(bp, curve_kind=SpecialPointKind.NEIMARK_SACKER if abs(z[-2]) < 1 else None)
                         for bp, z in zip(locus.points, joined(raw))]
-    if isinstance(curve, (MultiplierCurve, NeimarkSackerCurve, SlidingCurve)):
+    if isinstance(curve, (MultiplierCurve, NeimarkSackerCurve, SlidingCurve)) or (
+            isinstance(curve, GrazingCurve) and point.kind is SpecialPointKind.GRAZING_SLIDING):
         search = CodimensionTwoSearch(curve, point.kind, Corrector(curve, settings), normal_forms=normal_forms)
         for index, sp in search.search(joined(raw), joined(summaries)):
             locus.special_points.append(sp)
